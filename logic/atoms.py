@@ -1,0 +1,77 @@
+"""Ground atoms of propositional functions, written as the gold labels write them.
+
+An atom is a predicate applied to object names: ``toyInRoom(block0, room2)``.
+The corpus's labels say ``blockInRoom``; groundlang's own name, from the
+paper, is ``toyInRoom``. Parsing accepts either and always yields the
+paper's name, so a printed atom can be compared with a label after parsing.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+__all__ = ["Atom", "AtomError", "PREDICATE_ALIASES", "parse_atom", "parse_goal", "format_goal"]
+
+# Corpus spelling -> groundlang (paper) spelling.
+PREDICATE_ALIASES = {
+    "blockInRoom": "toyInRoom",
+    "blockInDoor": "toyInDoor",
+    "agentTouchingBlock": "agentTouchingToy",
+}
+
+_ATOM = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*\(([^()]*)\)\s*")
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+class AtomError(ValueError):
+    """Text that is not an atom or a goal."""
+
+
+@dataclass(frozen=True, order=True)
+class Atom:
+    """A propositional function applied to named objects."""
+
+    predicate: str
+    args: tuple[str, ...]
+
+    def __str__(self) -> str:
+        return f"{self.predicate}({', '.join(self.args)})"
+
+    def to_clingo(self) -> str:
+        """The same atom with lower-case predicate, as ASP requires: ``holds(...)`` style."""
+        return f"{self.predicate}({','.join(self.args)})"
+
+
+def parse_atom(text: str) -> Atom:
+    """Parse ``pred(a, b)``; corpus aliases map to the paper's predicate names."""
+    m = _ATOM.fullmatch(text)
+    if not m:
+        raise AtomError(f"{text.strip()!r} is not an atom like toyInRoom(block0, room1)")
+    pred = PREDICATE_ALIASES.get(m.group(1), m.group(1))
+    args = tuple(a.strip() for a in m.group(2).split(",")) if m.group(2).strip() else ()
+    for a in args:
+        if not _NAME.fullmatch(a):
+            raise AtomError(f"{text.strip()!r}: argument {a!r} is not an object name")
+    return Atom(pred, args)
+
+
+def parse_goal(text: str) -> tuple[Atom, ...]:
+    """Parse a conjunction of atoms separated by spaces (commas inside atoms only)."""
+    text = text.strip()
+    if not text:
+        raise AtomError("empty goal: expected one or more atoms like agentInRoom(agent0, room1)")
+    atoms = []
+    pos = 0
+    while pos < len(text):
+        m = _ATOM.match(text, pos)
+        if not m:
+            raise AtomError(f"cannot read an atom at {text[pos:]!r} in goal {text!r}")
+        atoms.append(parse_atom(m.group(0)))
+        pos = m.end()
+    return tuple(atoms)
+
+
+def format_goal(atoms: tuple[Atom, ...] | list[Atom]) -> str:
+    """Write a conjunction the way the labels CSV does."""
+    return " ".join(str(a) for a in atoms)

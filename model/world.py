@@ -1,0 +1,317 @@
+"""Cleanup World as an OO-MDP: palettes, objects, layouts, states and push dynamics.
+
+Coordinates follow the commands-to-tasks corpus: x grows east, y grows north,
+a room is the rectangle LEFT..RIGHT x BOTTOM..TOP whose border cells are walls,
+and a door rectangle clears the wall cells it covers. A cell is *inside* a room
+when LEFT < x < RIGHT and BOTTOM < y < TOP. Cells that are neither inside a
+room nor door cells cannot be entered.
+
+Objects keep the corpus's names in file order (``room0``, ``door0``,
+``block0``, ``agent0``) so that atoms printed here compare with gold labels.
+groundlang calls the movable objects *toys*, as the paper does; the corpus
+calls them blocks, hence their names.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+
+import numpy as np
+
+__all__ = [
+    "Action",
+    "ACTION_DELTAS",
+    "Palette",
+    "PALETTES",
+    "get_palette",
+    "Room",
+    "Door",
+    "Toy",
+    "Agent",
+    "Layout",
+    "State",
+    "step",
+    "WorldError",
+]
+
+
+class WorldError(ValueError):
+    """A layout or state that is not a valid Cleanup World."""
+
+
+class Action(enum.IntEnum):
+    """Movement actions, with the corpus's spelling as ``name.lower()``."""
+
+    NORTH = 0
+    SOUTH = 1
+    EAST = 2
+    WEST = 3
+
+    @classmethod
+    def parse(cls, word: str) -> "Action":
+        """Parse a corpus action word (case and surrounding spaces ignored)."""
+        try:
+            return cls[word.strip().upper()]
+        except KeyError:
+            raise WorldError(
+                f"unknown action {word.strip()!r}; expected one of north, south, east, west"
+            ) from None
+
+    @property
+    def word(self) -> str:
+        return self.name.lower()
+
+
+# (dx, dy) per action, indexed by Action value.
+ACTION_DELTAS = np.array([[0, 1], [0, -1], [1, 0], [-1, 0]], dtype=np.int64)
+
+
+@dataclass(frozen=True)
+class Palette:
+    """Names for the colour and shape indices a corpus file uses."""
+
+    name: str
+    colours: tuple[str, ...]
+    shapes: tuple[str, ...]
+
+    def colour(self, index: int) -> str:
+        if not 0 <= index < len(self.colours):
+            raise WorldError(
+                f"colour index {index} is outside palette {self.name!r} "
+                f"(0..{len(self.colours) - 1})"
+            )
+        return self.colours[index]
+
+    def shape(self, index: int) -> str:
+        if not 0 <= index < len(self.shapes):
+            raise WorldError(
+                f"shape index {index} is outside palette {self.name!r} "
+                f"(0..{len(self.shapes) - 1})"
+            )
+        return self.shapes[index]
+
+    def colour_index(self, name: str) -> int:
+        try:
+            return self.colours.index(name)
+        except ValueError:
+            raise WorldError(f"colour {name!r} is not in palette {self.name!r}") from None
+
+    def shape_index(self, name: str) -> int:
+        try:
+            return self.shapes.index(name)
+        except ValueError:
+            raise WorldError(f"shape {name!r} is not in palette {self.name!r}") from None
+
+
+PALETTES: dict[str, Palette] = {
+    "sokoban": Palette(
+        "sokoban",
+        (
+            "black", "blue", "cyan", "darkGray", "gray", "green", "lightGray",
+            "magenta", "orange", "pink", "red", "white", "yellow",
+        ),
+        ("star", "moon", "circle", "smiley", "square"),
+    ),
+    "sokoban2": Palette(
+        "sokoban2",
+        ("blue", "green", "magenta", "red", "yellow"),
+        ("chair", "bag", "backpack", "basket"),
+    ),
+}
+
+
+def get_palette(name: str | Palette) -> Palette:
+    """Return the palette called ``name`` (``sokoban`` or ``sokoban2``)."""
+    if isinstance(name, Palette):
+        return name
+    try:
+        return PALETTES[name]
+    except KeyError:
+        raise WorldError(
+            f"unknown palette {name!r}; expected one of {', '.join(sorted(PALETTES))}"
+        ) from None
+
+
+@dataclass(frozen=True)
+class Room:
+    colour: str
+    left: int
+    top: int
+    right: int
+    bottom: int
+
+    def contains(self, x: int, y: int) -> bool:
+        """True when (x, y) lies strictly inside the room's walls."""
+        return self.left < x < self.right and self.bottom < y < self.top
+
+
+@dataclass(frozen=True)
+class Door:
+    left: int
+    top: int
+    right: int
+    bottom: int
+
+    def contains(self, x: int, y: int) -> bool:
+        return self.left <= x <= self.right and self.bottom <= y <= self.top
+
+
+@dataclass(frozen=True)
+class Toy:
+    colour: str
+    shape: str
+    x: int
+    y: int
+
+
+@dataclass(frozen=True)
+class Agent:
+    x: int
+    y: int
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The static part of a state: rooms, doors and the toys' fixed attributes."""
+
+    rooms: tuple[Room, ...]
+    doors: tuple[Door, ...]
+    toy_attributes: tuple[tuple[str, str], ...]  # (colour, shape) per toy
+    palette: Palette = field(compare=True)
+
+    @cached_property
+    def width(self) -> int:
+        return max(r.right for r in self.rooms) + 1
+
+    @cached_property
+    def height(self) -> int:
+        return max(r.top for r in self.rooms) + 1
+
+    @cached_property
+    def walkable(self) -> np.ndarray:
+        """Boolean grid ``[width, height]``: cells an object may occupy.
+
+        Room interiors, plus door cells; a door only clears cells that belong
+        to some room's rectangle, it never opens the space outside all rooms.
+        """
+        interior = np.zeros((self.width, self.height), dtype=bool)
+        covered = np.zeros_like(interior)
+        for r in self.rooms:
+            interior[r.left + 1 : r.right, r.bottom + 1 : r.top] = True
+            covered[r.left : r.right + 1, r.bottom : r.top + 1] = True
+        door = np.zeros_like(interior)
+        for d in self.doors:
+            door[max(d.left, 0) : d.right + 1, max(d.bottom, 0) : d.top + 1] = True
+        return interior | (door & covered)
+
+    @cached_property
+    def wall(self) -> np.ndarray:
+        """Boolean grid ``[width, height]``: border cells of any room (before doors)."""
+        grid = np.zeros((self.width, self.height), dtype=bool)
+        for r in self.rooms:
+            grid[r.left : r.right + 1, r.bottom] = True
+            grid[r.left : r.right + 1, r.top] = True
+            grid[r.left, r.bottom : r.top + 1] = True
+            grid[r.right, r.bottom : r.top + 1] = True
+        return grid
+
+    @property
+    def room_names(self) -> list[str]:
+        return [f"room{i}" for i in range(len(self.rooms))]
+
+    @property
+    def door_names(self) -> list[str]:
+        return [f"door{i}" for i in range(len(self.doors))]
+
+    @property
+    def toy_names(self) -> list[str]:
+        return [f"block{i}" for i in range(len(self.toy_attributes))]
+
+    def validate(self) -> None:
+        """Raise WorldError when rooms are degenerate or overlap."""
+        if not self.rooms:
+            raise WorldError("a layout needs at least one room")
+        for i, r in enumerate(self.rooms):
+            if r.right - r.left < 2 or r.top - r.bottom < 2:
+                raise WorldError(
+                    f"room{i} ({r.left},{r.top},{r.right},{r.bottom}) has no interior "
+                    "(need RIGHT-LEFT >= 2 and TOP-BOTTOM >= 2)"
+                )
+            if min(r.left, r.bottom) < 0:
+                raise WorldError(f"room{i} has a negative coordinate")
+        for i, a in enumerate(self.rooms):
+            for j in range(i + 1, len(self.rooms)):
+                b = self.rooms[j]
+                if (
+                    max(a.left + 1, b.left + 1) < min(a.right, b.right)
+                    and max(a.bottom + 1, b.bottom + 1) < min(a.top, b.top)
+                ):
+                    raise WorldError(f"room{i} and room{j} overlap")
+        for i, d in enumerate(self.doors):
+            if d.right < d.left or d.top < d.bottom:
+                raise WorldError(f"door{i} has RIGHT < LEFT or TOP < BOTTOM")
+
+
+@dataclass(frozen=True)
+class State:
+    """A full Cleanup World state: a layout plus the agent's and toys' positions."""
+
+    layout: Layout
+    agent: Agent
+    toys: tuple[Toy, ...]
+
+    @property
+    def positions(self) -> np.ndarray:
+        """Dynamic part as ``[1 + num_toys, 2]`` int64 (agent first, then toys)."""
+        return np.array([[self.agent.x, self.agent.y]] + [[t.x, t.y] for t in self.toys])
+
+    def with_positions(self, positions: np.ndarray) -> "State":
+        agent = Agent(int(positions[0, 0]), int(positions[0, 1]))
+        toys = tuple(
+            replace(t, x=int(p[0]), y=int(p[1])) for t, p in zip(self.toys, positions[1:])
+        )
+        return State(self.layout, agent, toys)
+
+    def validate(self) -> None:
+        """Raise WorldError when an object stands where no object may be."""
+        self.layout.validate()
+        walk = self.layout.walkable
+        w, h = walk.shape
+        for name, (x, y) in zip(["agent0"] + self.layout.toy_names, self.positions):
+            if not (0 <= x < w and 0 <= y < h) or not walk[x, y]:
+                raise WorldError(f"{name} at ({x},{y}) is inside a wall or outside every room")
+        cells = [tuple(p) for p in self.positions]
+        if len(set(cells)) != len(cells):
+            raise WorldError("two objects share a cell")
+
+
+def step(state: State, action: Action) -> State:
+    """Apply one move with Sokoban pushes; blocked moves leave the state unchanged."""
+    pos = state.positions
+    walk = state.layout.walkable
+    dx, dy = ACTION_DELTAS[int(action)]
+    ax, ay = pos[0]
+    tx, ty = ax + dx, ay + dy
+
+    def free(x: int, y: int) -> bool:
+        return 0 <= x < walk.shape[0] and 0 <= y < walk.shape[1] and bool(walk[x, y])
+
+    if not free(tx, ty):
+        return state
+    for i in range(1, len(pos)):
+        if pos[i, 0] == tx and pos[i, 1] == ty:
+            bx, by = tx + dx, ty + dy
+            blocked = not free(bx, by) or any(
+                pos[j, 0] == bx and pos[j, 1] == by for j in range(1, len(pos))
+            )
+            if blocked:
+                return state
+            new = pos.copy()
+            new[i] = (bx, by)
+            new[0] = (tx, ty)
+            return state.with_positions(new)
+    new = pos.copy()
+    new[0] = (tx, ty)
+    return state.with_positions(new)

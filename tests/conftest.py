@@ -1,0 +1,38 @@
+"""Shared fixtures: paths to the project's fixtures and to the optional shared corpus."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+TESTS = Path(__file__).parent
+FIXTURES = TESTS / "fixtures"
+SHARED_CORPUS = TESTS.parent.parent / "shared" / "data" / "commands-to-tasks"
+
+
+@pytest.fixture
+def fixtures() -> Path:
+    return FIXTURES
+
+
+@pytest.fixture
+def shared_corpus() -> Path:
+    """The crowd-sourced corpus in ../shared; tests using it skip where it is absent."""
+    if not (SHARED_CORPUS / "allTurkTrain").is_dir():
+        pytest.skip(f"commands-to-tasks corpus not found at {SHARED_CORPUS} (it is not part of the repository)")
+    return SHARED_CORPUS
+
+
+@pytest.fixture(autouse=True)
+def _pyro_state():
+    """Pyro validation on and an empty parameter store for every test."""
+    try:
+        import pyro
+    except ImportError:  # pragma: no cover
+        yield
+        return
+    pyro.enable_validation(True)
+    pyro.clear_param_store()
+    yield
+    pyro.clear_param_store()
