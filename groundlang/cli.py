@@ -15,7 +15,7 @@ import logging
 import sys
 
 # Order is the order of ``groundlang --help``.
-COMMANDS = ["check", "show"]
+COMMANDS = ["check", "show", "tasks"]
 
 
 def build_parser() -> argparse.ArgumentParser:

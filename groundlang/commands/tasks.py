@@ -1,0 +1,60 @@
+"""``groundlang tasks FILE --palette NAME [--library LP] [--json]``: lifted tasks, groundings, constraints."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from groundlang.corpus import read_instance, read_state_file
+from groundlang.model.world import PALETTES
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "tasks", help="list lifted tasks and their groundings and binding constraints in a file's initial state"
+    )
+    p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state file")
+    p.add_argument("--palette", required=True, choices=sorted(PALETTES), help="colour/shape palette of the file")
+    p.add_argument("--library", metavar="LP", action="append",
+                   help="task library .lp file (repeatable; default: groundlang's tasks.lp)")
+    p.add_argument("--allow-scripts", action="store_true",
+                   help="let library files run #script blocks (only for files you trust)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.tasks import candidate_tasks
+
+    path = Path(args.file)
+    if path.suffix == ".state":
+        state = read_state_file(path, args.palette)
+    else:
+        state = read_instance(path, args.palette).initial_state
+    library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts)
+    candidates = candidate_tasks(state, library)
+    if args.json:
+        out = {
+            "lifted_tasks": library.names,
+            "groundings": [
+                {
+                    "task": g.task,
+                    "goal": g.goal_text,
+                    "constraints": [[str(a) for a in c.atoms] for c in constraints],
+                }
+                for g, constraints in candidates
+            ],
+        }
+        print(json.dumps(out, indent=1))
+        return 0
+    print(f"lifted tasks ({len(library.tasks)}):")
+    for t in library.tasks:
+        print(f"  {t}")
+    print(f"groundings in the initial state of {path} ({len(candidates)}):")
+    for g, constraints in candidates:
+        print(f"  {g.task}: {g.goal_text}")
+        for c in constraints:
+            print(f"      {c}")
+    return 0

@@ -1,0 +1,272 @@
+"""The public API: learn word meanings from commands with demonstrations, then follow commands.
+
+    learner = Learner(language_model="parse").fit(corpus)
+    learner.posterior("take the star to the red room", state).table()
+    result = learner.follow("take the star to the red room", state)
+    learner.save("model/"); Learner.load("model/")
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from groundlang.grammar.parser import parse
+from groundlang.inference.joint import FitResult, fit_globals, posterior
+from groundlang.inference.likelihoods import behaviour_log_likelihoods
+from groundlang.inference.planning import TaskSettings, rollout, rollout_states, solve_task
+from groundlang.logic.atoms import Atom, format_goal
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
+from groundlang.model.features import goal_mask
+from groundlang.model.geometry import cell_tables
+from groundlang.model.interpretations import CONTEXT_ROLES, Interpretation, interpretations
+from groundlang.model.language_models import LanguageModel, ParseAligned, get_language_model
+from groundlang.model.statespace import enumerate_states
+from groundlang.model.vocabulary import NULL, Vocabulary, class_token
+from groundlang.model.world import Action, State, get_palette
+
+__all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError"]
+
+log = logging.getLogger(__name__)
+
+
+class NotFittedError(ValueError):
+    """A learner was asked to interpret a command before it was trained or loaded."""
+
+
+def _capital(word: str) -> str:
+    return word[:1].upper() + word[1:]
+
+
+@dataclass
+class Posterior:
+    """Posterior over interpretations (L, T, C) of one command in one state."""
+
+    command: str
+    interpretations: list[Interpretation]
+    probabilities: np.ndarray  # [J]
+    readings: list = field(default_factory=list)  # grammar Readings
+    reading_probabilities: np.ndarray | None = None  # [R] posterior over readings
+
+    def ranked(self) -> list[tuple[float, Interpretation]]:
+        order = np.argsort(-self.probabilities, kind="stable")
+        return [(float(self.probabilities[j]), self.interpretations[j]) for j in order]
+
+    def goals(self) -> list[tuple[tuple[Atom, ...], float]]:
+        """Marginal posterior over grounded goals (T), summed over constraints, most probable first."""
+        totals: dict[tuple[Atom, ...], float] = {}
+        for p, interp in zip(self.probabilities, self.interpretations):
+            totals[interp.goal] = totals.get(interp.goal, 0.0) + float(p)
+        return sorted(totals.items(), key=lambda kv: -kv[1])
+
+    def lifted_tasks(self) -> dict[str, float]:
+        totals: dict[str, float] = {}
+        for p, interp in zip(self.probabilities, self.interpretations):
+            totals[interp.lifted] = totals.get(interp.lifted, 0.0) + float(p)
+        return dict(sorted(totals.items(), key=lambda kv: -kv[1]))
+
+    @property
+    def best_goal(self) -> tuple[Atom, ...]:
+        return self.goals()[0][0]
+
+    def table(self, top: int = 10) -> str:
+        """A plain-text table of the most probable interpretations."""
+        lines = [f"{'prob':>7}  {'task':<22} {'goal':<40} constraints"]
+        for p, interp in self.ranked()[:top]:
+            constraint = " ∧ ".join(str(a) for a in interp.constraint.atoms) or "(none)"
+            lines.append(f"{p:7.4f}  {interp.lifted:<22} {format_goal(interp.goal):<40} {constraint}")
+        return "\n".join(lines)
+
+
+@dataclass
+class FollowResult:
+    """What :meth:`Learner.follow` did: its reading of the command and the plan it executed."""
+
+    command: str
+    posterior: Posterior
+    goal: tuple[Atom, ...]
+    states: list[State]
+    actions: list[Action]
+    reached: bool
+    reason: str
+
+    @property
+    def final_state(self) -> State:
+        return self.states[-1]
+
+
+class Learner:
+    """Learns word meanings from (command, demonstration) pairs and follows new commands.
+
+    ``language_model`` is one of ``bow``, ``ibm2``, ``parse`` (default).
+    ``library`` is a :class:`TaskLibrary` (default: the authored one).
+    ``cache_dir`` holds behaviour likelihoods (see
+    :func:`groundlang.inference.likelihoods.behaviour_log_likelihoods`).
+    """
+
+    def __init__(
+        self,
+        language_model: str | LanguageModel = "parse",
+        library: TaskLibrary | None = None,
+        steps: int = 300,
+        lr: float = 0.1,
+        seed: int = 0,
+        settings: TaskSettings | None = None,
+        cache_dir: str | Path | None = None,
+    ):
+        self.lm = get_language_model(language_model) if isinstance(language_model, str) else language_model
+        self.library = library if library is not None else TaskLibrary.load()
+        self.steps = steps
+        self.lr = lr
+        self.seed = seed
+        self.settings = settings or TaskSettings()
+        self.cache_dir = cache_dir
+        self.vocab: Vocabulary | None = None
+        self.globals: dict[str, torch.Tensor] | None = None
+        self.fit_result: FitResult | None = None
+        self._interp_cache: dict[State, list[Interpretation]] = {}
+
+    # ----------------------------------------------------------------- observing
+    def _interpretations(self, state: State) -> list[Interpretation]:
+        if state not in self._interp_cache:
+            self._interp_cache[state] = interpretations(state, self.library)
+        return self._interp_cache[state]
+
+    def observe(self, instances: Sequence, progress: bool = False) -> list[Observation]:
+        """Observations with behaviour likelihoods for training instances (cached on disk)."""
+        interps = [self._interpretations(inst.initial_state) for inst in instances]
+        goals = [sorted({i.goal for i in group}) for group in interps]
+        table = behaviour_log_likelihoods(
+            instances, goals, self.settings, cache_dir=self.cache_dir, progress=progress
+        )
+        observations = []
+        for inst, group, goal_list, row in zip(instances, interps, goals, table):
+            by_goal = dict(zip(goal_list, row))
+            readings = tuple(parse(inst.command))
+            observations.append(
+                Observation(
+                    tuple(readings[0].logical_form.words),
+                    readings,
+                    tuple(group),
+                    tuple(float(by_goal[i.goal]) for i in group),
+                )
+            )
+        return observations
+
+    def _command_observation(self, command: str, state: State) -> Observation:
+        readings = tuple(parse(command))
+        return Observation(tuple(readings[0].logical_form.words), readings, tuple(self._interpretations(state)))
+
+    # ----------------------------------------------------------------- training
+    def _build_vocabulary(self, observations: Iterable[Observation], palettes: set) -> Vocabulary:
+        vocab = Vocabulary()
+        tokens: list[str] = [task.name for task in self.library.tasks]
+        roles: list[str] = []
+        preps: list[str] = []
+        for obs in observations:
+            vocab.add_words(obs.words)
+            for reading in obs.readings:
+                preps.extend(p for p, _ in entity_words(reading.logical_form) if p is not None)
+            for interp in obs.interpretations:
+                tokens.extend(machine_string(interp))
+                for rb in interp.roles:
+                    roles.append(rb.role)
+                    tokens.append(class_token(rb.cls))
+        for palette in sorted(palettes, key=lambda p: p.name):
+            tokens.extend(f"roomIs{_capital(c)}" for c in palette.colours)
+            tokens.extend(f"toyIs{_capital(c)}" for c in palette.colours)
+            tokens.extend(f"toyIs{_capital(s)}" for s in palette.shapes)
+        tokens.extend(class_token(c) for c in ("agent", "room", "toy"))
+        vocab.add_tokens(tokens)
+        vocab.add_roles(roles + list(CONTEXT_ROLES))
+        vocab.add_preps(preps)
+        return vocab
+
+    def fit(self, instances: Sequence, progress: bool = False, init: dict | None = None,
+            observations: list[Observation] | None = None) -> "Learner":
+        """Train on instances (anything with ``command``, ``initial_state``, ``states``, ``actions``).
+
+        ``observations`` may be passed to reuse behaviour likelihoods computed
+        once for several fits (as leave-one-out does); ``init`` warm-starts
+        the globals and requires the vocabulary they were fitted with
+        (``self.vocab``) to stay in place.
+        """
+        instances = list(instances)
+        if not instances:
+            raise ValueError("cannot fit on an empty corpus")
+        if observations is None:
+            observations = self.observe(instances, progress=progress)
+        if init is None or self.vocab is None:
+            palettes = {inst.initial_state.layout.palette for inst in instances}
+            self.vocab = self._build_vocabulary(observations, palettes)
+            init = None
+        batch = encode(observations, self.vocab)
+        self.fit_result = fit_globals(
+            batch, self.lm, self.vocab, steps=self.steps, lr=self.lr, seed=self.seed,
+            init=init, progress=progress,
+        )
+        self.globals = self.fit_result.globals
+        return self
+
+    # ----------------------------------------------------------------- using
+    def _require_fitted(self) -> None:
+        if self.globals is None or self.vocab is None:
+            raise NotFittedError("this learner has not been trained: call fit() or Learner.load() first")
+
+    def posterior(self, command: str, state: State) -> Posterior:
+        """Posterior over interpretations of ``command`` in ``state`` from the words alone."""
+        self._require_fitted()
+        obs = self._command_observation(command, state)
+        batch = encode([obs], self.vocab)
+        probs = posterior(batch, self.lm, self.globals, use_behaviour=False)[0]
+        J = len(obs.interpretations)
+        reading_probs = None
+        if isinstance(self.lm, ParseAligned):
+            with torch.no_grad():
+                _, per_reading, _ = self.lm.reading_table(self.globals, batch)  # [1, J, R]
+                joint = per_reading[0, :J] + torch.log(probs[:J].clamp_min(1e-30))[:, None]
+                reading_probs = torch.softmax(torch.logsumexp(joint, 0), 0)[: len(obs.readings)].numpy()
+        return Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
+                         list(obs.readings), reading_probs)
+
+    def follow(self, command: str, state: State, max_steps: int = 200) -> FollowResult:
+        """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act."""
+        post = self.posterior(command, state)
+        goal = post.best_goal
+        space = enumerate_states(state)
+        mask = goal_mask(space, goal, cell_tables(state.layout))
+        solved = solve_task(space.next_state, mask, self.settings)
+        trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
+        states, actions = rollout_states(space, trajectory)
+        reached = bool(mask[int(trajectory.states[-1])])
+        return FollowResult(command, post, goal, states, actions, reached, trajectory.reason)
+
+    def lexicon(self, top: int = 3, min_count: int = 1) -> dict[str, list[tuple[str, float]]]:
+        """Each known word's most probable meanings ``P(token | word)`` (uniform prior over tokens)."""
+        self._require_fitted()
+        phi = self.globals["phi"]  # [S, W]
+        meaning = phi / phi.sum(0, keepdim=True)
+        out = {}
+        for w, word in enumerate(self.vocab.words[1:], start=1):
+            order = torch.argsort(meaning[:, w], descending=True)[:top]
+            out[word] = [(self.vocab.tokens[int(s)], float(meaning[s, w])) for s in order]
+        return out
+
+    # ----------------------------------------------------------------- persistence
+    def save(self, directory: str | Path) -> Path:
+        from groundlang.model_io import save_learner
+
+        return save_learner(self, directory)
+
+    @classmethod
+    def load(cls, directory: str | Path) -> "Learner":
+        from groundlang.model_io import load_learner
+
+        return load_learner(directory)

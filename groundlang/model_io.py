@@ -1,0 +1,128 @@
+"""Saving and loading trained learners: JSON plus an ``.npz`` of tensors, never pickle.
+
+A model directory holds ``model.json`` (format name and version, language
+model and its settings, vocabulary, the task library as ASP text, planning
+settings, the sha256 of the tensor file) and ``globals.npz``. Both are
+written to temporary files and renamed; the JSON goes last and names the
+tensor file's hash, so a directory whose tensors were swapped or truncated
+is refused on load instead of giving silently different answers.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import torch
+
+__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner", "write_atomically"]
+
+FORMAT = "groundlang-model"
+FORMAT_VERSION = 1
+MODEL_JSON = "model.json"
+GLOBALS = "globals.npz"
+
+
+class ModelFormatError(ValueError):
+    """A model directory that is missing, corrupt, foreign or from another format version."""
+
+
+def write_atomically(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def save_learner(learner, directory: str | Path) -> Path:
+    """Write a fitted learner to ``directory`` (created if needed); returns the directory."""
+    from groundlang.learner import NotFittedError
+
+    if learner.globals is None or learner.vocab is None:
+        raise NotFittedError("cannot save a learner that has not been trained")
+    directory = Path(directory)
+    buffer = io.BytesIO()
+    np.savez(buffer, **{k: v.detach().cpu().numpy() for k, v in learner.globals.items()})
+    tensors = buffer.getvalue()
+    meta = {
+        "format": FORMAT,
+        "version": FORMAT_VERSION,
+        "language_model": learner.lm.name,
+        "language_model_settings": learner.lm.settings(),
+        "vocabulary": learner.vocab.to_json(),
+        "task_library": learner.library.to_asp(),
+        "planning": learner.settings.as_dict(),
+        "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed},
+        "globals_sha256": hashlib.sha256(tensors).hexdigest(),
+    }
+    write_atomically(directory / GLOBALS, tensors)
+    write_atomically(directory / MODEL_JSON, json.dumps(meta, indent=1).encode("utf-8"))
+    return directory
+
+
+def _read_json(directory: Path) -> dict:
+    path = directory / MODEL_JSON
+    if not directory.is_dir():
+        raise ModelFormatError(f"{directory}: not a model directory (it does not exist or is not a folder)")
+    if not path.is_file():
+        raise ModelFormatError(f"{directory}: no {MODEL_JSON}; this is not a groundlang model directory")
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ModelFormatError(f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        raise ModelFormatError(f"{path}: not a groundlang model (format field is not {FORMAT!r})")
+    if meta.get("version") != FORMAT_VERSION:
+        raise ModelFormatError(
+            f"{path}: model format version {meta.get('version')!r}, this groundlang reads version {FORMAT_VERSION}"
+        )
+    return meta
+
+
+def load_learner(directory: str | Path):
+    """Read a learner written by :func:`save_learner`; raises ModelFormatError on anything amiss."""
+    from groundlang.learner import Learner
+    from groundlang.inference.planning import TaskSettings
+    from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.language_models import get_language_model
+    from groundlang.model.vocabulary import Vocabulary
+
+    directory = Path(directory)
+    meta = _read_json(directory)
+    tensor_path = directory / GLOBALS
+    if not tensor_path.is_file():
+        raise ModelFormatError(f"{directory}: {GLOBALS} is missing")
+    data = tensor_path.read_bytes()
+    if hashlib.sha256(data).hexdigest() != meta.get("globals_sha256"):
+        raise ModelFormatError(
+            f"{tensor_path}: contents do not match the hash recorded in {MODEL_JSON} (truncated or swapped?)"
+        )
+    try:
+        with np.load(io.BytesIO(data), allow_pickle=False) as npz:
+            values = {k: torch.from_numpy(np.array(npz[k])) for k in npz.files}
+        learner = Learner(
+            get_language_model(meta["language_model"], **meta["language_model_settings"]),
+            library=TaskLibrary.from_text(meta["task_library"], f"{directory / MODEL_JSON}:task_library"),
+            steps=meta["training"]["steps"], lr=meta["training"]["lr"], seed=meta["training"]["seed"],
+            settings=TaskSettings(**meta["planning"]),
+        )
+        learner.vocab = Vocabulary.from_json(meta["vocabulary"])
+    except (KeyError, TypeError, zipfile.BadZipFile, OSError) as exc:
+        raise ModelFormatError(f"{directory}: model files are incomplete or corrupt ({exc!r})") from None
+    learner.globals = values
+    return learner

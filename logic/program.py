@@ -1,0 +1,245 @@
+"""Loading and grounding ASP programs safely: package rules, user rules, clear errors.
+
+A :class:`Program` is a checked, parsed set of sources (the package's ``.lp``
+files, read with ``importlib.resources``, and any user ``.lp`` files). It is
+parsed once; each environment then gets one ``clingo.Control`` with the
+program plus that environment's facts, grounded once.
+
+Safety and errors (all ``AspError``, a ``ValueError``, so the CLI prints one line):
+
+- syntax errors name the file, line and column (``AspSyntaxError``);
+- unsafe variables and other grounding errors carry clingo's message with the
+  file and line rewritten to the source's name (``AspGroundingError``);
+- ``#script`` blocks are refused unless ``allow_scripts=True``, and
+  ``#include`` is refused always: list the file among the sources instead
+  (``AspScriptRefused``);
+- grounding and solving stop waiting after ``time_limit`` seconds
+  (``AspTimeout``). clingo cannot interrupt its grounder, so a runaway
+  grounding is left in a daemon thread that ends with the process; the caller
+  gets the error at once.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import threading
+from dataclasses import dataclass, field
+from importlib.resources import files
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import clingo
+import clingo.ast as ast
+
+__all__ = [
+    "AspError",
+    "AspSyntaxError",
+    "AspScriptRefused",
+    "AspGroundingError",
+    "AspTimeout",
+    "Source",
+    "package_source",
+    "file_source",
+    "Program",
+    "DEFAULT_TIME_LIMIT",
+]
+
+log = logging.getLogger(__name__)
+
+# Seconds; generous for the Cleanup World (milliseconds), short enough to notice a runaway program.
+DEFAULT_TIME_LIMIT = 10.0
+
+
+class AspError(ValueError):
+    """An ASP program that cannot be used; the message names the file and line."""
+
+
+class AspSyntaxError(AspError):
+    """A source that clingo cannot parse."""
+
+
+class AspScriptRefused(AspError):
+    """A source with ``#script`` (without opt-in) or ``#include``."""
+
+
+class AspGroundingError(AspError):
+    """clingo refused to ground (unsafe variables, undefined operations that are errors...)."""
+
+
+class AspTimeout(AspError):
+    """Grounding or solving took longer than the time limit."""
+
+
+@dataclass(frozen=True)
+class Source:
+    """ASP text and the name its errors are reported under (a path or ``groundlang.logic/x.lp``)."""
+
+    name: str
+    text: str
+
+
+def package_source(filename: str) -> Source:
+    """A ``.lp`` file shipped in ``groundlang.logic``."""
+    resource = files("groundlang.logic") / filename
+    return Source(f"groundlang.logic/{filename}", resource.read_text(encoding="utf-8"))
+
+
+def file_source(path: str | Path) -> Source:
+    """A user's ``.lp`` file; raises OSError when unreadable and AspError when not UTF-8."""
+    path = Path(path)
+    data = path.read_bytes()
+    try:
+        return Source(str(path), data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise AspSyntaxError(f"{path}:{line}: not UTF-8 text (byte {exc.start})") from None
+
+
+# Comments and strings are removed before looking for directives, so that "% no #include here" is fine.
+_COMMENT_OR_STRING = re.compile(r'%\*.*?\*%|%[^\n]*|"(?:\\.|[^"\\])*"', re.DOTALL)
+_INCLUDE = re.compile(r"#include\b")
+
+
+def _blank(match: re.Match) -> str:
+    return re.sub(r"[^\n]", " ", match.group(0))
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _relocate(node, name: str) -> None:
+    """Give every location in an AST the source's name (clingo says ``<string>``)."""
+    if isinstance(node, ast.AST):
+        if "location" in node.keys():
+            b, e = node.location.begin, node.location.end
+            node.location = ast.Location(
+                ast.Position(name, b.line, b.column), ast.Position(name, e.line, e.column)
+            )
+        for key in node.child_keys:
+            _relocate(getattr(node, key), name)
+    elif isinstance(node, (ast.ASTSequence, list, tuple)):
+        for child in node:
+            _relocate(child, name)
+
+
+def _parse(source: Source, allow_scripts: bool) -> list:
+    """Parse one source into AST statements, refusing scripts and includes."""
+    scrubbed = _COMMENT_OR_STRING.sub(_blank, source.text)
+    m = _INCLUDE.search(scrubbed)
+    if m:
+        line = scrubbed.count("\n", 0, m.start()) + 1
+        raise AspScriptRefused(
+            f"{source.name}:{line}: #include is not allowed; pass the included file as another source"
+        )
+    messages: list[str] = []
+    statements: list = []
+    try:
+        ast.parse_string(
+            source.text, statements.append, logger=lambda code, msg: messages.append(msg)
+        )
+    except RuntimeError:
+        text = _one_line(" ".join(messages)) or "syntax error"
+        raise AspSyntaxError(text.replace("<string>", source.name)) from None
+    for stm in statements:
+        if stm.ast_type == ast.ASTType.Script and not allow_scripts:
+            raise AspScriptRefused(
+                f"{source.name}:{stm.location.begin.line}: #script blocks are refused; "
+                "pass allow_scripts=True only for programs you trust"
+            )
+        _relocate(stm, source.name)
+    return statements
+
+
+def _run_with_limit(work, time_limit: float | None, what: str) -> None:
+    """Run ``work()`` in a daemon thread (clingo releases the GIL), wait at most ``time_limit`` s."""
+    box: dict[str, BaseException] = {}
+
+    def target() -> None:
+        try:
+            work()
+        except BaseException as exc:  # re-raised in the caller's thread
+            box["error"] = exc
+
+    thread = threading.Thread(target=target, name="clingo", daemon=True)
+    thread.start()
+    thread.join(time_limit)
+    if thread.is_alive():
+        raise AspTimeout(
+            f"{what} did not finish within {time_limit:g} s; the program probably grounds "
+            "infinitely many atoms (raise time_limit if it is just large)"
+        )
+    if "error" in box:
+        raise box["error"]
+
+
+@dataclass(frozen=True)
+class Program:
+    """Checked, parsed ASP sources; ground them with an environment's facts via :meth:`control`."""
+
+    sources: tuple[Source, ...]
+    allow_scripts: bool = False
+    _statements: tuple = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        statements = []
+        for source in self.sources:
+            statements.extend(_parse(source, self.allow_scripts))
+        object.__setattr__(self, "_statements", tuple(statements))
+
+    @classmethod
+    def from_sources(cls, sources: Iterable[Source], allow_scripts: bool = False) -> "Program":
+        return cls(tuple(sources), allow_scripts)
+
+    @property
+    def names(self) -> str:
+        return ", ".join(s.name for s in self.sources)
+
+    def control(
+        self, facts: str = "", *, time_limit: float | None = DEFAULT_TIME_LIMIT,
+        arguments: Sequence[str] = (),
+    ) -> clingo.Control:
+        """A Control with the program and ``facts`` (trusted, generated text), grounded once."""
+        messages: list[str] = []
+
+        def logger(code: clingo.MessageCode, msg: str) -> None:
+            messages.append(msg)
+            log.debug("clingo: %s", _one_line(msg))
+
+        ctl = clingo.Control(list(arguments), logger=logger)
+        with ast.ProgramBuilder(ctl) as builder:
+            for stm in self._statements:
+                builder.add(stm)
+        try:
+            if facts:
+                ctl.add("base", [], facts)
+        except RuntimeError:
+            raise AspSyntaxError(
+                "environment facts: " + _one_line(" ".join(messages)).replace("<block>", "facts")
+            ) from None
+
+        def ground() -> None:
+            try:
+                ctl.ground([("base", [])])
+            except RuntimeError:
+                errors = [m for m in messages if "error" in m] or messages
+                raise AspGroundingError(_one_line(" ".join(errors)) or "grounding failed") from None
+
+        _run_with_limit(ground, time_limit, f"grounding {self.names}")
+        return ctl
+
+    def solve(
+        self, facts: str = "", *, models: int = 0, time_limit: float | None = DEFAULT_TIME_LIMIT
+    ) -> list[list[clingo.Symbol]]:
+        """Ground once and return the shown atoms of every answer set (``models=0``: all)."""
+        ctl = self.control(facts, time_limit=time_limit, arguments=[f"--models={models}"])
+        found: list[list[clingo.Symbol]] = []
+        with ctl.solve(on_model=lambda m: found.append(m.symbols(shown=True)), async_=True) as handle:
+            if not handle.wait(time_limit):
+                handle.cancel()
+                raise AspTimeout(
+                    f"solving {self.names} did not finish within {time_limit:g} s"
+                )
+            handle.get()
+        return found

@@ -1,0 +1,300 @@
+"""Lifted tasks, their groundings and binding constraints, enumerated by clingo.
+
+A lifted task (the paper's parametric reward/termination function) is written
+in ASP as facts (see ``tasks.lp``)::
+
+    task(toyToRoom). var(toyToRoom, "T", toy). var(toyToRoom, "R", room).
+    goal(toyToRoom, toyInRoom, ("T", "R")).
+
+For one environment (facts from ``groundlang.model.geometry``), one clingo
+Control grounds ``domain.lp + pfs.lp + library + groundings.lp`` once and one
+solve enumerates every grounding as an answer set; the colour/shape PFs true
+of the bound objects come with it, and Python only builds their subsets
+(the binding constraints) and a deterministic order.
+
+This module knows clingo terms and object names only; it never imports the
+world model.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from itertools import combinations
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import clingo
+
+from .atoms import Atom, format_goal
+from .program import (
+    DEFAULT_TIME_LIMIT,
+    AspError,
+    Program,
+    Source,
+    file_source,
+    package_source,
+)
+
+__all__ = [
+    "Variable",
+    "LiftedTask",
+    "GroundedTask",
+    "BindingConstraint",
+    "TaskLibrary",
+    "pf_name",
+    "format_lifted_task",
+    "binding_constraints",
+    "enumerate_groundings",
+    "DOMAIN_FILES",
+    "CLASS_ORDER",
+]
+
+# The domain rules every task program needs, in load order.
+DOMAIN_FILES = ("domain.lp", "pfs.lp")
+# Variables of a lifted task are listed in this class order, then by name.
+CLASS_ORDER = ("agent", "toy", "room", "door")
+# groundings.lp derives goal atoms for PFs of these arities.
+MAX_GOAL_ARITY = 3
+
+
+@dataclass(frozen=True)
+class Variable:
+    """A typed variable of a lifted task, e.g. ``Variable("R", "room")``."""
+
+    name: str
+    cls: str
+
+
+@dataclass(frozen=True)
+class LiftedTask:
+    """A task over typed variables; ``goal`` is a conjunction of (predicate, variable names)."""
+
+    name: str
+    variables: tuple[Variable, ...]
+    goal: tuple[tuple[str, tuple[str, ...]], ...]
+
+    def variable(self, name: str) -> Variable:
+        for v in self.variables:
+            if v.name == name:
+                return v
+        raise KeyError(f"lifted task {self.name} has no variable {name!r}")
+
+    def __str__(self) -> str:
+        params = ", ".join(f"{v.name}: {v.cls}" for v in self.variables)
+        body = " ∧ ".join(f"{p}({', '.join(a)})" for p, a in self.goal)
+        return f"{self.name}({params}) := {body}"
+
+
+@dataclass(frozen=True)
+class GroundedTask:
+    """A lifted task with its variables bound to objects; ``goal`` atoms use object names."""
+
+    task: str
+    binding: tuple[tuple[str, str], ...]  # (variable, object name), in the lifted task's variable order
+    goal: tuple[Atom, ...]
+
+    def object_of(self, variable: str) -> str:
+        return dict(self.binding)[variable]
+
+    @property
+    def goal_text(self) -> str:
+        """The goal as the labels CSV writes it: ``toyInRoom(block0, room2)``."""
+        return format_goal(self.goal)
+
+    def __str__(self) -> str:
+        return f"{self.task}[{', '.join(f'{v}={o}' for v, o in self.binding)}]: {self.goal_text}"
+
+
+@dataclass(frozen=True)
+class BindingConstraint:
+    """A conjunction of colour/shape atoms over bound objects; ``()`` is the empty conjunction."""
+
+    atoms: tuple[Atom, ...] = ()
+
+    def __str__(self) -> str:
+        return " ∧ ".join(str(a) for a in self.atoms) if self.atoms else "true"
+
+
+def pf_name(term: clingo.Symbol) -> str:
+    """groundlang's name for a PF term: ``toyInRoom`` stays, ``roomIs(darkGray)`` -> ``roomIsDarkGray``."""
+    if term.type is not clingo.SymbolType.Function or not term.name:
+        raise AspError(f"PF name {term} must be a constant or a term like roomIs(green)")
+    parts = [term.name]
+    for arg in term.arguments:
+        text = arg.string if arg.type is clingo.SymbolType.String else str(arg)
+        parts.append(text[:1].upper() + text[1:])
+    return "".join(parts)
+
+
+def _natural_key(name: str) -> tuple:
+    """``room2`` before ``room10``."""
+    return tuple(int(t) if t.isdigit() else t for t in re.findall(r"\d+|\D+", name))
+
+
+def _tuple_args(term: clingo.Symbol) -> tuple[clingo.Symbol, ...]:
+    if term.type is clingo.SymbolType.Function and term.name == "":
+        return tuple(term.arguments)
+    return (term,)  # a lone value written without parentheses
+
+
+def _text(term: clingo.Symbol) -> str:
+    return term.string if term.type is clingo.SymbolType.String else str(term)
+
+
+def format_lifted_task(task: LiftedTask) -> str:
+    """ASP facts that define ``task`` (loadable as a library); the inverse of reading one."""
+    lines = [f"task({task.name})."]
+    lines += [f'var({task.name}, "{v.name}", {v.cls}).' for v in task.variables]
+    for pred, args in task.goal:
+        vs = ", ".join(f'"{a}"' for a in args)
+        lines.append(f"goal({task.name}, {pred}, ({vs}{',' if len(args) == 1 else ''})).")
+    return "\n".join(lines) + "\n"
+
+
+def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[LiftedTask, ...]:
+    """Ground the library without an environment and read task/1, var/3, goal/3."""
+    ctl = program.control("", time_limit=time_limit)
+    atoms = ctl.symbolic_atoms
+    names = sorted(_text(a.symbol.arguments[0]) for a in atoms.by_signature("task", 1))
+    variables: dict[str, list[Variable]] = {n: [] for n in names}
+    goals: dict[str, list[tuple[str, tuple[str, ...]]]] = {n: [] for n in names}
+    signatures: dict[str, tuple[str, ...]] = {}
+    for a in atoms.by_signature("pf", 3):
+        cls_, name, sig = a.symbol.arguments
+        if cls_.name == "position":
+            signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
+    for a in atoms.by_signature("var", 3):
+        t, v, c = (_text(x) for x in a.symbol.arguments)
+        if t not in variables:
+            raise AspError(f"{program.names}: var({t}, \"{v}\", {c}) names no task({t})")
+        variables[t].append(Variable(v, c))
+    for a in atoms.by_signature("goal", 3):
+        t, p, args = a.symbol.arguments
+        t = _text(t)
+        if t not in goals:
+            raise AspError(f"{program.names}: goal({t}, ...) names no task({t})")
+        goals[t].append((pf_name(p), tuple(_text(x) for x in _tuple_args(args))))
+    tasks = []
+    rank = {c: i for i, c in enumerate(CLASS_ORDER)}
+    for n in names:
+        vs = sorted(set(variables[n]), key=lambda v: (rank.get(v.cls, len(rank)), v.cls, v.name))
+        if len({v.name for v in vs}) != len(vs):
+            raise AspError(f"{program.names}: task {n} declares a variable with two classes")
+        if not goals[n]:
+            raise AspError(f"{program.names}: task {n} has no goal/3 atom")
+        by_name = {v.name: v.cls for v in vs}
+        for pred, args in goals[n]:
+            if not 1 <= len(args) <= MAX_GOAL_ARITY:
+                raise AspError(f"{program.names}: task {n}: goal {pred} has {len(args)} arguments "
+                               f"(1..{MAX_GOAL_ARITY} supported)")
+            for arg in args:
+                if arg not in by_name:
+                    raise AspError(f"{program.names}: task {n}: goal {pred} uses variable "
+                                   f"{arg!r} that has no var({n}, \"{arg}\", Class)")
+            sig = signatures.get(pred)
+            if sig is not None and tuple(by_name[a] for a in args) != sig:
+                raise AspError(f"{program.names}: task {n}: goal {pred}({', '.join(args)}) "
+                               f"needs arguments of classes {sig}")
+        tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n])))))
+    return tuple(tasks)
+
+
+class TaskLibrary:
+    """Lifted tasks read from ASP: the default ``tasks.lp`` or user ``.lp`` files."""
+
+    def __init__(self, sources: Sequence[Source], *, allow_scripts: bool = False,
+                 time_limit: float | None = DEFAULT_TIME_LIMIT) -> None:
+        self.sources = tuple(sources)
+        self.allow_scripts = allow_scripts
+        domain = tuple(package_source(f) for f in DOMAIN_FILES)
+        self.program = Program(domain + self.sources, allow_scripts)
+        self.grounding_program = Program(
+            domain + self.sources + (package_source("groundings.lp"),), allow_scripts
+        )
+        self.tasks: tuple[LiftedTask, ...] = _read_lifted_tasks(self.program, time_limit)
+
+    @classmethod
+    def load(cls, paths: Iterable[str | Path] | None = None, allow_scripts: bool = False,
+             time_limit: float | None = DEFAULT_TIME_LIMIT) -> "TaskLibrary":
+        """The default library (``paths=None``) or the lifted tasks of the given ``.lp`` files."""
+        if paths is None:
+            return cls((package_source("tasks.lp"),), allow_scripts=allow_scripts,
+                       time_limit=time_limit)
+        return cls([file_source(p) for p in paths], allow_scripts=allow_scripts,
+                   time_limit=time_limit)
+
+    @classmethod
+    def from_text(cls, text: str, source_name: str = "<text>", allow_scripts: bool = False,
+                  time_limit: float | None = DEFAULT_TIME_LIMIT) -> "TaskLibrary":
+        return cls((Source(source_name, text),), allow_scripts=allow_scripts, time_limit=time_limit)
+
+    @classmethod
+    def from_tasks(cls, tasks: Iterable[LiftedTask], source_name: str = "<tasks>") -> "TaskLibrary":
+        """A library of given lifted tasks (e.g. discovered ones), via their ASP text."""
+        return cls.from_text("".join(format_lifted_task(t) for t in tasks), source_name)
+
+    def task(self, name: str) -> LiftedTask:
+        for t in self.tasks:
+            if t.name == name:
+                return t
+        raise KeyError(f"no lifted task {name!r} in the library ({', '.join(self.names)})")
+
+    @property
+    def names(self) -> list[str]:
+        return [t.name for t in self.tasks]
+
+    def to_lp(self) -> str:
+        """The library as ASP facts (normalised; comments and rules of the sources are not kept)."""
+        return "".join(format_lifted_task(t) for t in self.tasks)
+
+    def __repr__(self) -> str:
+        return f"TaskLibrary({', '.join(self.names)} from {', '.join(s.name for s in self.sources)})"
+
+
+def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
+    """Every conjunction of ``atoms`` (all subsets), largest first, the empty one last."""
+    atoms = tuple(atoms)
+    out = []
+    for k in range(len(atoms), -1, -1):
+        out.extend(BindingConstraint(c) for c in combinations(atoms, k))
+    return out
+
+
+def enumerate_groundings(
+    library: TaskLibrary, facts: str, *, time_limit: float | None = DEFAULT_TIME_LIMIT
+) -> list[tuple[GroundedTask, list[BindingConstraint]]]:
+    """Every permissible grounding not true initially, with its binding constraints.
+
+    ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
+    One Control, one grounding, one solve enumerating all answer sets. Order: library
+    order of tasks, then bound objects in variable order (``room2`` before ``room10``).
+    """
+    tasks = {t.name: t for t in library.tasks}
+    order = {t.name: i for i, t in enumerate(library.tasks)}
+    found = []
+    for model in library.grounding_program.solve(facts, models=0, time_limit=time_limit):
+        chosen, bind, goal, extra = None, {}, [], []
+        for sym in model:
+            if sym.name == "chosen":
+                chosen = _text(sym.arguments[0])
+            elif sym.name == "bind":
+                bind[_text(sym.arguments[0])] = _text(sym.arguments[1])
+            elif sym.name == "goal_atom":
+                goal.append(Atom(pf_name(sym.arguments[0]),
+                                 tuple(_text(a) for a in _tuple_args(sym.arguments[1]))))
+            elif sym.name == "constraint_atom":
+                extra.append(Atom(pf_name(sym.arguments[0]),
+                                  tuple(_text(a) for a in _tuple_args(sym.arguments[1]))))
+        lifted = tasks[chosen]
+        binding = tuple((v.name, bind[v.name]) for v in lifted.variables)
+        # Goal atoms in the lifted task's goal order, constraint atoms in variable order.
+        goal_order = {(p, tuple(bind[a] for a in args)): i for i, (p, args) in enumerate(lifted.goal)}
+        goal.sort(key=lambda a: goal_order.get((a.predicate, a.args), len(goal_order)))
+        position = {o: i for i, (_, o) in enumerate(binding)}
+        extra.sort(key=lambda a: (min(position[o] for o in a.args), a.predicate, a.args))
+        grounded = GroundedTask(chosen, binding, tuple(goal))
+        key = (order[chosen], tuple(_natural_key(o) for _, o in binding))
+        found.append((key, grounded, binding_constraints(extra)))
+    found.sort(key=lambda item: item[0])
+    return [(g, c) for _, g, c in found]

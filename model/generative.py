@@ -1,0 +1,49 @@
+"""The generative model of words, interpretations and demonstrations, in Pyro.
+
+Per instance i with initial state S_i::
+
+    z_i = (L, T, C) ~ prior over interpretations of S_i   # uniform L, T | L, C | L, T
+    B_i | T         ~ Boltzmann policy on T's reward       # pyro.factor from a cached table
+    E_i | L, C      ~ language model with global params    # pyro.factor, alignments summed out
+
+The interpretation is enumerated exactly (``TraceEnum_ELBO``); the global
+word distributions are Dirichlet-distributed and fitted by MAP.
+"""
+
+from __future__ import annotations
+
+import pyro
+import pyro.distributions as dist
+import torch
+from pyro.ops.indexing import Vindex
+
+from groundlang.model.encoding import Batch
+from groundlang.model.language_models import LanguageModel
+from groundlang.model.vocabulary import Vocabulary
+
+__all__ = ["instance_model", "global_sizes"]
+
+
+def global_sizes(vocab: Vocabulary) -> dict:
+    return {
+        "num_tokens": len(vocab.tokens),
+        "num_words": len(vocab.words),
+        "num_roles": len(vocab.roles),
+        "num_preps": len(vocab.preps),
+    }
+
+
+def instance_model(batch: Batch, lm: LanguageModel, sizes: dict, use_behaviour: bool = True) -> torch.Tensor:
+    """The Pyro model; returns the words table ``[I, J]`` for inspection."""
+    g = lm.sample_globals(**sizes)
+    words_ll = lm.log_likelihood(g, batch)  # [I, J]
+    I = batch.num_instances
+    idx = torch.arange(I)
+    with pyro.plate("instances", I, dim=-1):
+        z = pyro.sample(
+            "z", dist.Categorical(logits=batch.log_prior), infer={"enumerate": "parallel"}
+        )
+        if use_behaviour:
+            pyro.factor("behaviour", Vindex(batch.behaviour)[idx, z])
+        pyro.factor("words", Vindex(words_ll)[idx, z])
+    return words_ll

@@ -1,0 +1,99 @@
+"""From a Layout/State to ASP facts, and per-cell tables computed once per layout by clingo.
+
+The static geometry (which cell is inside which room, which cell is a door
+cell) is defined by the rules of ``groundlang.logic/domain.lp``; clingo runs
+them once per layout and the answers become integer grids that per-state PF
+values are computed from with numpy/torch (no clingo call per state).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from groundlang.logic.program import DEFAULT_TIME_LIMIT, AspError, Program, package_source
+
+from .world import Layout, State
+
+__all__ = ["CellTables", "cell_tables", "layout_facts", "state_facts", "domain_program"]
+
+_CONSTANT = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
+
+
+def _constant(value: str, what: str) -> str:
+    """An attribute value as an ASP constant (palette names are lower camel case)."""
+    if not _CONSTANT.match(value):
+        raise AspError(f"{what} {value!r} cannot be an ASP constant (expected lowerCamelCase)")
+    return value
+
+
+def layout_facts(layout: Layout) -> str:
+    """Facts for the static part: palette, rooms, doors, toys' attributes (see domain.lp)."""
+    pal = layout.palette
+    lines = [f"palette_colour({_constant(c, 'colour')})." for c in pal.colours]
+    lines += [f"palette_shape({_constant(s, 'shape')})." for s in pal.shapes]
+    for name, r in zip(layout.room_names, layout.rooms):
+        lines.append(f"room({name}). rect({name},{r.left},{r.top},{r.right},{r.bottom}). "
+                     f"colour({name},{_constant(r.colour, 'colour')}).")
+    for name, d in zip(layout.door_names, layout.doors):
+        lines.append(f"door({name}). rect({name},{d.left},{d.top},{d.right},{d.bottom}).")
+    for name, (colour, shape) in zip(layout.toy_names, layout.toy_attributes):
+        lines.append(f"toy({name}). colour({name},{_constant(colour, 'colour')}). "
+                     f"shape({name},{_constant(shape, 'shape')}).")
+    return "\n".join(lines) + "\n"
+
+
+def state_facts(state: State) -> str:
+    """Facts for a whole state: the layout's facts plus the agent and every position (at/3)."""
+    lines = [layout_facts(state.layout), "agent(agent0).",
+             f"at(agent0,{state.agent.x},{state.agent.y})."]
+    lines += [f"at({n},{t.x},{t.y})." for n, t in zip(state.layout.toy_names, state.toys)]
+    return "\n".join(lines) + "\n"
+
+
+@lru_cache(maxsize=1)
+def domain_program() -> Program:
+    """``domain.lp`` alone, parsed once per process."""
+    return Program((package_source("domain.lp"),))
+
+
+@dataclass(frozen=True)
+class CellTables:
+    """Per-cell lookup grids ``[W, H]`` int16 (read-only) for one layout.
+
+    room_of: index of the room whose interior holds the cell, -1 if none.
+    door_of: index of the door whose rectangle holds the cell (walkable door cells only;
+             the lowest index where door rectangles overlap), -1 if none.
+    """
+
+    room_of: np.ndarray
+    door_of: np.ndarray
+
+
+def _index(name: str, prefix: str) -> int:
+    return int(name[len(prefix):])
+
+
+@lru_cache(maxsize=256)
+def cell_tables(layout: Layout) -> CellTables:
+    """The ``inside/3`` and ``door_cell/3`` atoms of domain.lp as grids; cached per layout."""
+    ctl = domain_program().control(layout_facts(layout), time_limit=DEFAULT_TIME_LIMIT)
+    w, h = layout.width, layout.height
+    room_of = np.full((w, h), -1, dtype=np.int16)
+    door_of = np.full((w, h), -1, dtype=np.int16)
+    for grid, signature, prefix in ((room_of, "inside", "room"), (door_of, "door_cell", "door")):
+        cells = [
+            (_index(a.symbol.arguments[0].name, prefix), a.symbol.arguments[1].number,
+             a.symbol.arguments[2].number)
+            for a in ctl.symbolic_atoms.by_signature(signature, 3)
+        ]
+        # Highest index first so that the lowest index wins where rectangles overlap.
+        for i, x, y in sorted(cells, reverse=True):
+            if 0 <= x < w and 0 <= y < h:
+                grid[x, y] = i
+    room_of.flags.writeable = False
+    door_of.flags.writeable = False
+    return CellTables(room_of, door_of)

@@ -1,0 +1,153 @@
+"""Interpretations: the enumerable latent (L, T, C) of one instance, with its prior.
+
+An interpretation is a grounded task T of a lifted task L together with one
+binding constraint C (a conjunction of colour/shape PFs true of T's bound
+objects). The prior is the design's: L uniform over the lifted tasks
+permissible in the initial state, T uniform over L's groundings not already
+true, C uniform over the conjunctions of T. Each bound variable also gets a
+*role*, ``predicate.position`` of the first goal atom it appears in
+(``toyInRoom.1`` is "the room the toy must reach"), so that word alignments
+learned for one lifted task carry over to another that shares the role.
+
+Besides the task's variables, an instance offers *context roles* a noun
+phrase may refer to without being part of the goal: the room where the agent
+starts and the room where each bound toy starts ("from the orange room").
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass
+
+from groundlang.logic.atoms import Atom
+from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
+from groundlang.model.tasks import candidate_tasks
+from groundlang.model.world import State
+
+__all__ = [
+    "Interpretation",
+    "RoleBinding",
+    "interpretations",
+    "object_tokens",
+    "class_of",
+    "CONTEXT_ROLES",
+]
+
+CONTEXT_ROLES = ("agentStartRoom", "toyStartRoom")
+
+
+@dataclass(frozen=True)
+class RoleBinding:
+    """One thing a noun phrase may align with: a role, the object and its PF tokens."""
+
+    role: str  # "toyInRoom.1", "agentStartRoom", ...
+    obj: str  # object name, e.g. "room2"
+    cls: str  # object class: agent, room, toy
+    constraint_tokens: tuple[str, ...]  # PF names of C that hold of obj (what words may say)
+
+
+@dataclass(frozen=True)
+class Interpretation:
+    """One (L, T, C) candidate of an instance."""
+
+    task: GroundedTask
+    constraint: BindingConstraint
+    log_prior: float
+    roles: tuple[RoleBinding, ...]  # goal variables first, then context roles
+
+    @property
+    def lifted(self) -> str:
+        return self.task.task
+
+    @property
+    def goal(self) -> tuple[Atom, ...]:
+        return self.task.goal
+
+    @property
+    def constraint_tokens(self) -> tuple[str, ...]:
+        return tuple(a.predicate for a in self.constraint.atoms)
+
+
+def class_of(obj: str) -> str:
+    """Object class from the corpus naming convention (block0 is a toy)."""
+    for prefix, cls in (("agent", "agent"), ("room", "room"), ("door", "door"), ("block", "toy")):
+        if obj.startswith(prefix):
+            return cls
+    raise ValueError(f"cannot tell the class of object {obj!r}")
+
+
+def _capital(word: str) -> str:
+    return word[:1].upper() + word[1:]
+
+
+def object_tokens(state: State, obj: str) -> tuple[str, ...]:
+    """Names of the colour and shape PFs true of ``obj`` in ``state``."""
+    cls = class_of(obj)
+    index = int(obj.lstrip("abcdefghijklmnopqrstuvwxyz"))
+    if cls == "room":
+        return (f"roomIs{_capital(state.layout.rooms[index].colour)}",)
+    if cls == "toy":
+        colour, shape = state.layout.toy_attributes[index]
+        return (f"toyIs{_capital(colour)}", f"toyIs{_capital(shape)}")
+    return ()
+
+
+def _room_of(state: State, x: int, y: int) -> str | None:
+    for i, room in enumerate(state.layout.rooms):
+        if room.contains(x, y):
+            return f"room{i}"
+    return None
+
+
+def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary) -> tuple[RoleBinding, ...]:
+    lifted = next(t for t in library.tasks if t.name == task.task)
+    binding = dict(task.binding)
+    bindings = []
+    for var in lifted.variables:
+        role = next(
+            f"{pred}.{args.index(var.name)}" for pred, args in lifted.goal if var.name in args
+        )
+        obj = binding[var.name]
+        said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,))
+        bindings.append(RoleBinding(role, obj, var.cls, said))
+    start = _room_of(state, state.agent.x, state.agent.y)
+    if start is not None:
+        bindings.append(RoleBinding("agentStartRoom", start, "room", object_tokens(state, start)))
+    for var in lifted.variables:
+        if var.cls == "toy":
+            toy = state.toys[int(binding[var.name][len("block"):])]
+            room = _room_of(state, toy.x, toy.y)
+            if room is not None:
+                bindings.append(RoleBinding("toyStartRoom", room, "room", object_tokens(state, room)))
+            break
+    return tuple(bindings)
+
+
+def interpretations(state: State, library: TaskLibrary) -> list[Interpretation]:
+    """Every (L, T, C) of ``state`` with its log prior, in a deterministic order.
+
+    Raises ValueError when no lifted task has a grounding that is not already
+    true in ``state`` (nothing could be asked of the agent).
+    """
+    candidates = candidate_tasks(state, library)
+    if not candidates:
+        raise ValueError(
+            "no task of the library can be carried out from this state "
+            "(every grounding is impossible or already true)"
+        )
+    per_lifted = Counter(task.task for task, _ in candidates)
+    n_lifted = len(per_lifted)
+    result = []
+    for task, constraints in candidates:
+        log_prior_t = -math.log(n_lifted) - math.log(per_lifted[task.task])
+        for constraint in constraints:
+            result.append(
+                Interpretation(
+                    task,
+                    constraint,
+                    log_prior_t - math.log(len(constraints)),
+                    _roles(task, constraint, state, library),
+                )
+            )
+    return result

@@ -1,0 +1,342 @@
+"""Every state reachable from an initial state, with its deterministic transition table.
+
+A state's dynamic part (the agent's cell, then each toy's cell) is encoded as
+one int64 key over the layout's walkable cells: ``key = sum_j cell_j * W**j``
+with ``W`` walkable cells and ``j = 0`` the agent. The breadth-first search
+expands a whole frontier at once: successor keys for all frontier states and
+all four actions come from array operations on a per-cell neighbour table, so
+there is no Python loop over states. Seen keys are tracked in a dense index
+map when the key space ``W**(1+k)`` is small enough, and in a sorted key array
+otherwise. The result is ``next_state[S, A]`` (gather-style transitions, as
+soft value iteration wants them) and ``positions[S, 1+k, 2]``; index 0 is the
+initial state.
+
+The dynamics are those of :func:`groundlang.model.world.step`: moving into a
+toy pushes it one cell on unless a wall or another toy is there, in which case
+nothing moves.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+from functools import cached_property
+
+import numpy as np
+
+from groundlang.model.world import ACTION_DELTAS, Layout, State
+
+__all__ = ["StateSpace", "StateSpaceError", "enumerate_states", "trajectory_indices"]
+
+logger = logging.getLogger(__name__)
+
+NUM_ACTIONS = len(ACTION_DELTAS)
+
+# Largest key space (entries) for which the search keeps a dense int32 index
+# map (4 bytes per entry, so at most 128 MiB); beyond it, sorted keys.
+DENSE_KEY_LIMIT = 1 << 25
+
+
+class StateSpaceError(ValueError):
+    """A state space that cannot be built, or a state that is not in it."""
+
+
+class StateSpace:
+    """The reachable states of one initial state, as arrays.
+
+    Attributes:
+        layout: the static part shared by every state.
+        initial: the initial state (index 0).
+        next_state: ``[S, 4]`` int32, ``next_state[s, a]`` is the index reached
+            from state ``s`` by action ``a`` (``Action`` order NORTH, SOUTH,
+            EAST, WEST); blocked moves point back at ``s``.
+        positions: ``[S, 1 + k, 2]`` int16, (x, y) of the agent then each toy.
+    """
+
+    def __init__(
+        self,
+        initial: State,
+        next_state: np.ndarray,
+        positions: np.ndarray,
+        keys: np.ndarray,
+        cell_of: np.ndarray,
+    ) -> None:
+        self.layout: Layout = initial.layout
+        self.initial = initial
+        self.next_state = next_state
+        self.positions = positions
+        # keys[i] encodes state i; cell_of maps (x, y) to a walkable cell index or -1.
+        self._keys = keys
+        self._cell_of = cell_of
+        self._powers = _powers(int(cell_of.max()) + 1, positions.shape[1])
+
+    @property
+    def num_states(self) -> int:
+        return int(self.next_state.shape[0])
+
+    @property
+    def num_toys(self) -> int:
+        return int(self.positions.shape[1]) - 1
+
+    @property
+    def object_names(self) -> list[str]:
+        """Names of the moving objects in ``positions`` order: agent0, block0, ..."""
+        return ["agent0"] + self.layout.toy_names
+
+    def __len__(self) -> int:
+        return self.num_states
+
+    def __repr__(self) -> str:
+        return f"StateSpace({self.num_states} states, {self.num_toys} toy(s))"
+
+    @cached_property
+    def _sorted(self) -> tuple[np.ndarray, np.ndarray]:
+        order = np.argsort(self._keys, kind="stable")
+        return self._keys[order], order
+
+    def state_at(self, index: int) -> State:
+        """The State with index ``index`` (0 <= index < num_states)."""
+        if not 0 <= index < self.num_states:
+            raise StateSpaceError(f"state index {index} is outside 0..{self.num_states - 1}")
+        return self.initial.with_positions(self.positions[index])
+
+    def indices_of(self, positions: np.ndarray) -> np.ndarray:
+        """Indices of many states given as positions ``[n, 1 + k, 2]``; -1 where unreachable."""
+        pos = np.asarray(positions, dtype=np.int64)
+        if pos.ndim != 3 or pos.shape[1:] != self.positions.shape[1:]:
+            raise StateSpaceError(
+                f"positions of shape {tuple(pos.shape)} do not match [n, {self.positions.shape[1]}, 2]"
+            )
+        w, h = self._cell_of.shape
+        x, y = pos[..., 0], pos[..., 1]
+        on_grid = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+        cells = np.where(on_grid, self._cell_of[np.clip(x, 0, w - 1), np.clip(y, 0, h - 1)], -1)
+        valid = (cells >= 0).all(axis=1)
+        keys = np.where(valid, cells @ self._powers, -1)
+        sorted_keys, order = self._sorted
+        at = np.clip(np.searchsorted(sorted_keys, keys), 0, len(sorted_keys) - 1)
+        found = valid & (sorted_keys[at] == keys)
+        return np.where(found, order[at], -1)
+
+    def index_of(self, state: State | np.ndarray) -> int:
+        """Index of a State or a ``[1 + k, 2]`` positions array; StateSpaceError if unreachable."""
+        if isinstance(state, State):
+            if state.layout != self.layout:
+                raise StateSpaceError(f"state {_describe(state.positions)} has a different layout")
+            pos = state.positions
+        else:
+            pos = np.asarray(state)
+        index = int(self.indices_of(pos[None])[0])
+        if index < 0:
+            raise StateSpaceError(
+                f"state {_describe(pos)} is not reachable from the initial state "
+                f"{_describe(self.positions[0])}"
+            )
+        return index
+
+
+def _describe(positions: np.ndarray) -> str:
+    """``agent0@(4,2) block0@(2,2)`` for error messages."""
+    pos = np.asarray(positions)
+    names = ["agent0"] + [f"block{i}" for i in range(len(pos) - 1)]
+    return " ".join(f"{n}@({int(p[0])},{int(p[1])})" for n, p in zip(names, pos))
+
+
+def _powers(base: int, count: int) -> np.ndarray:
+    return np.array([base**j for j in range(count)], dtype=np.int64)
+
+
+def _neighbour_table(walkable: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Walkable cells and their neighbours.
+
+    Returns ``(cell_xy [W, 2], cell_of [width, height] int64 (-1 off cells),
+    neighbour [W + 1, 4] int64)``; ``W`` is the sentinel "no cell", and the
+    sentinel's own neighbours are the sentinel, so two-step look-ups need no
+    special case.
+    """
+    cell_xy = np.argwhere(walkable).astype(np.int64)
+    count = len(cell_xy)
+    width, height = walkable.shape
+    cell_of = np.full(walkable.shape, -1, dtype=np.int64)
+    cell_of[cell_xy[:, 0], cell_xy[:, 1]] = np.arange(count)
+    neighbour = np.full((count + 1, NUM_ACTIONS), count, dtype=np.int64)
+    for a, (dx, dy) in enumerate(ACTION_DELTAS):
+        x, y = cell_xy[:, 0] + dx, cell_xy[:, 1] + dy
+        inside = (x >= 0) & (x < width) & (y >= 0) & (y < height)
+        target = np.full(count, -1, dtype=np.int64)
+        target[inside] = cell_of[x[inside], y[inside]]
+        neighbour[:count, a] = np.where(target >= 0, target, count)
+    return cell_xy, cell_of, neighbour
+
+
+def _initial_cells(state: State, cell_of: np.ndarray) -> np.ndarray:
+    """Cells of the initial state's objects; StateSpaceError when one is off the walkable cells."""
+    pos = state.positions
+    width, height = cell_of.shape
+    names = ["agent0"] + state.layout.toy_names
+    cells = []
+    for name, (x, y) in zip(names, pos):
+        if not (0 <= x < width and 0 <= y < height) or cell_of[x, y] < 0:
+            raise StateSpaceError(
+                f"initial state {_describe(pos)}: {name} at ({x},{y}) is inside a wall "
+                "or outside every room"
+            )
+        cells.append(int(cell_of[x, y]))
+    if len(set(cells)) != len(cells):
+        raise StateSpaceError(f"initial state {_describe(pos)}: two objects share a cell")
+    return np.array(cells, dtype=np.int64)
+
+
+def state_count_bound(num_cells: int, num_toys: int) -> int:
+    """Upper bound on reachable states: distinct cells for the agent and each (named) toy."""
+    return math.perm(num_cells, num_toys + 1) if num_cells >= num_toys + 1 else 0
+
+
+def _pair_tables(neighbour: np.ndarray, powers: np.ndarray, dtype: type) -> list[np.ndarray]:
+    """Per-toy transition tables indexed by (agent cell, toy cell) pairs, ``[W * W, 4]``.
+
+    The successor of a state is ``key + sum_i T_i[agent + W * toy_i] >> 2``
+    unless the pushed toy would land on another toy. Each entry packs a key
+    displacement (times 4) with two flag bits: 1 when toy i is at the agent's
+    target cell, 2 when it is at the cell beyond. No toy has both and at most
+    one toy has each, so the flags of all toys sum to 3 exactly when a push is
+    blocked by another toy. T_1 also carries the agent's own move; a toy
+    pushed into a wall cancels it. With no toys, the table is indexed by the
+    agent's cell alone.
+    """
+    sentinel = neighbour.shape[0] - 1
+    cells = np.arange(sentinel)
+    target = neighbour[:sentinel]  # [W, 4]
+    beyond = neighbour[target, np.arange(NUM_ACTIONS)]  # [W, 4]
+    agent_move = np.where(target != sentinel, (target - cells[:, None]) * powers[0], 0)
+    if len(powers) == 1:
+        return [(agent_move * 4).astype(dtype)]
+    tables = []
+    toy = cells[:, None, None]  # pair index = agent + W * toy: toy is the slow axis
+    for i in range(1, len(powers)):
+        at_target = toy == target[None]  # [W(toy), W(agent), 4]
+        at_beyond = toy == beyond[None]
+        push = np.where(beyond == sentinel, -agent_move, (beyond - target) * powers[i])
+        delta = np.where(at_target, push[None], 0) + (agent_move[None] if i == 1 else 0)
+        packed = delta * 4 + at_target + 2 * at_beyond
+        tables.append(packed.reshape(-1, NUM_ACTIONS).astype(dtype))
+    return tables
+
+
+def enumerate_states(state: State, max_states: int = 2_000_000) -> StateSpace:
+    """Breadth-first enumeration of every state reachable from ``state``.
+
+    Returns a StateSpace whose index 0 is ``state``. Raises StateSpaceError
+    (a ValueError) when the initial state is invalid, or when the layout could
+    hold more than ``max_states`` states (checked up front, from the number of
+    walkable cells and toys; pass a larger ``max_states`` to allow it).
+    """
+    return _enumerate(state, max_states, dense=None)
+
+
+def _enumerate(state: State, max_states: int, dense: bool | None) -> StateSpace:
+    walkable = state.layout.walkable
+    cell_xy, cell_of, neighbour = _neighbour_table(walkable)
+    num_cells = len(cell_xy)
+    num_toys = len(state.toys)
+    start_cells = _initial_cells(state, cell_of)
+    bound = state_count_bound(num_cells, num_toys)
+    if bound > max_states:
+        raise StateSpaceError(
+            f"this layout could reach up to {bound:,} states ({num_cells} walkable cells, "
+            f"{num_toys} toy(s)), more than max_states={max_states:,}; "
+            f"pass max_states={bound:,} (or more) to enumerate_states to allow it"
+        )
+    key_space = num_cells ** (1 + num_toys)
+    if key_space >= 2**60:
+        raise StateSpaceError(
+            f"{num_cells} walkable cells and {num_toys} toys do not fit an int64 state key"
+        )
+    if dense is None:
+        dense = key_space <= DENSE_KEY_LIMIT
+    # int32 arithmetic is cheaper; the packed displacements need 2 spare bits.
+    dtype = np.int32 if key_space < 2**28 else np.int64
+    powers = _powers(num_cells, 1 + num_toys)
+    tables = _pair_tables(neighbour, powers, dtype)
+    pair_space = num_cells * num_cells
+
+    keys = (start_cells @ powers).astype(dtype)[None]
+    level_keys = [keys]
+    level_next: list[np.ndarray] = []
+    count = 1
+    if dense:
+        index_map = np.full(key_space, -1, dtype=np.int32)
+        index_map[keys] = 0
+    else:
+        seen_keys, seen_index = keys.copy(), np.zeros(1, dtype=np.int64)
+
+    while len(keys):
+        # Successor keys [n, 4] of the whole frontier.
+        if num_toys == 0:
+            packed = tables[0][keys]
+        else:
+            agent = keys % num_cells
+            packed = tables[0][keys % pair_space]
+            for i in range(2, 1 + num_toys):
+                toy = keys // powers[i] if i == num_toys else (keys // powers[i]) % num_cells
+                packed += tables[i - 1][agent + num_cells * toy]
+        if num_toys >= 2:
+            packed[(packed & 3) == 3] = 0
+        successor = (keys[:, None] + (packed >> 2)).ravel()
+
+        if dense:
+            index = index_map[successor]
+            fresh = successor[index < 0]
+            if len(fresh):
+                # Dedupe without sorting everything: each fresh key writes a
+                # distinct negative tag, the surviving tag marks one copy.
+                tags = -2 - np.arange(len(fresh), dtype=np.int32)
+                index_map[fresh] = tags
+                new_keys = np.sort(fresh[index_map[fresh] == tags])
+                index_map[new_keys] = np.arange(count, count + len(new_keys), dtype=np.int32)
+                index = index_map[successor]
+            else:
+                new_keys = fresh
+        else:
+            at = np.clip(np.searchsorted(seen_keys, successor), 0, len(seen_keys) - 1)
+            seen = seen_keys[at] == successor
+            new_keys = np.unique(successor[~seen])
+            index = np.empty(len(successor), dtype=np.int64)
+            index[seen] = seen_index[at[seen]]
+            index[~seen] = count + np.searchsorted(new_keys, successor[~seen])
+            where = np.searchsorted(seen_keys, new_keys)
+            seen_keys = np.insert(seen_keys, where, new_keys)
+            seen_index = np.insert(seen_index, where, np.arange(count, count + len(new_keys)))
+        level_next.append(index.reshape(-1, NUM_ACTIONS))
+        count += len(new_keys)
+        keys = new_keys
+        level_keys.append(keys)
+
+    all_keys = np.concatenate(level_keys).astype(np.int64)
+    next_state = np.concatenate(level_next).astype(np.int32, copy=False)
+    positions = cell_xy[(all_keys[:, None] // powers) % num_cells].astype(np.int16)
+    logger.debug(
+        "enumerated %d states in %d levels (%s key map)",
+        count, len(level_next), "dense" if dense else "sorted",
+    )
+    return StateSpace(state, next_state, positions, all_keys, cell_of)
+
+
+def trajectory_indices(space: StateSpace, states: Sequence[State]) -> np.ndarray:
+    """Indices ``[T]`` int64 of a demonstration's states; StateSpaceError naming the first missing step."""
+    if not states:
+        return np.zeros(0, dtype=np.int64)
+    for t, s in enumerate(states):
+        if s.layout != space.layout:
+            raise StateSpaceError(f"step {t}: state {_describe(s.positions)} has a different layout")
+    positions = np.stack([s.positions for s in states])
+    index = space.indices_of(positions)
+    missing = np.flatnonzero(index < 0)
+    if len(missing):
+        t = int(missing[0])
+        raise StateSpaceError(
+            f"step {t}: state {_describe(positions[t])} is not reachable from the initial state "
+            f"{_describe(space.positions[0])}"
+        )
+    return index.astype(np.int64)

@@ -1,0 +1,90 @@
+"""Candidate tasks of an environment: groundings and binding constraints for a State.
+
+The generative model's task part: L uniform over permissible lifted tasks,
+T | L uniform over groundings not already true in the initial state, C | T
+uniform over conjunctions of colour/shape PFs true of T's bound objects. This
+module produces the candidates (one clingo Control per environment, cached)
+and narrows them by predicates a logical form already knows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Collection, Mapping, Sequence
+
+from groundlang.logic.atoms import Atom
+from groundlang.logic.tasks import (
+    BindingConstraint,
+    GroundedTask,
+    TaskLibrary,
+    enumerate_groundings,
+)
+
+from .geometry import state_facts
+from .world import State
+
+__all__ = ["Candidate", "candidate_tasks", "narrow_by_known", "NarrowedCandidate"]
+
+Candidate = tuple[GroundedTask, list[BindingConstraint]]
+
+
+@lru_cache(maxsize=64)
+def _candidates(state: State, library: TaskLibrary) -> tuple:
+    found = enumerate_groundings(library, state_facts(state))
+    return tuple((g, tuple(c)) for g, c in found)
+
+
+def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
+    """Every permissible grounding not true in ``state``, each with all its binding constraints.
+
+    Order: tasks in library order, then bound objects in variable order; constraints
+    largest first, the empty conjunction last. One clingo Control per (state, library),
+    cached (the library is keyed by identity, the state by value). Raises AspError.
+    """
+    return [(g, list(c)) for g, c in _candidates(state, library)]
+
+
+@dataclass(frozen=True)
+class NarrowedCandidate:
+    """A grounding that agrees with what is known, its consistent constraints and its probability."""
+
+    grounded: GroundedTask
+    constraints: tuple[BindingConstraint, ...]
+    probability: float  # uniform over the surviving groundings of all tasks
+
+
+def narrow_by_known(
+    candidates: Sequence[Candidate],
+    known: Mapping[str, Collection[str]],
+    *,
+    task: str | None = None,
+) -> list[NarrowedCandidate]:
+    """Keep the groundings whose bound objects satisfy the known PFs; the rest stays uniform.
+
+    known: PF names (as groundlang writes them) per variable of the lifted task, e.g.
+           ``{"T": {"toyIsStar"}}`` for "the star" (the paper's new-colour-name case).
+           A grounding whose task lacks one of these variables is dropped.
+    task: the lifted task's name when the logical form names it; ``None`` keeps every task.
+    Each kept grounding keeps only the constraints that contain the known atoms, since the
+    known words are part of the description. Probabilities are uniform, 1/len(result);
+    an empty result means nothing in the environment fits what is known.
+    """
+    kept: list[tuple[GroundedTask, tuple[BindingConstraint, ...]]] = []
+    for grounded, constraints in candidates:
+        if task is not None and grounded.task != task:
+            continue
+        binding = dict(grounded.binding)
+        if any(v not in binding for v in known):
+            continue
+        required = {Atom(p, (binding[v],)) for v, pfs in known.items() for p in pfs}
+        # The first (largest) constraint holds every colour/shape PF true of the bound objects.
+        true_atoms = set(constraints[0].atoms) if constraints else set()
+        if not required <= true_atoms:
+            continue
+        consistent = tuple(c for c in constraints if required <= set(c.atoms))
+        kept.append((grounded, consistent))
+    if not kept:
+        return []
+    p = 1.0 / len(kept)
+    return [NarrowedCandidate(g, c, p) for g, c in kept]

@@ -1,0 +1,101 @@
+"""Vocabularies: the words commands use and the semantic tokens words may mean.
+
+Semantic tokens are what the language models generate words from: the names
+of lifted tasks (``toyToRoom``), of colour and shape PFs (``roomIsRed``), of
+object classes (``CLASS:room``) and the catch-all ``NULL`` that explains
+words with no meaning in the domain ("the", "please"). Index 0 of the word
+vocabulary is ``<unk>``: a word never seen in training gets only the prior's
+share of every token's distribution.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+__all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "OTHER_PREP", "DIRECT_OBJECT", "class_token"]
+
+NULL = "NULL"
+UNK = "<unk>"
+NO_ROLE = "none"
+OTHER_PREP = "<other>"
+DIRECT_OBJECT = "<dobj>"
+
+
+def class_token(cls: str) -> str:
+    return f"CLASS:{cls}"
+
+
+@dataclass
+class Vocabulary:
+    """Two index maps: words (``<unk>`` first) and semantic tokens (``NULL`` first)."""
+
+    words: list[str] = field(default_factory=lambda: [UNK])
+    tokens: list[str] = field(default_factory=lambda: [NULL])
+    # What a noun phrase may align with (index 0: nothing) and the prepositions
+    # that introduce noun phrases (index 0: unseen preposition, 1: direct object).
+    roles: list[str] = field(default_factory=lambda: [NO_ROLE])
+    preps: list[str] = field(default_factory=lambda: [OTHER_PREP, DIRECT_OBJECT])
+
+    def __post_init__(self) -> None:
+        self._word_index = {w: i for i, w in enumerate(self.words)}
+        self._token_index = {t: i for i, t in enumerate(self.tokens)}
+        self._role_index = {r: i for i, r in enumerate(self.roles)}
+        self._prep_index = {p: i for i, p in enumerate(self.preps)}
+        if self.words[:1] != [UNK] or self.tokens[:1] != [NULL]:
+            raise ValueError("a vocabulary starts with <unk> among words and NULL among tokens")
+
+    def add_words(self, words: Iterable[str]) -> None:
+        for w in words:
+            if w not in self._word_index:
+                self._word_index[w] = len(self.words)
+                self.words.append(w)
+
+    def add_tokens(self, tokens: Iterable[str]) -> None:
+        for t in tokens:
+            if t not in self._token_index:
+                self._token_index[t] = len(self.tokens)
+                self.tokens.append(t)
+
+    def add_roles(self, roles: Iterable[str]) -> None:
+        for r in roles:
+            if r not in self._role_index:
+                self._role_index[r] = len(self.roles)
+                self.roles.append(r)
+
+    def add_preps(self, preps: Iterable[str]) -> None:
+        for p in preps:
+            if p not in self._prep_index:
+                self._prep_index[p] = len(self.preps)
+                self.preps.append(p)
+
+    def role_id(self, role: str) -> int:
+        """Index of a role; a role training never saw aligns like nothing."""
+        return self._role_index.get(role, 0)
+
+    def prep_id(self, prep: str | None) -> int:
+        if prep is None:
+            return 1
+        return self._prep_index.get(prep, 0)
+
+    def word_id(self, word: str) -> int:
+        return self._word_index.get(word, 0)
+
+    def token_id(self, token: str) -> int:
+        """Index of a semantic token; tokens unknown to training map to NULL."""
+        return self._token_index.get(token, 0)
+
+    def has_token(self, token: str) -> bool:
+        return token in self._token_index
+
+    def to_json(self) -> dict:
+        return {
+            "words": list(self.words),
+            "tokens": list(self.tokens),
+            "roles": list(self.roles),
+            "preps": list(self.preps),
+        }
+
+    @classmethod
+    def from_json(cls, data: dict) -> "Vocabulary":
+        return cls(list(data["words"]), list(data["tokens"]), list(data["roles"]), list(data["preps"]))
