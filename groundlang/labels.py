@@ -94,6 +94,10 @@ _POSITION = {
 }
 
 
+def _article(word: str) -> str:
+    return "an" if word[:1] in "aeiou" else "a"
+
+
 def _capitalised(word: str) -> str:
     return word[:1].upper() + word[1:]
 
@@ -142,7 +146,7 @@ def _resolve(atom: Atom, state: State, context: str) -> tuple[str, list]:
             have = ", ".join(objs)
             raise LabelError(f"{context}: {atom} names {name}, which does not exist (objects: {have})")
         if objs[name][0] != cls:
-            raise LabelError(f"{context}: {atom} needs a {cls} where it names {name} (a {objs[name][0]})")
+            raise LabelError(f"{context}: {atom}: {name} is a {objs[name][0]}; expected {_article(cls)} {cls} there")
         found.append(objs[name][1])
     return atom.predicate, found
 

@@ -46,15 +46,23 @@ def fit_globals(
     lr: float = 0.1,
     seed: int = 0,
     init: dict[str, torch.Tensor] | None = None,
-    tol: float = 1e-5,
+    tol: float = 1e-6,
+    optimizer: str = "lbfgs",
     progress: bool = False,
 ) -> FitResult:
-    """MAP estimate of the language model's globals; stops early when the loss settles.
+    """MAP estimate of the language model's globals.
 
+    ``optimizer="lbfgs"`` (default) runs L-BFGS with a strong-Wolfe line
+    search on the enumerated loss (``TraceEnum_ELBO.differentiable_loss``)
+    for at most ``steps`` iterations, stopping when the relative loss change
+    falls below ``tol``; the objective is smooth and low-dimensional, so this
+    converges in tens of iterations where Adam needs hundreds.
+    ``optimizer="adam"`` runs ``steps`` SVI steps with learning rate ``lr``.
     ``init`` warm-starts from earlier globals (e.g. the full model's, for a
-    leave-one-out fold). The relative loss change over 10 steps below ``tol``
-    counts as converged.
+    leave-one-out fold); the fit still runs to convergence on its own data.
     """
+    if optimizer not in ("lbfgs", "adam"):
+        raise ValueError(f"unknown optimizer {optimizer!r}; expected lbfgs or adam")
     pyro.set_rng_seed(seed)
     pyro.clear_param_store()
     sizes = global_sizes(vocab)
@@ -64,7 +72,7 @@ def fit_globals(
 
     init_fn = init_to_value(values=init) if init else init_to_mean
     guide = AutoDelta(poutine.block(model, hide=["z"]), init_loc_fn=init_fn)
-    svi = SVI(model, guide, pyro.optim.Adam({"lr": lr}), TraceEnum_ELBO(max_plate_nesting=1))
+    elbo = TraceEnum_ELBO(max_plate_nesting=1)
     losses: list[float] = []
     converged = False
     bar = None
@@ -72,19 +80,44 @@ def fit_globals(
         from tqdm.auto import tqdm
 
         bar = tqdm(total=steps, desc="training", unit="step", leave=False)
-    for step in range(steps):
-        losses.append(float(svi.step()))
+
+    def tick(loss: float) -> None:
+        losses.append(loss)
         if bar is not None:
             bar.update(1)
-            bar.set_postfix(loss=f"{losses[-1]:.1f}")
-        if step >= 10 and abs(losses[-11] - losses[-1]) <= tol * abs(losses[-1]):
-            converged = True
-            break
+            bar.set_postfix(loss=f"{loss:.1f}")
+
+    if optimizer == "adam":
+        svi = SVI(model, guide, pyro.optim.Adam({"lr": lr}), elbo)
+        for step in range(steps):
+            tick(float(svi.step()))
+            if step >= 10 and abs(losses[-11] - losses[-1]) <= tol * abs(losses[-1]):
+                converged = True
+                break
+    else:
+        guide()  # creates the parameters
+        params = [p.unconstrained() for p in pyro.get_param_store().values()]
+        opt = torch.optim.LBFGS(
+            params, lr=1.0, max_iter=20, history_size=20, line_search_fn="strong_wolfe",
+            tolerance_grad=1e-6, tolerance_change=1e-12,
+        )
+
+        def closure():
+            opt.zero_grad()
+            loss = elbo.differentiable_loss(model, guide)
+            loss.backward()
+            return loss
+
+        for _ in range(max(1, steps // 20)):
+            tick(float(opt.step(closure)))
+            if len(losses) >= 2 and abs(losses[-2] - losses[-1]) <= tol * abs(losses[-1]):
+                converged = True
+                break
     if bar is not None:
         bar.close()
     with torch.no_grad():
         values = {k: v.detach().clone() for k, v in guide.median().items()}
-    log.debug("fit %s: %d steps, final loss %.3f", lm.name, len(losses), losses[-1])
+    log.debug("fit %s: %d rounds, final loss %.3f", lm.name, len(losses), losses[-1])
     return FitResult(values, losses, len(losses), converged)
 
 

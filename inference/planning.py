@@ -140,25 +140,44 @@ def move_q(values, next_state, reward, discount):
     return reward + discount * values[next_state]
 
 
-def soft_backup(values, next_state, reward, stop_reward, discount, temperature, terminal=None):
-    """One soft-max Bellman backup; returns ``(new_values [S], q [S, A(+1)])``.
+def _q_columns(values, next_state, reward, discount):
+    """The move Q-values as A separate ``[S]`` columns (lets a compiler fuse a whole sweep)."""
+    if reward.ndim == 1:
+        w = reward + discount * values
+        return [w[next_state[:, a]] for a in range(next_state.shape[1])]
+    return [reward[:, a] + discount * values[next_state[:, a]] for a in range(next_state.shape[1])]
 
-    Differentiable in every tensor argument (MLIRL uses it for the gradient at
-    the fixed point). Shapes as in :func:`soft_value_iteration`, already checked.
+
+def soft_backup(values, next_state, reward, stop_reward, discount, temperature, terminal=None):
+    """One soft-max Bellman backup ``T * logsumexp(Q / T)``; returns new values ``[S]``.
+
+    Written column by column with an explicit max shift rather than
+    ``torch.logsumexp`` over a concatenated ``[S, A+1]`` tensor: the result is
+    the same, but eager mode allocates no ``[S, A+1]`` temporaries and
+    torch.compile fuses the sweep into one loop over states. Differentiable in
+    every tensor argument (MLIRL differentiates it at the fixed point).
     """
-    q = move_q(values, next_state, reward, discount)
+    cols = _q_columns(values, next_state, reward, discount)
     if stop_reward is not None:
-        q = torch.cat([q, stop_reward[:, None]], dim=1)
-    new = temperature * torch.logsumexp(q / temperature, dim=1)
+        cols.append(stop_reward)
+    m = cols[0]
+    for c in cols[1:]:
+        m = torch.maximum(m, c)
+    # The max is a constant shift: detaching it leaves value and gradient unchanged.
+    m = m.detach()
+    total = torch.exp((cols[0] - m) / temperature)
+    for c in cols[1:]:
+        total = total + torch.exp((c - m) / temperature)
+    new = m + temperature * torch.log(total)
     if terminal is not None:
         new = torch.where(terminal, torch.zeros_like(new), new)
-    return new, q
+    return new
 
 
 def _sweeps_eager(values, next_state, reward, stop_reward, discount, temperature, terminal, count: int):
     for _ in range(count - 1):
-        values, _ = soft_backup(values, next_state, reward, stop_reward, discount, temperature, terminal)
-    new, _ = soft_backup(values, next_state, reward, stop_reward, discount, temperature, terminal)
+        values = soft_backup(values, next_state, reward, stop_reward, discount, temperature, terminal)
+    new = soft_backup(values, next_state, reward, stop_reward, discount, temperature, terminal)
     return new, (new - values).abs().max()
 
 
@@ -170,7 +189,7 @@ def _compiled_sweeps():
     global _COMPILED
     if _COMPILED is None:
         try:
-            fn = torch.compile(_sweeps_eager, dynamic=True, fullgraph=True)
+            fn = torch.compile(_sweeps_eager, fullgraph=True)
             S = 64
             ns = torch.randint(0, S, (S, 4))
             fn(torch.zeros(S), ns, torch.zeros(S), torch.zeros(S), 0.9, torch.tensor(1.0), None, 2)

@@ -208,9 +208,13 @@ class Program:
             log.debug("clingo: %s", _one_line(msg))
 
         ctl = clingo.Control(list(arguments), logger=logger)
-        with ast.ProgramBuilder(ctl) as builder:
-            for stm in self._statements:
-                builder.add(stm)
+        try:
+            with ast.ProgramBuilder(ctl) as builder:
+                for stm in self._statements:
+                    builder.add(stm)
+        except RuntimeError as exc:
+            # e.g. an allowed #script in a language this clingo build cannot run
+            raise AspGroundingError(_one_line(" ".join(messages) or str(exc))) from None
         try:
             if facts:
                 ctl.add("base", [], facts)

@@ -288,9 +288,8 @@ def enumerate_groundings(
                                   tuple(_text(a) for a in _tuple_args(sym.arguments[1]))))
         lifted = tasks[chosen]
         binding = tuple((v.name, bind[v.name]) for v in lifted.variables)
-        # Goal atoms in the lifted task's goal order, constraint atoms in variable order.
-        goal_order = {(p, tuple(bind[a] for a in args)): i for i, (p, args) in enumerate(lifted.goal)}
-        goal.sort(key=lambda a: goal_order.get((a.predicate, a.args), len(goal_order)))
+        # Goal atoms sorted (one text per goal, whatever the binding), constraint atoms in variable order.
+        goal.sort(key=lambda a: (a.predicate, tuple(_natural_key(o) for o in a.args)))
         position = {o: i for i, (_, o) in enumerate(binding)}
         extra.sort(key=lambda a: (min(position[o] for o in a.args), a.predicate, a.args))
         grounded = GroundedTask(chosen, binding, tuple(goal))

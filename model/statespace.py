@@ -272,39 +272,48 @@ def _enumerate(state: State, max_states: int, dense: bool | None) -> StateSpace:
         seen_keys, seen_index = keys.copy(), np.zeros(1, dtype=np.int64)
 
     while len(keys):
-        # Successor keys [n, 4] of the whole frontier.
+        # Successor keys [n, 4] of the whole frontier. ``take`` and
+        # ``compress`` rather than fancy indexing: the frontier arrays are
+        # small, so per-call overhead dominates.
         if num_toys == 0:
-            packed = tables[0][keys]
+            packed = tables[0].take(keys, axis=0)
         else:
-            agent = keys % num_cells
-            packed = tables[0][keys % pair_space]
+            agent = keys - (keys // num_cells) * num_cells
+            packed = tables[0].take(keys - (keys // pair_space) * pair_space, axis=0)
             for i in range(2, 1 + num_toys):
-                toy = keys // powers[i] if i == num_toys else (keys // powers[i]) % num_cells
-                packed += tables[i - 1][agent + num_cells * toy]
+                toy = keys // powers[i]
+                if i < num_toys:
+                    toy -= (toy // num_cells) * num_cells
+                packed += tables[i - 1].take(agent + num_cells * toy, axis=0)
+        move = packed >> 2
         if num_toys >= 2:
-            packed[(packed & 3) == 3] = 0
-        successor = (keys[:, None] + (packed >> 2)).ravel()
+            move[(packed & 3) == 3] = 0
+        successor = (keys[:, None] + move).ravel()
 
         if dense:
-            index = index_map[successor]
-            fresh = successor[index < 0]
+            index = index_map.take(successor)
+            fresh = successor.compress(index < 0)
             if len(fresh):
                 # Dedupe without sorting everything: each fresh key writes a
                 # distinct negative tag, the surviving tag marks one copy.
                 tags = -2 - np.arange(len(fresh), dtype=np.int32)
                 index_map[fresh] = tags
-                new_keys = np.sort(fresh[index_map[fresh] == tags])
+                new_keys = fresh.compress(index_map.take(fresh) == tags)
+                new_keys.sort()
                 index_map[new_keys] = np.arange(count, count + len(new_keys), dtype=np.int32)
-                index = index_map[successor]
+                index = index_map.take(successor)
             else:
                 new_keys = fresh
         else:
-            at = np.clip(np.searchsorted(seen_keys, successor), 0, len(seen_keys) - 1)
-            seen = seen_keys[at] == successor
-            new_keys = np.unique(successor[~seen])
+            at = np.searchsorted(seen_keys, successor)
+            np.minimum(at, len(seen_keys) - 1, out=at)
+            seen = seen_keys.take(at) == successor
+            unseen = successor.compress(~seen)
+            unseen.sort()
+            new_keys = unseen.compress(np.diff(unseen, prepend=unseen[:1] - 1) != 0)
             index = np.empty(len(successor), dtype=np.int64)
-            index[seen] = seen_index[at[seen]]
-            index[~seen] = count + np.searchsorted(new_keys, successor[~seen])
+            index[seen] = seen_index.take(at.compress(seen))
+            index[~seen] = count + np.searchsorted(new_keys, successor.compress(~seen))
             where = np.searchsorted(seen_keys, new_keys)
             seen_keys = np.insert(seen_keys, where, new_keys)
             seen_index = np.insert(seen_index, where, np.arange(count, count + len(new_keys)))
@@ -313,14 +322,30 @@ def _enumerate(state: State, max_states: int, dense: bool | None) -> StateSpace:
         keys = new_keys
         level_keys.append(keys)
 
-    all_keys = np.concatenate(level_keys).astype(np.int64)
+    all_keys = np.concatenate(level_keys)
     next_state = np.concatenate(level_next).astype(np.int32, copy=False)
-    positions = cell_xy[(all_keys[:, None] // powers) % num_cells].astype(np.int16)
+    positions = _decode(all_keys, num_cells, 1 + num_toys, cell_xy)
     logger.debug(
         "enumerated %d states in %d levels (%s key map)",
         count, len(level_next), "dense" if dense else "sorted",
     )
-    return StateSpace(state, next_state, positions, all_keys, cell_of)
+    return StateSpace(state, next_state, positions, all_keys.astype(np.int64), cell_of)
+
+
+def _decode(keys: np.ndarray, num_cells: int, num_objects: int, cell_xy: np.ndarray) -> np.ndarray:
+    """Positions ``[S, num_objects, 2]`` int16 of state keys ``[S]``; cell_xy is ``[W, 2]``."""
+    # Each (x, y) int16 pair gathered as one int32: half the gather calls.
+    xy_pairs = np.ascontiguousarray(cell_xy, dtype=np.int16).view(np.int32).ravel()
+    packed = np.empty((len(keys), num_objects), dtype=np.int32)
+    rest = keys
+    for j in range(num_objects):
+        if j + 1 < num_objects:
+            quotient = rest // num_cells
+            packed[:, j] = xy_pairs.take(rest - quotient * num_cells)
+            rest = quotient
+        else:
+            packed[:, j] = xy_pairs.take(rest)
+    return packed.view(np.int16).reshape(len(keys), num_objects, 2)
 
 
 def trajectory_indices(space: StateSpace, states: Sequence[State]) -> np.ndarray:

@@ -1,0 +1,62 @@
+"""Time task enumeration for one environment: library load, cell tables, groundings + constraints.
+
+Prints milliseconds per call (median of repeats) for the default library on the
+commands-to-tasks layout with one toy and with two toys. Each call builds one
+clingo Control, grounds once and enumerates every grounding in one solve
+(the per-state caches of groundlang.model are bypassed to time the work itself).
+
+    .venv/bin/python benchmarks/bench_tasks.py [--repeats 20]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+from groundlang.logic.tasks import TaskLibrary, enumerate_groundings
+from groundlang.model.geometry import cell_tables, state_facts
+from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette
+
+
+def corpus_state(num_toys: int) -> State:
+    toys = [("yellow", "star", 4, 8), ("red", "moon", 8, 8), ("blue", "circle", 2, 2)][:num_toys]
+    layout = Layout(
+        (Room("green", 0, 10, 6, 4), Room("red", 6, 10, 10, 4), Room("blue", 0, 4, 10, 0)),
+        (Door(3, 4, 3, 3), Door(8, 4, 8, 3), Door(6, 6, 6, 6)),
+        tuple((c, s) for c, s, _, _ in toys),
+        get_palette("sokoban"),
+    )
+    return State(layout, Agent(8, 6), tuple(Toy(c, s, x, y) for c, s, x, y in toys))
+
+
+def median_ms(fn, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return 1000 * statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=20)
+    args = parser.parse_args()
+
+    print(f"load default task library (parse + ground tasks.lp): "
+          f"{median_ms(TaskLibrary.load, args.repeats):7.2f} ms")
+    library = TaskLibrary.load()
+    for num_toys in (1, 2, 3):
+        state = corpus_state(num_toys)
+        facts = state_facts(state)
+        found = enumerate_groundings(library, facts)
+        constraints = sum(len(c) for _, c in found)
+        ms = median_ms(lambda: enumerate_groundings(library, facts), args.repeats)
+        cells = median_ms(lambda: cell_tables.__wrapped__(state.layout), args.repeats)
+        print(f"{num_toys} toy(s): {len(found):3d} groundings, {constraints:5d} binding constraints: "
+              f"enumeration {ms:7.2f} ms; cell tables {cells:6.2f} ms")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,233 @@
+"""Parse commands into logical forms with probabilities (the paper's SP component).
+
+Pipeline: tokenise (lowercase, punctuation split off, hyphenated words split, every word kept), tag each
+word with its possible categories (grammar.lexicon), split into sentences, parse each sentence with
+Earley (``ambiguity="explicit"``) over the grammar in ``commands.lark``, keep the best readings of each
+sentence (grammar.phrases.KBestTransformer), fall back to chunks where the grammar fails
+(grammar.chunker), compose logical forms for the whole command (grammar.composition) and normalise.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import logging
+import math
+import re
+from collections.abc import Mapping
+from importlib.resources import files
+
+from lark import Lark, Token
+from lark.exceptions import LarkError
+from lark.lexer import Lexer
+
+from .chunker import chunk
+from .composition import compose, instantiate
+from .lexicon import (
+    ADJECTIVES, ADVERBS, AUXILIARIES, COLOURS, CONJUNCTIONS, DETERMINERS, MEASURES, NEGATIONS, NOUNS, NUMBERS,
+    PARTICLES, PREPOSITIONS, PRONOUNS, RELATIVES, SUBORDINATORS, VERB_FORMS, SemanticLexicon, guess_categories,
+)
+from .logical_form import LogicalForm, Reading
+from .phrases import DEFAULT_WEIGHTS, KBestTransformer
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["DEFAULT_WEIGHTS", "ParseError", "Word", "parse", "tokenise", "tag"]
+
+# Longer sentences are split at commas first, then chunked: Earley is cubic and the number of PP
+# attachments grows exponentially, and no corpus sentence needs more.
+MAX_SENTENCE_TOKENS = 40
+SENTENCE_END = frozenset({".", "!", "?", ";", ":"})
+CLAUSE_BREAK = frozenset({",", "(", ")", "-", "[", "]", "{", "}"})
+
+# Grammar category -> the lexical categories that can play it (the terminals are generated from this).
+CATEGORY_RULES: dict[str, frozenset[str]] = {
+    "det": frozenset({"DET"}), "prep": frozenset({"PREP"}), "to": frozenset({"TO"}), "conj": frozenset({"CONJ"}),
+    "sub": frozenset({"SUB"}), "rel": frozenset({"REL"}), "pron": frozenset({"PRON"}), "aux": frozenset({"AUX"}),
+    "neg": frozenset({"NEG"}), "adv": frozenset({"ADV"}), "noun": frozenset({"NOUN", "MEASURE"}),
+    "nmod": frozenset({"ADJ", "COLOR", "NOUN", "NUM"}), "hmod": frozenset({"ADJ", "COLOR", "NUM"}),
+    "measure": frozenset({"MEASURE"}), "verb": frozenset({"VERB", "GER"}), "ger": frozenset({"GER"}),
+    "comma": frozenset({"COMMA"}),
+}
+
+_TOKEN = re.compile(r"\w+(?:'\w+)*|\.{2,}|[^\w\s]")
+_CLITIC = re.compile(r"^(\w+)('(?:re|s|m|ll|ve|d))$")
+_FALLBACK_CLASS = frozenset({"ADJ", "NOUN"})
+
+
+class ParseError(ValueError):
+    """A command that cannot be parsed at all (empty or whitespace-only)."""
+
+
+Word = tuple[str, frozenset[str]]
+
+
+def tokenise(command: str) -> list[str]:
+    """Lowercase tokens: words (hyphenated words split, clitics like 're split off) and punctuation."""
+    text = command.lower().replace("\u2019", "'").replace("\u2018", "'")
+    text = re.sub(r"(?<=\w)-(?=\w)", " ", text)
+    out: list[str] = []
+    for tok in _TOKEN.findall(text):
+        m = _CLITIC.match(tok)
+        if m and not tok.endswith("n't"):
+            out.extend(m.groups())
+        elif re.fullmatch(r"\.{2,}", tok):
+            out.append(".")
+        else:
+            out.append(tok)
+    return out
+
+
+def tag(tokens: list[str]) -> list[frozenset[str]]:
+    """Possible categories of each token (empty set for punctuation the grammar skips)."""
+    cats: list[frozenset[str]] = []
+    first = True
+    for tok in tokens:
+        if tok in SENTENCE_END:
+            cats.append(frozenset())
+            first = True
+        elif tok in CLAUSE_BREAK:
+            cats.append(frozenset({"COMMA"}))
+            first = True
+        elif not any(ch.isalnum() for ch in tok) and tok not in CONJUNCTIONS:
+            cats.append(frozenset())  # quotes and the like: kept in words, not parsed
+        else:
+            c = guess_categories(tok, first=first)
+            cats.append(c)
+            first = bool(c & {"CONJ", "COMMA", "SUB"})
+    return cats
+
+
+def _class_name(cats: frozenset[str]) -> str:
+    return "_".join(sorted(cats))
+
+
+def _known_classes() -> set[frozenset[str]]:
+    words = set().union(
+        ADJECTIVES, ADVERBS, AUXILIARIES, COLOURS, CONJUNCTIONS, DETERMINERS, MEASURES, NEGATIONS, NOUNS,
+        NUMBERS, PARTICLES, PREPOSITIONS, PRONOUNS, RELATIVES, SUBORDINATORS, VERB_FORMS, {"to", "'re", "'s"},
+    )
+    classes = {guess_categories(w) for w in words}
+    for probe in ("zzz", "4", "zzzly", "zzzzing", "zzzzed", "zzzz"):
+        classes.add(guess_categories(probe, first=False))
+        classes.add(guess_categories(probe, first=True))
+    classes.add(frozenset({"COMMA"}))
+    return classes
+
+
+class _TaggedLexer(Lexer):
+    """Feeds lark pre-tagged words: one token per word, typed by its category class."""
+
+    def __init__(self, lexer_conf):  # noqa: D401 - lark's signature
+        pass
+
+    def lex(self, data):
+        for i, (word, cls) in enumerate(data):
+            yield Token(cls, word, start_pos=i, end_pos=i + 1, line=1, column=i + 1)
+
+
+@functools.lru_cache(maxsize=1)
+def _earley() -> tuple[Lark, frozenset[frozenset[str]]]:
+    classes = _known_classes()
+    lines = [files("groundlang.grammar").joinpath("commands.lark").read_text(encoding="utf-8"), ""]
+    lines.append("%declare " + " ".join(sorted(_class_name(c) for c in classes)))
+    for rule, wanted in CATEGORY_RULES.items():
+        terms = sorted(_class_name(c) for c in classes if c & wanted)
+        lines.append(f"?{rule}: " + " | ".join(terms))
+    grammar = "\n".join(lines) + "\n"
+    parser = Lark(grammar, parser="earley", lexer=_TaggedLexer, ambiguity="explicit", start="start")
+    return parser, frozenset(classes)
+
+
+def _sentences(tokens: list[str], cats: list[frozenset[str]]) -> list[list[Word]]:
+    out: list[list[Word]] = [[]]
+    for tok, c in zip(tokens, cats):
+        if tok in SENTENCE_END:
+            out.append([])
+        elif c:
+            out[-1].append((tok, c))
+    return [s for s in out if s]
+
+
+def _split_long(sentence: list[Word]) -> list[list[Word]]:
+    if len(sentence) <= MAX_SENTENCE_TOKENS:
+        return [sentence]
+    parts: list[list[Word]] = [[]]
+    for w in sentence:
+        if "COMMA" in w[1] and parts[-1]:
+            parts.append([])
+        elif "COMMA" not in w[1]:
+            parts[-1].append(w)
+    return [p for p in parts if p]
+
+
+def _parse_sentence(sentence: list[Word], transformer: KBestTransformer) -> tuple[list[tuple[float, tuple]], bool]:
+    """Best (log weight, clause values) readings of one sentence, and whether it fell back to chunks."""
+    parser, classes = _earley()
+    if len(sentence) <= MAX_SENTENCE_TOKENS:
+        data = [(w, _class_name(c if c in classes else _FALLBACK_CLASS)) for w, c in sentence]
+        try:
+            tree = parser.parse(data)
+            cands = transformer.transform(tree)
+            if not isinstance(cands, list):
+                cands = [(0.0, cands)]
+            cands = [(w, v) for w, v in cands if v]
+            if cands:
+                return cands, False
+        except (LarkError, RecursionError) as exc:
+            logger.debug("grammar failed on %r: %s", " ".join(w for w, _ in sentence), type(exc).__name__)
+    return [(0.0, chunk([w for w, _ in sentence], [c for _, c in sentence]))], True
+
+
+def _normalise(scored: list[tuple[float, LogicalForm]]) -> list[tuple[float, LogicalForm]]:
+    """Sum equal logical forms; probabilities from log weights, summing to one, most probable first."""
+    top = max(w for w, _ in scored)
+    total: dict[LogicalForm, float] = {}
+    for w, lf in scored:
+        total[lf] = total.get(lf, 0.0) + math.exp(w - top)
+    z = sum(total.values())
+    return sorted(((p / z, lf) for lf, p in total.items()), key=lambda pl: -pl[0])
+
+
+def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None = None,
+          weights: Mapping[str, float] | None = None) -> list[Reading]:
+    """Readings of a command, most probable first; probabilities sum to one; never empty.
+
+    ``weights`` overrides entries of DEFAULT_WEIGHTS (positive numbers); ``lexicon`` instantiates the
+    predicates of the words it knows. Raises ParseError (a ValueError) for empty or whitespace-only
+    input, ValueError for ``max_readings < 1`` or a non-positive weight, TypeError for a non-string.
+    """
+    if not isinstance(command, str):
+        raise TypeError(f"parse: command must be a str, got {type(command).__name__}")
+    if max_readings < 1:
+        raise ValueError(f"parse: max_readings must be >= 1, got {max_readings}")
+    tokens = tokenise(command)
+    if not tokens:
+        raise ParseError("cannot parse an empty command (the text is empty or only whitespace)")
+    cats = tag(tokens)
+    tags = tuple(_class_name(c).replace("_", "|") if c else "PUNCT" for c in cats)
+    beam = 2 * max_readings + 4
+    transformer = KBestTransformer({**DEFAULT_WEIGHTS, **(weights or {})}, beam)
+    combined: list[tuple[float, tuple]] = [(0.0, ())]
+    fallback = False
+    for sentence in _sentences(tokens, cats):
+        for part in _split_long(sentence):
+            cands, fell_back = _parse_sentence(part, transformer)
+            fallback |= fell_back
+            combined = sorted(
+                ((w1 + w2, c1 + c2) for (w1, c1), (w2, c2) in itertools.product(combined, cands)),
+                key=lambda wc: -wc[0],
+            )[:beam]
+    words = tuple(tokens)
+    if not any(c for c in cats):
+        fallback = True  # punctuation only: one empty logical form that still keeps the tokens
+    scored = [(w, compose(c, words, tags, fallback)) for w, c in combined]
+    readings = _normalise(scored)
+    if lexicon is not None:
+        expanded = []
+        for p, lf in readings:
+            expanded += [(math.log(p * q) if p * q > 0 else -1e300, lf2) for q, lf2 in instantiate(lf, lexicon, beam)]
+        readings = _normalise(expanded)
+    readings = readings[:max_readings]
+    z = sum(p for p, _ in readings)
+    return [Reading(lf, p / z) for p, lf in readings]

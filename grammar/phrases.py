@@ -1,0 +1,244 @@
+"""Phrase values built from parse trees, and the k-best Transformer that scores them.
+
+Earley with ``ambiguity="explicit"`` returns a tree with ``_ambig`` nodes. Each node is transformed into
+a short list of candidates ``(log weight, phrase)``: a rule combines its children's candidates (a
+product, pruned to the beam) and adds its own log weight; ``_ambig`` merges alternatives, summing the
+weights of alternatives that built the same phrase (the paper sums parses per logical form).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from typing import Any, Union
+
+from lark import Token, Transformer
+
+from .lexicon import NEGATIONS
+
+# Default rule weights (a PCFG-like score; a reading's weight is the product of the weights of its
+# choice rules, then readings are normalised). Only rules that compete with each other matter:
+# - c_pp / np_pp: a PP after "verb NP" attaches to the verb 0.65, to the noun 0.35. These are the
+#   paper's numbers for "Push the star into the green room"; minimal attachment (and the corpus, where
+#   the "into/to/through X" after the object names the goal) favours the verb. c_part / np_part are the
+#   same choice for participles ("push star pushing it ..." vs "door leading into orange room").
+# - frag, frag_np (verbless fragments) 0.2: only a fallback reading when a verb is present.
+# - subj_clause 0.5: commands are imperative; a subject reading ("star goes into blue") competes only
+#   when an NP-like word opens the clause.
+# - np_headless 0.5: an ambiguous word ("ornge") is likelier the head noun than a bare modifier.
+# - np_coord, c_measure 0.5 / 0.3: coordination and measure phrases ("all way") are rarer than
+#   the alternatives they compete with (clause coordination, a direct object).
+DEFAULT_WEIGHTS: dict[str, float] = {
+    "c_pp": 0.65, "np_pp": 0.35, "c_part": 0.65, "np_part": 0.35,
+    "frag": 0.2, "frag_np": 0.2, "subj_clause": 0.5, "np_headless": 0.5, "np_coord": 0.5,
+    "c_measure": 0.3, "c_adv": 1.0, "c_inf": 1.0, "c_sub": 1.0, "c_ger": 1.0, "sub_clause": 1.0,
+    "np_rel": 1.0, "np_head": 1.0, "np_pron": 1.0, "pp": 1.0, "pp_coord": 1.0, "vp": 1.0, "gvp": 1.0,
+}
+
+
+@dataclass(frozen=True)
+class NP:
+    """A noun phrase: determiner, modifiers, head (None if headless), pronoun, attached PPs/clauses."""
+
+    det: str | None = None
+    mods: tuple[str, ...] = ()
+    head: str | None = None
+    pron: str | None = None
+    attached: tuple["PP | Sub", ...] = ()
+    conjuncts: tuple["NP", ...] = ()
+
+
+@dataclass(frozen=True)
+class PP:
+    prep: str
+    obj: NP
+
+
+@dataclass(frozen=True)
+class Adv:
+    word: str
+
+
+@dataclass(frozen=True)
+class Measure:
+    np: NP
+
+
+@dataclass(frozen=True)
+class VP:
+    """A clause: verb word form (None for fragments), negation, subject, direct object, complements."""
+
+    verb: str | None = None
+    negated: bool = False
+    subject: NP | None = None
+    obj: NP | None = None
+    comps: tuple["PP | Adv | Measure | Sub", ...] = ()
+    adverbs: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Sub:
+    """A subordinate, infinitival, gerund or relative clause and the word that introduces it."""
+
+    connective: str
+    clause: Union[VP, "Sub"]
+
+
+ClauseValue = Union[VP, Sub]
+Candidates = list[tuple[float, Any]]
+
+_SEP = "<sep>"
+
+
+def _words(children: list) -> list[str]:
+    return [str(c) for c in children if isinstance(c, Token)]
+
+
+def _np_parts(values: list) -> tuple[str | None, list[str]]:
+    det = None
+    rest = []
+    for v in values:
+        if isinstance(v, tuple) and v and v[0] == "det":
+            det = v[1]
+        else:
+            rest.append(str(v))
+    return det, rest
+
+
+def _verb_phrase(values: list) -> VP:
+    pre: list[str] = []
+    verb = None
+    obj = None
+    comps = []
+    for v in values:
+        if isinstance(v, tuple) and v and v[0] == "pre":
+            pre.append(v[1])
+        elif isinstance(v, tuple) and v and v[0] == "verb":
+            verb = v[1]
+        elif isinstance(v, tuple) and v and v[0] == "obj":
+            obj = v[1]
+        elif isinstance(v, (PP, Adv, Measure, Sub)):
+            comps.append(v)
+        # conjunction tokens between complements carry no structure; the words keep them
+    negated = any(w in NEGATIONS for w in pre)
+    adverbs = tuple(w for w in pre if w not in NEGATIONS)
+    return VP(verb=verb, negated=negated, obj=obj, comps=tuple(comps), adverbs=adverbs)
+
+
+def _fragment(values: list) -> VP:
+    nps = [v for v in values if isinstance(v, NP)]
+    comps = tuple(v for v in values if isinstance(v, (PP, Adv, Measure, Sub)))
+    return VP(verb=None, obj=nps[0] if nps else None, comps=comps)
+
+
+def _attach(np: NP, extra) -> NP:
+    return replace(np, attached=np.attached + (extra,))
+
+
+def _coord(a: NP, b: NP) -> NP:
+    parts = (a.conjuncts or (a,)) + (b.conjuncts or (b,))
+    return NP(conjuncts=parts)
+
+
+def _connective(values: list) -> tuple[str, Any]:
+    words = [str(v) for v in values if isinstance(v, Token)]
+    clause = next(v for v in values if isinstance(v, (VP, Sub)))
+    return " ".join(words), clause
+
+
+# Builders: rule name -> function of the children's values.
+_BUILDERS: dict[str, Callable[[list], Any]] = {
+    "start": lambda vs: tuple(v for v in vs if isinstance(v, (VP, Sub))),
+    "lead": lambda vs: _SEP,
+    "trail": lambda vs: _SEP,
+    "sep": lambda vs: _SEP,
+    "vpre": lambda vs: ("pre", str(vs[0])),
+    "vhead": lambda vs: ("verb", str(vs[0])),
+    "obj": lambda vs: ("obj", vs[0]),
+    "determiner": lambda vs: ("det", str(vs[0])),
+    "vp": _verb_phrase,
+    "gvp": _verb_phrase,
+    "subj_clause": lambda vs: replace(vs[1], subject=vs[0]),
+    "sub_clause": lambda vs: Sub(*_connective(vs)),
+    "frag_np": _fragment,
+    "frag": _fragment,
+    "c_pp": lambda vs: vs[0],
+    "c_adv": lambda vs: Adv(str(vs[0])),
+    "c_inf": lambda vs: Sub("to", vs[1]),
+    "c_sub": lambda vs: Sub(*_connective(vs)),
+    "c_ger": lambda vs: Sub(str(vs[0]), vs[1]),
+    "c_part": lambda vs: Sub("ing", vs[0]),
+    "c_measure": lambda vs: Measure(_np_head(vs)),
+    "np_pp": lambda vs: _attach(vs[0], vs[1]),
+    "np_part": lambda vs: _attach(vs[0], Sub("ing", vs[1])),
+    "np_rel": lambda vs: _attach(vs[0], Sub(str(vs[1]), vs[2])),
+    "np_head": lambda vs: _np_head(vs),
+    "np_headless": lambda vs: _np_headless(vs),
+    "np_pron": lambda vs: NP(pron=str(vs[0])),
+    "np_coord": lambda vs: _coord(vs[0], vs[2]),
+    "pp": lambda vs: PP(str(vs[0]), vs[1]),
+    "pp_coord": lambda vs: PP(str(vs[2]), vs[3]),
+}
+
+
+def _np_head(values: list) -> NP:
+    det, words = _np_parts(values)
+    return NP(det=det, mods=tuple(words[:-1]), head=words[-1])
+
+
+def _np_headless(values: list) -> NP:
+    det, words = _np_parts(values)
+    return NP(det=det, mods=tuple(words))
+
+
+def _logaddexp(a: float, b: float) -> float:
+    m = max(a, b)
+    return m + math.log1p(math.exp(-abs(a - b)))
+
+
+def _merge(cands: Candidates, beam: int) -> Candidates:
+    """Sum the weights of equal phrases, keep the ``beam`` best (highest log weight first)."""
+    best: dict[Any, float] = {}
+    for logw, value in cands:
+        old = best.get(value)
+        best[value] = logw if old is None else _logaddexp(old, logw)
+    ranked = sorted(best.items(), key=lambda kv: -kv[1])[:beam]
+    return [(w, v) for v, w in ranked]
+
+
+class KBestTransformer(Transformer):
+    """Turns an explicit-ambiguity parse tree into the ``beam`` best phrase values with log weights."""
+
+    def __init__(self, weights: Mapping[str, float], beam: int):
+        super().__init__(visit_tokens=False)
+        self.beam = beam
+        self.logw = {}
+        for name, w in weights.items():
+            if not (w > 0.0) or math.isinf(w):
+                raise ValueError(f"grammar weight {name!r} must be a positive finite number, got {w}")
+            self.logw[name] = math.log(w)
+
+    def _combine(self, rule: str, children: list) -> Candidates:
+        build = _BUILDERS[rule]
+        lists = [c if isinstance(c, list) else [(0.0, c)] for c in children]
+        partial: list[tuple[float, tuple]] = [(0.0, ())]
+        for options in lists:
+            partial = sorted(
+                ((w1 + w2, vals + (v,)) for (w1, vals), (w2, v) in itertools.product(partial, options)),
+                key=lambda wv: -wv[0],
+            )[: self.beam]
+        own = self.logw.get(rule, 0.0)
+        return _merge([(w + own, build(list(vals))) for w, vals in partial], self.beam)
+
+    def _ambig(self, children: list) -> Candidates:
+        merged: Candidates = []
+        for c in children:
+            merged.extend(c if isinstance(c, list) else [(0.0, c)])
+        return _merge(merged, self.beam)
+
+    def __default__(self, data, children, meta):
+        if data not in _BUILDERS:
+            raise ValueError(f"grammar rule {data!r} has no phrase builder")
+        return self._combine(data, children)

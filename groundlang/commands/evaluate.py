@@ -1,0 +1,56 @@
+"""``groundlang evaluate --corpus DIR --palette NAME --labels CSV [--protocol loo|train] ...``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from groundlang.model.language_models import LANGUAGE_MODELS
+from groundlang.model.world import PALETTES
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("evaluate", help="leave-one-out or train-set accuracy against gold labels")
+    p.add_argument("--corpus", required=True, metavar="DIR")
+    p.add_argument("--palette", required=True, choices=sorted(PALETTES))
+    p.add_argument("--labels", required=True, metavar="CSV")
+    p.add_argument("--protocol", default="loo", choices=["loo", "train"])
+    p.add_argument("--novel-envs", metavar="DIR", help="folder of *.state files to execute each command in too")
+    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODELS))
+    p.add_argument("--workers", type=int, default=1, help="folds in parallel (processes)")
+    p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
+    p.add_argument("--skip-inconsistent", action="store_true")
+    p.add_argument("--limit", type=int, help="score only the first N held-out instances")
+    p.add_argument("--json", metavar="OUT", help="write the result as JSON here")
+    p.set_defaults(func=run)
+
+
+def read_novel_states(directory: str, palette: str) -> list:
+    from groundlang.corpus import read_state_file
+
+    paths = sorted(Path(directory).glob("*.state"))
+    if not paths:
+        raise ValueError(f"{directory}: no *.state files for --novel-envs")
+    return [(p.name, read_state_file(p, palette)) for p in paths]
+
+
+def run(args: argparse.Namespace) -> int:
+    from groundlang.corpus import read_corpus
+    from groundlang.evaluation import evaluate
+    from groundlang.labels import read_labels
+    from groundlang.model_io import write_atomically
+
+    corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
+    labels = read_labels(args.labels)
+    novel = read_novel_states(args.novel_envs, args.palette) if args.novel_envs else []
+    result = evaluate(
+        corpus, labels, protocol=args.protocol, language_model=args.language_model,
+        novel_states=novel, workers=args.workers, ray_address=args.ray,
+        progress=not args.quiet, limit=args.limit,
+    )
+    print(result.summary())
+    if args.json:
+        write_atomically(Path(args.json), json.dumps(result.to_json(), indent=1).encode("utf-8"))
+        print(f"result written to {args.json}")
+    return 0 if not result.failed_folds else 1

@@ -1,0 +1,64 @@
+"""``groundlang follow "COMMAND" --env FILE --palette NAME --model MODEL_DIR [--out PNG] [--json]``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from groundlang.model.world import PALETTES
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("follow", help="interpret a command in an environment, plan and act")
+    p.add_argument("command_text", metavar="COMMAND")
+    p.add_argument("--env", required=True, metavar="FILE", help="a corpus file or a one-line .state file")
+    p.add_argument("--palette", required=True, choices=sorted(PALETTES))
+    p.add_argument("--model", required=True, metavar="MODEL_DIR")
+    p.add_argument("--out", metavar="PNG", help="draw the executed trajectory here")
+    p.add_argument("--top", type=int, default=5, help="interpretations to print")
+    p.add_argument("--max-steps", type=int, default=200)
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=run)
+
+
+def load_environment(path: str, palette: str):
+    """The initial state of a corpus file or of a one-line ``.state`` file."""
+    from groundlang.corpus import read_instance, read_state_file
+
+    if Path(path).suffix == ".state":
+        return read_state_file(path, palette)
+    return read_instance(path, palette).initial_state
+
+
+def run(args: argparse.Namespace) -> int:
+    from groundlang.corpus import format_state
+    from groundlang.learner import Learner
+    from groundlang.logic.atoms import format_goal
+
+    state = load_environment(args.env, args.palette)
+    learner = Learner.load(args.model)
+    result = learner.follow(args.command_text, state, max_steps=args.max_steps)
+    goals = result.posterior.goals()[: args.top]
+    if args.out:
+        from groundlang.render import save_picture
+
+        save_picture(args.out, state, trajectory=result.states,
+                     title=f"{args.command_text}\n-> {format_goal(result.goal)}")
+    if args.json:
+        print(json.dumps({
+            "interpretations": [{"goal": format_goal(g), "probability": p} for g, p in goals],
+            "actions": [a.word for a in result.actions],
+            "final_state": format_state(result.final_state),
+            "reached": result.reached,
+        }))
+        return 0
+    print(f"command: {args.command_text}")
+    print("interpretations:")
+    for goal, p in goals:
+        print(f"  {p:7.4f}  {format_goal(goal)}")
+    print(f"plan ({len(result.actions)} steps): {', '.join(a.word for a in result.actions) or '(none)'}")
+    print(f"goal {format_goal(result.goal)} {'reached' if result.reached else 'NOT reached'} ({result.reason})")
+    if args.out:
+        print(f"picture written to {args.out}")
+    return 0

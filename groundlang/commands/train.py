@@ -1,0 +1,43 @@
+"""``groundlang train CORPUS --palette NAME -o MODEL_DIR [--language-model NAME]``: fit and save a learner."""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from groundlang.corpus import read_corpus
+from groundlang.model.language_models import LANGUAGE_MODELS
+from groundlang.model.world import PALETTES
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("train", help="learn word meanings from a corpus and save the model")
+    p.add_argument("corpus", metavar="CORPUS", help="folder of corpus files")
+    p.add_argument("--palette", required=True, choices=sorted(PALETTES))
+    p.add_argument("-o", "--output", required=True, metavar="MODEL_DIR", help="folder to write the model to")
+    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODELS))
+    p.add_argument("--library", metavar="LP", action="append", help="task library .lp file(s) instead of the default")
+    p.add_argument("--skip-inconsistent", action="store_true")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from groundlang.learner import Learner
+    from groundlang.logic.tasks import TaskLibrary
+
+    corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
+    if corpus.skipped:
+        print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
+    library = TaskLibrary.load(args.library) if args.library else None
+    started = time.perf_counter()
+    learner = Learner(args.language_model, library=library, seed=args.seed)
+    learner.fit(corpus.instances, progress=not args.quiet)
+    learner.save(args.output)
+    fit = learner.fit_result
+    print(
+        f"trained {args.language_model} on {len(corpus)} instances in {time.perf_counter() - started:.1f} s "
+        f"({fit.steps} optimiser rounds, {'converged' if fit.converged else 'not converged'}); "
+        f"model written to {args.output}"
+    )
+    return 0

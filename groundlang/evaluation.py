@@ -1,0 +1,317 @@
+"""Evaluation protocols of RSS 2015: leave-one-out, train-set, and novel environments.
+
+A prediction is correct when executing the inferred task from the initial
+state reaches the gold goal. Labels are used only to score, never to train.
+
+Leave-one-out trains one model per held-out instance. Behaviour
+likelihoods are computed once for the whole corpus (they do not depend on
+the language model) and each fold's fit is warm-started from the model
+trained on all instances, then run to convergence on the fold's own
+objective (L-BFGS to a gradient tolerance), so the held-out instance's
+words leave no trace beyond that tolerance.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import multiprocessing
+import time
+from collections import Counter, defaultdict
+from dataclasses import asdict, dataclass, field
+
+from groundlang.corpus import Corpus, Instance
+from groundlang.labels import goal_holds, label_for
+from groundlang.learner import Learner
+from groundlang.logic.atoms import Atom, format_goal
+from groundlang.model.world import State
+
+__all__ = [
+    "EvaluationResult",
+    "NovelEnvironmentError",
+    "wilson_interval",
+    "translate_goal",
+    "describe_goal",
+    "evaluate",
+]
+
+log = logging.getLogger(__name__)
+
+
+class NovelEnvironmentError(ValueError):
+    """A novel layout where the gold goal cannot be carried over unambiguously."""
+
+
+def wilson_interval(correct: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """95% Wilson score interval for a binomial proportion."""
+    if n == 0:
+        return (0.0, 1.0)
+    p = correct / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def _properties(state: State, obj: str) -> tuple:
+    if obj.startswith("room"):
+        return ("room", state.layout.rooms[int(obj[4:])].colour)
+    if obj.startswith("block"):
+        return ("toy",) + tuple(state.layout.toy_attributes[int(obj[5:])])
+    return ("agent",)
+
+
+def translate_goal(goal: tuple[Atom, ...], source: State, target: State, where: str = "novel layout") -> tuple[Atom, ...]:
+    """Carry a goal over by the objects' properties (room colour; toy colour and shape).
+
+    Raises NovelEnvironmentError when an object has no unique counterpart in
+    ``target`` or when the translated goal already holds in ``target``.
+    """
+    names = {}
+    for obj in {a for atom in goal for a in atom.args}:
+        want = _properties(source, obj)
+        if want == ("agent",):
+            names[obj] = obj
+            continue
+        pool = target.layout.room_names if want[0] == "room" else target.layout.toy_names
+        matches = [o for o in pool if _properties(target, o) == want]
+        if len(matches) != 1:
+            raise NovelEnvironmentError(
+                f"{where}: the goal's {obj} ({' '.join(want)}) has {len(matches)} counterparts; exactly one is needed"
+            )
+        names[obj] = matches[0]
+    translated = tuple(Atom(a.predicate, tuple(names[x] for x in a.args)) for a in goal)
+    if goal_holds(translated, target):
+        raise NovelEnvironmentError(f"{where}: the goal {format_goal(translated)} already holds at the start")
+    return translated
+
+
+def describe_goal(goal: tuple[Atom, ...], state: State) -> str:
+    """A goal in layout-free words, e.g. ``toyInRoom(star, red)``, for confusion tables."""
+    parts = []
+    for atom in goal:
+        args = []
+        for a in atom.args:
+            props = _properties(state, a)
+            args.append("agent" if props == ("agent",) else props[-1])
+        parts.append(f"{atom.predicate}({', '.join(args)})")
+    return " ".join(parts)
+
+
+@dataclass
+class EvaluationResult:
+    protocol: str
+    language_model: str
+    accuracy: float
+    n: int
+    correct: int
+    ci_low: float
+    ci_high: float
+    seconds: float
+    per_task: dict
+    confusion: dict
+    skipped: int = 0
+    slowest_step: dict = field(default_factory=dict)
+    novel_accuracy: float | None = None
+    novel_n: int = 0
+    novel_correct: int = 0
+    failed_folds: list = field(default_factory=list)
+    records: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+    def summary(self) -> str:
+        lines = [
+            f"protocol {self.protocol}, language model {self.language_model}",
+            f"accuracy {self.accuracy:.2%} ({self.correct}/{self.n}), 95% CI [{self.ci_low:.2%}, {self.ci_high:.2%}]",
+        ]
+        if self.novel_n:
+            lines.append(f"novel environments: {self.novel_accuracy:.2%} ({self.novel_correct}/{self.novel_n})")
+        if self.skipped:
+            lines.append(f"skipped inconsistent demonstrations: {self.skipped}")
+        lines.append("per gold task:")
+        for task, row in self.per_task.items():
+            lines.append(f"  {task:<32} {row['accuracy']:.2%} ({row['correct']}/{row['n']})")
+        lines.append("confusion (gold -> executed goal):")
+        for gold, row in self.confusion.items():
+            for pred, count in sorted(row.items(), key=lambda kv: -kv[1]):
+                lines.append(f"  {gold:<32} -> {pred:<40} {count}")
+        if self.failed_folds:
+            lines.append(f"failed folds: {len(self.failed_folds)}")
+            for item in self.failed_folds[:5]:
+                lines.append(f"  {item['instance']}: {item['error']}")
+        for name, secs in self.slowest_step.items():
+            lines.append(f"time in {name}: {secs:.2f} s")
+        lines.append(f"wall time {self.seconds:.1f} s")
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------- folds
+
+_CONTEXT: dict = {}
+
+
+def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
+    result = learner.follow(instance.command, instance.initial_state)
+    record = {
+        "instance": instance.name,
+        "command": instance.command,
+        "gold": format_goal(gold),
+        "gold_task": describe_goal(gold, instance.initial_state),
+        "predicted": format_goal(result.goal),
+        "predicted_task": describe_goal(result.goal, instance.initial_state),
+        "correct": goal_holds(gold, result.final_state),
+        "novel": [],
+    }
+    for name, state in novel_states:
+        translated = translate_goal(gold, instance.initial_state, state, name)
+        novel = learner.follow(instance.command, state)
+        record["novel"].append({"environment": name, "correct": goal_holds(translated, novel.final_state)})
+    return record
+
+
+def _fold(index: int) -> dict:
+    ctx = _CONTEXT
+    learner: Learner = ctx["learner"]
+    instance = ctx["instances"][index]
+    started = time.perf_counter()
+    try:
+        if ctx["protocol"] == "loo":
+            keep = [k for k in range(len(ctx["instances"])) if k != index]
+            learner.fit(
+                [ctx["instances"][k] for k in keep],
+                observations=[ctx["observations"][k] for k in keep],
+                init=ctx["globals"],
+            )
+        record = _score(learner, instance, ctx["golds"][index], ctx["novel_states"])
+    except (ValueError, RuntimeError) as exc:
+        return {"instance": instance.name, "error": f"{type(exc).__name__}: {exc}", "seconds": time.perf_counter() - started}
+    record["seconds"] = time.perf_counter() - started
+    return record
+
+
+def _init_worker(context: dict) -> None:
+    import torch
+
+    torch.set_num_threads(1)
+    _CONTEXT.clear()
+    _CONTEXT.update(context)
+
+
+def _run_folds(context: dict, indices: list[int], workers: int, ray_address: str | None, progress: bool) -> list[dict]:
+    if ray_address is not None:
+        from groundlang.distributed import run_on_ray
+
+        return run_on_ray(_init_worker, _fold, context, indices, ray_address)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(indices), desc="folds", unit="fold", leave=False)
+    records = []
+    if workers <= 1:
+        _init_worker(context)
+        for i in indices:
+            records.append(_fold(i))
+            if bar is not None:
+                bar.update(1)
+    else:
+        with multiprocessing.get_context("fork").Pool(workers, _init_worker, (context,)) as pool:
+            for record in pool.imap(_fold, indices, chunksize=max(1, len(indices) // (8 * workers))):
+                records.append(record)
+                if bar is not None:
+                    bar.update(1)
+    if bar is not None:
+        bar.close()
+    return records
+
+
+def evaluate(
+    corpus: Corpus,
+    labels,
+    protocol: str = "loo",
+    language_model: str = "parse",
+    novel_states: list[tuple[str, State]] = (),
+    workers: int = 1,
+    ray_address: str | None = None,
+    progress: bool = False,
+    limit: int | None = None,
+    learner_options: dict | None = None,
+) -> EvaluationResult:
+    """Run ``loo`` or ``train`` on a corpus; ``limit`` scores only the first N held-out instances."""
+    if protocol not in ("loo", "train"):
+        raise ValueError(f"unknown protocol {protocol!r}; expected loo or train")
+    started = time.perf_counter()
+    instances = list(corpus.instances)
+    if len(instances) < 2:
+        raise ValueError(f"{corpus.directory}: evaluation needs at least two instances, found {len(instances)}")
+    golds = []
+    for inst in instances:
+        gold = label_for(inst, labels)
+        if gold is None:
+            raise ValueError(f"{inst.path}: no gold label for prefix {inst.prefix!r}")
+        golds.append(gold)
+    for name, state in novel_states:  # reject bad layouts before any work
+        for inst, gold in zip(instances, golds):
+            translate_goal(gold, inst.initial_state, state, name)
+
+    timings = {}
+    learner = Learner(language_model=language_model, **(learner_options or {}))
+    t = time.perf_counter()
+    observations = learner.observe(instances, progress=progress)
+    timings["behaviour likelihoods"] = time.perf_counter() - t
+    t = time.perf_counter()
+    learner.fit(instances, observations=observations, progress=progress)
+    timings["training on all instances"] = time.perf_counter() - t
+
+    context = {
+        "learner": learner,
+        "instances": instances,
+        "observations": observations,
+        "golds": golds,
+        "globals": dict(learner.globals),
+        "novel_states": list(novel_states),
+        "protocol": protocol,
+    }
+    indices = list(range(len(instances)))[: limit or None]
+    t = time.perf_counter()
+    records = _run_folds(context, indices, workers, ray_address, progress)
+    timings["folds" if protocol == "loo" else "following commands"] = time.perf_counter() - t
+
+    failed = [r for r in records if "error" in r]
+    scored = [r for r in records if "error" not in r]
+    correct = sum(r["correct"] for r in scored)
+    n = len(scored)
+    per_task: dict = defaultdict(lambda: {"n": 0, "correct": 0})
+    confusion: dict = defaultdict(Counter)
+    for r in scored:
+        per_task[r["gold_task"]]["n"] += 1
+        per_task[r["gold_task"]]["correct"] += int(r["correct"])
+        confusion[r["gold_task"]][r["predicted_task"]] += 1
+    for row in per_task.values():
+        row["accuracy"] = row["correct"] / row["n"]
+    novel = [x["correct"] for r in scored for x in r["novel"]]
+    low, high = wilson_interval(correct, n)
+    if scored:
+        slowest = max(scored, key=lambda r: r["seconds"])
+        timings[f"slowest fold ({slowest['instance']})"] = slowest["seconds"]
+    return EvaluationResult(
+        protocol=protocol,
+        language_model=language_model,
+        accuracy=correct / n if n else 0.0,
+        n=n,
+        correct=correct,
+        ci_low=low,
+        ci_high=high,
+        seconds=time.perf_counter() - started,
+        per_task=dict(sorted(per_task.items())),
+        confusion={k: dict(v) for k, v in sorted(confusion.items())},
+        skipped=len(corpus.skipped),
+        slowest_step=timings,
+        novel_accuracy=(sum(novel) / len(novel)) if novel else None,
+        novel_n=len(novel),
+        novel_correct=sum(novel),
+        failed_folds=failed,
+        records=records,
+    )

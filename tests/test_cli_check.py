@@ -1,0 +1,146 @@
+"""The ``check`` and ``show`` commands, called through groundlang.cli.main."""
+
+from __future__ import annotations
+
+import pytest
+
+from groundlang.cli import main
+from groundlang.corpus import example_corpus_path
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    assert "Traceback" not in out + err
+    return code, out, err
+
+
+def test_check_fixture_corpus(capsys, fixtures):
+    code, out, err = run(capsys, "check", str(fixtures / "sokoban"), "--palette", "sokoban",
+                         "--labels", str(fixtures / "sokoban" / "labels.csv"))
+    assert code == 0
+    assert out.splitlines() == [
+        f"corpus: {fixtures / 'sokoban'} (palette sokoban)",
+        "instances: 4",
+        "distinct commands: 4",
+        "distinct layouts: 1",
+        "distinct demonstrations: 2",
+        "inconsistent demonstrations: 0",
+        "labelled: 4/4 files (2 prefixes in labels.csv)",
+        "goal holds in final state: 4/4",
+    ]
+
+
+def test_check_inconsistent_exit_codes(capsys, fixtures):
+    code, out, err = run(capsys, "check", str(fixtures / "inconsistent"), "--palette", "sokoban")
+    assert code == 1
+    assert "inconsistent demonstrations: 1" in out
+    assert "agent2red_1.txt, line 5: step 2 (east) from line 4" in out
+    assert "use --skip-inconsistent" in err
+    code, out, err = run(capsys, "check", str(fixtures / "inconsistent"), "--palette", "sokoban", "--skip-inconsistent")
+    assert code == 0
+    assert "instances: 1" in out
+    assert "skipped: 1 inconsistent files" in out
+
+
+def test_check_failing_goal_exits_1(capsys, fixtures):
+    code, out, err = run(capsys, "check", str(fixtures / "sokoban"), "--palette", "sokoban",
+                         "--labels", str(fixtures / "labels" / "wrong_goal.csv"))
+    assert code == 1
+    assert "goal holds in final state: 2/4" in out
+    assert "agent2red_0.txt: goal agentInRoom(agent0, room0) does not hold in the final state" in out
+
+
+def test_check_partial_labels(capsys, fixtures):
+    code, out, _ = run(capsys, "check", str(fixtures / "sokoban2"), "--palette", "sokoban2",
+                       "--labels", str(fixtures / "sokoban2" / "labels.csv"))
+    assert code == 0
+    assert "labelled: 1/2 files (1 prefixes in labels.csv)" in out
+
+
+@pytest.mark.parametrize(
+    "argv, pieces",
+    [
+        (["check", "{f}/no_corpus", "--palette", "sokoban"], ["no_corpus: no corpus files"]),
+        (["check", "{f}/missing_folder", "--palette", "sokoban"], ["missing_folder: not a directory"]),
+        (["check", "{f}/sokoban", "--palette", "sokoban2"], ["line 3", "colour index", "outside palette 'sokoban2'"]),
+        (["check", "{f}/sokoban", "--palette", "sokoban", "--labels", "{f}/labels/unknown_prefix.csv"],
+         ["prefixes star2blue_ name no files"]),
+        (["check", "{f}/sokoban", "--palette", "sokoban", "--labels", "{f}/labels/unknown_object.csv"],
+         ["names room7, which does not exist"]),
+        (["check", "{f}/sokoban", "--palette", "sokoban", "--labels", "{f}/labels/bad_header.csv"],
+         ["bad_header.csv, line 1"]),
+        (["check", "{f}/sokoban", "--palette", "sokoban", "--labels", "{f}/labels/absent.csv"], ["absent.csv"]),
+        (["show", "{f}/malformed/non_utf8.txt", "--palette", "sokoban"], ["non_utf8.txt, line 1", "not UTF-8"]),
+        (["show", "{f}/malformed/truncated.txt", "--palette", "sokoban"], ["truncated.txt, line 5"]),
+        (["show", "{f}/two_lines.state", "--palette", "sokoban"], ["two_lines.state, line 2"]),
+        (["show", "{f}/inconsistent/agent2red_1.txt", "--palette", "sokoban"], ["line 5: step 2"]),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, fixtures, argv, pieces):
+    code, out, err = run(capsys, *[a.format(f=fixtures) for a in argv])
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith(f"groundlang {argv[0]}: error: ")
+    for piece in pieces:
+        assert piece in lines[0]
+
+
+@pytest.mark.parametrize("name", ["empty.txt", "wrong_fields.txt", "not_a_number.txt", "unknown_kind.txt",
+                                  "colour_outside_palette.txt", "unknown_action.txt", "object_in_wall.txt"])
+def test_show_malformed_files(capsys, fixtures, name):
+    code, out, err = run(capsys, "show", str(fixtures / "malformed" / name), "--palette", "sokoban")
+    assert code == 2
+    assert name in err and len(err.strip().splitlines()) == 1
+    assert out == ""
+
+
+def test_show_corpus_file_with_picture(capsys, fixtures, tmp_path):
+    png = tmp_path / "star.png"
+    code, out, err = run(capsys, "show", str(fixtures / "sokoban" / "star2green_0.txt"), "--palette", "sokoban",
+                         "--out", str(png))
+    assert code == 0
+    lines = out.splitlines()
+    assert lines[0] == "command: push the star into the green room"
+    assert lines[1] == "steps: 2 (west,west)"
+    assert lines[2] == "initial state:"
+    assert lines[3:8] == ["#########", "#ggg#rrr#", "#ggg+SAr#", "#ggg#rrr#", "#########"]
+    assert "final state:" in lines
+    assert "#ggSArrr#" in lines
+    assert lines[-1] == f"wrote {png}"
+    assert png.read_bytes().startswith(b"\x89PNG")
+
+
+def test_show_state_file(capsys, fixtures, tmp_path):
+    code, out, _ = run(capsys, "show", str(fixtures / "two_toys.state"), "--palette", "sokoban2",
+                       "--out", str(tmp_path / "s.png"))
+    assert code == 0
+    assert "#bbb+CAy#" in out.splitlines()
+    assert (tmp_path / "s.png").stat().st_size > 1000
+
+
+def test_check_example_corpus(capsys):
+    folder = example_corpus_path()
+    code, out, _ = run(capsys, "check", str(folder), "--palette", "sokoban", "--labels", str(folder / "labels.csv"))
+    assert code == 0
+    assert "instances: 24" in out
+    assert "distinct demonstrations: 6" in out
+    assert "labelled: 24/24 files" in out
+    assert "goal holds in final state: 24/24" in out
+
+
+@pytest.mark.parametrize("folder, commands", [("allTurkTrain", 237), ("allTurkTrainLimitedCommand", 227)])
+def test_check_shared_corpus(capsys, shared_corpus, folder, commands):
+    code, out, err = run(capsys, "check", str(shared_corpus / folder), "--palette", "sokoban",
+                         "--labels", str(shared_corpus / "labels.csv"))
+    assert code == 0
+    assert out.splitlines()[1:] == [
+        "instances: 240",
+        f"distinct commands: {commands}",
+        "distinct layouts: 1",
+        "distinct demonstrations: 6",
+        "inconsistent demonstrations: 0",
+        "labelled: 240/240 files (6 prefixes in labels.csv)",
+        "goal holds in final state: 240/240",
+    ]

@@ -1,0 +1,158 @@
+"""Gold labels (groundlang.labels): reading the CSV, checking goals on states, coverage."""
+
+from __future__ import annotations
+
+import pytest
+
+from groundlang.corpus import parse_state, read_corpus, read_instance
+from groundlang.labels import (
+    LabelError,
+    check_goal_objects,
+    goal_holds,
+    label_coverage,
+    label_for,
+    read_labels,
+)
+from groundlang.logic.atoms import Atom, parse_goal
+
+LAYOUT = "room,5,0,4,4,0 room,10,4,4,8,0 door,4,2,4,2"
+
+
+def state(objects: str, palette: str = "sokoban"):
+    return parse_state(f"{LAYOUT} {objects}", palette)
+
+
+def test_read_labels(fixtures):
+    labels = read_labels(fixtures / "sokoban" / "labels.csv")
+    assert labels == {
+        "agent2red_": (Atom("agentInRoom", ("agent0", "room1")),),
+        "star2green_": (Atom("toyInRoom", ("block0", "room0")),),
+    }
+    assert labels.path.name == "labels.csv"
+    multi = read_labels(fixtures / "sokoban2" / "labels.csv")["chair2blue_"]
+    assert [a.predicate for a in multi] == ["toyInRoom", "toyIsChair", "toyIsRed", "roomIsBlue"]
+
+
+@pytest.mark.parametrize(
+    "name, pieces",
+    [
+        ("bad_header.csv", ["bad_header.csv, line 1: header is 'prefix,target'; expected prefix,goal"]),
+        ("bad_goal.csv", ["bad_goal.csv, line 2:", "agentInRoom(agent0 room1"]),
+        ("wrong_fields.csv", ["wrong_fields.csv, line 2: 3 fields; expected 2"]),
+    ],
+)
+def test_malformed_labels(fixtures, name, pieces):
+    with pytest.raises(LabelError) as info:
+        read_labels(fixtures / "labels" / name)
+    for piece in pieces:
+        assert piece in str(info.value)
+
+
+def test_duplicate_and_empty_labels(tmp_path):
+    path = tmp_path / "dup.csv"
+    path.write_text('prefix,goal\na_,"agentInRoom(agent0, room0)"\na_,"agentInRoom(agent0, room1)"\n')
+    with pytest.raises(LabelError, match=r"dup.csv, line 3: prefix 'a_' is labelled twice"):
+        read_labels(path)
+    empty = tmp_path / "empty.csv"
+    empty.write_text("")
+    with pytest.raises(LabelError, match="empty.csv: the file is empty"):
+        read_labels(empty)
+    binary = tmp_path / "bin.csv"
+    binary.write_bytes(b"prefix,goal\n\xff\xfe\n")
+    with pytest.raises(LabelError, match=r"bin.csv, line 2: not UTF-8"):
+        read_labels(binary)
+
+
+def test_position_atoms():
+    s = state("block,12,0,5,2 agent,4,2")  # star in the red room, agent in the door
+    assert goal_holds(parse_goal("toyInRoom(block0, room1)"), s)
+    assert goal_holds(parse_goal("blockInRoom(block0, room1)"), s)
+    assert not goal_holds(parse_goal("toyInRoom(block0, room0)"), s)
+    assert not goal_holds(parse_goal("agentInRoom(agent0, room0)"), s)
+    assert not goal_holds(parse_goal("agentInRoom(agent0, room1)"), s)
+    assert goal_holds(parse_goal("agentInDoor(agent0, door0)"), s)
+    assert not goal_holds(parse_goal("toyInDoor(block0, door0)"), s)
+    assert goal_holds(parse_goal("agentTouchingToy(agent0, block0)"), s)
+    assert not goal_holds(parse_goal("agentTouchingToy(agent0, block0)"), state("block,12,0,6,2 agent,4,2"))
+    # a conjunction needs every atom
+    assert not goal_holds(parse_goal("toyInRoom(block0, room1) agentInRoom(agent0, room1)"), s)
+    assert goal_holds(parse_goal("toyInRoom(block0, room1) agentInRoom(agent0, room1)"), state("block,12,0,5,2 agent,6,2"))
+    assert goal_holds((), s)
+
+
+def test_colour_and_shape_atoms():
+    s = state("block,12,0,5,2 agent,4,2")
+    assert goal_holds(parse_goal("roomIsGreen(room0) roomIsRed(room1) toyIsYellow(block0) toyIsStar(block0)"), s)
+    assert not goal_holds(parse_goal("roomIsRed(room0)"), s)
+    assert not goal_holds(parse_goal("toyIsMoon(block0)"), s)
+    assert goal_holds(parse_goal("blockIsStar(block0)"), s)
+    gray = parse_state("room,3,0,4,4,0 block,6,4,2,2 agent,1,1", "sokoban")
+    assert goal_holds(parse_goal("roomIsDarkGray(room0) toyIsLightGray(block0) toyIsSquare(block0)"), gray)
+    two = parse_state(
+        "room,0,0,4,4,0 room,4,4,4,8,0 door,4,2,4,2 block,3,0,5,2 block,1,3,6,3 agent,6,2", "sokoban2"
+    )
+    assert goal_holds(parse_goal("toyIsChair(block0) toyIsRed(block0) toyIsBasket(block1) roomIsYellow(room1)"), two)
+    assert not goal_holds(parse_goal("toyIsChair(block1)"), two)
+
+
+@pytest.mark.parametrize(
+    "goal, piece",
+    [
+        ("agentInRoom(agent0, room7)", "names room7, which does not exist"),
+        ("toyInRoom(block0, room0)", "names block0, which does not exist"),
+        ("agentInRoom(room0, agent0)", "room0 is a room; expected an agent there"),
+        ("roomIsPurple(room0)", "unknown predicate 'roomIsPurple'"),
+        ("agentInRoom(agent0)", "has 1 arguments; expected 2"),
+    ],
+)
+def test_bad_goals_are_clear_errors(goal, piece):
+    s = state("agent,2,2")
+    with pytest.raises(LabelError) as info:
+        goal_holds(parse_goal(goal), s)
+    assert piece in str(info.value)
+
+
+def test_label_for(fixtures):
+    labels = read_labels(fixtures / "sokoban2" / "labels.csv")
+    chair = read_instance(fixtures / "sokoban2" / "chair2blue_0.txt", "sokoban2")
+    bag = read_instance(fixtures / "sokoban2" / "bag2yellow_0.txt", "sokoban2")
+    assert len(label_for(chair, labels)) == 4
+    assert label_for(bag, labels) is None
+    bad = read_labels(fixtures / "labels" / "unknown_object.csv")
+    inst = read_instance(fixtures / "sokoban" / "agent2red_0.txt", "sokoban")
+    with pytest.raises(LabelError, match=r"unknown_object.csv: goal of 'agent2red_' for .*agent2red_0.txt: .*names room7"):
+        label_for(inst, bad)
+
+
+def test_label_coverage(fixtures):
+    corpus = read_corpus(fixtures / "sokoban", "sokoban")
+    cov = label_coverage(corpus, read_labels(fixtures / "sokoban" / "labels.csv"))
+    assert (cov.total, cov.labelled, cov.holding, cov.failing, cov.unlabelled) == (4, 4, 4, [], [])
+    wrong = label_coverage(corpus, read_labels(fixtures / "labels" / "wrong_goal.csv"))
+    assert (wrong.labelled, wrong.holding) == (4, 2)
+    assert [i.name for i, _ in wrong.failing] == ["agent2red_0", "agent2red_1"]
+    two = read_corpus(fixtures / "sokoban2", "sokoban2")
+    cov2 = label_coverage(two, read_labels(fixtures / "sokoban2" / "labels.csv"))
+    assert (cov2.total, cov2.labelled, cov2.holding) == (2, 1, 1)
+    assert [i.name for i in cov2.unlabelled] == ["bag2yellow_0"]
+
+
+def test_labels_naming_missing_files(fixtures):
+    corpus = read_corpus(fixtures / "sokoban", "sokoban")
+    with pytest.raises(LabelError, match=r"unknown_prefix.csv: prefixes star2blue_ name no files in .*sokoban"):
+        label_coverage(corpus, read_labels(fixtures / "labels" / "unknown_prefix.csv"))
+
+
+def test_check_goal_objects_passes_good_goals():
+    check_goal_objects(parse_goal("agentInRoom(agent0, room1) roomIsRed(room1)"), state("agent,2,2"))
+
+
+def test_shared_labels_hold_at_the_end_only(shared_corpus):
+    labels = read_labels(shared_corpus / "labels.csv")
+    assert len(labels) == 6
+    for folder in ("allTurkTrain", "allTurkTrainLimitedCommand"):
+        corpus = read_corpus(shared_corpus / folder, "sokoban")
+        cov = label_coverage(corpus, labels)
+        assert (cov.total, cov.labelled, cov.holding) == (240, 240, 240)
+        for inst in corpus:
+            assert not goal_holds(label_for(inst, labels), inst.initial_state), inst.name

@@ -1,0 +1,120 @@
+"""Loading, checking and grounding ASP programs: errors name file and line, scripts need opt-in."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from groundlang.logic.program import (
+    AspError,
+    AspGroundingError,
+    AspScriptRefused,
+    AspSyntaxError,
+    AspTimeout,
+    Program,
+    Source,
+    file_source,
+    package_source,
+)
+
+
+def shown(program: Program, facts: str = "") -> set[str]:
+    (model,) = program.solve(facts, models=1)
+    return {str(s) for s in model}
+
+
+def test_package_sources_load_with_a_header_comment():
+    for name in ("domain.lp", "pfs.lp", "tasks.lp", "groundings.lp"):
+        src = package_source(name)
+        assert src.name == f"groundlang.logic/{name}"
+        assert src.text.lstrip().startswith("%"), name
+
+
+def test_a_program_grounds_with_facts():
+    program = Program((Source("double.lp", "d(Y) :- n(X), Y = 2*X."),))
+    assert shown(program, "n(1). n(3).") == {"n(1)", "n(3)", "d(2)", "d(6)"}
+
+
+def test_solve_enumerates_every_answer_set():
+    program = Program((Source("choice.lp", "1 { p(1..3) } 1."),))
+    models = program.solve(models=0)
+    assert sorted(str(m[0]) for m in models) == ["p(1)", "p(2)", "p(3)"]
+
+
+def test_syntax_error_names_file_and_line(tmp_path):
+    path = tmp_path / "broken.lp"
+    path.write_text("a(1).\n% fine\nb(X) :- c(X) d.\n")
+    with pytest.raises(AspSyntaxError) as err:
+        Program((file_source(path),))
+    assert f"{path}:3:" in str(err.value)
+    assert "syntax error" in str(err.value)
+    assert isinstance(err.value, ValueError)
+
+
+def test_syntax_error_in_text_names_the_source_name():
+    with pytest.raises(AspSyntaxError, match=r"^mine\.lp:2:"):
+        Program((Source("mine.lp", "a.\nb :- .. .\n"),))
+
+
+def test_unsafe_variable_names_file_line_and_variable():
+    program = Program((Source("unsafe.lp", "a(1).\nb(X) :- c(Y).\n"),))
+    with pytest.raises(AspGroundingError) as err:
+        program.control()
+    message = str(err.value)
+    assert "unsafe.lp:2:" in message
+    assert "unsafe variables" in message
+    assert "'X' is unsafe" in message
+    assert "\n" not in message
+
+
+def test_script_is_refused_without_opt_in():
+    text = 'a.\n#script (python)\nimport os\nos.system("touch /tmp/groundlang-pwned")\n#end.\n'
+    with pytest.raises(AspScriptRefused, match=r"^evil\.lp:2: #script blocks are refused"):
+        Program((Source("evil.lp", text),))
+
+
+def test_script_passes_the_check_with_opt_in():
+    text = '#script (python)\nimport clingo\ndef seven():\n    return clingo.Number(7)\n#end.\nv(@seven()).\n'
+    program = Program((Source("ok.lp", text),), allow_scripts=True)
+    try:
+        assert "v(7)" in shown(program)
+    except AspGroundingError as exc:  # this clingo build may have no Python scripting at all
+        assert "python support not available" in str(exc)
+
+
+def test_script_word_in_a_comment_or_string_is_fine():
+    program = Program((Source("c.lp", '% a #script or #include here is only a comment\nname("#include").\n'),))
+    assert shown(program) == {'name("#include")'}
+
+
+def test_include_is_refused(tmp_path):
+    with pytest.raises(AspScriptRefused, match=r"^inc\.lp:2: #include is not allowed"):
+        Program((Source("inc.lp", 'a.\n#include "other.lp".\n'),))
+
+
+def test_non_utf8_file_names_file_and_line(tmp_path):
+    path = tmp_path / "latin1.lp"
+    path.write_bytes(b"a.\nroom(\xe9).\n")
+    with pytest.raises(AspSyntaxError, match=r"latin1\.lp:2: not UTF-8"):
+        file_source(path)
+
+
+def test_missing_file_is_an_os_error(tmp_path):
+    with pytest.raises(OSError):
+        file_source(tmp_path / "absent.lp")
+
+
+def test_grounding_time_limit_gives_a_clear_error():
+    # About 2.7e7 body instances: seconds of grounding, little memory; stopped waiting after 0.1 s.
+    program = Program((Source("slow.lp", "d(1..300). q :- d(X), d(Y), d(Z), X+Y+Z < 0."),))
+    start = time.perf_counter()
+    with pytest.raises(AspTimeout, match=r"grounding slow\.lp did not finish within 0\.1 s"):
+        program.control(time_limit=0.1)
+    assert time.perf_counter() - start < 1.0
+
+
+def test_bad_environment_facts_are_reported():
+    program = Program((Source("p.lp", "a."),))
+    with pytest.raises(AspError, match="facts"):
+        program.control("room(.")

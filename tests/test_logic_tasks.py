@@ -1,0 +1,240 @@
+"""Lifted task library, groundings and binding constraints (logic.tasks, model.tasks, `groundlang tasks`)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from groundlang.logic.atoms import Atom
+from groundlang.logic.program import AspError, AspScriptRefused, AspSyntaxError
+from groundlang.logic.tasks import (
+    BindingConstraint,
+    GroundedTask,
+    LiftedTask,
+    TaskLibrary,
+    Variable,
+    binding_constraints,
+    enumerate_groundings,
+    format_lifted_task,
+)
+
+# Two rooms (green room0 west, blue room1 east) joined by a door at (4,2); two toys:
+# block0 a yellow star in room0, block1 a red moon in room1; the agent in room0.
+TWO_TOYS = """
+palette_colour(blue; green; red; yellow). palette_shape(star; moon).
+room(room0). rect(room0, 0, 4, 4, 0). colour(room0, green).
+room(room1). rect(room1, 4, 4, 8, 0). colour(room1, blue).
+door(door0). rect(door0, 4, 2, 4, 2).
+toy(block0). colour(block0, yellow). shape(block0, star). at(block0, 2, 2).
+toy(block1). colour(block1, red). shape(block1, moon). at(block1, 6, 2).
+agent(agent0). at(agent0, 1, 1).
+"""
+NO_TOYS = """
+palette_colour(blue; green). palette_shape(star).
+room(room0). rect(room0, 0, 4, 4, 0). colour(room0, green).
+room(room1). rect(room1, 4, 4, 8, 0). colour(room1, blue).
+door(door0). rect(door0, 4, 2, 4, 2).
+agent(agent0). at(agent0, 4, 2).
+"""
+
+
+def A(text: str) -> Atom:
+    pred, args = text.rstrip(")").split("(")
+    return Atom(pred, tuple(a.strip() for a in args.split(",")))
+
+
+@pytest.fixture(scope="module")
+def library() -> TaskLibrary:
+    return TaskLibrary.load()
+
+
+def test_default_library_lifted_tasks(library):
+    assert library.tasks == (
+        LiftedTask("agentToRoom", (Variable("A", "agent"), Variable("R", "room")),
+                   (("agentInRoom", ("A", "R")),)),
+        LiftedTask("toyToRoom", (Variable("T", "toy"), Variable("R", "room")),
+                   (("toyInRoom", ("T", "R")),)),
+        LiftedTask("toyToRoomAgentToRoom",
+                   (Variable("A", "agent"), Variable("T", "toy"), Variable("RA", "room"), Variable("RT", "room")),
+                   (("agentInRoom", ("A", "RA")), ("toyInRoom", ("T", "RT")))),
+    )
+
+
+def test_two_toy_groundings_in_order(library):
+    found = enumerate_groundings(library, TWO_TOYS)
+    assert [(g.task, g.goal_text) for g, _ in found] == [
+        ("agentToRoom", "agentInRoom(agent0, room1)"),
+        ("toyToRoom", "toyInRoom(block0, room1)"),
+        ("toyToRoom", "toyInRoom(block1, room0)"),
+        ("toyToRoomAgentToRoom", "agentInRoom(agent0, room0) toyInRoom(block0, room1)"),
+        ("toyToRoomAgentToRoom", "agentInRoom(agent0, room1) toyInRoom(block0, room0)"),
+        ("toyToRoomAgentToRoom", "agentInRoom(agent0, room1) toyInRoom(block1, room0)"),
+    ]
+    g, constraints = found[1]
+    assert g == GroundedTask("toyToRoom", (("T", "block0"), ("R", "room1")), (A("toyInRoom(block0, room1)"),))
+    assert [tuple(str(a) for a in c.atoms) for c in constraints] == [
+        ("toyIsStar(block0)", "toyIsYellow(block0)", "roomIsBlue(room1)"),
+        ("toyIsStar(block0)", "toyIsYellow(block0)"),
+        ("toyIsStar(block0)", "roomIsBlue(room1)"),
+        ("toyIsYellow(block0)", "roomIsBlue(room1)"),
+        ("toyIsStar(block0)",),
+        ("toyIsYellow(block0)",),
+        ("roomIsBlue(room1)",),
+        (),
+    ]
+    assert found[0][1] == [BindingConstraint((A("roomIsBlue(room1)"),)), BindingConstraint(())]
+    # conjunction: toy (2 PFs) + two rooms (1 each) -> 2^4 conjunctions, none mentions an unbound object
+    g, constraints = found[5]
+    assert dict(g.binding) == {"A": "agent0", "T": "block1", "RA": "room1", "RT": "room0"}
+    assert len(constraints) == 16 and constraints[-1].atoms == ()
+    assert set(constraints[0].atoms) == {A("toyIsRed(block1)"), A("toyIsMoon(block1)"),
+                                         A("roomIsBlue(room1)"), A("roomIsGreen(room0)")}
+
+
+def test_task_already_true_initially_is_excluded(library):
+    goals = {g.goal_text for g, _ in enumerate_groundings(library, TWO_TOYS)}
+    assert "agentInRoom(agent0, room0)" not in goals  # the agent starts in room0
+    assert "toyInRoom(block0, room0)" not in goals and "toyInRoom(block1, room1)" not in goals
+    # both conjuncts true initially: agent in room0 and block1 in room1
+    assert "agentInRoom(agent0, room0) toyInRoom(block1, room1)" not in goals
+    # only one conjunct true initially: still a task
+    assert "agentInRoom(agent0, room0) toyInRoom(block0, room1)" in goals
+
+
+def test_task_needing_an_absent_class_is_not_permissible(library):
+    found = enumerate_groundings(library, NO_TOYS)  # the agent stands in the door: in no room
+    assert [(g.task, g.goal_text) for g, _ in found] == [
+        ("agentToRoom", "agentInRoom(agent0, room0)"),
+        ("agentToRoom", "agentInRoom(agent0, room1)"),
+    ]
+
+
+def test_user_task_added_by_rules_only():
+    lib = TaskLibrary.from_text(
+        '% agentToDoor(A, D): the agent stands in door D\n'
+        'task(agentToDoor). var(agentToDoor, "A", agent). var(agentToDoor, "D", door).\n'
+        'goal(agentToDoor, agentInDoor, ("A", "D")).\n', "door.lp")
+    assert lib.names == ["agentToDoor"]
+    found = enumerate_groundings(lib, TWO_TOYS)
+    assert [g.goal_text for g, _ in found] == ["agentInDoor(agent0, door0)"]
+    assert found[0][1] == [BindingConstraint(())]  # doors have no colour or shape PFs
+    assert enumerate_groundings(lib, NO_TOYS) == []  # the agent is already in the door
+
+
+def test_distinct_variables_of_one_class_take_distinct_objects():
+    lib = TaskLibrary.from_text(
+        'task(swap). var(swap, "T1", toy). var(swap, "T2", toy). var(swap, "R1", room). var(swap, "R2", room).\n'
+        'goal(swap, toyInRoom, ("T1", "R2")). goal(swap, toyInRoom, ("T2", "R1")).\n', "swap.lp")
+    found = enumerate_groundings(lib, TWO_TOYS)
+    # 2 orders of toys x 2 orders of rooms; two of the four bindings say "block0 in room0 and
+    # block1 in room1", which holds initially
+    assert len(found) == 2
+    assert {g.goal_text for g, _ in found} == {"toyInRoom(block0, room1) toyInRoom(block1, room0)"}
+    for g, _ in found:
+        b = dict(g.binding)
+        assert b["T1"] != b["T2"] and b["R1"] != b["R2"]
+
+
+def test_lifted_tasks_round_trip_through_asp(library):
+    text = "".join(format_lifted_task(t) for t in library.tasks)
+    assert TaskLibrary.from_text(text).tasks == library.tasks
+    assert TaskLibrary.from_tasks(library.tasks).tasks == library.tasks
+
+
+@pytest.mark.parametrize("text, message", [
+    ('task(t). var(t, "A", agent). goal(t, agentInRoom, ("A", "R")).', r"uses variable 'R'"),
+    ('task(t). var(t, "A", agent). var(t, "B", agent). goal(t, agentInRoom, ("A", "B")).', r"classes \('agent', 'room'\)"),
+    ('task(t). var(t, "A", agent).', r"task t has no goal"),
+    ('var(t, "A", agent).', r"names no task\(t\)"),
+])
+def test_malformed_library_is_an_asp_error(text, message):
+    with pytest.raises(AspError, match=message):
+        TaskLibrary.from_text(text, "bad.lp")
+
+
+def test_library_syntax_error_and_script(tmp_path):
+    path = tmp_path / "lib.lp"
+    path.write_text('task(t).\nvar(t, "A" agent).\n')
+    with pytest.raises(AspSyntaxError, match=rf"{path}:2:"):
+        TaskLibrary.load([path])
+    with pytest.raises(AspScriptRefused):
+        TaskLibrary.from_text("#script (python)\n#end.\n", "s.lp")
+
+
+def test_binding_constraints_are_all_subsets_largest_first():
+    atoms = [A("toyIsStar(block0)"), A("roomIsRed(room1)"), A("toyIsRed(block0)")]
+    cs = binding_constraints(atoms)
+    assert len(cs) == 8 and len(set(cs)) == 8
+    assert [len(c.atoms) for c in cs] == [3, 2, 2, 2, 1, 1, 1, 0]
+    assert binding_constraints([]) == [BindingConstraint(())]
+
+
+# --- model.tasks: the adapter for a model.world.State -------------------------------------------
+
+def two_toy_state():
+    from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette
+
+    layout = Layout((Room("green", 0, 4, 4, 0), Room("blue", 4, 4, 8, 0)), (Door(4, 2, 4, 2),),
+                    (("yellow", "star"), ("red", "moon")), get_palette("sokoban"))
+    return State(layout, Agent(1, 1), (Toy("yellow", "star", 2, 2), Toy("red", "moon", 6, 2)))
+
+
+def test_candidate_tasks_for_a_state_match_the_asp_case(library):
+    from groundlang.model.tasks import candidate_tasks
+
+    found = candidate_tasks(two_toy_state(), library)
+    expected = enumerate_groundings(library, TWO_TOYS)
+    assert [g for g, _ in found] == [g for g, _ in expected]
+    assert [c for _, c in found] == [c for _, c in expected]
+
+
+def test_narrow_by_known_star_toy_leaves_a_uniform_room_choice():
+    from groundlang.model.tasks import candidate_tasks, narrow_by_known
+    from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette
+
+    # The paper's "new colour name": three rooms, a star and a moon; "the star" and the task are known.
+    layout = Layout((Room("green", 0, 4, 4, 0), Room("red", 4, 4, 8, 0), Room("blue", 0, 8, 8, 4)),
+                    (Door(4, 2, 4, 2), Door(2, 4, 2, 4)), (("yellow", "star"), ("red", "moon")),
+                    get_palette("sokoban"))
+    state = State(layout, Agent(1, 1), (Toy("yellow", "star", 2, 3), Toy("red", "moon", 6, 2)))
+    candidates = candidate_tasks(state, TaskLibrary.load())
+    narrowed = narrow_by_known(candidates, {"T": {"toyIsStar"}}, task="toyToRoom")
+    assert [n.grounded.goal_text for n in narrowed] == ["toyInRoom(block0, room1)", "toyInRoom(block0, room2)"]
+    assert [n.probability for n in narrowed] == [0.5, 0.5]
+    for n in narrowed:  # every kept constraint mentions the star; the room's colour stays open
+        assert all(A("toyIsStar(block0)") in c.atoms for c in n.constraints)
+        assert len(n.constraints) == 4
+    # without the task, the conjunction's groundings of the star survive too; agentToRoom has no T
+    wide = narrow_by_known(candidates, {"T": {"toyIsStar"}})
+    assert {n.grounded.task for n in wide} == {"toyToRoom", "toyToRoomAgentToRoom"}
+    assert all(dict(n.grounded.binding)["T"] == "block0" for n in wide)
+    assert sum(n.probability for n in wide) == pytest.approx(1.0)
+    assert narrow_by_known(candidates, {"T": {"toyIsSquare"}}) == []
+
+
+def test_cli_tasks_json(tmp_path, capsys):
+    from groundlang.cli import main
+    from groundlang.corpus import format_state
+
+    path = tmp_path / "two.state"
+    path.write_text(format_state(two_toy_state()) + "\n")
+    assert main(["tasks", str(path), "--palette", "sokoban", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["lifted_tasks"] == ["agentToRoom", "toyToRoom", "toyToRoomAgentToRoom"]
+    assert out["groundings"][0] == {"task": "agentToRoom", "goal": "agentInRoom(agent0, room1)",
+                                    "constraints": [["roomIsBlue(room1)"], []]}
+    assert len(out["groundings"]) == 6
+
+
+def test_cli_tasks_bad_library_is_one_line(tmp_path, capsys):
+    from groundlang.cli import main
+    from groundlang.corpus import format_state
+
+    state = tmp_path / "two.state"
+    state.write_text(format_state(two_toy_state()) + "\n")
+    lib = tmp_path / "bad.lp"
+    lib.write_text("task(t).\n#script (python)\n#end.\n")
+    assert main(["tasks", str(state), "--palette", "sokoban", "--library", str(lib)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{lib}:2:" in err[0] and "#script" in err[0]

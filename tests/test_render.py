@@ -1,0 +1,100 @@
+"""Pictures (groundlang.render): ASCII drawings and matplotlib images."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from groundlang.corpus import parse_state, read_instance, read_state_file
+from groundlang.render import SHAPE_GLYPHS, ascii_state, draw_state, save_picture, trajectory_positions
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def test_ascii_small_state(fixtures):
+    text = ascii_state(read_state_file(fixtures / "small.state", "sokoban"))
+    assert text == (
+        "#########\n"
+        "#ggg#rrr#\n"
+        "#gAg+rrr#\n"
+        "#ggg#rrr#\n"
+        "#########\n"
+        "legend: # wall, + door, A agent0\n"
+        "  g room0 (green)\n"
+        "  r room1 (red)"
+    )
+
+
+def test_ascii_two_toys_north_up(fixtures):
+    rows = ascii_state(read_state_file(fixtures / "two_toys.state", "sokoban2")).splitlines()
+    assert rows[1] == "#bbb#yBy#"  # y = 3: the basket at (6, 3)
+    assert rows[2] == "#bbb+CAy#"  # y = 2: chair (5, 2), agent (6, 2)
+    assert "  C block0 (red chair)" in rows
+    assert "  B block1 (green basket)" in rows
+
+
+def test_ascii_colliding_shape_initials_use_digits():
+    s = parse_state("room,5,0,5,5,0 block,12,0,1,1 block,10,3,3,3 agent,2,2", "sokoban")  # star, smiley
+    rows = ascii_state(s).splitlines()
+    assert rows[2] == "#gg1g#"
+    assert rows[3] == "#gAgg#"
+    assert rows[4] == "#0ggg#"
+    assert "  0 block0 (yellow star)" in rows and "  1 block1 (red smiley)" in rows
+
+
+def test_every_palette_shape_has_a_glyph():
+    from groundlang.model.world import PALETTES
+
+    shapes = [s for p in PALETTES.values() for s in p.shapes]
+    assert set(shapes) <= set(SHAPE_GLYPHS)
+    assert len({SHAPE_GLYPHS[s] for s in shapes}) == len(shapes)
+
+
+def test_trajectory_positions(fixtures):
+    inst = read_instance(fixtures / "sokoban" / "star2green_0.txt", "sokoban")
+    pos = trajectory_positions(inst.states)
+    assert pos.shape == (3, 2, 2)
+    assert pos[:, 1].tolist() == [[5, 2], [4, 2], [3, 2]]
+    assert trajectory_positions(pos.tolist()).tolist() == pos.tolist()
+    assert trajectory_positions(None).shape == (0, 1, 2)
+    with pytest.raises(ValueError, match="shape"):
+        trajectory_positions([[1, 2]])
+
+
+def test_draw_state_with_trajectory(fixtures):
+    inst = read_instance(fixtures / "sokoban" / "star2green_0.txt", "sokoban")
+    ax = draw_state(inst.initial_state, trajectory=inst.states, title="push")
+    lines = ax.get_lines()
+    agent_path = lines[0]
+    assert agent_path.get_xdata().tolist() == [6, 5, 4]
+    assert np.asarray(lines[1].get_xdata()).tolist() == [5, 4, 3]  # the star's path
+    texts = [t.get_text() for t in ax.texts]
+    assert SHAPE_GLYPHS["star"] in texts and "A" in texts
+    assert ax.get_title() == "push"
+    image = ax.get_images()[0].get_array()
+    assert image.shape == (5, 9, 3)
+    assert np.allclose(image[0, 0], (0.18, 0.18, 0.2))  # wall corner
+    assert image[2, 2, 1] > image[2, 2, 0]  # green room floor is greenish
+
+
+def test_save_picture_png_atomic(fixtures, tmp_path):
+    inst = read_instance(fixtures / "sokoban2" / "chair2blue_0.txt", "sokoban2")
+    out = save_picture(tmp_path / "chair.png", inst.initial_state, trajectory=inst.states, title=inst.command)
+    data = out.read_bytes()
+    assert data.startswith(PNG_MAGIC)
+    assert len(data) > 5000
+    assert [p.name for p in tmp_path.iterdir()] == ["chair.png"]
+    svg = save_picture(tmp_path / "s.svg", inst.initial_state)
+    assert svg.read_text().lstrip().startswith("<?xml")
+    with pytest.raises(ValueError, match="not supported"):
+        save_picture(tmp_path / "x.bmp", inst.initial_state)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["chair.png", "s.svg"]
+
+
+def test_render_import_does_not_load_matplotlib():
+    code = "import sys, groundlang.render, groundlang.corpus; print('matplotlib' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
