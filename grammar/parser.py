@@ -23,10 +23,7 @@ from lark.lexer import Lexer
 
 from .chunker import chunk
 from .composition import compose, instantiate
-from .lexicon import (
-    ADJECTIVES, ADVERBS, AUXILIARIES, COLOURS, CONJUNCTIONS, DETERMINERS, MEASURES, NEGATIONS, NOUNS, NUMBERS,
-    PARTICLES, PREPOSITIONS, PRONOUNS, RELATIVES, SUBORDINATORS, VERB_FORMS, SemanticLexicon, guess_categories,
-)
+from .lexicon import CONJUNCTIONS, SemanticLexicon, guess_categories
 from .logical_form import LogicalForm, Reading
 from .phrases import DEFAULT_WEIGHTS, KBestTransformer
 
@@ -40,19 +37,18 @@ MAX_SENTENCE_TOKENS = 40
 SENTENCE_END = frozenset({".", "!", "?", ";", ":"})
 CLAUSE_BREAK = frozenset({",", "(", ")", "-", "[", "]", "{", "}"})
 
-# Grammar category -> the lexical categories that can play it (the terminals are generated from this).
+# Grammar terminal -> the lexical categories that can play it (the parser's term matcher reads this).
 CATEGORY_RULES: dict[str, frozenset[str]] = {
-    "det": frozenset({"DET"}), "prep": frozenset({"PREP"}), "to": frozenset({"TO"}), "conj": frozenset({"CONJ"}),
-    "sub": frozenset({"SUB"}), "rel": frozenset({"REL"}), "pron": frozenset({"PRON"}), "aux": frozenset({"AUX"}),
-    "neg": frozenset({"NEG"}), "adv": frozenset({"ADV"}), "noun": frozenset({"NOUN", "MEASURE"}),
-    "nmod": frozenset({"ADJ", "COLOR", "NOUN", "NUM"}), "hmod": frozenset({"ADJ", "COLOR", "NUM"}),
-    "measure": frozenset({"MEASURE"}), "verb": frozenset({"VERB", "GER"}), "ger": frozenset({"GER"}),
-    "comma": frozenset({"COMMA"}),
+    "DET": frozenset({"DET"}), "PREP": frozenset({"PREP"}), "TO": frozenset({"TO"}), "CONJ": frozenset({"CONJ"}),
+    "SUB": frozenset({"SUB"}), "REL": frozenset({"REL"}), "PRON": frozenset({"PRON"}), "AUX": frozenset({"AUX"}),
+    "NEG": frozenset({"NEG"}), "ADV": frozenset({"ADV"}), "NOUN": frozenset({"NOUN", "MEASURE"}),
+    "NMOD": frozenset({"ADJ", "COLOR", "NOUN", "NUM"}), "HMOD": frozenset({"ADJ", "COLOR", "NUM"}),
+    "MEASURE": frozenset({"MEASURE"}), "VERB": frozenset({"VERB", "GER"}), "GER": frozenset({"GER"}),
+    "COMMA": frozenset({"COMMA"}),
 }
 
 _TOKEN = re.compile(r"\w+(?:'\w+)*|\.{2,}|[^\w\s]")
 _CLITIC = re.compile(r"^(\w+)('(?:re|s|m|ll|ve|d))$")
-_FALLBACK_CLASS = frozenset({"ADJ", "NOUN"})
 
 
 class ParseError(ValueError):
@@ -102,23 +98,28 @@ def _class_name(cats: frozenset[str]) -> str:
     return "_".join(sorted(cats))
 
 
-def _known_classes() -> set[frozenset[str]]:
-    words = set().union(
-        ADJECTIVES, ADVERBS, AUXILIARIES, COLOURS, CONJUNCTIONS, DETERMINERS, MEASURES, NEGATIONS, NOUNS,
-        NUMBERS, PARTICLES, PREPOSITIONS, PRONOUNS, RELATIVES, SUBORDINATORS, VERB_FORMS, {"to", "'re", "'s"},
-    )
-    classes = {guess_categories(w) for w in words}
-    for probe in ("zzz", "4", "zzzly", "zzzzing", "zzzzed", "zzzz"):
-        classes.add(guess_categories(probe, first=False))
-        classes.add(guess_categories(probe, first=True))
-    classes.add(frozenset({"COMMA"}))
-    return classes
+# Token type (a lexical class such as "ADJ_NOUN") -> the grammar terminals it matches.
+_TERMINALS_OF: dict[str, frozenset[str]] = {}
+
+
+def _terminals_of(cls: str) -> frozenset[str]:
+    found = _TERMINALS_OF.get(cls)
+    if found is None:
+        cats = frozenset(cls.split("_"))
+        found = frozenset(t for t, wanted in CATEGORY_RULES.items() if cats & wanted)
+        _TERMINALS_OF[cls] = found
+    return found
+
+
+def _match(term, token) -> bool:
+    """Earley's term matcher: a word matches every grammar terminal its lexical tags allow."""
+    return term.name in _terminals_of(token.type)
 
 
 class _TaggedLexer(Lexer):
-    """Feeds lark pre-tagged words: one token per word, typed by its category class."""
+    """Feeds lark pre-tagged words: one token per word, typed by its lexical class."""
 
-    def __init__(self, lexer_conf):  # noqa: D401 - lark's signature
+    def __init__(self, lexer_conf):  # lark's signature
         pass
 
     def lex(self, data):
@@ -127,16 +128,19 @@ class _TaggedLexer(Lexer):
 
 
 @functools.lru_cache(maxsize=1)
-def _earley() -> tuple[Lark, frozenset[frozenset[str]]]:
-    classes = _known_classes()
-    lines = [files("groundlang.grammar").joinpath("commands.lark").read_text(encoding="utf-8"), ""]
-    lines.append("%declare " + " ".join(sorted(_class_name(c) for c in classes)))
-    for rule, wanted in CATEGORY_RULES.items():
-        terms = sorted(_class_name(c) for c in classes if c & wanted)
-        lines.append(f"?{rule}: " + " | ".join(terms))
-    grammar = "\n".join(lines) + "\n"
-    parser = Lark(grammar, parser="earley", lexer=_TaggedLexer, ambiguity="explicit", start="start")
-    return parser, frozenset(classes)
+def _earley() -> Lark:
+    grammar = files("groundlang.grammar").joinpath("commands.lark").read_text(encoding="utf-8")
+    parser = Lark(grammar, parser="earley", lexer=_TaggedLexer, ambiguity="explicit", start="start",
+                  ordered_sets=False)
+    # lark's basic Earley matches a terminal by token type; ours accepts a word for each of its categories
+    parser.parser.parser.term_matcher = _match
+    return parser
+
+
+@functools.lru_cache(maxsize=2048)
+def _parse_tree(data: tuple[tuple[str, str], ...]):
+    """Earley's explicit-ambiguity tree of one tagged sentence (cached: crowd commands repeat a lot)."""
+    return _earley().parse(list(data))
 
 
 def _sentences(tokens: list[str], cats: list[frozenset[str]]) -> list[list[Word]]:
@@ -163,11 +167,10 @@ def _split_long(sentence: list[Word]) -> list[list[Word]]:
 
 def _parse_sentence(sentence: list[Word], transformer: KBestTransformer) -> tuple[list[tuple[float, tuple]], bool]:
     """Best (log weight, clause values) readings of one sentence, and whether it fell back to chunks."""
-    parser, classes = _earley()
     if len(sentence) <= MAX_SENTENCE_TOKENS:
-        data = [(w, _class_name(c if c in classes else _FALLBACK_CLASS)) for w, c in sentence]
+        data = tuple((w, _class_name(c)) for w, c in sentence)
         try:
-            tree = parser.parse(data)
+            tree = _parse_tree(data)
             cands = transformer.transform(tree)
             if not isinstance(cands, list):
                 cands = [(0.0, cands)]

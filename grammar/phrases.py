@@ -102,6 +102,8 @@ def _np_parts(values: list) -> tuple[str | None, list[str]]:
     for v in values:
         if isinstance(v, tuple) and v and v[0] == "det":
             det = v[1]
+        elif isinstance(v, tuple) and v and v[0] == "mods":
+            rest.extend(v[1])
         else:
             rest.append(str(v))
     return det, rest
@@ -121,6 +123,8 @@ def _verb_phrase(values: list) -> VP:
             obj = v[1]
         elif isinstance(v, (PP, Adv, Measure, Sub)):
             comps.append(v)
+        elif isinstance(v, tuple) and v and v[0] == "comps":
+            comps.extend(v[1])
         # conjunction tokens between complements carry no structure; the words keep them
     negated = any(w in NEGATIONS for w in pre)
     adverbs = tuple(w for w in pre if w not in NEGATIONS)
@@ -129,7 +133,7 @@ def _verb_phrase(values: list) -> VP:
 
 def _fragment(values: list) -> VP:
     nps = [v for v in values if isinstance(v, NP)]
-    comps = tuple(v for v in values if isinstance(v, (PP, Adv, Measure, Sub)))
+    comps = tuple(c for v in values if isinstance(v, tuple) and v and v[0] == "comps" for c in v[1])
     return VP(verb=None, obj=nps[0] if nps else None, comps=comps)
 
 
@@ -158,6 +162,8 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "vhead": lambda vs: ("verb", str(vs[0])),
     "obj": lambda vs: ("obj", vs[0]),
     "determiner": lambda vs: ("det", str(vs[0])),
+    "nmods": lambda vs: ("mods", tuple(str(v) for v in vs)),
+    "comps": lambda vs: ("comps", tuple(v for v in vs if isinstance(v, (PP, Adv, Measure, Sub)))),
     "vp": _verb_phrase,
     "gvp": _verb_phrase,
     "subj_clause": lambda vs: replace(vs[1], subject=vs[0]),

@@ -13,16 +13,21 @@ Safety and errors (all ``AspError``, a ``ValueError``, so the CLI prints one lin
 - ``#script`` blocks are refused unless ``allow_scripts=True``, and
   ``#include`` is refused always: list the file among the sources instead
   (``AspScriptRefused``);
-- grounding and solving stop waiting after ``time_limit`` seconds
-  (``AspTimeout``). clingo cannot interrupt its grounder, so a runaway
-  grounding is left in a daemon thread that ends with the process; the caller
-  gets the error at once.
+- grounding and solving stop after ``time_limit`` seconds (``AspTimeout``).
+  clingo cannot interrupt its grounder, so a program built with
+  ``isolated=True`` (user files) is solved in a child process that is killed
+  at the limit and capped in memory; the package's own rules run in-process
+  (a runaway there would be abandoned in a daemon thread).
 """
 
 from __future__ import annotations
 
+import json
 import logging
+import os
 import re
+import subprocess
+import sys
 import threading
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -49,6 +54,10 @@ log = logging.getLogger(__name__)
 
 # Seconds; generous for the Cleanup World (milliseconds), short enough to notice a runaway program.
 DEFAULT_TIME_LIMIT = 10.0
+# Address-space cap of the child process that solves user programs.
+CHILD_MEMORY_LIMIT = 2 << 30
+# Extra seconds the parent waits for the child's own timeout report before killing it.
+_CHILD_GRACE = 5.0
 
 
 class AspError(ValueError):
@@ -180,6 +189,7 @@ class Program:
 
     sources: tuple[Source, ...]
     allow_scripts: bool = False
+    isolated: bool = False  # solve() in a killable child process (for user-supplied sources)
     _statements: tuple = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -189,8 +199,9 @@ class Program:
         object.__setattr__(self, "_statements", tuple(statements))
 
     @classmethod
-    def from_sources(cls, sources: Iterable[Source], allow_scripts: bool = False) -> "Program":
-        return cls(tuple(sources), allow_scripts)
+    def from_sources(cls, sources: Iterable[Source], allow_scripts: bool = False,
+                     isolated: bool = False) -> "Program":
+        return cls(tuple(sources), allow_scripts, isolated)
 
     @property
     def names(self) -> str:
@@ -236,7 +247,13 @@ class Program:
     def solve(
         self, facts: str = "", *, models: int = 0, time_limit: float | None = DEFAULT_TIME_LIMIT
     ) -> list[list[clingo.Symbol]]:
-        """Ground once and return the shown atoms of every answer set (``models=0``: all)."""
+        """Ground once and return the shown atoms of every answer set (``models=0``: all).
+
+        With ``isolated=True`` this runs in a child process (killed at the time limit);
+        errors are re-raised here as the same AspError subclasses.
+        """
+        if self.isolated:
+            return _solve_in_child(self, facts, models, time_limit)
         ctl = self.control(facts, time_limit=time_limit, arguments=[f"--models={models}"])
         found: list[list[clingo.Symbol]] = []
         with ctl.solve(on_model=lambda m: found.append(m.symbols(shown=True)), async_=True) as handle:
@@ -247,3 +264,64 @@ class Program:
                 )
             handle.get()
         return found
+
+
+_ERRORS = {c.__name__: c for c in (AspError, AspSyntaxError, AspScriptRefused, AspGroundingError, AspTimeout)}
+
+
+def _solve_in_child(program: Program, facts: str, models: int, time_limit: float | None) -> list:
+    request = {
+        "sources": [[s.name, s.text] for s in program.sources],
+        "allow_scripts": program.allow_scripts,
+        "facts": facts,
+        "models": models,
+        "time_limit": time_limit,
+    }
+    try:
+        done = subprocess.run(
+            [sys.executable, "-m", "groundlang.logic.program"],
+            input=json.dumps(request), capture_output=True, text=True,
+            timeout=None if time_limit is None else time_limit + _CHILD_GRACE,
+        )
+    except subprocess.TimeoutExpired:
+        raise AspTimeout(f"solving {program.names} did not finish within {time_limit:g} s "
+                         "(child process killed)") from None
+    try:
+        reply = json.loads(done.stdout)
+    except ValueError:
+        reason = (_one_line(done.stderr)[-300:] or f"exit code {done.returncode}")
+        if done.returncode < 0 or "MemoryError" in reason or "bad_alloc" in reason:
+            reason = f"it ran out of memory ({CHILD_MEMORY_LIMIT >> 30} GiB) or crashed: {reason}"
+        raise AspGroundingError(f"grounding {program.names} failed: {reason}") from None
+    if "error" in reply:
+        kind, message = reply["error"]
+        raise _ERRORS.get(kind, AspError)(message)
+    return [[clingo.parse_term(t) for t in model] for model in reply["models"]]
+
+
+def _child_main() -> None:
+    """Child side of ``isolated`` solving: JSON request on stdin, JSON reply on stdout."""
+    try:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, (CHILD_MEMORY_LIMIT, CHILD_MEMORY_LIMIT))
+    except (ImportError, ValueError, OSError):  # pragma: no cover - not on every platform
+        pass
+    request = json.loads(sys.stdin.read())
+    try:
+        program = Program(tuple(Source(n, t) for n, t in request["sources"]), request["allow_scripts"])
+        found = program.solve(request["facts"], models=request["models"], time_limit=request["time_limit"])
+        reply = {"models": [[str(sym) for sym in model] for model in found]}
+    except AspError as exc:
+        reply = {"error": [type(exc).__name__, str(exc)]}
+    except MemoryError:
+        reply = {"error": ["AspGroundingError",
+                           f"grounding ran out of memory ({CHILD_MEMORY_LIMIT >> 30} GiB)"]}
+    sys.stdout.write(json.dumps(reply))
+    sys.stdout.flush()
+    # A runaway grounding may still be running in a thread; leave without finalising it.
+    os._exit(0)
+
+
+if __name__ == "__main__":
+    _child_main()

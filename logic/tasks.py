@@ -152,25 +152,33 @@ def format_lifted_task(task: LiftedTask) -> str:
     return "\n".join(lines) + "\n"
 
 
+# Shown atoms of a library solved without an environment (a user's own #show cannot hide them).
+_LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #show goal/3. #show pf/3.")
+
+
 def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[LiftedTask, ...]:
-    """Ground the library without an environment and read task/1, var/3, goal/3."""
-    ctl = program.control("", time_limit=time_limit)
-    atoms = ctl.symbolic_atoms
-    names = sorted(_text(a.symbol.arguments[0]) for a in atoms.by_signature("task", 1))
+    """Solve the library without an environment and read task/1, var/3, goal/3."""
+    models = program.solve("", models=1, time_limit=time_limit)
+    if not models:
+        raise AspError(f"{program.names}: the task library has no answer set (a constraint always fails)")
+    by_signature: dict[tuple[str, int], list] = {}
+    for sym in models[0]:
+        by_signature.setdefault((sym.name, len(sym.arguments)), []).append(sym)
+    names = sorted(_text(a.arguments[0]) for a in by_signature.get(("task", 1), []))
     variables: dict[str, list[Variable]] = {n: [] for n in names}
     goals: dict[str, list[tuple[str, tuple[str, ...]]]] = {n: [] for n in names}
     signatures: dict[str, tuple[str, ...]] = {}
-    for a in atoms.by_signature("pf", 3):
-        cls_, name, sig = a.symbol.arguments
+    for a in by_signature.get(("pf", 3), []):
+        cls_, name, sig = a.arguments
         if cls_.name == "position":
             signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
-    for a in atoms.by_signature("var", 3):
-        t, v, c = (_text(x) for x in a.symbol.arguments)
+    for a in by_signature.get(("var", 3), []):
+        t, v, c = (_text(x) for x in a.arguments)
         if t not in variables:
             raise AspError(f"{program.names}: var({t}, \"{v}\", {c}) names no task({t})")
         variables[t].append(Variable(v, c))
-    for a in atoms.by_signature("goal", 3):
-        t, p, args = a.symbol.arguments
+    for a in by_signature.get(("goal", 3), []):
+        t, p, args = a.arguments
         t = _text(t)
         if t not in goals:
             raise AspError(f"{program.names}: goal({t}, ...) names no task({t})")
@@ -207,10 +215,13 @@ class TaskLibrary:
                  time_limit: float | None = DEFAULT_TIME_LIMIT) -> None:
         self.sources = tuple(sources)
         self.allow_scripts = allow_scripts
+        self.time_limit = time_limit  # seconds per grounding+solve of this library; None: no limit
         domain = tuple(package_source(f) for f in DOMAIN_FILES)
-        self.program = Program(domain + self.sources, allow_scripts)
+        # User files are solved in a killable child process; the package's own rules in-process.
+        isolated = not all(s.name.startswith("groundlang.logic/") for s in self.sources)
+        self.program = Program(domain + self.sources + (_LIBRARY_SHOW,), allow_scripts, isolated)
         self.grounding_program = Program(
-            domain + self.sources + (package_source("groundings.lp"),), allow_scripts
+            domain + self.sources + (package_source("groundings.lp"),), allow_scripts, isolated
         )
         self.tasks: tuple[LiftedTask, ...] = _read_lifted_tasks(self.program, time_limit)
 
@@ -262,30 +273,44 @@ def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
 
 
 def enumerate_groundings(
-    library: TaskLibrary, facts: str, *, time_limit: float | None = DEFAULT_TIME_LIMIT
+    library: TaskLibrary, facts: str, *, time_limit: float | None = None
 ) -> list[tuple[GroundedTask, list[BindingConstraint]]]:
     """Every permissible grounding not true initially, with its binding constraints.
 
     ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
-    One Control, one grounding, one solve enumerating all answer sets. Order: library
+    ``time_limit``: seconds, default the library's. One Control, one grounding, one solve
+    enumerating all answer sets. Order: library
     order of tasks, then bound objects in variable order (``room2`` before ``room10``).
     """
     tasks = {t.name: t for t in library.tasks}
     order = {t.name: i for i, t in enumerate(library.tasks)}
     found = []
-    for model in library.grounding_program.solve(facts, models=0, time_limit=time_limit):
+    # The same atoms recur in many answer sets; decoding clingo symbols is the costly part.
+    decoded: dict[clingo.Symbol, tuple[str, object]] = {}
+
+    def decode(sym: clingo.Symbol) -> tuple[str, object]:
+        kind, args = sym.name, sym.arguments
+        if kind == "chosen":
+            return kind, _text(args[0])
+        if kind == "bind":
+            return kind, (_text(args[0]), _text(args[1]))
+        return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
+
+    limit = library.time_limit if time_limit is None else time_limit
+    for model in library.grounding_program.solve(facts, models=0, time_limit=limit):
         chosen, bind, goal, extra = None, {}, [], []
         for sym in model:
-            if sym.name == "chosen":
-                chosen = _text(sym.arguments[0])
-            elif sym.name == "bind":
-                bind[_text(sym.arguments[0])] = _text(sym.arguments[1])
-            elif sym.name == "goal_atom":
-                goal.append(Atom(pf_name(sym.arguments[0]),
-                                 tuple(_text(a) for a in _tuple_args(sym.arguments[1]))))
-            elif sym.name == "constraint_atom":
-                extra.append(Atom(pf_name(sym.arguments[0]),
-                                  tuple(_text(a) for a in _tuple_args(sym.arguments[1]))))
+            if sym not in decoded:
+                decoded[sym] = decode(sym)
+            kind, value = decoded[sym]
+            if kind == "chosen":
+                chosen = value
+            elif kind == "bind":
+                bind[value[0]] = value[1]
+            elif kind == "goal_atom":
+                goal.append(value)
+            elif kind == "constraint_atom":
+                extra.append(value)
         lifted = tasks[chosen]
         binding = tuple((v.name, bind[v.name]) for v in lifted.variables)
         # Goal atoms sorted (one text per goal, whatever the binding), constraint atoms in variable order.

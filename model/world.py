@@ -203,7 +203,7 @@ class Layout:
             covered[r.left : r.right + 1, r.bottom : r.top + 1] = True
         door = np.zeros_like(interior)
         for d in self.doors:
-            door[max(d.left, 0) : d.right + 1, max(d.bottom, 0) : d.top + 1] = True
+            door[max(d.left, 0) : max(d.right + 1, 0), max(d.bottom, 0) : max(d.top + 1, 0)] = True
         return interior | (door & covered)
 
     @cached_property

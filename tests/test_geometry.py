@@ -144,7 +144,5 @@ def test_door_left_of_the_grid_opens_nothing_in_asp():
     assert (tables.door_of == -1).all() and tables.room_of[0, 2] == -1
 
 
-@pytest.mark.xfail(reason="model.world.Layout.walkable slices door[max(l,0):r+1] with a negative r+1, "
-                          "which opens wall cells for a door entirely at negative x; reported to the lead")
 def test_door_left_of_the_grid_agrees_with_walkable():
     check_against_world(Layout((Room("red", 0, 4, 4, 0),), (Door(-5, 2, -3, 2),), (), SOKOBAN))

@@ -118,3 +118,25 @@ def test_bad_environment_facts_are_reported():
     program = Program((Source("p.lp", "a."),))
     with pytest.raises(AspError, match="facts"):
         program.control("room(.")
+
+
+def test_isolated_program_gives_the_same_answer_sets():
+    source = Source("choice.lp", "1 { p(1..3) } 1. q(\"a b\", (x,)).")
+    inside = Program((source,)).solve(models=0)
+    child = Program((source,), isolated=True).solve(models=0)
+    assert sorted(map(str, map(sorted, inside))) == sorted(map(str, map(sorted, child)))
+    assert len(child) == 3
+
+
+def test_isolated_errors_keep_their_class_and_location():
+    program = Program((Source("unsafe.lp", "a(1).\nb(X) :- c(Y).\n"),), isolated=True)
+    with pytest.raises(AspGroundingError, match=r"unsafe\.lp:2:.*'X' is unsafe"):
+        program.solve()
+
+
+def test_isolated_infinite_grounding_is_stopped():
+    program = Program((Source("forever.lp", "n(1). n(X+1) :- n(X)."),), isolated=True)
+    start = time.perf_counter()
+    with pytest.raises(AspTimeout, match=r"forever\.lp did not finish within 0\.5 s"):
+        program.solve(time_limit=0.5)
+    assert time.perf_counter() - start < 5.0

@@ -238,3 +238,17 @@ def test_cli_tasks_bad_library_is_one_line(tmp_path, capsys):
     assert main(["tasks", str(state), "--palette", "sokoban", "--library", str(lib)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"{lib}:2:" in err[0] and "#script" in err[0]
+
+
+def test_cli_tasks_runaway_library_stops_at_the_time_limit(tmp_path, capsys):
+    from groundlang.cli import main
+    from groundlang.corpus import format_state
+
+    state = tmp_path / "two.state"
+    state.write_text(format_state(two_toy_state()) + "\n")
+    lib = tmp_path / "forever.lp"
+    lib.write_text('task(t). var(t, "A", agent). var(t, "R", room). goal(t, agentInRoom, ("A", "R")).\n'
+                   "n(1). n(X+1) :- n(X).\n")
+    assert main(["tasks", str(state), "--palette", "sokoban", "--library", str(lib), "--time-limit", "0.5"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "forever.lp" in err[0] and "did not finish within 0.5 s" in err[0]

@@ -20,6 +20,8 @@ def register(subparsers) -> None:
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp)")
     p.add_argument("--allow-scripts", action="store_true",
                    help="let library files run #script blocks (only for files you trust)")
+    p.add_argument("--time-limit", type=float, default=10.0, metavar="SECONDS",
+                   help="stop grounding/solving the library after this long (default 10)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     p.set_defaults(func=run)
 
@@ -33,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
         state = read_state_file(path, args.palette)
     else:
         state = read_instance(path, args.palette).initial_state
-    library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts)
+    library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
     candidates = candidate_tasks(state, library)
     if args.json:
         out = {

@@ -1,0 +1,202 @@
+"""model.features: grounded PF values over a state space, from per-cell tables."""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+import torch
+
+from groundlang.logic.atoms import Atom, parse_atom, parse_goal
+from groundlang.model.features import FeatureError, feature_matrix, goal_mask, position_atoms
+from groundlang.model.geometry import CellTables, cell_tables
+from groundlang.model.statespace import enumerate_states
+from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette
+
+SOKOBAN = get_palette("sokoban")
+
+
+def local_tables(layout: Layout) -> CellTables:
+    """The tables straight from Layout.walkable, rooms and doors (no clingo)."""
+    w, h = layout.width, layout.height
+    room_of = np.full((w, h), -1, dtype=np.int16)
+    door_of = np.full((w, h), -1, dtype=np.int16)
+    for i in reversed(range(len(layout.rooms))):
+        r = layout.rooms[i]
+        room_of[r.left + 1 : r.right, r.bottom + 1 : r.top] = i
+    for i in reversed(range(len(layout.doors))):
+        d = layout.doors[i]
+        door_of[max(d.left, 0) : d.right + 1, max(d.bottom, 0) : d.top + 1] = i
+    door_of[~layout.walkable] = -1
+    return CellTables(room_of, door_of)
+
+
+def corpus_state(agent=(8, 6), toys=((4, 8),), palette=SOKOBAN, kinds=(("yellow", "star"),)) -> State:
+    layout = Layout(
+        (Room("green", 0, 10, 6, 4), Room("red", 6, 10, 10, 4), Room("blue", 0, 4, 10, 0)),
+        (Door(3, 4, 3, 3), Door(8, 4, 8, 3), Door(5, 6, 6, 6)),
+        tuple(kinds[: len(toys)]),
+        palette,
+    )
+    return State(layout, Agent(*agent), tuple(Toy(*k, x, y) for k, (x, y) in zip(kinds, toys)))
+
+
+@pytest.fixture(scope="module")
+def one_toy():
+    state = corpus_state()
+    return enumerate_states(state), local_tables(state.layout)
+
+
+@pytest.fixture(scope="module")
+def two_toys():
+    state = corpus_state(toys=((4, 8), (7, 2)), kinds=(("yellow", "star"), ("red", "moon")))
+    return enumerate_states(state), local_tables(state.layout)
+
+
+def test_local_tables_match_clingo():
+    layout = corpus_state().layout
+    mine, theirs = local_tables(layout), cell_tables(layout)
+    np.testing.assert_array_equal(mine.room_of, theirs.room_of)
+    np.testing.assert_array_equal(mine.door_of, theirs.door_of)
+
+
+def test_position_atoms():
+    layout = corpus_state(toys=((4, 8), (7, 2)), kinds=(("yellow", "star"), ("red", "moon"))).layout
+    atoms = [str(a) for a in position_atoms(layout)]
+    assert len(atoms) == 3 + 2 * 3 + 3 + 2 * 3 + 2
+    assert atoms[:4] == ["agentInRoom(agent0, room0)", "agentInRoom(agent0, room1)",
+                         "agentInRoom(agent0, room2)", "toyInRoom(block0, room0)"]
+    assert atoms[-2:] == ["agentTouchingToy(agent0, block0)", "agentTouchingToy(agent0, block1)"]
+    assert "toyInDoor(block1, door2)" in atoms
+    assert [str(a) for a in position_atoms(corpus_state(toys=()).layout)] == [
+        "agentInRoom(agent0, room0)", "agentInRoom(agent0, room1)", "agentInRoom(agent0, room2)",
+        "agentInDoor(agent0, door0)", "agentInDoor(agent0, door1)", "agentInDoor(agent0, door2)",
+    ]
+
+
+@pytest.mark.parametrize(
+    "agent, toy, true_atoms",
+    [
+        ((8, 6), (4, 8), {"agentInRoom(agent0, room1)", "toyInRoom(block0, room0)"}),
+        ((3, 4), (3, 3), {"agentInDoor(agent0, door0)", "toyInDoor(block0, door0)",
+                          "toyInRoom(block0, room2)", "agentTouchingToy(agent0, block0)"}),
+        ((6, 6), (5, 6), {"agentInDoor(agent0, door2)", "toyInDoor(block0, door2)",
+                          "toyInRoom(block0, room0)", "agentTouchingToy(agent0, block0)"}),
+        ((5, 5), (4, 6), {"agentInRoom(agent0, room0)", "toyInRoom(block0, room0)"}),  # diagonal
+        ((9, 1), (9, 2), {"agentInRoom(agent0, room2)", "toyInRoom(block0, room2)",
+                          "agentTouchingToy(agent0, block0)"}),
+    ],
+)
+def test_hand_picked_states(one_toy, agent, toy, true_atoms):
+    space, tables = one_toy
+    atoms = position_atoms(space.layout)
+    row = feature_matrix(space, atoms, tables)[space.index_of(np.array([agent, toy]))]
+    assert {str(a) for a, v in zip(atoms, row.tolist()) if v == 1.0} == true_atoms
+
+
+def test_every_atom_every_state_matches_goal_holds(two_toys):
+    """Against groundlang.labels.goal_holds, a per-state Python reference, on a sample of states."""
+    from groundlang.labels import goal_holds
+
+    space, tables = two_toys
+    atoms = position_atoms(space.layout) + [parse_atom(a) for a in (
+        "roomIsGreen(room0)", "roomIsBlue(room0)", "toyIsRed(block1)", "toyIsMoon(block1)", "toyIsStar(block1)")]
+    features = feature_matrix(space, atoms, tables)
+    assert features.dtype == torch.float32 and features.shape == (space.num_states, len(atoms))
+    rng = np.random.default_rng(0)
+    for s in rng.choice(space.num_states, 400, replace=False):
+        state = space.state_at(int(s))
+        expected = [float(goal_holds([a], state)) for a in atoms]
+        assert features[s].tolist() == expected, space.state_at(int(s))
+
+
+def test_column_counts(one_toy):
+    space, tables = one_toy
+    counts = feature_matrix(space, position_atoms(space.layout), tables).sum(0).tolist()
+    # 70 cells; toy elsewhere: 69 placements per agent cell. Rooms hold 25, 15, 27 cells.
+    assert counts[:3] == [25 * 69, 15 * 69, 27 * 69]
+    assert counts[3:6] == [25 * 69, 15 * 69, 27 * 69]
+    assert counts[6:9] == [2 * 69, 2 * 69, 2 * 69]  # door cells (3,3),(3,4) / (8,3),(8,4) / (5,6),(6,6)
+    # Ordered pairs of 4-neighbouring walkable cells.
+    walk = space.layout.walkable
+    pairs = 2 * ((walk[1:, :] & walk[:-1, :]).sum() + (walk[:, 1:] & walk[:, :-1]).sum())
+    assert counts[-1] == pairs
+
+
+def test_constant_colour_and_shape_columns(one_toy):
+    space, tables = one_toy
+    atoms = ["roomIsGreen(room0)", "roomIsRed(room0)", "roomIsRed(room1)", "roomIsDarkGray(room2)",
+             "toyIsYellow(block0)", "toyIsStar(block0)", "toyIsMoon(block0)"]
+    values = feature_matrix(space, [parse_atom(a) for a in atoms], tables)
+    assert values[0].tolist() == [1, 0, 1, 0, 1, 1, 0]
+    assert bool((values == values[0]).all())
+
+    second = corpus_state(palette=get_palette("sokoban2"), kinds=(("magenta", "chair"),))
+    space2 = enumerate_states(second)
+    values2 = feature_matrix(space2, ["toyIsChair(block0)", "toyIsMagenta(block0)", "toyIsBag(block0)"],
+                             local_tables(second.layout))
+    assert values2[123].tolist() == [1, 1, 0]
+    with pytest.raises(FeatureError, match="toyIsStar"):  # a shape of the other palette
+        feature_matrix(space2, ["toyIsStar(block0)"], local_tables(second.layout))
+
+
+@pytest.mark.parametrize(
+    "atom, message",
+    [
+        ("agentNearRoom(agent0, room0)", r"agentNearRoom\(agent0, room0\): unknown predicate"),
+        ("toyInRoom(block0, room7)", r"toyInRoom\(block0, room7\): argument 2 'room7' is not a room"),
+        ("toyInRoom(block3, room0)", "'block3' is not a toy"),
+        ("agentInRoom(block0, room0)", "'block0' is not an agent"),
+        ("agentInRoom(agent0)", "takes 2 arguments"),
+        ("roomIsGreen(room0, room1)", "takes 1 argument"),
+        ("roomIsStar(room0)", "unknown predicate 'roomIsStar'"),
+        ("roomIsPurple(room0)", "unknown predicate"),
+        ("toyIsGreen(room0)", "'room0' is not a toy"),
+    ],
+)
+def test_bad_atoms_are_named(one_toy, atom, message):
+    space, tables = one_toy
+    with pytest.raises(FeatureError, match=message):
+        feature_matrix(space, [parse_atom(atom)], tables)
+    with pytest.raises(ValueError):
+        goal_mask(space, [atom], tables)
+
+
+def test_table_shape_is_checked(one_toy):
+    space, _ = one_toy
+    small = CellTables(np.zeros((3, 3), np.int16), np.zeros((3, 3), np.int16))
+    with pytest.raises(FeatureError, match=r"room_of has shape \(3, 3\)"):
+        feature_matrix(space, position_atoms(space.layout), small)
+
+
+def test_goal_mask(two_toys):
+    space, tables = two_toys
+    goal = parse_goal("agentInRoom(agent0, room1) blockInRoom(block1, room0)")  # corpus alias
+    mask = goal_mask(space, goal, tables)
+    assert mask.dtype == bool and mask.shape == (space.num_states,)
+    features = feature_matrix(space, [Atom("agentInRoom", ("agent0", "room1")),
+                                      Atom("toyInRoom", ("block1", "room0"))], tables)
+    np.testing.assert_array_equal(mask, features.numpy().all(1))
+    # Agent in room1 (15 cells), block1 in room0 (25 cells), block0 anywhere else (68 cells).
+    assert mask.sum() == 15 * 25 * 68
+    assert not mask[0]
+    np.testing.assert_array_equal(goal_mask(space, ["agentInRoom(agent0, room1)"], tables),
+                                  features[:, 0].numpy() == 1)
+    with pytest.raises(FeatureError, match="empty goal"):
+        goal_mask(space, [], tables)
+
+
+def test_corpus_goals_hold_only_at_the_end(shared_corpus):
+    """Each of the 6 demonstrations: the label's goal holds in the final state, not the first."""
+    from groundlang.corpus import read_instance
+
+    labels = {row["prefix"]: parse_goal(row["goal"])
+              for row in csv.DictReader(open(shared_corpus / "labels.csv", encoding="utf-8"))}
+    assert len(labels) == 6
+    for prefix, goal in labels.items():
+        instance = read_instance(shared_corpus / "allTurkTrain" / f"{prefix}0.txt", "sokoban")
+        space = enumerate_states(instance.initial_state)
+        mask = goal_mask(space, goal, cell_tables(space.layout))
+        assert mask[space.index_of(instance.final_state)], prefix
+        assert not mask[0], prefix
