@@ -12,7 +12,7 @@ from collections import Counter
 
 from .lexicon import SemanticLexicon, lemma
 from .logical_form import Clause, Entity, LogicalForm, Relation
-from .phrases import NP, PP, VP, Adv, ClauseValue, Measure, Sub
+from .phrases import NP, PP, VP, Adv, ClauseValue, Measure, Sub, top_k
 
 _NOT_IDENT = re.compile(r"[^0-9a-z]+")
 
@@ -149,8 +149,5 @@ def instantiate(lf: LogicalForm, lexicon: SemanticLexicon, beam: int) -> list[tu
         options.append(alts)
     partial: list[tuple[float, tuple[Relation, ...]]] = [(1.0, ())]
     for alts in options:
-        partial = sorted(
-            ((p1 * p2, rels + (r,)) for (p1, rels), (p2, r) in itertools.product(partial, alts)),
-            key=lambda pr: -pr[0],
-        )[:beam]
+        partial = top_k([(p1 * p2, rels + (r,)) for (p1, rels), (p2, r) in itertools.product(partial, alts)], beam)
     return [(p, lf.with_relations(rels)) for p, rels in partial]

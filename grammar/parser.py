@@ -25,7 +25,7 @@ from .chunker import chunk
 from .composition import compose, instantiate
 from .lexicon import CONJUNCTIONS, SemanticLexicon, guess_categories
 from .logical_form import LogicalForm, Reading
-from .phrases import DEFAULT_WEIGHTS, KBestTransformer
+from .phrases import DEFAULT_WEIGHTS, KBestTransformer, top_k
 
 logger = logging.getLogger(__name__)
 
@@ -131,7 +131,7 @@ class _TaggedLexer(Lexer):
 def _earley() -> Lark:
     grammar = files("groundlang.grammar").joinpath("commands.lark").read_text(encoding="utf-8")
     parser = Lark(grammar, parser="earley", lexer=_TaggedLexer, ambiguity="explicit", start="start",
-                  ordered_sets=False)
+                  ordered_sets=True)
     # lark's basic Earley matches a terminal by token type; ours accepts a word for each of its categories
     parser.parser.parser.term_matcher = _match
     return parser
@@ -139,8 +139,15 @@ def _earley() -> Lark:
 
 @functools.lru_cache(maxsize=2048)
 def _parse_tree(data: tuple[tuple[str, str], ...]):
-    """Earley's explicit-ambiguity tree of one tagged sentence (cached: crowd commands repeat a lot)."""
-    return _earley().parse(list(data))
+    """Earley's explicit-ambiguity tree of one tagged sentence, None if the grammar rejects it.
+
+    Cached (independent of the weights): crowd commands repeat whole sentences a lot.
+    """
+    try:
+        return _earley().parse(list(data))
+    except (LarkError, RecursionError) as exc:
+        logger.debug("grammar failed on %r: %s", " ".join(w for w, _ in data), type(exc).__name__)
+        return None
 
 
 def _sentences(tokens: list[str], cats: list[frozenset[str]]) -> list[list[Word]]:
@@ -169,16 +176,14 @@ def _parse_sentence(sentence: list[Word], transformer: KBestTransformer) -> tupl
     """Best (log weight, clause values) readings of one sentence, and whether it fell back to chunks."""
     if len(sentence) <= MAX_SENTENCE_TOKENS:
         data = tuple((w, _class_name(c)) for w, c in sentence)
-        try:
-            tree = _parse_tree(data)
+        tree = _parse_tree(data)
+        if tree is not None:
             cands = transformer.transform(tree)
             if not isinstance(cands, list):
                 cands = [(0.0, cands)]
             cands = [(w, v) for w, v in cands if v]
             if cands:
                 return cands, False
-        except (LarkError, RecursionError) as exc:
-            logger.debug("grammar failed on %r: %s", " ".join(w for w, _ in sentence), type(exc).__name__)
     return [(0.0, chunk([w for w, _ in sentence], [c for _, c in sentence]))], True
 
 
@@ -189,7 +194,7 @@ def _normalise(scored: list[tuple[float, LogicalForm]]) -> list[tuple[float, Log
     for w, lf in scored:
         total[lf] = total.get(lf, 0.0) + math.exp(w - top)
     z = sum(total.values())
-    return sorted(((p / z, lf) for lf, p in total.items()), key=lambda pl: -pl[0])
+    return sorted(((p / z, lf) for lf, p in total.items()), key=lambda pl: (-round(pl[0], 12), repr(pl[1])))
 
 
 def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None = None,
@@ -217,10 +222,7 @@ def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None =
         for part in _split_long(sentence):
             cands, fell_back = _parse_sentence(part, transformer)
             fallback |= fell_back
-            combined = sorted(
-                ((w1 + w2, c1 + c2) for (w1, c1), (w2, c2) in itertools.product(combined, cands)),
-                key=lambda wc: -wc[0],
-            )[:beam]
+            combined = top_k([(w1 + w2, c1 + c2) for (w1, c1), (w2, c2) in itertools.product(combined, cands)], beam)
     words = tuple(tokens)
     if not any(c for c in cats):
         fallback = True  # punctuation only: one empty logical form that still keeps the tokens

@@ -210,8 +210,21 @@ def _merge(cands: Candidates, beam: int) -> Candidates:
     for logw, value in cands:
         old = best.get(value)
         best[value] = logw if old is None else _logaddexp(old, logw)
-    ranked = sorted(best.items(), key=lambda kv: -kv[1])[:beam]
-    return [(w, v) for v, w in ranked]
+    return top_k([(w, v) for v, w in best.items()], beam)
+
+
+def top_k(items: list[tuple[float, Any]], k: int) -> list[tuple[float, Any]]:
+    """The k highest-weight (weight, value) pairs; ties at the cut broken by ``repr`` (deterministic).
+
+    lark's Earley sets are unordered, so alternatives arrive in an order that varies with the hash seed.
+    """
+    items = sorted(items, key=lambda wv: -wv[0])
+    if len(items) > k and abs(items[k][0] - items[k - 1][0]) < 1e-9:
+        cut = items[k - 1][0]
+        above = [wv for wv in items if wv[0] > cut + 1e-9]
+        tied = sorted((wv for wv in items if abs(wv[0] - cut) <= 1e-9), key=lambda wv: repr(wv[1]))
+        items = above + tied
+    return items[:k]
 
 
 class KBestTransformer(Transformer):
@@ -231,10 +244,8 @@ class KBestTransformer(Transformer):
         lists = [c if isinstance(c, list) else [(0.0, c)] for c in children]
         partial: list[tuple[float, tuple]] = [(0.0, ())]
         for options in lists:
-            partial = sorted(
-                ((w1 + w2, vals + (v,)) for (w1, vals), (w2, v) in itertools.product(partial, options)),
-                key=lambda wv: -wv[0],
-            )[: self.beam]
+            partial = top_k([(w1 + w2, vals + (v,)) for (w1, vals), (w2, v) in itertools.product(partial, options)],
+                            self.beam)
         own = self.logw.get(rule, 0.0)
         return _merge([(w + own, build(list(vals))) for w, vals in partial], self.beam)
 

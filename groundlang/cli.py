@@ -15,7 +15,7 @@ import logging
 import sys
 
 # Order is the order of ``groundlang --help``.
-COMMANDS = ["check", "show", "tasks"]
+COMMANDS = ["check", "show", "tasks", "parse"]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from groundlang.inference.planning import PlanningError, _run_sweeps, as_transitions, soft_backup
+from groundlang.inference.planning import PlanningError, _run_sweeps, as_transitions, soft_backup, threads_for
 
 __all__ = ["Demonstration", "MLIRLProblem", "MLIRLResult", "mlirl", "MIN_TEMPERATURE", "MAX_TEMPERATURE"]
 
@@ -238,7 +238,7 @@ def mlirl(
     reward_on: str = "terminate",
     step_cost: float = 1.0,
     discount: float = 0.99,
-    l2: float = 1e-2,
+    l2: float = 1e-3,
     optimizer: str = "lbfgs",
     lr: float = 0.1,
     max_steps: int = 100,
@@ -264,6 +264,11 @@ def mlirl(
                                step_cost=step_cost, discount=discount, **solver)
     elif demo_weights is not None:
         problem.demo_weights = np.asarray(demo_weights, dtype=float)
+    with threads_for(problem.next_state.shape[0]):
+        return _fit(problem, temperature, initial_temperature, initial_weights, l2, optimizer, lr, max_steps, tol)
+
+
+def _fit(problem, temperature, initial_temperature, initial_weights, l2, optimizer, lr, max_steps, tol):
     F = problem.num_features
     theta = torch.zeros(F, dtype=problem.dtype) if initial_weights is None else \
         torch.as_tensor(np.asarray(initial_weights), dtype=problem.dtype).clone()
@@ -274,7 +279,10 @@ def mlirl(
     log_t = torch.tensor(math.log(initial_temperature if learn_t else temperature), dtype=problem.dtype,
                          requires_grad=learn_t)
     params = [theta] + ([log_t] if learn_t else [])
-    scale = max(float(problem.demo_weights.sum()) * (1 + len(problem._move_state) / len(problem.demonstrations)), 1e-12)
+    # Normalise by the weighted number of decisions (moves + final stop) so that tolerances and the
+    # prior's strength do not depend on how many demonstrations there are or how they are weighted.
+    decisions = np.array([len(d.actions) + 1 for d in problem.demonstrations])
+    scale = max(float((problem.demo_weights * decisions).sum()), 1e-12)
 
     def objective():
         ll = problem.log_likelihood(theta, _temperature(log_t))
@@ -310,7 +318,7 @@ def mlirl(
         raise PlanningError(f"optimizer must be 'lbfgs' or 'adam', got {optimizer!r}")
     with torch.no_grad():
         ll = problem.log_likelihood(theta, _temperature(log_t))
-    result = MLIRLResult(theta.detach().numpy().copy(), float(_temperature(log_t)), float(ll), steps, converged,
+    result = MLIRLResult(theta.detach().numpy().copy(), float(_temperature(log_t).detach()), float(ll), steps, converged,
                          problem.warm_values)
     logger.debug("mlirl: %d steps, log-likelihood %.4f, temperature %.3f", steps, result.log_likelihood,
                  result.temperature)

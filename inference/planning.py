@@ -30,6 +30,7 @@ float64 for gradient checks.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 from dataclasses import dataclass
 
@@ -43,6 +44,7 @@ __all__ = [
     "TaskSettings",
     "Rollout",
     "as_transitions",
+    "threads_for",
     "soft_value_iteration",
     "soft_backup",
     "task_rewards",
@@ -63,6 +65,26 @@ TERMINATE = 4
 CHECK_EVERY = 8
 # Below this many states a compiled kernel does not repay its start-up cost.
 COMPILE_MIN_STATES = 200_000
+
+
+# Below this many states one thread is faster: each op is a few microseconds
+# of work, and waking a second OpenMP thread costs more than it saves (10x
+# more when other processes share the cores).
+PARALLEL_MIN_STATES = 50_000
+
+
+@contextlib.contextmanager
+def threads_for(num_states: int):
+    """Run torch single-threaded inside the block when ``num_states`` is small; restores the setting."""
+    before = torch.get_num_threads()
+    if num_states >= PARALLEL_MIN_STATES or before == 1:
+        yield
+        return
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
 
 
 class PlanningError(ValueError):
@@ -258,8 +280,9 @@ def soft_value_iteration(
         stop = torch.zeros(S, dtype=dtype)  # absorbing states need an action: terminate
     T = torch.as_tensor(temperature, dtype=dtype)
     v0 = torch.zeros(S, dtype=dtype) if initial_values is None else _vector(initial_values, "initial_values", S, dtype)
-    values, sweeps, residual = _run_sweeps(v0, ns, r, stop, float(discount), T, term, tol, max_sweeps, backend)
-    q, log_policy = policy_from_values(values, ns, r, stop, float(discount), T, term)
+    with threads_for(S):
+        values, sweeps, residual = _run_sweeps(v0, ns, r, stop, float(discount), T, term, tol, max_sweeps, backend)
+        q, log_policy = policy_from_values(values, ns, r, stop, float(discount), T, term)
     converged = residual <= tol
     if not converged:
         logger.info("soft value iteration: %d sweeps, residual %.3g > tol %.3g", sweeps, residual, tol)

@@ -67,23 +67,28 @@ class Batch:
         return self.log_prior.shape[0]
 
 
-def entity_words(lf: LogicalForm) -> list[tuple[str, tuple[str, ...]]]:
+def entity_words(lf: LogicalForm) -> list[tuple[str | None, tuple[str, ...]]]:
     """(preposition key, content words) per entity of a logical form.
 
     The key is the preposition for a verb-attached phrase, ``prep@np`` for a
     phrase attached to another noun phrase (the two readings of "push the
     star into the green room" differ here) and None for a direct object.
+    Phrases in a negated clause ("do not enter the green room") get a
+    ``not:`` prefix, so they may learn to align with nothing.
     """
-    prep_of: dict[str, str | None] = {}
-    for clause in lf.clauses:
-        for prep, var in clause.preps:
-            prep_of.setdefault(var, prep)
-    for prep, _head, var in lf.attachments:
-        prep_of.setdefault(var, f"{prep}@np")
+    negated = {i for i, clause in enumerate(lf.clauses) if getattr(clause, "negated", False)}
     result = []
     for entity in lf.entities:
+        if entity.role == "npp":
+            key = f"{entity.prep}@np"
+        elif entity.prep is not None:
+            key = entity.prep
+        else:
+            key = None
+        if entity.clause in negated:
+            key = f"not:{key or 'dobj'}"
         content = tuple(entity.modifiers) + ((entity.head,) if entity.head else ())
-        result.append((prep_of.get(entity.var), content))
+        result.append((key, content))
     return result
 
 

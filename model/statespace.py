@@ -27,7 +27,7 @@ import numpy as np
 
 from groundlang.model.world import ACTION_DELTAS, Layout, State
 
-__all__ = ["StateSpace", "StateSpaceError", "enumerate_states", "trajectory_indices"]
+__all__ = ["StateSpace", "StateSpaceError", "enumerate_states", "state_count_bound", "trajectory_indices"]
 
 logger = logging.getLogger(__name__)
 
@@ -44,6 +44,9 @@ class StateSpaceError(ValueError):
 
 class StateSpace:
     """The reachable states of one initial state, as arrays.
+
+    States are numbered in breadth-first order: a state's index never precedes
+    that of any state nearer the initial state (index 0).
 
     Attributes:
         layout: the static part shared by every state.
@@ -196,7 +199,7 @@ def state_count_bound(num_cells: int, num_toys: int) -> int:
 def _pair_tables(neighbour: np.ndarray, powers: np.ndarray, dtype: type) -> list[np.ndarray]:
     """Per-toy transition tables indexed by (agent cell, toy cell) pairs, ``[W * W, 4]``.
 
-    The successor of a state is ``key + sum_i T_i[agent + W * toy_i] >> 2``
+    The successor of a state is ``key + (sum_i T_i[agent + W * toy_i] >> 2)``
     unless the pushed toy would land on another toy. Each entry packs a key
     displacement (times 4) with two flag bits: 1 when toy i is at the agent's
     target cell, 2 when it is at the cell beyond. No toy has both and at most

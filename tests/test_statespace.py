@@ -123,6 +123,14 @@ def test_arrays_and_accessors():
         assert space.index_of(space.state_at(i)) == i
         assert space.index_of(space.positions[i]) == i
     np.testing.assert_array_equal(space.indices_of(space.positions[::-1]), np.arange(4830)[::-1])
+    # Breadth-first numbering: distance from the initial state never decreases with the index.
+    distance = np.full(space.num_states, -1)
+    frontier, d = np.array([0]), 0
+    while len(frontier):
+        distance[frontier] = d
+        successors = np.unique(space.next_state[frontier])
+        frontier, d = successors[distance[successors] < 0], d + 1
+    assert (distance >= 0).all() and (np.diff(distance) >= 0).all() and distance.max() > 20
 
 
 def test_unreachable_and_invalid_lookups_are_named():

@@ -1,0 +1,76 @@
+"""``groundlang parse``: print the logical forms of commands with their probabilities.
+
+    groundlang parse "push the star into the green room" [--json]
+    groundlang parse --file commands.txt          # every non-empty line
+    groundlang parse --file CORPUS_DIR            # the first line of every *.txt file below the folder
+
+With ``--file`` a summary follows: how many commands got a full parse, how many only the fallback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from groundlang.grammar.parser import parse
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("parse", help="parse commands into logical forms with probabilities",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("command", nargs="?", help="the command to parse (quote it)")
+    p.add_argument("--file", type=Path, help="a text file (one command per line) or a corpus folder")
+    p.add_argument("--json", action="store_true", help="one JSON object per command")
+    p.add_argument("--max-readings", type=int, default=8, help="readings kept per command (default 8)")
+    p.set_defaults(func=run)
+
+
+def _commands(path: Path) -> list[tuple[str, str]]:
+    """(source, command) pairs: first lines of a corpus folder's files, or a file's non-empty lines."""
+    if path.is_dir():
+        files = sorted(p for p in path.rglob("*.txt") if p.is_file())
+        if not files:
+            raise ValueError(f"{path}: no *.txt command files in this folder")
+        out = []
+        for f in files:
+            with open(f, encoding="utf-8", errors="replace") as fh:
+                out.append((str(f), fh.readline().strip()))
+        return out
+    lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    return [(f"{path}:{i}", line.strip()) for i, line in enumerate(lines, 1) if line.strip()]
+
+
+def run(args: argparse.Namespace) -> int:
+    if (args.command is None) == (args.file is None):
+        raise ValueError("give either a COMMAND or --file FILE_OR_CORPUS_DIR (exactly one)")
+    if args.max_readings < 1:
+        raise ValueError(f"--max-readings must be >= 1, got {args.max_readings}")
+    items = [("argument", args.command)] if args.file is None else _commands(args.file)
+    full = fallback = empty = 0
+    for source, command in items:
+        if not command.strip():
+            if args.file is None:
+                parse(command)  # raises the clear ParseError for an empty command
+            empty += 1
+            print(f"{source}: empty command, skipped", file=sys.stderr)
+            continue
+        readings = parse(command, max_readings=args.max_readings)
+        if readings[0].logical_form.fallback:
+            fallback += 1
+        else:
+            full += 1
+        if args.json:
+            print(json.dumps({"command": command, "readings": [r.to_json() for r in readings]}))
+        else:
+            print(command)
+            for r in readings:
+                mark = "  [fallback]" if r.logical_form.fallback else ""
+                print(f"  {r.probability:.3f}  {r.logical_form.paper_str()}{mark}")
+    if args.file is not None:
+        total = full + fallback
+        summary = (f"{total} commands: {full} full parse, {fallback} fallback only"
+                   + (f", {empty} empty skipped" if empty else ""))
+        print(summary, file=sys.stderr if args.json else sys.stdout)
+    return 0

@@ -1,0 +1,211 @@
+"""Behaviour likelihood tables: each demonstration's log-likelihood under each candidate grounded goal.
+
+``behaviour_likelihood_table(instances, candidates)`` returns, per instance,
+an array ``[len(candidates[i])]`` of ``log P(demonstration | goal)`` under the
+Boltzmann policy of the task "make the goal hold, then terminate"
+(:func:`groundlang.inference.planning.solve_task`). The table is ragged (one
+array per instance, because instances have different candidate lists);
+:func:`pad_table` turns it into ``[instances, max candidates]`` with ``-inf``
+padding and a mask, the shape Pyro's ``Vindex`` lookups want.
+
+Work is shared: the state space is enumerated once per distinct initial
+state, the task is solved once per (initial state, goal), and every
+demonstration starting there is scored against that one solution. (The
+commands-to-tasks corpus has 240 instances but 6 demonstrations.)
+
+Cache: one small JSON file per (layout, initial state, goal, demonstration,
+settings), named by the sha256 of a canonical JSON description of those, in
+``cache_dir/behaviour/ab/abcdef....json``. The directory is the caller's
+``cache_dir``, else ``$GROUNDLANG_CACHE``, else ``.groundlang-cache`` in the
+working directory; ``cache_dir=False`` turns caching off. Files are written
+atomically (temporary file + ``os.replace``), so an interrupted run leaves
+only whole entries; an entry that does not parse or whose recorded key
+differs is logged as a warning and recomputed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from groundlang.inference.planning import TaskSettings, as_transitions, demonstration_log_likelihood, solve_task
+from groundlang.logic.atoms import Atom, parse_atom
+
+__all__ = ["CACHE_VERSION", "behaviour_likelihood_table", "cache_directory", "entry_key", "pad_table"]
+
+logger = logging.getLogger(__name__)
+
+# Bump when the meaning of a cached number changes (planner or reward semantics).
+CACHE_VERSION = 1
+
+
+def cache_directory(cache_dir: str | os.PathLike | None = None) -> Path:
+    """The cache root: ``cache_dir``, else ``$GROUNDLANG_CACHE``, else ``./.groundlang-cache``."""
+    if cache_dir is not None:
+        return Path(cache_dir)
+    env = os.environ.get("GROUNDLANG_CACHE")
+    return Path(env) if env else Path.cwd() / ".groundlang-cache"
+
+
+def _layout_description(layout) -> dict:
+    return {
+        "rooms": [[r.colour, r.left, r.top, r.right, r.bottom] for r in layout.rooms],
+        "doors": [[d.left, d.top, d.right, d.bottom] for d in layout.doors],
+        "toys": [list(t) for t in layout.toy_attributes],
+        "palette": layout.palette.name,
+    }
+
+
+def _goal(goal) -> tuple[Atom, ...]:
+    atoms = (goal,) if isinstance(goal, (Atom, str)) else tuple(goal)
+    return tuple(parse_atom(a) if isinstance(a, str) else a for a in atoms)
+
+
+def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], settings: TaskSettings) -> str:
+    """sha256 (hex) of the canonical description of one table entry."""
+    description = {
+        "version": CACHE_VERSION,
+        "layout": _layout_description(initial_state.layout),
+        "initial": initial_state.positions.tolist(),
+        "goal": sorted(str(a) for a in goal),
+        # The dynamics are deterministic: the initial state and the actions fix the states.
+        "actions": [int(a) for a in actions],
+        "settings": settings.as_dict(),
+    }
+    text = json.dumps(description, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _entry_path(root: Path, key: str) -> Path:
+    return root / "behaviour" / key[:2] / f"{key}.json"
+
+
+def _read_entry(path: Path, key: str) -> float | None:
+    """The cached value, or None when absent; a corrupt entry is logged and treated as absent."""
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        logger.warning("behaviour cache entry %s unreadable (%s); recomputing", path, exc)
+        return None
+    try:
+        data = json.loads(text)
+        if data.get("key") != key:
+            raise ValueError(f"records key {str(data.get('key'))[:12]}..., expected {key[:12]}...")
+        value = float(data["log_likelihood"])
+        if math.isnan(value) or value == math.inf:
+            raise ValueError(f"holds {value}")
+        return value
+    except (ValueError, TypeError, KeyError, AttributeError) as exc:
+        logger.warning("behaviour cache entry %s is corrupt (%s); recomputing", path, exc)
+        return None
+
+
+def _write_entry(path: Path, key: str, value: float, goal: Sequence[Atom]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps({"key": key, "goal": " ".join(str(a) for a in goal), "log_likelihood": value})
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def behaviour_likelihood_table(
+    instances: Sequence,
+    candidates: Sequence[Sequence],
+    settings: TaskSettings = TaskSettings(),
+    cache_dir: str | os.PathLike | None | bool = None,
+    progress: bool = False,
+) -> list[np.ndarray]:
+    """Log-likelihood of each instance's demonstration under each of its candidate goals.
+
+    Args:
+        instances: objects with ``initial_state`` (a model.world State), ``states``
+            (the demonstration's States, first = initial) and ``actions`` (Actions),
+            e.g. ``groundlang.corpus.Instance``.
+        candidates: per instance, a list of goals; a goal is a conjunction given as a
+            tuple of Atoms (or atom strings, or a single Atom).
+        settings: reward and solver settings (part of the cache key).
+        cache_dir: cache root (see module docstring); False for no cache.
+    Returns a list of float64 arrays, ``result[i][k]`` for candidate ``k`` of instance ``i``.
+    Raises ValueError when the lists differ in length or a goal names an unknown object.
+    """
+    from groundlang.model.features import goal_mask
+    from groundlang.model.geometry import cell_tables
+    from groundlang.model.statespace import enumerate_states, trajectory_indices
+
+    if len(candidates) != len(instances):
+        raise ValueError(f"{len(instances)} instances but {len(candidates)} candidate lists")
+    root = None if cache_dir is False else cache_directory(cache_dir)
+    goals = [[_goal(g) for g in row] for row in candidates]
+    table = [np.full(len(row), np.nan) for row in goals]
+    keys: list[list[str]] = []
+    # (initial state) -> {goal: [(instance, candidate)]} for the entries still to compute.
+    todo: dict = {}
+    hits = 0
+    for i, (inst, row) in enumerate(zip(instances, goals)):
+        actions = [int(a) for a in inst.actions]
+        keys.append([entry_key(inst.initial_state, g, actions, settings) for g in row])
+        for k, (g, key) in enumerate(zip(row, keys[i])):
+            value = None if root is None else _read_entry(_entry_path(root, key), key)
+            if value is None:
+                todo.setdefault(inst.initial_state, {}).setdefault(g, []).append((i, k))
+            else:
+                table[i][k] = value
+                hits += 1
+    solves = sum(len(by_goal) for by_goal in todo.values())
+    logger.info("behaviour likelihoods: %d cached, %d to compute with %d solves in %d state spaces",
+                hits, sum(len(v) for by_goal in todo.values() for v in by_goal.values()), solves, len(todo))
+    bar = None
+    if progress and solves:
+        from tqdm import tqdm
+
+        bar = tqdm(total=solves, desc="behaviour likelihoods", unit="solve")
+    for initial, by_goal in todo.items():
+        space = enumerate_states(initial)
+        transitions = as_transitions(space.next_state)
+        tables = cell_tables(space.layout)
+        demo_indices: dict[int, np.ndarray] = {}
+        for goal, entries in by_goal.items():
+            mask = goal_mask(space, goal, tables)
+            result = solve_task(transitions, mask, settings)
+            if not result.converged:
+                logger.warning("goal %s: soft value iteration stopped after %d sweeps (residual %.3g)",
+                               " ".join(map(str, goal)), result.sweeps, result.residual)
+            for i, k in entries:
+                if i not in demo_indices:
+                    demo_indices[i] = trajectory_indices(space, list(instances[i].states))
+                actions = [int(a) for a in instances[i].actions]
+                value = float(demonstration_log_likelihood(result.log_policy, demo_indices[i], actions))
+                table[i][k] = value
+                if root is not None:
+                    _write_entry(_entry_path(root, keys[i][k]), keys[i][k], value, goal)
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        bar.close()
+    return table
+
+
+def pad_table(rows: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Ragged rows -> ``(table [N, K] float64 padded with -inf, mask [N, K] bool, True = real entry)``."""
+    width = max((len(r) for r in rows), default=0)
+    table = np.full((len(rows), width), -np.inf)
+    mask = np.zeros((len(rows), width), dtype=bool)
+    for i, r in enumerate(rows):
+        table[i, : len(r)] = r
+        mask[i, : len(r)] = True
+    return table, mask
