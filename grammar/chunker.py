@@ -8,7 +8,7 @@ preposition before a noun phrase is kept. Never fails: any sequence gives at lea
 from __future__ import annotations
 
 from .lexicon import NEGATIONS
-from .phrases import NP, PP, VP, Adv
+from .phrases import NP, PP, VP
 
 _NP_CATS = frozenset({"DET", "NUM", "ADJ", "COLOR", "NOUN", "MEASURE", "GER"})
 _BREAK_CATS = frozenset({"COMMA", "CONJ", "SUB", "REL"})

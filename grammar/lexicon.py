@@ -136,8 +136,8 @@ def _closed_categories(word: str) -> set[str]:
         cats.add("ADV")
     if word in VERB_FORMS:
         cats.add("GER" if word.endswith("ing") else "VERB")
-        if word.endswith("ing") or word.endswith("ed"):
-            cats.add("ADJ")  # participles modify nouns: "leading door", "orange-floored room"
+        if word.endswith("ed"):
+            cats.add("ADJ")  # past participles modify nouns: "orange-floored room", "colored room"
     if word == ",":
         cats = {"COMMA"}
     if word == "left":

@@ -163,9 +163,9 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "obj": lambda vs: ("obj", vs[0]),
     "determiner": lambda vs: ("det", str(vs[0])),
     "nmods": lambda vs: ("mods", tuple(str(v) for v in vs)),
-    "comps": lambda vs: ("comps", tuple(v for v in vs if isinstance(v, (PP, Adv, Measure, Sub)))),
+    "comps": lambda vs: _complements(vs),
     "vp": _verb_phrase,
-    "gvp": _verb_phrase,
+    "gvp": lambda vs: _verb_phrase([("verb", str(vs[0]))] + list(vs[1:])),
     "subj_clause": lambda vs: replace(vs[1], subject=vs[0]),
     "sub_clause": lambda vs: Sub(*_connective(vs)),
     "frag_np": _fragment,
@@ -187,6 +187,14 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "pp": lambda vs: PP(str(vs[0]), vs[1]),
     "pp_coord": lambda vs: PP(str(vs[2]), vs[3]),
 }
+
+
+def _complements(values: list):
+    comps = tuple(v for v in values if isinstance(v, (PP, Adv, Measure, Sub)))
+    # late closure: a clausal complement ("without walking ...", "until ...") takes what follows it
+    if any(isinstance(c, Sub) for c in comps[:-1]):
+        return None
+    return ("comps", comps)
 
 
 def _np_head(values: list) -> NP:
@@ -247,7 +255,8 @@ class KBestTransformer(Transformer):
             partial = top_k([(w1 + w2, vals + (v,)) for (w1, vals), (w2, v) in itertools.product(partial, options)],
                             self.beam)
         own = self.logw.get(rule, 0.0)
-        return _merge([(w + own, build(list(vals))) for w, vals in partial], self.beam)
+        built = [(w + own, build(list(vals))) for w, vals in partial]
+        return _merge([(w, v) for w, v in built if v is not None], self.beam)
 
     def _ambig(self, children: list) -> Candidates:
         merged: Candidates = []

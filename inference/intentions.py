@@ -6,9 +6,14 @@ proportions ``rho [K]``. E-step: responsibilities
 log-likelihoods of :class:`~groundlang.inference.mlirl.MLIRLProblem`. M-step:
 MLIRL for each cluster with the responsibilities as demonstration weights
 (warm-started from the previous iteration's weights and values), and
-``rho = mean_d r[d, :]``. Initialisation is seeded: K distinct demonstrations
-are drawn as cluster seeds (responsibility one for their cluster), the rest
-get Dirichlet(1) responsibilities; the same seed gives the same clusters.
+``rho = mean_d r[d, :]``.
+
+Initialisation (EM's local optima make it matter): farthest-first seeding,
+as k-means++ does for points. The first cluster is fitted to one
+demonstration drawn with ``seed``; each further cluster is fitted to the
+demonstration that the clusters so far explain worst (lowest best
+log-likelihood per decision). The first E-step then starts from those K
+fits. The same seed gives the same clusters.
 """
 
 from __future__ import annotations
@@ -73,30 +78,39 @@ def multiple_intentions(
         raise PlanningError(f"num_intentions must be between 1 and the number of demonstrations ({D}), got {K}")
     rng = np.random.default_rng(seed)
     problems = [MLIRLProblem(next_state, features, demonstrations, **problem_kwargs) for _ in range(K)]
-    resp = rng.dirichlet(np.ones(K), size=D)
-    for k, d in enumerate(rng.choice(D, size=K, replace=False)):
-        resp[d] = np.eye(K)[k]
     F = problems[0].num_features
     weights = np.zeros((K, F))
     temps = np.full(K, 1.0 if temperature is None else float(temperature))
+    decisions = np.array([len(d.actions) + 1 for d in problems[0].demonstrations])
     previous, converged, total = -math.inf, False, -math.inf
     iteration = 0
+
+    def fit(k: int, demo_weights: np.ndarray) -> None:
+        result = mlirl(None, None, None, demo_weights=demo_weights, temperature=temperature,
+                       initial_temperature=temps[k], initial_weights=weights[k], max_steps=mlirl_steps,
+                       problem=problems[k])
+        weights[k], temps[k] = result.weights, result.temperature
+
+    def log_likelihoods() -> np.ndarray:  # [D, K]
+        with torch.no_grad():
+            return np.stack([
+                problems[k].per_demo_log_likelihood(torch.as_tensor(weights[k], dtype=problems[k].dtype),
+                                                    torch.tensor(temps[k], dtype=problems[k].dtype)).numpy()
+                for k in range(K)
+            ], axis=1).astype(np.float64)
+
     with threads_for(problems[0].next_state.shape[0]):
+        seeds = [int(rng.integers(D))]
+        fit(0, np.eye(D)[seeds[0]])
+        for k in range(1, K):
+            explained = log_likelihoods()[:, :k].max(axis=1) / decisions
+            explained[seeds] = np.inf
+            seeds.append(int(np.argmin(explained)))
+            fit(k, np.eye(D)[seeds[-1]])
+        priors = np.full(K, 1.0 / K)
         for iteration in range(1, max_iterations + 1):
-            # M-step.
-            priors = resp.mean(axis=0)
-            for k in range(K):
-                fit = mlirl(None, None, None, demo_weights=resp[:, k], temperature=temperature,
-                            initial_temperature=temps[k], initial_weights=weights[k], max_steps=mlirl_steps,
-                            problem=problems[k])
-                weights[k], temps[k] = fit.weights, fit.temperature
             # E-step.
-            with torch.no_grad():
-                ll = np.stack([
-                    problems[k].per_demo_log_likelihood(torch.as_tensor(weights[k], dtype=problems[k].dtype),
-                                                        torch.tensor(temps[k], dtype=problems[k].dtype)).numpy()
-                    for k in range(K)
-                ], axis=1).astype(np.float64)  # [D, K]
+            ll = log_likelihoods()
             joint = ll + np.log(np.maximum(priors, 1e-300))
             norm = np.logaddexp.reduce(joint, axis=1)
             resp = np.exp(joint - norm[:, None])
@@ -106,4 +120,8 @@ def multiple_intentions(
                 converged = True
                 break
             previous = total
+            # M-step.
+            priors = resp.mean(axis=0)
+            for k in range(K):
+                fit(k, resp[:, k])
     return IntentionsResult(weights.copy(), temps.copy(), resp, resp.mean(axis=0), total, iteration, converged)

@@ -48,6 +48,8 @@ __all__ = ["Demonstration", "MLIRLProblem", "MLIRLResult", "mlirl", "MIN_TEMPERA
 
 logger = logging.getLogger(__name__)
 
+# The L1 prior |theta| is smoothed to sqrt(theta^2 + eps^2) so that L-BFGS sees a smooth objective.
+L1_SMOOTHING = 1e-2
 MIN_TEMPERATURE = 0.05
 MAX_TEMPERATURE = 20.0
 
@@ -239,6 +241,8 @@ def mlirl(
     step_cost: float = 1.0,
     discount: float = 0.99,
     l2: float = 1e-3,
+    l1: float = 0.0,
+    nonnegative: bool = False,
     optimizer: str = "lbfgs",
     lr: float = 0.1,
     max_steps: int = 100,
@@ -254,6 +258,11 @@ def mlirl(
         demo_weights: ``[D]`` non-negative weights (EM responsibilities), default ones.
         temperature: fixed Boltzmann temperature, or None to learn it from ``initial_temperature``.
         l2: Gaussian prior ``l2 / 2 * |theta|^2`` added to the negative log-likelihood.
+        l1: Laplace (sparsity) prior ``l1 * |theta|_1``. Propositions that become true together
+            at the end of a demonstration are indistinguishable by where the demonstrator
+            stopped; the L2 prior splits weight evenly among them, an L1 prior concentrates it on
+            the one whose achievement alone best explains the whole path.
+        nonnegative: weights constrained >= 0 (softplus parametrisation).
         optimizer: "lbfgs" (``max_steps`` iterations) or "adam" (``max_steps`` steps of size ``lr``).
         tol: converged when the objective per demonstrated step changes less than this.
         problem: reuse an MLIRLProblem (its warm start); then next_state..discount are ignored.
@@ -265,28 +274,43 @@ def mlirl(
     elif demo_weights is not None:
         problem.demo_weights = np.asarray(demo_weights, dtype=float)
     with threads_for(problem.next_state.shape[0]):
-        return _fit(problem, temperature, initial_temperature, initial_weights, l2, optimizer, lr, max_steps, tol)
+        return _fit(problem, temperature, initial_temperature, initial_weights, l2, l1, nonnegative, optimizer,
+                    lr, max_steps, tol)
 
 
-def _fit(problem, temperature, initial_temperature, initial_weights, l2, optimizer, lr, max_steps, tol):
+def _fit(problem, temperature, initial_temperature, initial_weights, l2, l1, nonnegative, optimizer, lr, max_steps,
+         tol):
     F = problem.num_features
     theta = torch.zeros(F, dtype=problem.dtype) if initial_weights is None else \
         torch.as_tensor(np.asarray(initial_weights), dtype=problem.dtype).clone()
     if theta.shape != (F,):
         raise PlanningError(f"initial_weights must be [{F}], got {tuple(theta.shape)}")
-    theta.requires_grad_(True)
+    if nonnegative:
+        # theta = softplus(u): weights stay >= 0 (goals are propositions wanted true, not avoided).
+        # Zero weights would sit where softplus is flat; start unknown weights at softplus(0) = 0.69.
+        theta = torch.zeros_like(theta) if initial_weights is None else \
+            torch.where(theta > 20, theta, torch.log(torch.expm1(theta.clamp_min(1e-3))))
+    raw = theta.requires_grad_(True)
+
+    def weights_of(u):
+        return torch.nn.functional.softplus(u) if nonnegative else u
+
     learn_t = temperature is None
     log_t = torch.tensor(math.log(initial_temperature if learn_t else temperature), dtype=problem.dtype,
                          requires_grad=learn_t)
-    params = [theta] + ([log_t] if learn_t else [])
+    params = [raw] + ([log_t] if learn_t else [])
     # Normalise by the weighted number of decisions (moves + final stop) so that tolerances and the
     # prior's strength do not depend on how many demonstrations there are or how they are weighted.
     decisions = np.array([len(d.actions) + 1 for d in problem.demonstrations])
     scale = max(float((problem.demo_weights * decisions).sum()), 1e-12)
 
     def objective():
+        theta = weights_of(raw)
         ll = problem.log_likelihood(theta, _temperature(log_t))
-        return (-ll + 0.5 * l2 * (theta * theta).sum()) / scale, ll
+        penalty = 0.5 * l2 * (theta * theta).sum()
+        if l1:
+            penalty = penalty + l1 * torch.sqrt(theta * theta + L1_SMOOTHING**2).sum()
+        return (-ll + penalty) / scale, ll
 
     steps, converged = 0, False
     if optimizer == "lbfgs":
@@ -317,6 +341,7 @@ def _fit(problem, temperature, initial_temperature, initial_weights, l2, optimiz
     else:
         raise PlanningError(f"optimizer must be 'lbfgs' or 'adam', got {optimizer!r}")
     with torch.no_grad():
+        theta = weights_of(raw)
         ll = problem.log_likelihood(theta, _temperature(log_t))
     result = MLIRLResult(theta.detach().numpy().copy(), float(_temperature(log_t).detach()), float(ll), steps, converged,
                          problem.warm_values)

@@ -340,11 +340,11 @@ class TaskSettings:
     ``absorbing_goal`` the goal ends the episode on arrival (paying
     ``goal_reward`` then) and walking on has likelihood -inf.
 
-    The defaults make the soft values bounded even at discount 1
-    (``step_cost > temperature * log 5``) and make a goal 100 steps away still
-    worth pursuing (``goal_reward * discount**100 > 100 * step_cost``... roughly);
-    a temperature of 0.5 step costs means a move that wastes two steps is
-    about e^-4 times as likely as the best one.
+    The defaults keep the soft values bounded even at discount 1
+    (``step_cost > temperature * log 5``) and make a goal up to about 80 steps
+    away worth pursuing (``goal_reward * 0.995**d > sum of discounted step
+    costs``); a temperature of half a step cost makes a move that wastes two
+    steps about e^-4 times as likely as the best one.
     """
 
     goal_reward: float = 100.0

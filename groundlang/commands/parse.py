@@ -20,7 +20,8 @@ from groundlang.grammar.parser import parse
 def register(subparsers) -> None:
     p = subparsers.add_parser("parse", help="parse commands into logical forms with probabilities",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("command", nargs="?", help="the command to parse (quote it)")
+    # dest "text": the CLI keeps the sub-command's name in args.command
+    p.add_argument("text", nargs="?", metavar="COMMAND", help="the command to parse (quote it)")
     p.add_argument("--file", type=Path, help="a text file (one command per line) or a corpus folder")
     p.add_argument("--json", action="store_true", help="one JSON object per command")
     p.add_argument("--max-readings", type=int, default=8, help="readings kept per command (default 8)")
@@ -43,11 +44,11 @@ def _commands(path: Path) -> list[tuple[str, str]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    if (args.command is None) == (args.file is None):
+    if (args.text is None) == (args.file is None):
         raise ValueError("give either a COMMAND or --file FILE_OR_CORPUS_DIR (exactly one)")
     if args.max_readings < 1:
         raise ValueError(f"--max-readings must be >= 1, got {args.max_readings}")
-    items = [("argument", args.command)] if args.file is None else _commands(args.file)
+    items = [("argument", args.text)] if args.file is None else _commands(args.file)
     full = fallback = empty = 0
     for source, command in items:
         if not command.strip():
