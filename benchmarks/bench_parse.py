@@ -1,7 +1,10 @@
 """Benchmark: commands parsed per second on the commands-to-tasks corpus (goal: all 480 in < 2 s, one core).
 
-Prints, per folder and for both together: commands, full parses vs fallback-only, and commands/second,
-cold (a fresh Earley tree cache, the parser already built) and warm (trees cached, weights re-applied).
+Prints, per folder and for both together: commands, full parses vs fallback-only, CPU seconds and
+commands/second, cold (empty forest cache, the parser already built) and warm (forests cached, weights
+re-applied). Side by side in the same run, for the whole corpus cold: without sharing forests between
+sentences of the same class sequence, and with lark's own Earley predictor (grammar.earley not
+installed). Prints /proc/loadavg before and after: other processes share this machine.
 Run: .venv/bin/python benchmarks/bench_parse.py [CORPUS_DIR]
 """
 
@@ -11,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-from groundlang.grammar import parser
+from groundlang.grammar import earley, parser
 
 DEFAULT_CORPUS = Path(__file__).resolve().parents[2] / "shared" / "data" / "commands-to-tasks"
 
@@ -24,9 +27,22 @@ def first_lines(folder: Path) -> list[str]:
     return out
 
 
-def timed(commands: list[str]) -> tuple[float, int]:
+def loadavg() -> str:
+    try:
+        return Path("/proc/loadavg").read_text().strip()
+    except OSError:
+        return "n/a"
+
+
+def timed(commands: list[str], share_forests: bool = True) -> tuple[float, int]:
+    """CPU seconds to parse every command (forest cache cleared first), and how many parsed fully."""
+    parser._parse_forest.cache_clear()
+    full = 0
     start = time.process_time()
-    full = sum(not parser.parse(c)[0].logical_form.fallback for c in commands)
+    for c in commands:
+        if not share_forests:
+            parser._parse_forest.cache_clear()
+        full += not parser.parse(c)[0].logical_form.fallback
     return time.process_time() - start, full
 
 
@@ -36,6 +52,7 @@ def main() -> int:
     if not all(f.is_dir() for f in folders):
         print(f"corpus not found under {corpus}")
         return 1
+    print(f"loadavg before: {loadavg()}")
     t0 = time.process_time()
     parser.parse("push the star into the green room")  # builds the Earley parser once
     print(f"build parser: {time.process_time() - t0:.3f} s cpu")
@@ -43,15 +60,28 @@ def main() -> int:
     for folder in folders:
         commands = first_lines(folder)
         every += commands
-        parser._parse_tree.cache_clear()
         secs, full = timed(commands)
         print(f"{folder.name:28s} {len(commands)} commands: {full} full parse, {len(commands) - full} fallback only; "
               f"{secs:.2f} s cpu, {len(commands) / secs:.0f} commands/s (cold)")
-    parser._parse_tree.cache_clear()
     cold, full = timed(every)
-    warm, _ = timed(every)
-    print(f"{'both':28s} {len(every)} commands: {full} full parse; cold {cold:.2f} s cpu "
-          f"({len(every) / cold:.0f}/s), warm {warm:.2f} s ({len(every) / warm:.0f}/s), warm/cold {warm / cold:.2f}")
+    start = time.process_time()
+    for c in every:  # forests now cached
+        parser.parse(c)
+    warm = time.process_time() - start
+    n = len(every)
+    print(f"{'both':28s} {n} commands: {full} full parse; cold {cold:.2f} s cpu ({n / cold:.0f}/s), "
+          f"warm {warm:.2f} s ({n / warm:.0f}/s), warm/cold {warm / cold:.2f}")
+    unshared, _ = timed(every, share_forests=False)
+    lark_earley = parser._earley()[0].parser.parser
+    del lark_earley.predict_and_complete  # lark's own method again
+    try:
+        own, _ = timed(every)
+    finally:
+        earley.install(lark_earley)
+    print(f"{'both, no forest sharing':28s} cold {unshared:.2f} s cpu ({n / unshared:.0f}/s), "
+          f"{unshared / cold:.2f}x the cold time")
+    print(f"{'both, lark own predictor':28s} cold {own:.2f} s cpu ({n / own:.0f}/s), {own / cold:.2f}x the cold time")
+    print(f"loadavg after: {loadavg()}")
     return 0
 
 

@@ -2,9 +2,15 @@
 
 Pipeline: tokenise (lowercase, punctuation split off, hyphenated words split, every word kept), tag each
 word with its possible categories (grammar.lexicon), split into sentences, parse each sentence with
-Earley (``ambiguity="explicit"``) over the grammar in ``commands.lark``, keep the best readings of each
-sentence (grammar.phrases.KBestTransformer), fall back to chunks where the grammar fails
-(grammar.chunker), compose logical forms for the whole command (grammar.composition) and normalise.
+Earley over the grammar in ``commands.lark``, keep the best readings of each sentence from the parse
+forest (grammar.kbest), fall back to chunks where the grammar fails (grammar.chunker), compose logical
+forms for the whole command (grammar.composition) and normalise.
+
+Speed: Earley returns the shared packed forest (``ambiguity="forest"``), scored once per node, instead
+of explicit trees that unpack every ambiguity; the forest depends only on the sentence's word classes,
+so it is cached by class sequence ("push star into orange room" and "move chair into green room"
+share one). lark's unordered sets are used (faster); the scoring visits derivations in a fixed order,
+so readings do not depend on the hash seed.
 """
 
 from __future__ import annotations
@@ -25,7 +31,9 @@ from .chunker import chunk
 from .composition import compose, instantiate
 from .lexicon import CONJUNCTIONS, SemanticLexicon, guess_categories
 from .logical_form import LogicalForm, Reading
-from .phrases import DEFAULT_WEIGHTS, KBestTransformer, top_k
+from .earley import install as install_fast_earley
+from .kbest import ForestKBest, RuleSymbolNode, log_weights
+from .phrases import DEFAULT_WEIGHTS, top_k
 
 logger = logging.getLogger(__name__)
 
@@ -123,30 +131,35 @@ class _TaggedLexer(Lexer):
         pass
 
     def lex(self, data):
-        for i, (word, cls) in enumerate(data):
-            yield Token(cls, word, start_pos=i, end_pos=i + 1, line=1, column=i + 1)
+        # the token value is the class too: the forest must not depend on the words (it is shared)
+        for i, cls in enumerate(data):
+            yield Token(cls, cls, start_pos=i, end_pos=i + 1, line=1, column=i + 1)
 
 
 @functools.lru_cache(maxsize=1)
-def _earley() -> Lark:
+def _earley() -> tuple[Lark, dict]:
+    """The Earley parser (returns forests) and a fixed index per grammar rule (the visiting order)."""
     grammar = files("groundlang.grammar").joinpath("commands.lark").read_text(encoding="utf-8")
-    parser = Lark(grammar, parser="earley", lexer=_TaggedLexer, ambiguity="explicit", start="start",
-                  ordered_sets=True)
+    parser = Lark(grammar, parser="earley", lexer=_TaggedLexer, ambiguity="forest", start="start",
+                  ordered_sets=False)
     # lark's basic Earley matches a terminal by token type; ours accepts a word for each of its categories
-    parser.parser.parser.term_matcher = _match
-    return parser
+    earley = parser.parser.parser
+    earley.term_matcher = _match
+    earley.SymbolNode = RuleSymbolNode  # keeps NOUN and HMOD derivations of one word apart (grammar.kbest)
+    install_fast_earley(earley)
+    return parser, {rule: i for i, rule in enumerate(parser.rules)}
 
 
-@functools.lru_cache(maxsize=2048)
-def _parse_tree(data: tuple[tuple[str, str], ...]):
-    """Earley's explicit-ambiguity tree of one tagged sentence, None if the grammar rejects it.
+@functools.lru_cache(maxsize=512)  # ~60 kB per forest; the corpus has 355 distinct class sequences
+def _parse_forest(classes: tuple[str, ...]):
+    """Earley's parse forest (root symbol node) of a sentence's class sequence, None if rejected.
 
-    Cached (independent of the weights): crowd commands repeat whole sentences a lot.
+    Cached (independent of words and weights): crowd commands repeat sentence shapes a lot.
     """
     try:
-        return _earley().parse(list(data))
+        return _earley()[0].parse(list(classes))
     except (LarkError, RecursionError) as exc:
-        logger.debug("grammar failed on %r: %s", " ".join(w for w, _ in data), type(exc).__name__)
+        logger.debug("grammar failed on %r: %s", " ".join(classes), type(exc).__name__)
         return None
 
 
@@ -172,15 +185,19 @@ def _split_long(sentence: list[Word]) -> list[list[Word]]:
     return [p for p in parts if p]
 
 
-def _parse_sentence(sentence: list[Word], transformer: KBestTransformer) -> tuple[list[tuple[float, tuple]], bool]:
+def _parse_sentence(sentence: list[Word], logw: Mapping[str, float],
+                    beam: int) -> tuple[list[tuple[float, tuple]], bool]:
     """Best (log weight, clause values) readings of one sentence, and whether it fell back to chunks."""
     if len(sentence) <= MAX_SENTENCE_TOKENS:
-        data = tuple((w, _class_name(c)) for w, c in sentence)
-        tree = _parse_tree(data)
-        if tree is not None:
-            cands = transformer.transform(tree)
-            if not isinstance(cands, list):
-                cands = [(0.0, cands)]
+        classes = tuple(_class_name(c) for _, c in sentence)
+        root = _parse_forest(classes)
+        if root is not None:
+            words = [Token(cls, w, start_pos=i) for i, ((w, _), cls) in enumerate(zip(sentence, classes))]
+            try:
+                cands = ForestKBest(logw, beam, words, _earley()[1]).best(root)
+            except RecursionError:
+                logger.debug("forest too deep for %r", " ".join(w for w, _ in sentence))
+                cands = []
             cands = [(w, v) for w, v in cands if v]
             if cands:
                 return cands, False
@@ -215,12 +232,12 @@ def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None =
     cats = tag(tokens)
     tags = tuple(_class_name(c).replace("_", "|") if c else "PUNCT" for c in cats)
     beam = 2 * max_readings + 4
-    transformer = KBestTransformer({**DEFAULT_WEIGHTS, **(weights or {})}, beam)
+    logw = log_weights({**DEFAULT_WEIGHTS, **(weights or {})})
     combined: list[tuple[float, tuple]] = [(0.0, ())]
     fallback = False
     for sentence in _sentences(tokens, cats):
         for part in _split_long(sentence):
-            cands, fell_back = _parse_sentence(part, transformer)
+            cands, fell_back = _parse_sentence(part, logw, beam)
             fallback |= fell_back
             combined = top_k([(w1 + w2, c1 + c2) for (w1, c1), (w2, c2) in itertools.product(combined, cands)], beam)
     words = tuple(tokens)

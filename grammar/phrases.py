@@ -1,20 +1,18 @@
-"""Phrase values built from parse trees, and the k-best Transformer that scores them.
+"""Phrase values built from parse-tree nodes, the default rule weights, and k-best list helpers.
 
-Earley with ``ambiguity="explicit"`` returns a tree with ``_ambig`` nodes. Each node is transformed into
-a short list of candidates ``(log weight, phrase)``: a rule combines its children's candidates (a
-product, pruned to the beam) and adds its own log weight; ``_ambig`` merges alternatives, summing the
-weights of alternatives that built the same phrase (the paper sums parses per logical form).
+``build(rule, children)`` turns a grammar rule's children values (lark Tokens for words, phrase values
+for sub-phrases) into the rule's phrase value; grammar.kbest applies it to every derivation in
+Earley's parse forest and keeps the best candidates ``(log weight, phrase)``.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any, Union
 
-from lark import Token, Transformer
+from lark import Token
 
 from .lexicon import NEGATIONS
 
@@ -189,6 +187,18 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
 }
 
 
+def build(rule: str, children) -> Any:
+    """The phrase value of a tree node named ``rule`` (alias or rule name); None if the node is rejected.
+
+    Raises ValueError for a rule without a builder (a grammar rule added without one).
+    """
+    try:
+        builder = _BUILDERS[rule]
+    except KeyError:
+        raise ValueError(f"grammar rule {rule!r} has no phrase builder") from None
+    return builder(list(children))
+
+
 def _complements(values: list):
     comps = tuple(v for v in values if isinstance(v, (PP, Adv, Measure, Sub)))
     # late closure: a clausal complement ("without walking ...", "until ...") takes what follows it
@@ -212,7 +222,7 @@ def _logaddexp(a: float, b: float) -> float:
     return m + math.log1p(math.exp(-abs(a - b)))
 
 
-def _merge(cands: Candidates, beam: int) -> Candidates:
+def merge(cands: Candidates, beam: int) -> Candidates:
     """Sum the weights of equal phrases, keep the ``beam`` best (highest log weight first)."""
     best: dict[Any, float] = {}
     for logw, value in cands:
@@ -233,38 +243,3 @@ def top_k(items: list[tuple[float, Any]], k: int) -> list[tuple[float, Any]]:
         tied = sorted((wv for wv in items if abs(wv[0] - cut) <= 1e-9), key=lambda wv: repr(wv[1]))
         items = above + tied
     return items[:k]
-
-
-class KBestTransformer(Transformer):
-    """Turns an explicit-ambiguity parse tree into the ``beam`` best phrase values with log weights."""
-
-    def __init__(self, weights: Mapping[str, float], beam: int):
-        super().__init__(visit_tokens=False)
-        self.beam = beam
-        self.logw = {}
-        for name, w in weights.items():
-            if not (w > 0.0) or math.isinf(w):
-                raise ValueError(f"grammar weight {name!r} must be a positive finite number, got {w}")
-            self.logw[name] = math.log(w)
-
-    def _combine(self, rule: str, children: list) -> Candidates:
-        build = _BUILDERS[rule]
-        lists = [c if isinstance(c, list) else [(0.0, c)] for c in children]
-        partial: list[tuple[float, tuple]] = [(0.0, ())]
-        for options in lists:
-            partial = top_k([(w1 + w2, vals + (v,)) for (w1, vals), (w2, v) in itertools.product(partial, options)],
-                            self.beam)
-        own = self.logw.get(rule, 0.0)
-        built = [(w + own, build(list(vals))) for w, vals in partial]
-        return _merge([(w, v) for w, v in built if v is not None], self.beam)
-
-    def _ambig(self, children: list) -> Candidates:
-        merged: Candidates = []
-        for c in children:
-            merged.extend(c if isinstance(c, list) else [(0.0, c)])
-        return _merge(merged, self.beam)
-
-    def __default__(self, data, children, meta):
-        if data not in _BUILDERS:
-            raise ValueError(f"grammar rule {data!r} has no phrase builder")
-        return self._combine(data, children)

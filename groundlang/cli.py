@@ -15,7 +15,7 @@ import logging
 import sys
 
 # Order is the order of ``groundlang --help``.
-COMMANDS = ["check", "show", "tasks", "parse", "irl"]
+COMMANDS = ["check", "show", "tasks", "parse", "irl", "discover"]
 
 
 def build_parser() -> argparse.ArgumentParser:

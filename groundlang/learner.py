@@ -18,18 +18,19 @@ import numpy as np
 import torch
 
 from groundlang.grammar.parser import parse
+from groundlang.inference.acting import rollout, rollout_states
 from groundlang.inference.joint import FitResult, fit_globals, posterior
-from groundlang.inference.likelihoods import behaviour_log_likelihoods
-from groundlang.inference.planning import TaskSettings, rollout, rollout_states, solve_task
+from groundlang.inference.likelihoods import behaviour_likelihood_table
+from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
 from groundlang.model.geometry import cell_tables
 from groundlang.model.interpretations import CONTEXT_ROLES, Interpretation, interpretations
-from groundlang.model.language_models import LanguageModel, ParseAligned, get_language_model
+from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
 from groundlang.model.statespace import enumerate_states
-from groundlang.model.vocabulary import NULL, Vocabulary, class_token
+from groundlang.model.vocabulary import UNALIGNED, Vocabulary, class_token
 from groundlang.model.world import Action, State, get_palette
 
 __all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError"]
@@ -143,7 +144,7 @@ class Learner:
         """Observations with behaviour likelihoods for training instances (cached on disk)."""
         interps = [self._interpretations(inst.initial_state) for inst in instances]
         goals = [sorted({i.goal for i in group}) for group in interps]
-        table = behaviour_log_likelihoods(
+        table = behaviour_likelihood_table(
             instances, goals, self.settings, cache_dir=self.cache_dir, progress=progress
         )
         observations = []
@@ -184,6 +185,7 @@ class Learner:
             tokens.extend(f"toyIs{_capital(c)}" for c in palette.colours)
             tokens.extend(f"toyIs{_capital(s)}" for s in palette.shapes)
         tokens.extend(class_token(c) for c in ("agent", "room", "toy"))
+        tokens.append(UNALIGNED)
         vocab.add_tokens(tokens)
         vocab.add_roles(roles + list(CONTEXT_ROLES))
         vocab.add_preps(preps)
@@ -208,6 +210,14 @@ class Learner:
             self.vocab = self._build_vocabulary(observations, palettes)
             init = None
         batch = encode(observations, self.vocab)
+        if init is None and not isinstance(self.lm, BagOfWords):
+            # Alignment models start from the bag of words' word distributions,
+            # as IBM Model 2 is classically started from Model 1: the MAP of an
+            # alignment model from a flat start lands in poor local optima
+            # (measured: "star" learned as a room word on the crowd corpus).
+            start = fit_globals(batch, BagOfWords(self.lm.word_concentration), self.vocab,
+                                steps=self.steps, seed=self.seed)
+            init = {"phi": start.globals["phi"]}
         self.fit_result = fit_globals(
             batch, self.lm, self.vocab, steps=self.steps, lr=self.lr, seed=self.seed,
             init=init, progress=progress,
@@ -248,11 +258,18 @@ class Learner:
         reached = bool(mask[int(trajectory.states[-1])])
         return FollowResult(command, post, goal, states, actions, reached, trajectory.reason)
 
-    def lexicon(self, top: int = 3, min_count: int = 1) -> dict[str, list[tuple[str, float]]]:
-        """Each known word's most probable meanings ``P(token | word)`` (uniform prior over tokens)."""
+    def lexicon(self, top: int = 3) -> dict[str, list[tuple[str, float]]]:
+        """Each known word's most probable meanings, ``P(token | word)``.
+
+        The prior over tokens is uniform over the tokens training actually
+        used: a token no training interpretation offered keeps its flat prior
+        distribution and is left out, so that it does not dilute the table.
+        """
         self._require_fitted()
         phi = self.globals["phi"]  # [S, W]
-        meaning = phi / phi.sum(0, keepdim=True)
+        learned = phi.max(-1).values > 3.0 / phi.shape[1]
+        meaning = phi * learned[:, None]
+        meaning = meaning / meaning.sum(0, keepdim=True).clamp_min(1e-30)
         out = {}
         for w, word in enumerate(self.vocab.words[1:], start=1):
             order = torch.argsort(meaning[:, w], descending=True)[:top]

@@ -11,6 +11,7 @@ or, equivalently and faster, from normalising the enumerated log-joint.
 from __future__ import annotations
 
 import logging
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import pyro
@@ -25,9 +26,22 @@ from groundlang.model.generative import global_sizes, instance_model
 from groundlang.model.language_models import LanguageModel
 from groundlang.model.vocabulary import Vocabulary
 
-__all__ = ["FitResult", "fit_globals", "posterior", "posterior_by_enumeration"]
+__all__ = ["FitResult", "fit_globals", "posterior", "posterior_by_enumeration", "single_threaded"]
 
 log = logging.getLogger(__name__)
+
+
+@contextmanager
+def single_threaded():
+    """Run torch on one thread: these tensors are small, and with two busy cores
+    intra-op threading made each evaluation ~10x slower (measured: 0.37 s vs 0.035 s
+    for the 240-instance parse model's word table)."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
 
 
 @dataclass
@@ -63,6 +77,11 @@ def fit_globals(
     """
     if optimizer not in ("lbfgs", "adam"):
         raise ValueError(f"unknown optimizer {optimizer!r}; expected lbfgs or adam")
+    with single_threaded():
+        return _fit(batch, lm, vocab, steps, lr, seed, init, tol, optimizer, progress)
+
+
+def _fit(batch, lm, vocab, steps, lr, seed, init, tol, optimizer, progress) -> FitResult:
     pyro.set_rng_seed(seed)
     pyro.clear_param_store()
     sizes = global_sizes(vocab)
@@ -70,7 +89,7 @@ def fit_globals(
     def model():
         return instance_model(batch, lm, sizes)
 
-    init_fn = init_to_value(values=init) if init else init_to_mean
+    init_fn = init_to_value(values=init, fallback=init_to_mean) if init else init_to_mean
     guide = AutoDelta(poutine.block(model, hide=["z"]), init_loc_fn=init_fn)
     elbo = TraceEnum_ELBO(max_plate_nesting=1)
     losses: list[float] = []
@@ -109,7 +128,7 @@ def fit_globals(
             return loss
 
         for _ in range(max(1, steps // 20)):
-            tick(float(opt.step(closure)))
+            tick(float(opt.step(closure).detach()))
             if len(losses) >= 2 and abs(losses[-2] - losses[-1]) <= tol * abs(losses[-1]):
                 converged = True
                 break

@@ -42,7 +42,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from groundlang.inference.planning import PlanningError, _run_sweeps, as_transitions, soft_backup, threads_for
+from groundlang.inference.planning import PlanningError, as_transitions, soft_backup
+from groundlang.inference.sweeps import (
+    policy_from_carry,
+    predecessor_table,
+    solve_adjoint,
+    solve_values,
+    threads_for,
+    transition_columns,
+)
 
 __all__ = ["Demonstration", "MLIRLProblem", "MLIRLResult", "mlirl", "MIN_TEMPERATURE", "MAX_TEMPERATURE"]
 
@@ -79,43 +87,36 @@ class _SoftFixedPoint(torch.autograd.Function):
     def forward(ctx, reward, stop, temperature, problem):
         if problem.warm_values is None or problem.warm_values.dtype != reward.dtype:
             problem.warm_values = torch.zeros(reward.shape[0], dtype=reward.dtype)
-        values, sweeps, residual = _run_sweeps(
-            problem.warm_values, problem.next_state, reward.detach(), None if stop is None else stop.detach(),
-            problem.discount, temperature.detach(), None, problem.tol, problem.max_sweeps, problem.backend,
+        reward_d, stop_d, t_d = reward.detach(), None if stop is None else stop.detach(), temperature.detach()
+        carry, sweeps, residual = solve_values(
+            problem.warm_values, problem.columns, reward_d, stop_d, problem.discount, t_d, None,
+            problem.tol, problem.max_sweeps, problem.backend,
         )
+        values, _, log_policy = policy_from_carry(carry, problem.columns, reward_d, stop_d, t_d)
         problem.warm_values = values
         problem.last_sweeps, problem.last_residual = sweeps, residual
         ctx.problem = problem
-        ctx.save_for_backward(reward, stop if stop is not None else torch.empty(0), temperature, values)
+        A = problem.next_state.shape[1]
+        move_prob = log_policy[:, :A].exp()  # pi(a|s) of the moves, [S, A]
+        ctx.save_for_backward(reward, stop if stop is not None else torch.empty(0), temperature, values, move_prob)
         ctx.has_stop = stop is not None
         return values
 
     @staticmethod
     def backward(ctx, grad_values):
-        reward, stop, temperature, values = ctx.saved_tensors
+        reward, stop, temperature, values, move_prob = ctx.saved_tensors
         stop = stop if ctx.has_stop else None
         problem = ctx.problem
-        ns = problem.next_state
-        S, A = ns.shape
         with torch.no_grad():
-            if reward.ndim == 1:
-                q = (reward + problem.discount * values)[ns]
-            else:
-                q = reward + problem.discount * values[ns]
-            move_prob = torch.exp((q - values[:, None]) / temperature)  # pi(a|s) for the moves, [S, A]
-            flat_next = ns.reshape(-1)
-            lam = grad_values.clone()
-            for _ in range(problem.max_sweeps):
-                spread = torch.zeros_like(lam).index_add_(0, flat_next, (move_prob * lam[:, None]).reshape(-1))
-                new = grad_values + problem.discount * spread
-                change = float((new - lam).abs().max())
-                lam = new
-                if change <= problem.tol * (1.0 + float(lam.abs().max())):
-                    break
+            lam, problem.last_adjoint_steps = solve_adjoint(
+                grad_values.contiguous(), move_prob, problem.predecessors(), problem.discount, problem.tol,
+                problem.max_sweeps, problem.backend, problem.warm_adjoint,
+            )
+            problem.warm_adjoint = lam
         with torch.enable_grad():
             inputs = [t.detach().requires_grad_(True) for t in (reward, temperature)]
             stop_in = None if stop is None else stop.detach().requires_grad_(True)
-            new_values = soft_backup(values, ns, inputs[0], stop_in, problem.discount, inputs[1])
+            new_values = soft_backup(values, problem.next_state, inputs[0], stop_in, problem.discount, inputs[1])
             wrt = inputs + ([stop_in] if stop_in is not None else [])
             grads = torch.autograd.grad(new_values, wrt, lam)
         grad_reward, grad_temperature = grads[0], grads[1]
@@ -145,11 +146,15 @@ class MLIRLProblem:
     dtype: torch.dtype = torch.float32
     backend: str = "auto"
     warm_values: torch.Tensor | None = field(default=None, repr=False)
+    warm_adjoint: torch.Tensor | None = field(default=None, repr=False)
     last_sweeps: int = 0
+    last_adjoint_steps: int = 0
     last_residual: float = math.inf
 
     def __post_init__(self):
         self.next_state = as_transitions(self.next_state)
+        self.columns = transition_columns(self.next_state)
+        self._predecessors = None
         S, A = self.next_state.shape
         self.features = torch.as_tensor(np.asarray(self.features) if not isinstance(self.features, torch.Tensor)
                                         else self.features, dtype=self.dtype)
@@ -179,6 +184,12 @@ class MLIRLProblem:
         self._move_action = torch.as_tensor(np.concatenate([d.actions for d in demos]))
         self._move_demo = torch.as_tensor(np.concatenate([np.full(len(d.actions), i) for i, d in enumerate(demos)]))
         self._final_state = torch.as_tensor(np.array([d.states[-1] for d in demos]))
+
+    def predecessors(self):
+        """:func:`predecessor_table` of this problem's transitions (built on first use)."""
+        if self._predecessors is None:
+            self._predecessors = predecessor_table(self.next_state)
+        return self._predecessors
 
     @property
     def num_features(self) -> int:

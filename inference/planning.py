@@ -1,4 +1,4 @@
-"""Soft value iteration, Boltzmann policies with a terminate action, demonstration likelihoods, rollouts.
+"""Soft value iteration, Boltzmann policies with a terminate action, demonstration likelihoods.
 
 The MDP is deterministic and given as a gather table ``next_state[S, A]``
 (``A = 4`` moves in ``Action`` order). Rewards come in two parts:
@@ -21,8 +21,8 @@ States in the optional ``terminal`` mask absorb: their value is 0 and their
 only action is TERMINATE (probability 1), so a demonstration that walks on
 from a terminal state has log-likelihood -inf.
 
-Jacobi sweeps are vectorised gathers over ``next_state``: no loop over
-states. Sweeps stop when ``max |V_new - V| <= tol`` (converged) or at
+Jacobi sweeps (:mod:`groundlang.inference.sweeps`) are vectorised gathers
+over ``next_state``: no loop over states. Sweeps stop when ``max |V_new - V| <= tol`` (converged) or at
 ``max_sweeps`` (not converged; reported, never raised). Float32 by default:
 the sweep is memory-bound and float32 halves the traffic; pass ``dtype``
 float64 for gradient checks.
@@ -30,19 +30,26 @@ float64 for gradient checks.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 from dataclasses import dataclass
 
 import numpy as np
 import torch
 
+from groundlang.inference.sweeps import (
+    TERMINATE,
+    PlanningError,
+    policy_from_carry,
+    solve_values,
+    threads_for,
+    transition_columns,
+)
+
 __all__ = [
     "TERMINATE",
     "PlanningError",
     "SoftValueResult",
     "TaskSettings",
-    "Rollout",
     "as_transitions",
     "threads_for",
     "soft_value_iteration",
@@ -51,45 +58,9 @@ __all__ = [
     "solve_task",
     "demonstration_log_likelihood",
     "task_log_likelihood",
-    "rollout",
-    "rollout_states",
 ]
 
 logger = logging.getLogger(__name__)
-
-TERMINATE = 4
-"""Index of the terminate action in Q-values and policies that have one."""
-
-# Sweeps per convergence check: the residual costs a reduction and, in the
-# compiled path, a graph break; checking every few sweeps is cheaper.
-CHECK_EVERY = 8
-# Below this many states a compiled kernel does not repay its start-up cost.
-COMPILE_MIN_STATES = 200_000
-
-
-# Below this many states one thread is faster: each op is a few microseconds
-# of work, and waking a second OpenMP thread costs more than it saves (10x
-# more when other processes share the cores).
-PARALLEL_MIN_STATES = 50_000
-
-
-@contextlib.contextmanager
-def threads_for(num_states: int):
-    """Run torch single-threaded inside the block when ``num_states`` is small; restores the setting."""
-    before = torch.get_num_threads()
-    if num_states >= PARALLEL_MIN_STATES or before == 1:
-        yield
-        return
-    torch.set_num_threads(1)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(before)
-
-
-class PlanningError(ValueError):
-    """Arrays of the wrong shape or type for planning; the message names the array and its shape."""
-
 
 @dataclass(frozen=True)
 class SoftValueResult:
@@ -154,14 +125,6 @@ def _check_scalars(discount: float, temperature) -> None:
         raise PlanningError(f"temperature must be > 0, got {float(temperature)}")
 
 
-def move_q(values, next_state, reward, discount):
-    """Q-values of the moves ``[S, A]`` given values ``[S]``: one gather over ``next_state``."""
-    if reward.ndim == 1:
-        # Arrival reward: gather reward + discount * V in one pass.
-        return (reward + discount * values)[next_state]
-    return reward + discount * values[next_state]
-
-
 def _q_columns(values, next_state, reward, discount):
     """The move Q-values as A separate ``[S]`` columns (lets a compiler fuse a whole sweep)."""
     if reward.ndim == 1:
@@ -194,52 +157,6 @@ def soft_backup(values, next_state, reward, stop_reward, discount, temperature, 
     if terminal is not None:
         new = torch.where(terminal, torch.zeros_like(new), new)
     return new
-
-
-def _sweeps_eager(values, next_state, reward, stop_reward, discount, temperature, terminal, count: int):
-    for _ in range(count - 1):
-        values = soft_backup(values, next_state, reward, stop_reward, discount, temperature, terminal)
-    new = soft_backup(values, next_state, reward, stop_reward, discount, temperature, terminal)
-    return new, (new - values).abs().max()
-
-
-_COMPILED = None
-
-
-def _compiled_sweeps():
-    """torch.compile'd block of sweeps, or None where compilation does not work (logged once)."""
-    global _COMPILED
-    if _COMPILED is None:
-        try:
-            fn = torch.compile(_sweeps_eager, fullgraph=True)
-            S = 64
-            ns = torch.randint(0, S, (S, 4))
-            fn(torch.zeros(S), ns, torch.zeros(S), torch.zeros(S), 0.9, torch.tensor(1.0), None, 2)
-            _COMPILED = fn
-        except Exception as exc:  # any failure in the compiler stack: fall back, do not crash
-            logger.warning("torch.compile unavailable (%s: %s); using eager sweeps", type(exc).__name__, exc)
-            _COMPILED = False
-    return _COMPILED or None
-
-
-def _run_sweeps(values, ns, reward, stop, discount, temperature, terminal, tol, max_sweeps, backend):
-    use_compiled = backend == "compiled" or (backend == "auto" and ns.shape[0] >= COMPILE_MIN_STATES)
-    sweeps_fn = (_compiled_sweeps() if use_compiled else None) or _sweeps_eager
-    sweeps, residual = 0, float("inf")
-    with torch.no_grad():
-        while sweeps < max_sweeps:
-            count = min(CHECK_EVERY, max_sweeps - sweeps)
-            values, res = sweeps_fn(values, ns, reward, stop, discount, temperature, terminal, count)
-            sweeps += count
-            residual = float(res)
-            if not np.isfinite(residual):
-                raise PlanningError(
-                    f"soft value iteration diverged after {sweeps} sweeps (residual {residual}); "
-                    "with discount 1 the step cost must exceed temperature * log(number of actions)"
-                )
-            if residual <= tol:
-                break
-    return values, sweeps, residual
 
 
 def soft_value_iteration(
@@ -280,26 +197,15 @@ def soft_value_iteration(
         stop = torch.zeros(S, dtype=dtype)  # absorbing states need an action: terminate
     T = torch.as_tensor(temperature, dtype=dtype)
     v0 = torch.zeros(S, dtype=dtype) if initial_values is None else _vector(initial_values, "initial_values", S, dtype)
+    columns = transition_columns(ns)
     with threads_for(S):
-        values, sweeps, residual = _run_sweeps(v0, ns, r, stop, float(discount), T, term, tol, max_sweeps, backend)
-        q, log_policy = policy_from_values(values, ns, r, stop, float(discount), T, term)
+        carry, sweeps, residual = solve_values(v0, columns, r, stop, float(discount), T, term, tol, max_sweeps,
+                                               backend)
+        values, q, log_policy = policy_from_carry(carry, columns, r, stop, T, term)
     converged = residual <= tol
     if not converged:
         logger.info("soft value iteration: %d sweeps, residual %.3g > tol %.3g", sweeps, residual, tol)
     return SoftValueResult(values, q, log_policy, sweeps, converged, residual)
-
-
-def policy_from_values(values, ns, reward, stop, discount, temperature, terminal=None):
-    """Q-values and Boltzmann log-policy ``[S, A(+1)]`` from values ``[S]``."""
-    q = move_q(values, ns, reward, discount)
-    if stop is not None:
-        q = torch.cat([q, stop[:, None]], dim=1)
-    log_policy = torch.log_softmax(q / temperature, dim=1)
-    if terminal is not None:
-        absorbing = torch.full_like(log_policy[0], float("-inf"))
-        absorbing[TERMINATE] = 0.0
-        log_policy = torch.where(terminal[:, None], absorbing, log_policy)
-    return q, log_policy
 
 
 def demonstration_log_likelihood(log_policy, states, actions, terminate: bool = True) -> torch.Tensor:
@@ -388,64 +294,3 @@ def task_log_likelihood(space, goal_mask, demo_states, demo_actions, settings: T
     """Log-likelihood of one demonstration (state indices ``[T+1]``, moves ``[T]``) under a grounded goal."""
     result = solve_task(space.next_state, goal_mask, settings)
     return float(demonstration_log_likelihood(result.log_policy, demo_states, demo_actions))
-
-
-@dataclass(frozen=True)
-class Rollout:
-    """A trajectory: ``states`` ``[T + 1]`` indices, ``actions`` ``[T]`` moves, and why it ended
-    ("terminated", "goal" or "max_steps")."""
-
-    states: np.ndarray
-    actions: np.ndarray
-    reason: str
-
-
-def rollout(
-    next_state,
-    policy,
-    start: int = 0,
-    goal_mask=None,
-    greedy: bool = True,
-    seed: int | None = None,
-    max_steps: int = 200,
-) -> Rollout:
-    """Act from ``start`` until TERMINATE is chosen, the goal holds, or ``max_steps`` moves.
-
-    ``policy`` is a SoftValueResult or a log-policy / Q table ``[S, A(+1)]``
-    (argmax or sampling are the same for either when greedy). Sampling
-    (``greedy=False``) needs a log-policy and uses ``numpy.random.default_rng(seed)``.
-    """
-    table = policy.log_policy if isinstance(policy, SoftValueResult) else policy
-    table = np.asarray(torch.as_tensor(table).detach().cpu().numpy(), dtype=np.float64)
-    ns = np.asarray(next_state)
-    if table.ndim != 2 or table.shape[0] != ns.shape[0]:
-        raise PlanningError(f"policy must be [{ns.shape[0]}, A], got shape {table.shape}")
-    goal = None if goal_mask is None else np.asarray(goal_mask, dtype=bool)
-    rng = np.random.default_rng(seed)
-    states, actions = [int(start)], []
-    reason = "max_steps"
-    for _ in range(max_steps + 1):
-        s = states[-1]
-        if goal is not None and goal[s]:
-            reason = "goal"
-            break
-        if greedy:
-            a = int(np.argmax(table[s]))
-        else:
-            p = np.exp(table[s] - table[s].max())
-            a = int(rng.choice(len(p), p=p / p.sum()))
-        if a == TERMINATE:
-            reason = "terminated"
-            break
-        if len(actions) == max_steps:
-            break
-        actions.append(a)
-        states.append(int(ns[s, a]))
-    return Rollout(np.array(states, dtype=np.int64), np.array(actions, dtype=np.int64), reason)
-
-
-def rollout_states(space, trajectory: Rollout):
-    """The trajectory in the corpus's terms: ``(list of model.world.State, list of Action)``."""
-    from groundlang.model.world import Action
-
-    return [space.state_at(int(i)) for i in trajectory.states], [Action(int(a)) for a in trajectory.actions]

@@ -13,6 +13,7 @@ U distinct entity/frame words, V roles.
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from dataclasses import dataclass
 
@@ -20,7 +21,7 @@ import torch
 
 from groundlang.grammar.logical_form import LogicalForm, Reading
 from groundlang.model.interpretations import Interpretation, class_of
-from groundlang.model.vocabulary import NULL, Vocabulary, class_token
+from groundlang.model.vocabulary import NULL, UNALIGNED, Vocabulary, class_token
 
 __all__ = ["Observation", "Batch", "encode", "entity_words", "machine_string", "PAD_LOGIT"]
 
@@ -41,26 +42,38 @@ class Observation:
 
 @dataclass
 class Batch:
-    """Padded tensors for a list of observations; see the module docstring for shapes."""
+    """Padded tensors for a list of observations; see the module docstring for shapes.
+
+    Words are generated from *mixtures*: uniform mixtures over a set of
+    semantic tokens ({L} + C + {NULL} for a bag of words, the tokens of the
+    object in a role, ...). The distinct sets are few, so their emission
+    probabilities are computed once per evaluation as ``mixtures @ phi`` and
+    gathered, instead of mixing per instance and interpretation.
+    """
 
     log_prior: torch.Tensor  # [I, J], PAD_LOGIT where padded
     behaviour: torch.Tensor  # [I, J], 0 where padded or unobserved
     mask: torch.Tensor  # [I, J] bool
-    lifted: torch.Tensor  # [I, J] token id of the lifted task
-    bow_tokens: torch.Tensor  # [I, J, S] 0/1: {L} + C + {NULL}
-    words: torch.Tensor  # [I, N] word ids
+    mixtures: torch.Tensor  # [X, S] rows: uniform weights over a token set
+    bow_mix: torch.Tensor  # [I, J] mixture of {L} + C + {NULL}
+    bow_mix_no_null: torch.Tensor  # [I, J] mixture of {L} + C (Model 0 has no NULL)
+    frame_mix: torch.Tensor  # [I, J] mixture of {L, NULL}: words outside noun phrases
+    uniq: torch.Tensor  # [I, U] distinct word ids of the command (0-padded)
+    word_counts: torch.Tensor  # [I, U] occurrences of each distinct word
+    words: torch.Tensor  # [I, N] word ids in order
     word_mask: torch.Tensor  # [I, N] bool
     machine: torch.Tensor  # [I, J, M] token ids of the machine string (NULL first)
     machine_mask: torch.Tensor  # [I, J, M] bool
-    uniq: torch.Tensor  # [I, U] distinct word ids of the command
     reading_logp: torch.Tensor  # [I, R], PAD_LOGIT where padded
-    entity_counts: torch.Tensor  # [I, R, E, U] counts of each word in each entity
-    entity_prep: torch.Tensor  # [I, R, E] preposition class ids
-    entity_mask: torch.Tensor  # [I, R, E] bool
-    frame_counts: torch.Tensor  # [I, R, U] counts of words outside entities
+    type_counts: torch.Tensor  # [I, K, U] words of each distinct noun-phrase type
+    type_prep: torch.Tensor  # [I, K] preposition class of each type
+    type_mask: torch.Tensor  # [I, K] bool
+    reading_types: torch.Tensor  # [I, R, K] occurrences of each type in each reading
+    frame_counts: torch.Tensor  # [I, R, U] words outside noun phrases, per reading
     role: torch.Tensor  # [I, J, V] role ids (0 = aligned with nothing)
     role_mask: torch.Tensor  # [I, J, V] bool
-    role_tokens: torch.Tensor  # [I, J, V, S] 0/1 tokens a word aligned with the role may come from
+    role_mix: torch.Tensor  # [I, J, V] mixture a word aligned with the role comes from (no NULL:
+    # a phrase's content words name its object; only a phrase aligned with nothing is NULL's)
 
     @property
     def num_instances(self) -> int:
@@ -109,6 +122,51 @@ def _pad(rows: list[list], fill, dtype) -> torch.Tensor:
     return torch.tensor([list(r) + [fill] * (width - len(r)) for r in rows], dtype=dtype)
 
 
+class _Mixtures:
+    """Interning of token sets as rows of a mixture table."""
+
+    def __init__(self):
+        self.index: dict[frozenset[int], int] = {}
+
+    def __call__(self, tokens) -> int:
+        key = frozenset(tokens)
+        if key not in self.index:
+            self.index[key] = len(self.index)
+        return self.index[key]
+
+    def table(self, num_tokens: int) -> torch.Tensor:
+        out = torch.zeros(len(self.index), num_tokens)
+        for key, row in self.index.items():
+            out[row, sorted(key)] = 1.0 / len(key)
+        return out
+
+
+def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int]):
+    """Distinct noun-phrase types and, per distinct reading structure, their counts.
+
+    Readings that give the same multiset of (preposition key, words) and the
+    same frame words are indistinguishable to the language model; their
+    probabilities are summed.
+    """
+    types: dict[tuple, int] = {}
+    merged: dict[tuple, float] = {}
+    for reading in obs.readings:
+        ents = entity_words(reading.logical_form)
+        inside = Counter(w for _, content in ents for w in content)
+        frame = Counter(obs.words)
+        frame.subtract(inside)
+        ent_types = Counter()
+        for prep, content in ents:
+            if not content:
+                continue  # a pronoun: nothing to generate
+            key = (vocab.prep_id(prep), tuple(sorted(col[vocab.word_id(w)] for w in content)))
+            ent_types[types.setdefault(key, len(types))] += 1
+        frame_key = tuple(sorted((col[vocab.word_id(w)], c) for w, c in frame.items() if c > 0))
+        signature = (tuple(sorted(ent_types.items())), frame_key)
+        merged[signature] = merged.get(signature, 0.0) + reading.probability
+    return types, merged
+
+
 def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     """Pad and index a list of observations with a fixed vocabulary."""
     if not observations:
@@ -117,18 +175,25 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     J = max(len(o.interpretations) for o in observations)
     S = len(vocab.tokens)
     null = vocab.token_id(NULL)
+    mix = _Mixtures()
 
     log_prior = torch.full((I, J), PAD_LOGIT)
     behaviour = torch.zeros(I, J)
     mask = torch.zeros(I, J, dtype=torch.bool)
-    lifted = torch.zeros(I, J, dtype=torch.long)
-    bow_tokens = torch.zeros(I, J, S)
+    pad_mix = mix([null])
+    bow_mix = torch.full((I, J), pad_mix, dtype=torch.long)
+    bow_mix_no_null = torch.full((I, J), pad_mix, dtype=torch.long)
+    frame_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     machines = [[[null] for _ in range(J)] for _ in range(I)]
     V = max(len(interp.roles) for o in observations for interp in o.interpretations) + 1
     role = torch.zeros(I, J, V, dtype=torch.long)
     role_mask = torch.zeros(I, J, V, dtype=torch.bool)
-    role_tokens = torch.zeros(I, J, V, S)
-    role_tokens[..., null] = 1.0
+    # A phrase aligned with nothing draws its words from a token of its own:
+    # with NULL (shared with every frame word) as its only source, the
+    # unaligned option was so costly that "from the orange room" phrases were
+    # aligned with the agent instead, teaching CLASS:agent the room colours.
+    unaligned = mix([vocab.token_id(UNALIGNED)])
+    role_mix = torch.full((I, J, V), unaligned, dtype=torch.long)
 
     for i, obs in enumerate(observations):
         if obs.behaviour is not None and len(obs.behaviour) != len(obs.interpretations):
@@ -142,73 +207,65 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             if obs.behaviour is not None:
                 behaviour[i, j] = obs.behaviour[j]
             lid = vocab.token_id(interp.lifted)
-            lifted[i, j] = lid
-            bow_tokens[i, j, [lid, null] + [vocab.token_id(t) for t in interp.constraint_tokens]] = 1.0
+            said = [vocab.token_id(t) for t in interp.constraint_tokens]
+            bow_mix[i, j] = mix([lid, null] + said)
+            bow_mix_no_null[i, j] = mix([lid] + said)
+            frame_mix[i, j] = mix([lid, null])
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
-            role_mask[i, j, 0] = True  # aligned with nothing: NULL only
+            role_mask[i, j, 0] = True  # aligned with nothing
             for v, rb in enumerate(interp.roles, start=1):
                 role[i, j, v] = vocab.role_id(rb.role)
                 role_mask[i, j, v] = True
-                said = [vocab.token_id(t) for t in rb.constraint_tokens]
-                role_tokens[i, j, v, said + [vocab.token_id(class_token(rb.cls))]] = 1.0
+                tokens = [vocab.token_id(t) for t in rb.constraint_tokens]
+                role_mix[i, j, v] = mix(tokens + [vocab.token_id(class_token(rb.cls))])
 
     M = max(len(m) for row in machines for m in row)
     machine = torch.full((I, J, M), null, dtype=torch.long)
     machine_mask = torch.zeros(I, J, M, dtype=torch.bool)
     for i in range(I):
-        for j in range(J):
-            m = machines[i][j] if j < len(observations[i].interpretations) else [null]
+        for j in range(len(observations[i].interpretations)):
+            m = machines[i][j]
             machine[i, j, : len(m)] = torch.tensor(m)
             machine_mask[i, j, : len(m)] = True
 
     words = _pad([[vocab.word_id(w) for w in o.words] for o in observations], 0, torch.long)
     word_mask = _pad([[True] * len(o.words) for o in observations], False, torch.bool)
 
-    # Parse-aligned pieces: distinct words per command, counted per entity.
-    uniq_rows, per_reading = [], []
+    uniq_rows, count_rows, structures = [], [], []
     for obs in observations:
-        ids = sorted({vocab.word_id(w) for w in obs.words}) or [0]
+        counts = Counter(vocab.word_id(w) for w in obs.words)
+        ids = sorted(counts) or [0]
         col = {w: u for u, w in enumerate(ids)}
         uniq_rows.append(ids)
-        readings = []
-        for reading in obs.readings:
-            ents = entity_words(reading.logical_form)
-            inside = Counter(w for _, content in ents for w in content)
-            frame = Counter(obs.words)
-            frame.subtract(inside)
-            readings.append(
-                (
-                    reading.probability,
-                    [
-                        (vocab.prep_id(prep), Counter(col[vocab.word_id(w)] for w in content))
-                        for prep, content in ents
-                    ],
-                    Counter({col[vocab.word_id(w)]: c for w, c in frame.items() if c > 0}),
-                )
-            )
-        per_reading.append(readings)
+        count_rows.append([float(counts.get(w, 0)) for w in ids])
+        structures.append(_reading_structure(obs, vocab, col))
     uniq = _pad(uniq_rows, 0, torch.long)
+    word_counts = _pad(count_rows, 0.0, torch.float32)
     U = uniq.shape[1]
-    R = max(len(r) for r in per_reading) or 1
-    E = max((len(ents) for rs in per_reading for _, ents, _ in rs), default=0) or 1
+    R = max(len(merged) for _, merged in structures) or 1
+    K = max(len(types) for types, _ in structures) or 1
     reading_logp = torch.full((I, R), PAD_LOGIT)
-    entity_counts = torch.zeros(I, R, E, U)
-    entity_prep = torch.zeros(I, R, E, dtype=torch.long)
-    entity_mask = torch.zeros(I, R, E, dtype=torch.bool)
+    type_counts = torch.zeros(I, K, U)
+    type_prep = torch.zeros(I, K, dtype=torch.long)
+    type_mask = torch.zeros(I, K, dtype=torch.bool)
+    reading_types = torch.zeros(I, R, K)
     frame_counts = torch.zeros(I, R, U)
-    for i, readings in enumerate(per_reading):
-        for r, (prob, ents, frame) in enumerate(readings):
-            reading_logp[i, r] = float(torch.log(torch.tensor(max(prob, 1e-12))))
-            for u, c in frame.items():
+    for i, (types, merged) in enumerate(structures):
+        for (prep, cols), k in types.items():
+            type_prep[i, k] = prep
+            type_mask[i, k] = True
+            for u in cols:
+                type_counts[i, k, u] += 1.0
+        for r, ((ent_types, frame_key), prob) in enumerate(merged.items()):
+            reading_logp[i, r] = math.log(max(prob, 1e-12))
+            for k, c in ent_types:
+                reading_types[i, r, k] = c
+            for u, c in frame_key:
                 frame_counts[i, r, u] = c
-            for e, (prep, counts) in enumerate(ents):
-                entity_prep[i, r, e] = prep
-                entity_mask[i, r, e] = True
-                for u, c in counts.items():
-                    entity_counts[i, r, e, u] = c
 
     return Batch(
-        log_prior, behaviour, mask, lifted, bow_tokens, words, word_mask, machine, machine_mask,
-        uniq, reading_logp, entity_counts, entity_prep, entity_mask, frame_counts,
-        role, role_mask, role_tokens,
+        log_prior, behaviour, mask, mix.table(S), bow_mix, bow_mix_no_null, frame_mix,
+        uniq, word_counts, words, word_mask, machine, machine_mask,
+        reading_logp, type_counts, type_prep, type_mask, reading_types, frame_counts,
+        role, role_mask, role_mix,
     )

@@ -55,19 +55,28 @@ class LanguageModel:
         raise NotImplementedError
 
 
+def mixture_log_emissions(g: dict, batch: Batch) -> torch.Tensor:
+    """``log P(word u of instance i | mixture x)`` as ``[X, I, U]``."""
+    emit = batch.mixtures @ g["phi"]  # [X, W]
+    return emit[:, batch.uniq].clamp_min(1e-30).log()
+
+
+def _gather_mixtures(log_emit: torch.Tensor, mix_ids: torch.Tensor) -> torch.Tensor:
+    """``log_emit [X, I, U]`` at ``mix_ids [I, ...]`` -> ``[I, ..., U]``."""
+    I, U = log_emit.shape[1], log_emit.shape[2]
+    flat = mix_ids.reshape(I, -1)  # [I, Q]
+    per_instance = log_emit.permute(1, 0, 2)  # [I, X, U]
+    out = torch.gather(per_instance, 1, flat[..., None].expand(-1, -1, U))
+    return out.reshape(*mix_ids.shape, U)
+
+
 class BagOfWords(LanguageModel):
     name = "bow"
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
-        phi = g["phi"]  # [S, W]
-        tokens = batch.bow_tokens  # [I, J, S]
-        if not self.null_token:
-            tokens = tokens.clone()
-            tokens[..., 0] = 0.0
-        weights = tokens / tokens.sum(-1, keepdim=True).clamp_min(1.0)
-        per_word = phi[:, batch.words].permute(1, 0, 2)  # [I, S, N]
-        mix = torch.bmm(weights, per_word)  # [I, J, N]
-        return (mix.clamp_min(1e-30).log() * batch.word_mask[:, None, :]).sum(-1)
+        mix = batch.bow_mix if self.null_token else batch.bow_mix_no_null
+        per_word = _gather_mixtures(mixture_log_emissions(g, batch), mix)  # [I, J, U]
+        return (per_word * batch.word_counts[:, None, :]).sum(-1)
 
 
 class IBMModel2(LanguageModel):
@@ -108,7 +117,7 @@ class ParseAligned(LanguageModel):
         self.align_concentration = align_concentration
 
     def settings(self) -> dict:
-        return {**super().settings(), "align_concentration": self.align_concentration}
+        return {"word_concentration": self.word_concentration, "align_concentration": self.align_concentration}
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
@@ -122,22 +131,26 @@ class ParseAligned(LanguageModel):
         return self.reading_table(g, batch)[0]
 
     def reading_table(self, g: dict, batch: Batch):
-        """``(log P(words | j) [I, J], per-reading [I, J, R], entity-role log-weights [I, J, V, R, E])``."""
-        phi, align = g["phi"], g["align"]
-        phi_u = phi[:, batch.uniq].permute(1, 0, 2)  # [I, S, U]
-        weights = batch.role_tokens / batch.role_tokens.sum(-1, keepdim=True)  # [I, J, V, S]
-        log_emit = torch.einsum("ijvs,isu->ijvu", weights, phi_u).clamp_min(1e-30).log()
-        entity_ll = torch.einsum("ijvu,ireu->ijvre", log_emit, batch.entity_counts)
-        log_align = align.clamp_min(1e-30).log()[
-            batch.entity_prep[:, None, None, :, :], batch.role[:, :, :, None, None]
-        ]  # [I, J, V, R, E]
-        joint = (entity_ll + log_align).masked_fill(~batch.role_mask[..., None, None], PAD_LOGIT)
-        per_entity = torch.logsumexp(joint, dim=2)  # [I, J, R, E]
-        entities = (per_entity * batch.entity_mask[:, None]).sum(-1)  # [I, J, R]
-        U = phi_u.shape[-1]
-        task_word = torch.gather(phi_u, 1, batch.lifted[:, :, None].expand(-1, -1, U))  # [I, J, U]
-        log_frame = (0.5 * (task_word + phi_u[:, None, 0, :])).clamp_min(1e-30).log()
-        frame = torch.einsum("iju,iru->ijr", log_frame, batch.frame_counts)
+        """``(log P(words | j) [I, J], per reading [I, J, R], per type and role [I, J, V, K])``.
+
+        A noun phrase of type k aligns with role v of interpretation j with
+        probability ``align[prep_k, role_v]`` renormalised over the roles j
+        offers (so tasks with more variables are not penalised for it); its
+        words then come from that role's mixture.
+        """
+        log_emit = mixture_log_emissions(g, batch)  # [X, I, U]
+        role_words = _gather_mixtures(log_emit, batch.role_mix)  # [I, J, V, U]
+        type_ll = torch.einsum("ijvu,iku->ijvk", role_words, batch.type_counts)  # [I, J, V, K]
+        log_align = g["align"].clamp_min(1e-30).log()[
+            batch.type_prep[:, None, None, :], batch.role[:, :, :, None]
+        ]  # [I, J, V, K]
+        log_align = log_align.masked_fill(~batch.role_mask[..., None], PAD_LOGIT)
+        log_align = log_align - torch.logsumexp(log_align, dim=2, keepdim=True)
+        joint = type_ll + log_align
+        per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]
+        entities = torch.einsum("ijk,irk->ijr", per_type, batch.reading_types)
+        frame_words = _gather_mixtures(log_emit, batch.frame_mix)  # [I, J, U]
+        frame = torch.einsum("iju,iru->ijr", frame_words, batch.frame_counts)
         per_reading = entities + frame + batch.reading_logp[:, None, :]
         return torch.logsumexp(per_reading, dim=-1), per_reading, joint
 

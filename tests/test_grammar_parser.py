@@ -4,12 +4,18 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import subprocess
+import sys
 
 import pytest
 
 from groundlang.cli import main
+from groundlang.grammar import earley as earley_module
+from groundlang.grammar import parser
 from groundlang.grammar.lexicon import SemanticLexicon, guess_categories, lemma
 from groundlang.grammar.parser import DEFAULT_WEIGHTS, ParseError, parse, tag, tokenise
+from groundlang.grammar.phrases import build
 
 
 def strings(readings):
@@ -160,6 +166,77 @@ def test_empty_command_is_a_clear_error(text):
 def test_parse_is_deterministic():
     text = "go from room with green floor to one with orange floor"
     assert parse(text) == parse(text)
+
+
+def test_word_that_is_noun_or_modifier_keeps_both_readings():
+    # lark's packed nodes ignore the rule: "bottom" as NOUN (np_head, 1.0) and as HMOD (np_headless, 0.5)
+    # must both survive (grammar.kbest.RuleSymbolNode), in the ratio of their weights
+    readings = parse("go to bottom")
+    assert [(r.logical_form.paper_str(), round(r.probability, 6)) for r in readings] == [
+        ("go(bottom1)", round(2 / 3, 6)), ("go(bottom1), P1(bottom1, bottom)", round(1 / 3, 6))]
+    lfs = strings(parse("start in bottom left of orange room"))
+    assert lfs[:2] == ["start(bottom1, room1), P1(room1, orange)",
+                       "start(bottom1, room1), P1(bottom1, bottom), P2(room1, orange)"]
+
+
+def test_sentences_of_one_class_sequence_share_a_forest_but_keep_their_words():
+    parser._parse_forest.cache_clear()
+    first = strings(parse("push the star into the green room"))
+    second = strings(parse("move the chair into the blue room"))
+    assert parser._parse_forest.cache_info().hits >= 1
+    assert first[0] == "push(star1, room1), P1(room1, green)"
+    assert second == ["move(chair1, room1), P1(room1, blue)", "move(chair1), P1(room1, blue), into(chair1, room1)"]
+
+
+AMBIGUOUS = [
+    "Push the star into the green room",
+    "go from room with green floor to one with orange floor",
+    "start in bottom left of orange room",
+    "go up from green room through entry to tan room and approach star . push star right through entry to orange room",
+    "you would start in bottom left of orange room . you would n walk slightly into tan room .",
+    "move happy in a straight line from red room on top right , through door , to beige room on top left",
+]
+
+
+def test_fast_earley_predictor_gives_the_same_readings_as_lark():
+    earley = parser._earley()[0].parser.parser
+    parser._parse_forest.cache_clear()
+    fast = [[(r.logical_form, r.probability) for r in parse(c)] for c in AMBIGUOUS]
+    del earley.predict_and_complete  # lark's own predictor/completer
+    try:
+        parser._parse_forest.cache_clear()
+        own = [[(r.logical_form, r.probability) for r in parse(c)] for c in AMBIGUOUS]
+    finally:
+        assert earley_module.install(earley)
+        parser._parse_forest.cache_clear()
+    assert fast == own
+
+
+@pytest.mark.slow
+def test_readings_do_not_depend_on_the_hash_seed():
+    script = ("import json, sys\n"
+              "from groundlang.grammar import parse\n"
+              "for c in json.loads(sys.argv[1]):\n"
+              "    print(json.dumps([[r.logical_form.to_json(), repr(r.probability)] for r in parse(c)]))\n")
+    outputs = []
+    for seed in ("0", "1", "4242"):
+        env = {**os.environ, "PYTHONHASHSEED": seed}
+        done = subprocess.run([sys.executable, "-c", script, json.dumps(AMBIGUOUS)], env=env,
+                              capture_output=True, text=True, timeout=120, check=True)
+        outputs.append(done.stdout)
+    assert len(outputs[0].splitlines()) == len(AMBIGUOUS)
+    assert outputs[0] == outputs[1] == outputs[2]
+
+
+def test_grammar_package_exports():
+    import groundlang.grammar as grammar
+
+    assert sorted(grammar.__all__) == sorted([
+        "parse", "ParseError", "DEFAULT_WEIGHTS", "LogicalForm", "Reading", "Entity", "Clause", "Relation",
+        "SemanticLexicon", "tokenise"])
+    assert grammar.parse is parse and grammar.ParseError is ParseError
+    with pytest.raises(ValueError, match="no phrase builder"):
+        build("no_such_rule", [])
 
 
 def _corpus_commands(folder):

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from groundlang.inference.acting import rollout
 from groundlang.inference.intentions import multiple_intentions
-from groundlang.inference.planning import PlanningError, rollout, solve_task
+from groundlang.inference.planning import PlanningError, solve_task
 
 
 def _world():

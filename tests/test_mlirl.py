@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 import torch
 
+from groundlang.inference.acting import rollout
 from groundlang.inference.mlirl import Demonstration, MLIRLProblem, mlirl
-from groundlang.inference.planning import PlanningError, rollout, soft_value_iteration, solve_task
+from groundlang.inference.planning import PlanningError, soft_value_iteration, solve_task
 
 
 def _random_problem(reward_on, discount, seed=0, **kwargs):

@@ -1,4 +1,4 @@
-"""Soft value iteration against brute force, the terminate action, demonstration likelihoods, rollouts."""
+"""Soft value iteration against brute force, the terminate action, demonstration likelihoods."""
 
 from __future__ import annotations
 
@@ -14,7 +14,6 @@ from groundlang.inference.planning import (
     PlanningError,
     TaskSettings,
     demonstration_log_likelihood,
-    rollout,
     soft_value_iteration,
     solve_task,
     task_log_likelihood,
@@ -171,27 +170,6 @@ def test_demonstration_shapes_are_checked():
         demonstration_log_likelihood(result.log_policy, [0, 1, 2], [2])
     with pytest.raises(PlanningError, match="move indices"):
         demonstration_log_likelihood(result.log_policy, [0, 1], [4])
-
-
-def test_greedy_rollout_reaches_the_goal_and_terminates():
-    goal = np.array([False, False, False, True])
-    result = solve_task(CORRIDOR, goal)
-    path = rollout(CORRIDOR, result, start=0)
-    assert path.states.tolist() == [0, 1, 2, 3] and path.actions.tolist() == [2, 2, 2]
-    assert path.reason == "terminated"
-    stopped = rollout(CORRIDOR, result, start=0, goal_mask=goal)
-    assert stopped.reason == "goal" and stopped.states[-1] == 3
-    capped = rollout(CORRIDOR, result.q_values, start=0, max_steps=2)
-    assert capped.reason == "max_steps" and len(capped.actions) == 2
-
-
-def test_sampled_rollouts_are_reproducible_by_seed():
-    result = soft_value_iteration(CORRIDOR, -0.3, 0.9, 1.0, stop_reward=np.array([0, 0, 0, 3.0]))
-    a = rollout(CORRIDOR, result, greedy=False, seed=7, max_steps=30)
-    b = rollout(CORRIDOR, result, greedy=False, seed=7, max_steps=30)
-    assert a.states.tolist() == b.states.tolist() and a.reason == b.reason
-    runs = {tuple(rollout(CORRIDOR, result, greedy=False, seed=s, max_steps=30).states) for s in range(20)}
-    assert len(runs) > 1
 
 
 @pytest.mark.slow

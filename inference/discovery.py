@@ -1,0 +1,530 @@
+"""Task discovery from scratch: lifted tasks found in demonstrations, with no task library (the paper's TA).
+
+For each distinct demonstration (instances that share an initial state and
+actions are one piece of behavioural evidence), MLIRL fits non-negative
+weights over every grounded position PF of the layout; the *top* features
+(weight >= ``weight_margin`` x the largest, true when the demonstrator
+stopped) and their conjunctions of up to ``max_conjuncts`` atoms are the
+candidate goals. Each candidate goal is *lifted*: objects become typed
+variables (agent ``A``, toy ``T``, room ``R``, door ``D``; one object, one
+variable), so goals of different instances with the same structure are one
+candidate lifted task.
+
+Which lifted tasks form the library is decided by a two-part code length
+(minimum description length), summed over the distinct demonstrations::
+
+    J(library) = sum_i max_{L in library} [ max_T log P(B_i | T) - log |G_L(S_i)| ]
+                 - D log |library| - atom_cost * (goal atoms in the library)
+
+``log P(B_i | T)`` is the behaviour likelihood of demonstration ``i`` under
+grounding ``T`` (the planner's Boltzmann policy with a terminate action,
+:func:`groundlang.inference.likelihoods.behaviour_likelihood_table`);
+``G_L(S_i)`` are the groundings of ``L`` not already true in the initial
+state (clingo, :func:`groundlang.model.tasks.candidate_tasks`), so naming one
+costs ``log |G_L|``; naming the task costs ``log |library|`` per
+demonstration, and writing a task down costs ``atom_cost`` per goal atom
+(default ``log 5``: one of five position predicates). This is what breaks
+near-ties that MLIRL weights alone leave open: a toy that ends on a door cell
+inside a room makes ``toyInDoor`` and ``toyInRoom`` weigh the same, but the
+path is far more probable under "toy into the room", and that structure is
+shared with the other toy demonstrations. Conjunctions that add an incidental
+atom (the agent next to the toy it just pushed) gain a fraction of a nat and
+pay for more groundings and a longer task. The library maximising ``J`` is
+found by exhaustive search over subsets (up to ``max_tasks`` tasks), or by
+backward elimination when there are too many candidates.
+
+Colour and shape PFs never enter a lifted task here: what tells objects
+apart is left to the binding constraints (the words). The report records,
+per demonstration, the smallest colour/shape conjunction that singles out
+each bound object in its initial state (``roomIsGreen``; nothing for a lone
+toy; ``None`` when no colour/shape PF can, e.g. for doors).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import tempfile
+from dataclasses import dataclass, field, replace
+from itertools import combinations, permutations
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from groundlang.inference.likelihoods import behaviour_likelihood_table
+from groundlang.inference.mlirl import mlirl
+from groundlang.inference.planning import TaskSettings
+from groundlang.logic.atoms import Atom
+from groundlang.logic.tasks import CLASS_ORDER, GroundedTask, LiftedTask, TaskLibrary, Variable, format_lifted_task
+
+__all__ = ["DISCOVERY_IRL", "DiscoverySettings", "DemonstrationReport", "Discovery", "discover_tasks",
+           "lift_goal", "structure_key", "task_name", "singling_out", "write_library"]
+
+logger = logging.getLogger(__name__)
+
+# Same MLIRL settings as ``groundlang irl``: non-negative weights with a sparsity prior let the
+# whole path, not only where it stopped, pick the proposition that was wanted.
+DISCOVERY_IRL = dict(temperature=0.5, l1=0.1, nonnegative=True)
+# Exhaustive library search when it has at most this many subsets; backward elimination beyond.
+MAX_EXHAUSTIVE_SUBSETS = 200_000
+# How many of the best libraries the result lists (to show the winning margin).
+RANKED_LIBRARIES = 5
+VARIABLE_LETTER = {"agent": "A", "toy": "T", "room": "R", "door": "D"}
+
+
+@dataclass(frozen=True)
+class DiscoverySettings:
+    """Knobs of :func:`discover_tasks` (see the module docstring for the score they enter)."""
+
+    weight_margin: float = 0.5  # top features: weight >= margin * largest weight
+    max_conjuncts: int = 2  # candidate goals: conjunctions of up to this many top features
+    atom_cost: float = math.log(5)  # nats per goal atom written into the library
+    max_tasks: int = 4  # largest library the search considers
+    irl: dict = field(default_factory=lambda: dict(DISCOVERY_IRL))
+    task: TaskSettings = TaskSettings()  # behaviour likelihood settings (part of the cache key)
+
+    def __post_init__(self):
+        if not 0.0 < self.weight_margin <= 1.0:
+            raise ValueError(f"weight_margin must be in (0, 1], got {self.weight_margin}")
+        if self.max_conjuncts < 1 or self.max_tasks < 1:
+            raise ValueError(f"max_conjuncts and max_tasks must be >= 1, "
+                             f"got {self.max_conjuncts} and {self.max_tasks}")
+
+
+@dataclass(frozen=True)
+class DemonstrationReport:
+    """What discovery found for one distinct demonstration (shared by ``instances``).
+
+    ``weights``: MLIRL weight of every position PF, largest first; ``top_features``: those that
+    became candidate goal atoms. ``scores``: per candidate lifted task, ``max_T log P(B | T) -
+    log |G_L|`` (-inf when it has no grounding here). ``task``/``grounding``/``log_likelihood``:
+    the library task that explains the demonstration best, its best grounding and that grounding's
+    behaviour log-likelihood (None/None/-inf when nothing in the library applies).
+    ``singled_out``: per variable, the smallest colour/shape conjunction true of its object that no
+    other object of its class satisfies (``()`` when no other object exists, None when none does).
+    """
+
+    instances: tuple[str, ...]
+    num_states: int
+    weights: tuple[tuple[Atom, float], ...]
+    top_features: tuple[tuple[Atom, float], ...]
+    mlirl_log_likelihood: float
+    scores: tuple[tuple[str, float], ...]
+    task: str | None = None
+    grounding: GroundedTask | None = None
+    log_likelihood: float = -math.inf
+    singled_out: tuple[tuple[str, tuple[Atom, ...] | None], ...] = ()
+
+    def to_json(self) -> dict:
+        return {
+            "instances": list(self.instances),
+            "states": self.num_states,
+            "top_features": {str(a): round(w, 6) for a, w in self.top_features},
+            "mlirl_log_likelihood": self.mlirl_log_likelihood,
+            "scores": {n: (s if math.isfinite(s) else None) for n, s in self.scores},
+            "task": self.task,
+            "goal": None if self.grounding is None else self.grounding.goal_text,
+            "log_likelihood": self.log_likelihood if math.isfinite(self.log_likelihood) else None,
+            "singled_out": {v: (None if c is None else [str(a) for a in c]) for v, c in self.singled_out},
+        }
+
+
+@dataclass(frozen=True)
+class Discovery:
+    """Result of :func:`discover_tasks`: the library (loaded back from its own ASP text) and the reports."""
+
+    library: TaskLibrary
+    tasks: tuple[LiftedTask, ...]
+    candidates: tuple[LiftedTask, ...]
+    demonstrations: tuple[DemonstrationReport, ...]
+    score: float
+    text: str  # the library as commented ASP, as write_library writes it
+    alternatives: tuple[tuple[tuple[str, ...], float], ...] = ()  # best libraries and their J, best first
+
+    def report_for(self, instance: str) -> DemonstrationReport:
+        """The report of the demonstration an instance (by name) belongs to; KeyError if none."""
+        for r in self.demonstrations:
+            if instance in r.instances:
+                return r
+        raise KeyError(f"no demonstration has an instance named {instance!r}")
+
+    def to_json(self) -> dict:
+        explained = {t.name: [r.instances[0] for r in self.demonstrations if r.task == t.name] for t in self.tasks}
+        return {
+            "lifted_tasks": [{"name": t.name, "task": str(t), "variables": {v.name: v.cls for v in t.variables},
+                              "goal": [[p, list(a)] for p, a in t.goal], "demonstrations": explained[t.name]}
+                             for t in self.tasks],
+            "score": self.score,
+            "alternatives": [{"tasks": list(names), "score": s} for names, s in self.alternatives],
+            "demonstrations": [r.to_json() for r in self.demonstrations],
+        }
+
+
+# ---------------------------------------------------------------- lifting
+
+
+def structure_key(goal: Sequence[tuple[str, Sequence[str]]], classes: dict[str, str]) -> tuple:
+    """Canonical form of a goal up to renaming its variables/objects: ``((pred, (cls#k, ...)), ...)``.
+
+    ``classes`` maps each argument to its class. Two goals have the same key exactly when
+    one is the other with arguments renamed one-to-one within classes.
+    """
+    best = None
+    for order in permutations(sorted(goal, key=lambda pa: pa[0])):
+        if [p for p, _ in order] != sorted(p for p, _ in order):
+            continue  # only orders that keep predicates sorted; ties between equal predicates are tried
+        names: dict[str, str] = {}
+        counts: dict[str, int] = {}
+        key = []
+        for pred, args in order:
+            renamed = []
+            for a in args:
+                if a not in names:
+                    c = classes[a]
+                    counts[c] = counts.get(c, 0) + 1
+                    names[a] = f"{c}#{counts[c]}"
+                renamed.append(names[a])
+            key.append((pred, tuple(renamed)))
+        key = tuple(key)
+        best = key if best is None or key < best else best
+    return best
+
+
+def lifted_key(task: LiftedTask) -> tuple:
+    """:func:`structure_key` of a lifted task (e.g. to compare with the default library)."""
+    return structure_key(task.goal, {v.name: v.cls for v in task.variables})
+
+
+def _mover_rank(pred_args: tuple[str, tuple[str, ...]], classes: dict[str, str]) -> tuple:
+    # The toy's goal before the agent's, as tasks.lp names toyToRoomAgentToRoom.
+    first = classes[pred_args[1][0]]
+    return ({"toy": 0, "agent": 1}.get(first, 2), pred_args[0], pred_args[1])
+
+
+def task_name(goal: Sequence[tuple[str, Sequence[str]]], classes: dict[str, str]) -> str:
+    """A readable name from the goal predicates: toyInRoom -> toyToRoom, agentTouchingToy -> agentToToy."""
+    parts = []
+    for pred, _ in sorted(goal, key=lambda pa: _mover_rank((pa[0], tuple(pa[1])), classes)):
+        name = pred
+        for word in ("In", "Touching"):
+            head, sep, tail = pred.partition(word)
+            if sep and head and tail[:1].isupper():
+                name = f"{head}To{tail}"
+                break
+        parts.append(name)
+    return parts[0] + "".join(p[:1].upper() + p[1:] for p in parts[1:])
+
+
+def lift_goal(goal: Sequence[Atom], classes: dict[str, str], name: str | None = None) -> LiftedTask:
+    """Replace the objects of a grounded goal by typed variables (``A``, ``T``, ``R``, ``R2``, ...).
+
+    ``classes``: object name -> class. One object, one variable; distinct objects of a class get
+    distinct variables (as groundings bind them). Raises KeyError for an object of unknown class.
+    """
+    key = structure_key([(a.predicate, a.args) for a in goal], classes)
+    names: dict[str, str] = {}
+    counts: dict[str, int] = {}
+    for _, args in key:
+        for slot in args:
+            if slot not in names:
+                cls = slot.split("#")[0]
+                counts[cls] = counts.get(cls, 0) + 1
+                letter = VARIABLE_LETTER.get(cls, cls[:1].upper())
+                names[slot] = letter if counts[cls] == 1 else f"{letter}{counts[cls]}"
+    rank = {c: i for i, c in enumerate(CLASS_ORDER)}
+    variables = sorted({Variable(n, s.split("#")[0]) for s, n in names.items()},
+                       key=lambda v: (rank.get(v.cls, len(rank)), v.cls, v.name))
+    lifted_goal = tuple(sorted({(p, tuple(names[s] for s in args)) for p, args in key}))
+    var_classes = {v.name: v.cls for v in variables}
+    return LiftedTask(name or task_name(lifted_goal, var_classes), tuple(variables), lifted_goal)
+
+
+# ---------------------------------------------------------------- colour/shape PFs that pick an object out
+
+
+def _capitalised(name: str) -> str:
+    return name[:1].upper() + name[1:]
+
+
+def _attribute_atoms(layout) -> dict[str, tuple[Atom, ...]]:
+    """Colour/shape PFs true of each room and toy, named as pfs.lp names them (roomIsGreen, toyIsStar)."""
+    out: dict[str, tuple[Atom, ...]] = {}
+    for name, room in zip(layout.room_names, layout.rooms):
+        out[name] = (Atom(f"roomIs{_capitalised(room.colour)}", (name,)),)
+    for name, (colour, shape) in zip(layout.toy_names, layout.toy_attributes):
+        out[name] = (Atom(f"toyIs{_capitalised(colour)}", (name,)), Atom(f"toyIs{_capitalised(shape)}", (name,)))
+    return out
+
+
+def singling_out(layout, obj: str, peers: Sequence[str]) -> tuple[Atom, ...] | None:
+    """Smallest colour/shape conjunction true of ``obj`` and of none of ``peers`` (same class).
+
+    ``()`` when there are no peers; None when no conjunction of its PFs tells it apart.
+    """
+    if not peers:
+        return ()
+    attributes = _attribute_atoms(layout)
+    own = attributes.get(obj, ())
+    others = [{a.predicate for a in attributes.get(p, ())} for p in peers]
+    for k in range(1, len(own) + 1):
+        for subset in combinations(own, k):
+            wanted = {a.predicate for a in subset}
+            if not any(wanted <= o for o in others):
+                return subset
+    return None
+
+
+# ---------------------------------------------------------------- library search
+
+
+def _library_score(table: np.ndarray, chosen: Sequence[int], sizes: np.ndarray, atom_cost: float) -> float:
+    """``J`` of the module docstring. ``table``: ``[D, L]`` per-demonstration scores (-inf: not applicable)."""
+    best = table[:, list(chosen)].max(axis=1)
+    if not np.isfinite(best).all():
+        return -math.inf
+    return float(best.sum() - len(table) * math.log(len(chosen)) - atom_cost * sizes[list(chosen)].sum())
+
+
+def _select_library(table: np.ndarray, sizes: np.ndarray, atom_cost: float,
+                    max_tasks: int) -> list[tuple[tuple[int, ...], float]]:
+    """Candidate-task index sets with their ``J``, best first (at most RANKED_LIBRARIES of them).
+
+    Exhaustive over subsets of up to ``max_tasks`` tasks; ties go to fewer tasks, then earlier
+    candidates. With too many subsets: backward elimination from all candidates (one result).
+    """
+    n = table.shape[1]
+    total = sum(math.comb(n, k) for k in range(1, min(max_tasks, n) + 1))
+    if total <= MAX_EXHAUSTIVE_SUBSETS:
+        scored = [(subset, _library_score(table, subset, sizes, atom_cost))
+                  for k in range(1, min(max_tasks, n) + 1) for subset in combinations(range(n), k)]
+        scored = [item for item in scored if math.isfinite(item[1])]
+        # Stable sort: among equal scores, smaller and earlier subsets (generation order) come first.
+        scored.sort(key=lambda item: -round(item[1], 9))
+        return scored[:RANKED_LIBRARIES]
+    logger.info("discovery: %d candidate tasks, searching the library by backward elimination", n)
+    best = list(range(n))
+    best_score = _library_score(table, best, sizes, atom_cost)
+    while len(best) > 1:
+        trials = [(_library_score(table, [j for j in best if j != i], sizes, atom_cost), i) for i in best]
+        score, drop = max(trials, key=lambda si: (si[0], -si[1]))
+        if score < best_score - 1e-9 and len(best) <= max_tasks:
+            break
+        best.remove(drop)
+        best_score = score
+    return [(tuple(best), best_score)] if math.isfinite(best_score) else []
+
+
+# ---------------------------------------------------------------- the pipeline
+
+
+@dataclass
+class _Demo:
+    instance: object  # a representative instance (initial_state, states, actions)
+    names: tuple[str, ...]
+    num_states: int = 0
+    weights: tuple = ()
+    top: tuple = ()
+    mlirl_ll: float = math.nan
+    goals: list = field(default_factory=list)  # candidate grounded goals (tuples of Atoms)
+
+
+def _object_classes(layout) -> dict[str, str]:
+    classes = {"agent0": "agent"}
+    classes.update({r: "room" for r in layout.room_names})
+    classes.update({d: "door" for d in layout.door_names})
+    classes.update({t: "toy" for t in layout.toy_names})
+    return classes
+
+
+def _group(instances: Sequence) -> list[_Demo]:
+    """Instances sharing (initial state, actions), first-seen order."""
+    groups: dict[tuple, _Demo] = {}
+    for i, inst in enumerate(instances):
+        key = (inst.initial_state, tuple(int(a) for a in inst.actions))
+        name = getattr(inst, "name", None) or f"instance{i}"
+        if key in groups:
+            groups[key].names += (name,)
+        else:
+            groups[key] = _Demo(inst, (name,))
+    return list(groups.values())
+
+
+def _fit_top_features(demo: _Demo, settings: DiscoverySettings) -> None:
+    """MLIRL over every position PF; keep the top features true at the end as candidate goal atoms."""
+    from groundlang.model.features import feature_matrix, position_atoms
+    from groundlang.model.geometry import cell_tables
+    from groundlang.model.statespace import enumerate_states, trajectory_indices
+
+    inst = demo.instance
+    space = enumerate_states(inst.initial_state)
+    atoms = position_atoms(space.layout)
+    features = feature_matrix(space, atoms, cell_tables(space.layout)).numpy()
+    states = trajectory_indices(space, list(inst.states))
+    actions = [int(a) for a in inst.actions]
+    fit = mlirl(space.next_state, features, [(states, actions)], **settings.irl)
+    order = np.argsort(-fit.weights, kind="stable")
+    demo.num_states = space.num_states
+    demo.weights = tuple((atoms[j], float(fit.weights[j])) for j in order)
+    demo.mlirl_ll = fit.log_likelihood
+    largest = float(fit.weights.max()) if len(atoms) else 0.0
+    final, initial = features[states[-1]] > 0.5, features[states[0]] > 0.5
+    top = [j for j in order if largest > 0 and fit.weights[j] >= settings.weight_margin * largest and final[j]]
+    demo.top = tuple((atoms[j], float(fit.weights[j])) for j in top)
+    for k in range(1, settings.max_conjuncts + 1):
+        for subset in combinations(top, k):
+            if not all(initial[j] for j in subset):
+                demo.goals.append(tuple(atoms[j] for j in subset))
+    if not demo.goals:
+        logger.warning("discovery: demonstration of %s has no candidate goal (no weighted PF that became true)",
+                       demo.names[0])
+
+
+def _candidate_tasks(demos: list[_Demo]) -> list[LiftedTask]:
+    """The lifted structures of every demonstration's candidate goals, each once, named readably."""
+    candidates: dict[tuple, LiftedTask] = {}
+    for demo in demos:
+        classes = _object_classes(demo.instance.initial_state.layout)
+        for goal in demo.goals:
+            key = structure_key([(a.predicate, a.args) for a in goal], classes)
+            if key in candidates:
+                continue
+            lifted = lift_goal(goal, classes)
+            taken = {t.name for t in candidates.values()}
+            name, n = lifted.name, 1
+            while name in taken:  # e.g. one room for toy and agent, or two rooms: same predicates
+                n += 1
+                name = f"{lifted.name}{n}"
+            candidates[key] = replace(lifted, name=name)
+    return list(candidates.values())
+
+
+def _score_table(demos: list[_Demo], library: TaskLibrary, settings: DiscoverySettings, cache_dir, progress):
+    """``(scores [D, L], best [D] of {task index: (log-likelihood, grounding)})`` for the library's tasks.
+
+    ``scores[i, j] = max_T log P(B_i | T) - log |G_j(S_i)|`` over the groundings clingo enumerates
+    (-inf where task ``j`` has none).
+    """
+    from groundlang.model.tasks import candidate_tasks
+
+    index = {t.name: j for j, t in enumerate(library.tasks)}
+    groundings = [candidate_tasks(d.instance.initial_state, library) for d in demos]
+    rows = behaviour_likelihood_table([d.instance for d in demos], [[g.goal for g, _ in row] for row in groundings],
+                                      settings.task, cache_dir=cache_dir, progress=progress)
+    scores = np.full((len(demos), len(library.tasks)), -math.inf)
+    best: list[dict[int, tuple[float, GroundedTask]]] = []
+    for i, (row, lls) in enumerate(zip(groundings, rows)):
+        per_task: dict[int, list[tuple[float, GroundedTask]]] = {}
+        for (g, _), ll in zip(row, lls):
+            per_task.setdefault(index[g.task], []).append((float(ll), g))
+        best.append({})
+        for j, items in per_task.items():
+            best[i][j] = max(items, key=lambda item: item[0])  # first of equals: enumeration order
+            scores[i, j] = best[i][j][0] - math.log(len(items))
+    return scores, best
+
+
+def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoverySettings(),
+                   cache_dir: str | os.PathLike | None | bool = None, progress: bool = False) -> Discovery:
+    """Discover a task library from demonstrations alone (no labels, no words, no library).
+
+    ``instances``: objects with ``initial_state``, ``states``, ``actions`` and optionally ``name``
+    (e.g. ``groundlang.corpus.Instance``); identical (initial state, actions) pairs count once.
+    ``cache_dir``: behaviour-likelihood cache root (False: none), see inference.likelihoods.
+    Returns a :class:`Discovery`; its library is loaded back from the commented ASP text.
+    Raises ValueError when there are no instances, no candidate goal, or no library of at most
+    ``max_tasks`` tasks covers every demonstration that has one.
+    """
+    if not instances:
+        raise ValueError("discover_tasks needs at least one instance")
+    demos = _group(instances)
+    logger.info("discovery: %d instances, %d distinct demonstrations", len(instances), len(demos))
+    for demo in demos:
+        _fit_top_features(demo, settings)
+    lifted = _candidate_tasks(demos)
+    if not lifted:
+        raise ValueError("no demonstration yields a candidate goal: nothing can be discovered")
+    candidates = TaskLibrary.from_tasks(lifted, "<discovery candidates>")
+    scores, best = _score_table(demos, candidates, settings, cache_dir, progress)
+    sizes = np.array([len(t.goal) for t in candidates.tasks])
+    usable = np.isfinite(scores).any(axis=1)
+    ranked = _select_library(scores[usable], sizes, settings.atom_cost, settings.max_tasks) if usable.any() else []
+    if not ranked:
+        raise ValueError(f"no library of at most {settings.max_tasks} candidate tasks explains every "
+                         "demonstration that has a candidate goal")
+    chosen, score = ranked[0]
+    reports = []
+    for i, demo in enumerate(demos):
+        report = DemonstrationReport(demo.names, demo.num_states, demo.weights, demo.top, demo.mlirl_ll,
+                                     tuple((t.name, float(scores[i, j])) for j, t in enumerate(candidates.tasks)))
+        applicable = [j for j in chosen if np.isfinite(scores[i, j])]
+        if applicable:
+            j = max(applicable, key=lambda j: scores[i, j])
+            ll, g = best[i][j]
+            layout = demo.instance.initial_state.layout
+            classes = _object_classes(layout)
+            peers = {o: [p for p, c in classes.items() if c == classes[o] and p != o] for _, o in g.binding}
+            picked = tuple((v, singling_out(layout, o, peers[o])) for v, o in g.binding)
+            report = replace(report, task=candidates.tasks[j].name, grounding=g, log_likelihood=ll,
+                             singled_out=picked)
+        reports.append(report)
+    tasks = tuple(candidates.tasks[j] for j in chosen)
+    text = _library_text(tasks, reports, score, settings, len(instances))
+    library = TaskLibrary.from_text(text, "<discovered tasks>")
+    logger.info("discovery: library %s (score %.3f)", ", ".join(t.name for t in tasks), score)
+    alternatives = tuple((tuple(candidates.tasks[j].name for j in subset), s) for subset, s in ranked)
+    return Discovery(library, library.tasks, candidates.tasks, tuple(reports), score, text, alternatives)
+
+
+def _library_text(tasks, reports, score, settings: DiscoverySettings, num_instances: int) -> str:
+    """The discovered tasks as ASP facts (tasks.lp's format) with a comment header and per-task evidence."""
+    lines = [
+        "% Lifted tasks discovered from demonstrations by groundlang (inference/discovery.py).",
+        "%",
+        "% Format as in groundlang's tasks.lp: task(Name), var(Name, \"V\", Class), goal(Name, Pf, (\"V\", ...)).",
+        f"% Evidence: {num_instances} instances, {len(reports)} distinct demonstrations. Each task below was",
+        "% lifted from MLIRL's top-weighted position PFs (objects -> typed variables) and kept because it",
+        f"% shortens the description of the demonstrations (score J = {score:.3f} nats; weight margin",
+        f"% {settings.weight_margin}, up to {settings.max_conjuncts} atoms per goal, "
+        f"{settings.atom_cost:.3f} nats per atom).",
+        "% Edit freely: this file loads with TaskLibrary.load([path]).",
+        "",
+    ]
+    for task in tasks:
+        explained = [r for r in reports if r.task == task.name]
+        lines.append(f"% {task}")
+        lines.append(f"%   explains {len(explained)} demonstration(s):")
+        for r in explained:
+            picks = ", ".join(f"{v} {_describe_pick(c)}" for v, c in r.singled_out)
+            more = f" (+{len(r.instances) - 1} more)" if len(r.instances) > 1 else ""
+            lines.append(f"%   - {r.instances[0]}{more}: {r.grounding.goal_text}, "
+                         f"log-likelihood {r.log_likelihood:.3f}; {picks}")
+        lines.append(format_lifted_task(task))
+    unexplained = [r for r in reports if r.task is None]
+    if unexplained:
+        lines.append("% Not explained by any task: " + ", ".join(r.instances[0] for r in unexplained))
+    return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def _describe_pick(conjunction) -> str:
+    if conjunction is None:
+        return "not singled out by colour/shape"
+    if not conjunction:
+        return "the only one of its class"
+    return "by " + " ∧ ".join(map(str, conjunction))
+
+
+def write_library(discovery: Discovery, path: str | os.PathLike) -> Path:
+    """Write the discovered library's ASP text to ``path`` atomically (temporary file + os.replace)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
+            f.write(discovery.text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path

@@ -1,0 +1,224 @@
+"""Task discovery from scratch (inference/discovery.py) and ``groundlang discover``."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+from groundlang.cli import main
+from groundlang.corpus import example_corpus_path, read_corpus
+from groundlang.inference.discovery import (
+    DiscoverySettings,
+    _select_library,
+    discover_tasks,
+    lift_goal,
+    lifted_key,
+    singling_out,
+    structure_key,
+    task_name,
+    write_library,
+)
+from groundlang.logic.atoms import Atom, parse_atom, parse_goal
+from groundlang.logic.tasks import TaskLibrary, Variable
+from groundlang.model.tasks import candidate_tasks
+
+CLASSES = {"agent0": "agent", "block0": "toy", "block1": "toy", "room0": "room", "room1": "room",
+           "room2": "room", "door0": "door", "door1": "door"}
+
+
+def _default(name: str):
+    return TaskLibrary.load().task(name)
+
+
+# ---------------------------------------------------------------- lifting
+
+
+def test_lift_goal_replaces_objects_by_typed_variables():
+    lifted = lift_goal([parse_atom("toyInRoom(block0, room2)")], CLASSES)
+    assert lifted.name == "toyToRoom"
+    assert lifted.variables == (Variable("T", "toy"), Variable("R", "room"))
+    assert lifted.goal == (("toyInRoom", ("T", "R")),)
+    assert lifted_key(lifted) == lifted_key(_default("toyToRoom"))
+
+
+def test_lifted_structures_are_equal_up_to_renaming_objects():
+    a = [parse_atom("toyInRoom(block0, room2)"), parse_atom("agentInRoom(agent0, room0)")]
+    b = [parse_atom("agentInRoom(agent0, room1)"), parse_atom("toyInRoom(block1, room0)")]
+    same_room = [parse_atom("toyInRoom(block0, room1)"), parse_atom("agentInRoom(agent0, room1)")]
+    assert structure_key([(x.predicate, x.args) for x in a], CLASSES) == \
+        structure_key([(x.predicate, x.args) for x in b], CLASSES)
+    lifted = lift_goal(a, CLASSES)
+    assert lifted.name == "toyToRoomAgentToRoom"  # toy's goal first, as tasks.lp names it
+    assert {v.name for v in lifted.variables} == {"A", "T", "R", "R2"}
+    # The default library's RT/RA task is the same structure.
+    assert lifted_key(lifted) == lifted_key(_default("toyToRoomAgentToRoom"))
+    # One room for both atoms is another structure: one variable, not two.
+    shared = lift_goal(same_room, CLASSES)
+    assert {v.name for v in shared.variables} == {"A", "T", "R"}
+    assert lifted_key(shared) != lifted_key(lifted)
+
+
+def test_task_names_come_from_goal_predicates():
+    assert task_name([("agentInRoom", ("A", "R"))], {"A": "agent", "R": "room"}) == "agentToRoom"
+    assert task_name([("agentTouchingToy", ("A", "T"))], {"A": "agent", "T": "toy"}) == "agentToToy"
+    assert task_name([("agentInDoor", ("A", "D")), ("toyInRoom", ("T", "R"))],
+                     {"A": "agent", "D": "door", "T": "toy", "R": "room"}) == "toyToRoomAgentToDoor"
+
+
+def test_singling_out_finds_the_smallest_distinguishing_conjunction():
+    corpus = read_corpus(example_corpus_path(), "sokoban")
+    layout = corpus.instances[0].initial_state.layout
+    assert singling_out(layout, "room0", ["room1", "room2"]) == (Atom("roomIsGreen", ("room0",)),)
+    assert singling_out(layout, "block0", []) == ()  # a lone toy needs no description
+    assert singling_out(layout, "door0", ["door1"]) is None  # doors have no colour or shape
+
+
+# ---------------------------------------------------------------- library search
+
+
+def test_library_search_prefers_a_shared_structure_over_a_near_tie():
+    # Three toy demonstrations; in the third, "toy to door" fits 0.1 nats better than "toy to room"
+    # (the star2teal situation). Columns: agentToRoom, toyToRoom, toyToDoor.
+    table = np.array([[-1.0, -np.inf, -np.inf],
+                      [-50.0, -2.0, -30.0],
+                      [-50.0, -3.0, -25.0],
+                      [-60.0, -12.1, -12.0]])
+    ranked = _select_library(table, np.array([1, 1, 1]), math.log(5), max_tasks=3)
+    (best, score), (runner_up, second) = ranked[0], ranked[1]
+    assert best == (0, 1)
+    assert score == pytest.approx(-1 - 2 - 3 - 12.1 - 4 * math.log(2) - 2 * math.log(5))
+    assert runner_up == (0, 1, 2)  # buys 0.1 nats for 4 log(3/2) + log 5 more
+    assert score - second == pytest.approx(4 * math.log(1.5) + math.log(5) - 0.1)
+
+
+def test_library_search_refuses_what_no_library_covers():
+    table = np.array([[-1.0, -np.inf], [-np.inf, -1.0]])
+    assert _select_library(table, np.array([1, 1]), 1.0, max_tasks=1) == []
+    assert _select_library(table, np.array([1, 1]), 1.0, max_tasks=2)[0][0] == (0, 1)
+
+
+def test_settings_are_checked():
+    with pytest.raises(ValueError, match="weight_margin"):
+        DiscoverySettings(weight_margin=0.0)
+    with pytest.raises(ValueError, match="max_conjuncts"):
+        DiscoverySettings(max_conjuncts=0)
+    with pytest.raises(ValueError, match="at least one instance"):
+        discover_tasks([])
+
+
+# ---------------------------------------------------------------- the example corpus (no ../shared needed)
+
+
+@pytest.fixture(scope="module")
+def example_discovery(tmp_path_factory):
+    corpus = read_corpus(example_corpus_path(), "sokoban")
+    return corpus, discover_tasks(corpus.instances, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+@pytest.mark.slow
+def test_discovery_on_the_example_corpus_finds_agent_and_toy_to_room(example_discovery, tmp_path):
+    corpus, found = example_discovery
+    assert len(corpus) == 24 and len(found.demonstrations) == 6
+    assert [lifted_key(t) for t in found.tasks] == [lifted_key(_default("agentToRoom")),
+                                                   lifted_key(_default("toyToRoom"))]
+    assert [t.name for t in found.tasks] == ["agentToRoom", "toyToRoom"]
+    with open(example_corpus_path() / "labels.csv") as f:
+        gold = {row["prefix"]: parse_goal(row["goal"]) for row in csv.DictReader(f)}
+    for report in found.demonstrations:
+        assert len(report.instances) == 4
+        assert report.grounding.goal == gold[report.instances[0][:-1]], report.instances[0]
+        assert report.log_likelihood > -3.0
+    # star2green: MLIRL weighs the agent's door highest, the behaviour likelihood still picks the room.
+    green = found.report_for("star2green_2")
+    assert green.top_features[0][0] == parse_atom("agentInDoor(agent0, door1)")
+    assert green.task == "toyToRoom" and dict(green.singled_out)["R"] == (parse_atom("roomIsGreen(room0)"),)
+    # The winner beats the runner-up library by more than two nats.
+    assert found.alternatives[0][0] == ("agentToRoom", "toyToRoom")
+    assert found.score - found.alternatives[1][1] > 2.0
+    path = write_library(found, tmp_path / "discovered.lp")
+    loaded = TaskLibrary.load([path])
+    assert loaded.names == ["agentToRoom", "toyToRoom"]
+    state = corpus.instances[0].initial_state
+    goals = [g.goal_text for g, _ in candidate_tasks(state, loaded)]
+    default_goals = [g.goal_text for g, _ in candidate_tasks(state, TaskLibrary.load())
+                     if g.task in ("agentToRoom", "toyToRoom")]
+    assert goals == default_goals and len(goals) == 4
+
+
+# ---------------------------------------------------------------- the commands-to-tasks corpus
+
+
+@pytest.mark.slow
+def test_discovery_on_the_six_corpus_demonstrations(shared_corpus, tmp_path):
+    corpus = read_corpus(shared_corpus / "allTurkTrain", "sokoban")
+    found = discover_tasks(corpus.instances, cache_dir=tmp_path / "cache")
+    assert len(corpus) == 240 and len(found.demonstrations) == 6
+    assert sorted(len(r.instances) for r in found.demonstrations) == [40] * 6
+    # Exactly two lifted tasks, equivalent to the default library's agent-to-room and toy-to-room.
+    assert sorted(lifted_key(t) for t in found.tasks) == sorted(
+        [lifted_key(_default("agentToRoom")), lifted_key(_default("toyToRoom"))])
+    with open(shared_corpus / "labels.csv") as f:
+        gold = {row["prefix"]: parse_goal(row["goal"]) for row in csv.DictReader(f)}
+    for report in found.demonstrations:
+        assert report.grounding.goal == gold[report.instances[0].rsplit("_", 1)[0] + "_"]
+    # star2teal: toyInDoor(block0, door0) outweighs toyInRoom(block0, room2) in MLIRL (4.46 vs 4.43),
+    # but the path is e^3 times likelier under "toy into room2", which the other toy demos share.
+    teal = found.report_for("star2teal_0")
+    assert [str(a) for a, _ in teal.top_features[:2]] == ["toyInDoor(block0, door0)", "toyInRoom(block0, room2)"]
+    scores = dict(teal.scores)
+    assert scores["toyToRoom"] - scores["toyToDoor"] == pytest.approx(3.45, abs=0.1)
+    assert teal.log_likelihood == pytest.approx(-12.19, abs=0.05)
+    assert found.score == pytest.approx(-37.58, abs=0.05)
+    assert found.score - found.alternatives[1][1] == pytest.approx(2.64, abs=0.05)
+    # The written .lp loads back and grounds.
+    path = write_library(found, tmp_path / "tasks.lp")
+    text = path.read_text()
+    assert text.startswith("% Lifted tasks discovered") and "star2teal_0 (+39 more)" in text
+    loaded = TaskLibrary.load([path])
+    grounded = candidate_tasks(teal_state(corpus), loaded)
+    assert [g.goal_text for g, _ in grounded] == [
+        "agentInRoom(agent0, room0)", "agentInRoom(agent0, room2)",
+        "toyInRoom(block0, room1)", "toyInRoom(block0, room2)"]
+
+
+def teal_state(corpus):
+    return next(i for i in corpus.instances if i.name == "star2teal_0").initial_state
+
+
+# ---------------------------------------------------------------- CLI
+
+
+def test_cli_discover_writes_a_library_that_groundlang_tasks_reads(tmp_path, capsys):
+    corpus = tmp_path / "corpus"
+    corpus.mkdir()
+    for name in ("agent2red_0.txt", "agent2red_1.txt", "star2blue_0.txt"):
+        (corpus / name).write_text((example_corpus_path() / name).read_text())
+    out = tmp_path / "tasks.lp"
+    argv = ["discover", str(corpus), "--palette", "sokoban", "-o", str(out), "--cache-dir", str(tmp_path / "cache")]
+    assert main(argv + ["--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["output"] == str(out)
+    assert [t["name"] for t in result["lifted_tasks"]] == ["agentToRoom", "toyToRoom"]
+    assert result["lifted_tasks"][1]["goal"] == [["toyInRoom", ["T", "R"]]]
+    assert result["lifted_tasks"][0]["demonstrations"] == ["agent2red_0"]
+    assert [d["instances"] for d in result["demonstrations"]] == [["agent2red_0", "agent2red_1"], ["star2blue_0"]]
+    assert result["demonstrations"][1]["goal"] == "toyInRoom(block0, room2)"
+    assert main(["tasks", str(corpus / "star2blue_0.txt"), "--palette", "sokoban", "--library", str(out),
+                 "--json"]) == 0
+    listed = json.loads(capsys.readouterr().out)
+    assert listed["lifted_tasks"] == ["agentToRoom", "toyToRoom"]
+    assert "toyInRoom(block0, room2)" in [g["goal"] for g in listed["groundings"]]
+    # Table output; the behaviour likelihoods now come from the cache.
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "toyToRoom(T: toy, R: room) := toyInRoom(T, R)" in text and f"written: {out}" in text
+
+
+def test_cli_discover_on_an_empty_folder_is_exit_code_2(tmp_path, capsys):
+    assert main(["discover", str(tmp_path), "--palette", "sokoban", "-o", str(tmp_path / "t.lp")]) == 2
+    assert "groundlang discover: error" in capsys.readouterr().err
+    assert not (tmp_path / "t.lp").exists()
