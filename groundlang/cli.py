@@ -13,9 +13,14 @@ import argparse
 import importlib
 import logging
 import sys
+import time
+
+from groundlang.interrupt import terminate_as_interrupt, what_was_kept
 
 # Order is the order of ``groundlang --help``.
-COMMANDS = ["check", "show", "tasks", "parse", "irl", "discover"]
+COMMANDS = ["demo", "check", "show", "parse", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate"]
+# Commands that fill the behaviour-likelihood cache (reported after an interruption).
+CACHING_COMMANDS = {"train", "evaluate", "discover"}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -37,13 +42,18 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     level = logging.WARNING if args.quiet else (logging.DEBUG if args.verbose else logging.INFO)
     logging.basicConfig(level=level, format="%(message)s")
+    started = time.time()
     try:
-        return int(args.func(args) or 0)
+        # SIGTERM (a scheduler, `kill`) stops a run the way Ctrl-C does.
+        with terminate_as_interrupt():
+            return int(args.func(args) or 0)
     except (ValueError, OSError) as exc:
-        print(f"groundlang {args.command}: error: {exc}", file=sys.stderr)
+        message = " ".join(str(exc).splitlines())  # one line, whatever the library said
+        print(f"groundlang {args.command}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"groundlang {args.command}: interrupted", file=sys.stderr)
+        kept = what_was_kept(args, started, uses_cache=args.command in CACHING_COMMANDS)
+        print(f"groundlang {args.command}: interrupted; {kept}", file=sys.stderr)
         return 130
 
 

@@ -27,10 +27,10 @@ from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
 from groundlang.model.geometry import cell_tables
-from groundlang.model.interpretations import CONTEXT_ROLES, Interpretation, interpretations
+from groundlang.model.interpretations import OTHER_ROLES, Interpretation, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
 from groundlang.model.statespace import enumerate_states
-from groundlang.model.vocabulary import UNALIGNED, Vocabulary, class_token
+from groundlang.model.vocabulary import Vocabulary, class_token
 from groundlang.model.world import Action, State, get_palette
 
 __all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError"]
@@ -174,7 +174,7 @@ class Learner:
         for obs in observations:
             vocab.add_words(obs.words)
             for reading in obs.readings:
-                preps.extend(p for p, _ in entity_words(reading.logical_form) if p is not None)
+                preps.extend(p for p, _, _ in entity_words(reading.logical_form) if p is not None)
             for interp in obs.interpretations:
                 tokens.extend(machine_string(interp))
                 for rb in interp.roles:
@@ -184,10 +184,9 @@ class Learner:
             tokens.extend(f"roomIs{_capital(c)}" for c in palette.colours)
             tokens.extend(f"toyIs{_capital(c)}" for c in palette.colours)
             tokens.extend(f"toyIs{_capital(s)}" for s in palette.shapes)
-        tokens.extend(class_token(c) for c in ("agent", "room", "toy"))
-        tokens.append(UNALIGNED)
+        tokens.extend(class_token(c) for c in ("agent", "room", "door", "toy"))
         vocab.add_tokens(tokens)
-        vocab.add_roles(roles + list(CONTEXT_ROLES))
+        vocab.add_roles(roles + list(OTHER_ROLES))
         vocab.add_preps(preps)
         return vocab
 
@@ -256,7 +255,9 @@ class Learner:
         trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
         states, actions = rollout_states(space, trajectory)
         reached = bool(mask[int(trajectory.states[-1])])
-        return FollowResult(command, post, goal, states, actions, reached, trajectory.reason)
+        # The space holds only states reachable from ``state``: no goal state in it means no plan can succeed.
+        reason = trajectory.reason if reached or bool(np.asarray(mask).any()) else "unreachable"
+        return FollowResult(command, post, goal, states, actions, reached, reason)
 
     def lexicon(self, top: int = 3) -> dict[str, list[tuple[str, float]]]:
         """Each known word's most probable meanings, ``P(token | word)``.

@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from groundlang.interrupt import deferred_interrupts
+
 __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner", "write_atomically"]
 
 FORMAT = "groundlang-model"
@@ -70,8 +72,10 @@ def save_learner(learner, directory: str | Path) -> Path:
         "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed},
         "globals_sha256": hashlib.sha256(tensors).hexdigest(),
     }
-    write_atomically(directory / GLOBALS, tensors)
-    write_atomically(directory / MODEL_JSON, json.dumps(meta, indent=1).encode("utf-8"))
+    # Ctrl-C between the two renames would leave new tensors beside the old JSON: hold it back.
+    with deferred_interrupts():
+        write_atomically(directory / GLOBALS, tensors)
+        write_atomically(directory / MODEL_JSON, json.dumps(meta, indent=1).encode("utf-8"))
     return directory
 
 
@@ -83,7 +87,7 @@ def _read_json(directory: Path) -> dict:
         raise ModelFormatError(f"{directory}: no {MODEL_JSON}; this is not a groundlang model directory")
     try:
         meta = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise ModelFormatError(f"{path}: not valid JSON ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise ModelFormatError(f"{path}: not a groundlang model (format field is not {FORMAT!r})")
@@ -112,6 +116,10 @@ def load_learner(directory: str | Path):
         raise ModelFormatError(
             f"{tensor_path}: contents do not match the hash recorded in {MODEL_JSON} (truncated or swapped?)"
         )
+    if not data.startswith(b"PK\x03\x04"):
+        # np.load would guess "pickled data" for any non-archive and suggest loading it unsafely.
+        raise ModelFormatError(f"{tensor_path}: not an .npz archive (it starts with {data[:8]!r}); "
+                               "expected the tensors groundlang saved")
     try:
         with np.load(io.BytesIO(data), allow_pickle=False) as npz:
             values = {k: torch.from_numpy(np.array(npz[k])) for k in npz.files}
@@ -122,7 +130,30 @@ def load_learner(directory: str | Path):
             settings=TaskSettings(**meta["planning"]),
         )
         learner.vocab = Vocabulary.from_json(meta["vocabulary"])
-    except (KeyError, TypeError, zipfile.BadZipFile, OSError) as exc:
+    except (KeyError, TypeError, AttributeError, ValueError, EOFError, zipfile.BadZipFile, OSError) as exc:
         raise ModelFormatError(f"{directory}: model files are incomplete or corrupt ({exc!r})") from None
-    learner.globals = values
+    learner.globals = _checked_globals(learner, values, tensor_path)
     return learner
+
+
+def _checked_globals(learner, values: dict, tensor_path: Path) -> dict:
+    """The loaded tensors, refused unless names, shapes and finiteness fit the vocabulary and language model."""
+    import pyro.poutine
+
+    v = learner.vocab
+    with pyro.poutine.block():
+        expected = learner.lm.sample_globals(len(v.tokens), len(v.words), len(v.roles), len(v.preps))
+    if sorted(values) != sorted(expected):
+        raise ModelFormatError(
+            f"{tensor_path}: holds {sorted(values)}; language model {learner.lm.name} needs {sorted(expected)}"
+        )
+    out = {}
+    for name, want in expected.items():
+        got = values[name]
+        if tuple(got.shape) != tuple(want.shape) or not (got.is_floating_point() and bool(torch.isfinite(got).all())):
+            raise ModelFormatError(
+                f"{tensor_path}: {name} is {got.dtype} {tuple(got.shape)}; expected finite floats of shape "
+                f"{tuple(want.shape)} for this vocabulary"
+            )
+        out[name] = got.to(want.dtype)
+    return out

@@ -15,11 +15,13 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 import pyro
+import pyro.distributions as dist
 import torch
 from pyro.infer import SVI, TraceEnum_ELBO
 from pyro.infer.autoguide import AutoDelta
 from pyro.infer.autoguide.initialization import init_to_mean, init_to_value
 from pyro import poutine
+from pyro.poutine.util import site_is_subsample
 
 from groundlang.model.encoding import Batch
 from groundlang.model.generative import global_sizes, instance_model
@@ -60,45 +62,113 @@ def fit_globals(
     lr: float = 0.1,
     seed: int = 0,
     init: dict[str, torch.Tensor] | None = None,
-    tol: float = 1e-6,
-    optimizer: str = "lbfgs",
+    tol: float = 1e-7,
+    optimizer: str = "auto",
     progress: bool = False,
 ) -> FitResult:
     """MAP estimate of the language model's globals.
 
-    ``optimizer="lbfgs"`` (default) runs L-BFGS with a strong-Wolfe line
-    search on the enumerated loss (``TraceEnum_ELBO.differentiable_loss``)
-    for at most ``steps`` iterations, stopping when the relative loss change
-    falls below ``tol``; the objective is smooth and low-dimensional, so this
-    converges in tens of iterations where Adam needs hundreds.
-    ``optimizer="adam"`` runs ``steps`` SVI steps with learning rate ``lr``.
+    Optimisers (all maximise the same Pyro joint density, with the
+    interpretation enumerated by ``TraceEnum_ELBO``):
+
+    - ``"em"``: expectation-maximisation driven by autograd. For Dirichlet
+      globals, ``phi * d log p(data, phi) / d phi`` is exactly the expected
+      counts plus ``alpha - 1``, so one backward pass through the enumerated
+      model gives the E step and normalising gives the M step; every step
+      increases the objective, with no step size. Stops when the relative
+      change of the objective is below ``tol`` or after ``steps`` iterations.
+    - ``"lbfgs"``: L-BFGS (strong-Wolfe) on the unconstrained ``AutoDelta``
+      parameters, ``steps // 20`` rounds of 20 iterations.
+    - ``"adam"``: ``steps`` SVI steps with learning rate ``lr``.
+    - ``"auto"``: EM when every global is Dirichlet, else L-BFGS.
+
     ``init`` warm-starts from earlier globals (e.g. the full model's, for a
     leave-one-out fold); the fit still runs to convergence on its own data.
     """
-    if optimizer not in ("lbfgs", "adam"):
-        raise ValueError(f"unknown optimizer {optimizer!r}; expected lbfgs or adam")
+    if optimizer not in ("auto", "em", "lbfgs", "adam"):
+        raise ValueError(f"unknown optimizer {optimizer!r}; expected auto, em, lbfgs or adam")
     with single_threaded():
-        return _fit(batch, lm, vocab, steps, lr, seed, init, tol, optimizer, progress)
+        pyro.set_rng_seed(seed)
+        pyro.clear_param_store()
+        sizes = global_sizes(vocab)
+
+        def model():
+            return instance_model(batch, lm, sizes)
+
+        sites = _global_sites(model)
+        if optimizer == "auto":
+            optimizer = "em" if all(isinstance(d, dist.Dirichlet) for d in sites.values()) else "lbfgs"
+        if optimizer == "em":
+            return _fit_em(model, sites, lm, steps, init, tol, progress)
+        return _fit_svi(model, lm, steps, lr, init, tol, optimizer, progress)
 
 
-def _fit(batch, lm, vocab, steps, lr, seed, init, tol, optimizer, progress) -> FitResult:
-    pyro.set_rng_seed(seed)
-    pyro.clear_param_store()
-    sizes = global_sizes(vocab)
+def _global_sites(model) -> dict:
+    """The model's global sample sites and their prior distributions."""
+    trace = poutine.trace(poutine.block(model, hide=["z"])).get_trace()
+    return {
+        name: site["fn"].base_dist if isinstance(site["fn"], dist.Independent) else site["fn"]
+        for name, site in trace.nodes.items()
+        if site["type"] == "sample" and not site["is_observed"] and not site_is_subsample(site)
+    }
 
-    def model():
-        return instance_model(batch, lm, sizes)
 
+def _progress_bar(progress: bool, total: int, lm: LanguageModel):
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=f"training {lm.name}", unit="iter", leave=False)
+
+
+def _log_joint(model, values: dict) -> torch.Tensor:
+    """``log p(data, globals)`` with the interpretations summed out exactly."""
+    conditioned = poutine.condition(model, data=values)
+    return -TraceEnum_ELBO(max_plate_nesting=1).differentiable_loss(conditioned, _empty_guide)
+
+
+def _empty_guide():
+    pass
+
+
+def _fit_em(model, sites, lm, steps, init, tol, progress) -> FitResult:
+    values = {
+        name: (init[name].clone() if init and name in init else prior.mean.detach().clone())
+        for name, prior in sites.items()
+    }
+    losses: list[float] = []
+    converged = False
+    bar = _progress_bar(progress, steps, lm)
+    for _ in range(steps):
+        leaves = {k: v.clone().requires_grad_(True) for k, v in values.items()}
+        objective = _log_joint(model, leaves)
+        objective.backward()
+        losses.append(-float(objective.detach()))
+        with torch.no_grad():
+            for name, leaf in leaves.items():
+                # phi * dlogp/dphi = expected counts + (alpha - 1): the M step.
+                counts = (leaf * leaf.grad).clamp_min(1e-12)
+                values[name] = counts / counts.sum(-1, keepdim=True)
+        if bar is not None:
+            bar.update(1)
+            bar.set_postfix(loss=f"{losses[-1]:.1f}")
+        if len(losses) >= 2 and abs(losses[-2] - losses[-1]) <= tol * abs(losses[-1]):
+            converged = True
+            break
+    if bar is not None:
+        bar.close()
+    log.debug("EM fit %s: %d iterations, final loss %.3f", lm.name, len(losses), losses[-1])
+    return FitResult(values, losses, len(losses), converged)
+
+
+def _fit_svi(model, lm, steps, lr, init, tol, optimizer, progress) -> FitResult:
     init_fn = init_to_value(values=init, fallback=init_to_mean) if init else init_to_mean
     guide = AutoDelta(poutine.block(model, hide=["z"]), init_loc_fn=init_fn)
     elbo = TraceEnum_ELBO(max_plate_nesting=1)
     losses: list[float] = []
     converged = False
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=steps, desc="training", unit="step", leave=False)
+    rounds = steps if optimizer == "adam" else max(1, steps // 20)
+    bar = _progress_bar(progress, rounds, lm)
 
     def tick(loss: float) -> None:
         losses.append(loss)
@@ -127,7 +197,7 @@ def _fit(batch, lm, vocab, steps, lr, seed, init, tol, optimizer, progress) -> F
             loss.backward()
             return loss
 
-        for _ in range(max(1, steps // 20)):
+        for _ in range(rounds):
             tick(float(opt.step(closure).detach()))
             if len(losses) >= 2 and abs(losses[-2] - losses[-1]) <= tol * abs(losses[-1]):
                 converged = True
@@ -136,7 +206,7 @@ def _fit(batch, lm, vocab, steps, lr, seed, init, tol, optimizer, progress) -> F
         bar.close()
     with torch.no_grad():
         values = {k: v.detach().clone() for k, v in guide.median().items()}
-    log.debug("fit %s: %d rounds, final loss %.3f", lm.name, len(losses), losses[-1])
+    log.debug("%s fit %s: %d rounds, final loss %.3f", optimizer, lm.name, len(losses), losses[-1])
     return FitResult(values, losses, len(losses), converged)
 
 

@@ -108,6 +108,7 @@ def file_source(path: str | Path) -> Source:
 # Comments and strings are removed before looking for directives, so that "% no #include here" is fine.
 _COMMENT_OR_STRING = re.compile(r'%\*.*?\*%|%[^\n]*|"(?:\\.|[^"\\])*"', re.DOTALL)
 _INCLUDE = re.compile(r"#include\b")
+_NON_ASCII = re.compile(r"[^\x00-\x7f]")
 
 
 def _blank(match: re.Match) -> str:
@@ -141,6 +142,17 @@ def _parse(source: Source, allow_scripts: bool) -> list:
         line = scrubbed.count("\n", 0, m.start()) + 1
         raise AspScriptRefused(
             f"{source.name}:{line}: #include is not allowed; pass the included file as another source"
+        )
+    # clingo's lexer reports a non-ASCII character one byte at a time, and the
+    # half character in its message aborts the process (a decode error inside
+    # a C callback): refuse such text here, with the position.
+    m = _NON_ASCII.search(scrubbed)
+    if m:
+        line = scrubbed.count("\n", 0, m.start()) + 1
+        column = m.start() - scrubbed.rfind("\n", 0, m.start())
+        raise AspSyntaxError(
+            f"{source.name}:{line}:{column}: unexpected character {m.group(0)!r}; "
+            "names and operators are ASCII (other text only in comments and strings)"
         )
     messages: list[str] = []
     statements: list = []

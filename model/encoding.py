@@ -21,7 +21,7 @@ import torch
 
 from groundlang.grammar.logical_form import LogicalForm, Reading
 from groundlang.model.interpretations import Interpretation, class_of
-from groundlang.model.vocabulary import NULL, UNALIGNED, Vocabulary, class_token
+from groundlang.model.vocabulary import NULL, Vocabulary, class_token
 
 __all__ = ["Observation", "Batch", "encode", "entity_words", "machine_string", "PAD_LOGIT"]
 
@@ -65,15 +65,18 @@ class Batch:
     machine: torch.Tensor  # [I, J, M] token ids of the machine string (NULL first)
     machine_mask: torch.Tensor  # [I, J, M] bool
     reading_logp: torch.Tensor  # [I, R], PAD_LOGIT where padded
-    type_counts: torch.Tensor  # [I, K, U] words of each distinct noun-phrase type
+    type_counts: torch.Tensor  # [I, K, U] modifiers (adjectives, colour words) of each noun-phrase type
+    type_head_counts: torch.Tensor  # [I, K, U] head noun of each noun-phrase type
     type_prep: torch.Tensor  # [I, K] preposition class of each type
     type_mask: torch.Tensor  # [I, K] bool
     reading_types: torch.Tensor  # [I, R, K] occurrences of each type in each reading
     frame_counts: torch.Tensor  # [I, R, U] words outside noun phrases, per reading
     role: torch.Tensor  # [I, J, V] role ids (0 = aligned with nothing)
     role_mask: torch.Tensor  # [I, J, V] bool
-    role_mix: torch.Tensor  # [I, J, V] mixture a word aligned with the role comes from (no NULL:
-    # a phrase's content words name its object; only a phrase aligned with nothing is NULL's)
+    role_logw: torch.Tensor  # [I, J, V] -log(objects sharing the role's label): "other:room" picks one room
+    role_mix: torch.Tensor  # [I, J, V] mixture a modifier aligned with the role comes from:
+    # the PFs the phrase may express of the role's object, and NULL ("left", "far")
+    role_head_mix: torch.Tensor  # [I, J, V] mixture the head noun comes from: the object's class
 
     @property
     def num_instances(self) -> int:
@@ -81,7 +84,7 @@ class Batch:
 
 
 def entity_words(lf: LogicalForm) -> list[tuple[str | None, tuple[str, ...]]]:
-    """(preposition key, content words) per entity of a logical form.
+    """(preposition key, modifiers, head) per entity of a logical form.
 
     The key is the preposition for a verb-attached phrase, ``prep@np`` for a
     phrase attached to another noun phrase (the two readings of "push the
@@ -100,8 +103,7 @@ def entity_words(lf: LogicalForm) -> list[tuple[str | None, tuple[str, ...]]]:
             key = None
         if entity.clause in negated:
             key = f"not:{key or 'dobj'}"
-        content = tuple(entity.modifiers) + ((entity.head,) if entity.head else ())
-        result.append((key, content))
+        result.append((key, tuple(entity.modifiers), (entity.head,) if entity.head else ()))
     return result
 
 
@@ -152,14 +154,18 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
     merged: dict[tuple, float] = {}
     for reading in obs.readings:
         ents = entity_words(reading.logical_form)
-        inside = Counter(w for _, content in ents for w in content)
+        inside = Counter(w for _, mods, head in ents for w in mods + head)
         frame = Counter(obs.words)
         frame.subtract(inside)
         ent_types = Counter()
-        for prep, content in ents:
-            if not content:
+        for prep, mods, head in ents:
+            if not mods and not head:
                 continue  # a pronoun: nothing to generate
-            key = (vocab.prep_id(prep), tuple(sorted(col[vocab.word_id(w)] for w in content)))
+            key = (
+                vocab.prep_id(prep),
+                tuple(sorted(col[vocab.word_id(w)] for w in mods)),
+                tuple(col[vocab.word_id(w)] for w in head),
+            )
             ent_types[types.setdefault(key, len(types))] += 1
         frame_key = tuple(sorted((col[vocab.word_id(w)], c) for w, c in frame.items() if c > 0))
         signature = (tuple(sorted(ent_types.items())), frame_key)
@@ -188,12 +194,12 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     V = max(len(interp.roles) for o in observations for interp in o.interpretations) + 1
     role = torch.zeros(I, J, V, dtype=torch.long)
     role_mask = torch.zeros(I, J, V, dtype=torch.bool)
-    # A phrase aligned with nothing draws its words from a token of its own:
-    # with NULL (shared with every frame word) as its only source, the
-    # unaligned option was so costly that "from the orange room" phrases were
-    # aligned with the agent instead, teaching CLASS:agent the room colours.
-    unaligned = mix([vocab.token_id(UNALIGNED)])
-    role_mix = torch.full((I, J, V), unaligned, dtype=torch.long)
+    role_logw = torch.zeros(I, J, V)
+    # A phrase aligned with nothing draws its words from NULL, which every
+    # frame word shares: a free distribution of its own would learn to
+    # explain every phrase (see model.interpretations).
+    role_mix = torch.full((I, J, V), pad_mix, dtype=torch.long)
+    role_head_mix = torch.full((I, J, V), pad_mix, dtype=torch.long)
 
     for i, obs in enumerate(observations):
         if obs.behaviour is not None and len(obs.behaviour) != len(obs.interpretations):
@@ -213,11 +219,16 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             frame_mix[i, j] = mix([lid, null])
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
             role_mask[i, j, 0] = True  # aligned with nothing
+            sharing = Counter(rb.role for rb in interp.roles)
             for v, rb in enumerate(interp.roles, start=1):
+                role_logw[i, j, v] = -math.log(sharing[rb.role])
                 role[i, j, v] = vocab.role_id(rb.role)
                 role_mask[i, j, v] = True
                 tokens = [vocab.token_id(t) for t in rb.constraint_tokens]
-                role_mix[i, j, v] = mix(tokens + [vocab.token_id(class_token(rb.cls))])
+                # Adjectives say properties, nouns say kinds: a class token
+                # that could emit modifiers would learn every colour word.
+                role_mix[i, j, v] = mix(tokens + [null])
+                role_head_mix[i, j, v] = mix([vocab.token_id(class_token(rb.cls))])
 
     M = max(len(m) for row in machines for m in row)
     machine = torch.full((I, J, M), null, dtype=torch.long)
@@ -246,16 +257,19 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     K = max(len(types) for types, _ in structures) or 1
     reading_logp = torch.full((I, R), PAD_LOGIT)
     type_counts = torch.zeros(I, K, U)
+    type_head_counts = torch.zeros(I, K, U)
     type_prep = torch.zeros(I, K, dtype=torch.long)
     type_mask = torch.zeros(I, K, dtype=torch.bool)
     reading_types = torch.zeros(I, R, K)
     frame_counts = torch.zeros(I, R, U)
     for i, (types, merged) in enumerate(structures):
-        for (prep, cols), k in types.items():
+        for (prep, mods, head), k in types.items():
             type_prep[i, k] = prep
             type_mask[i, k] = True
-            for u in cols:
+            for u in mods:
                 type_counts[i, k, u] += 1.0
+            for u in head:
+                type_head_counts[i, k, u] += 1.0
         for r, ((ent_types, frame_key), prob) in enumerate(merged.items()):
             reading_logp[i, r] = math.log(max(prob, 1e-12))
             for k, c in ent_types:
@@ -266,6 +280,6 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     return Batch(
         log_prior, behaviour, mask, mix.table(S), bow_mix, bow_mix_no_null, frame_mix,
         uniq, word_counts, words, word_mask, machine, machine_mask,
-        reading_logp, type_counts, type_prep, type_mask, reading_types, frame_counts,
-        role, role_mask, role_mix,
+        reading_logp, type_counts, type_head_counts, type_prep, type_mask, reading_types, frame_counts,
+        role, role_mask, role_logw, role_mix, role_head_mix,
     )

@@ -9,13 +9,16 @@ true, C uniform over the conjunctions of T. Each bound variable also gets a
 (``toyInRoom.1`` is "the room the toy must reach"), so that word alignments
 learned for one lifted task carry over to another that shares the role.
 
-Optionally (``context_roles=True``), an instance also offers *context
-roles* a noun phrase may refer to without being part of the goal: the room
-where the agent starts and the room where the bound toy starts ("from the
-orange room"). They are off by default: where every task has a single
-demonstration, the start room's colour is confounded with the goal's, and a
-model with context roles can explain "blue" by the start room as well as by
-the goal room (measured on the example corpus: it picks the wrong one).
+Every other object of the state is offered too, with the role
+``other:<class>`` ("from the orange room", "through the door on the left"):
+a noun phrase may describe an object that is not part of the goal, and its
+words are then generated from that object's colour and shape PFs. This keeps
+all words grounded: the colour words of the rooms a worker walks *through*
+teach the colours as well as those of the goal, and no free distribution is
+left for phrases to escape into (an earlier design with one "unaligned"
+distribution learned to explain every phrase there: measured 58% on the
+crowd corpus). A phrase may still align with nothing (role ``none``); its
+words then come from ``NULL``.
 """
 
 from __future__ import annotations
@@ -35,20 +38,20 @@ __all__ = [
     "interpretations",
     "object_tokens",
     "class_of",
-    "CONTEXT_ROLES",
+    "OTHER_ROLES",
 ]
 
-CONTEXT_ROLES = ("agentStartRoom", "toyStartRoom")
+OTHER_ROLES = tuple(f"other:{cls}" for cls in ("agent", "room", "door", "toy"))
 
 
 @dataclass(frozen=True)
 class RoleBinding:
     """One thing a noun phrase may align with: a role, the object and its PF tokens."""
 
-    role: str  # "toyInRoom.1", "agentStartRoom", ...
+    role: str  # "toyInRoom.1", "other:room", ...
     obj: str  # object name, e.g. "room2"
-    cls: str  # object class: agent, room, toy
-    constraint_tokens: tuple[str, ...]  # PF names of C that hold of obj (what words may say)
+    cls: str  # object class: agent, room, door, toy
+    constraint_tokens: tuple[str, ...]  # PFs words may express: C's for a bound object, all for others
 
 
 @dataclass(frozen=True)
@@ -58,7 +61,7 @@ class Interpretation:
     task: GroundedTask
     constraint: BindingConstraint
     log_prior: float
-    roles: tuple[RoleBinding, ...]  # goal variables first, then context roles
+    roles: tuple[RoleBinding, ...]  # goal variables first, then every other object
 
     @property
     def lifted(self) -> str:
@@ -97,16 +100,13 @@ def object_tokens(state: State, obj: str) -> tuple[str, ...]:
     return ()
 
 
-def _room_of(state: State, x: int, y: int) -> str | None:
-    for i, room in enumerate(state.layout.rooms):
-        if room.contains(x, y):
-            return f"room{i}"
-    return None
+def _objects(state: State) -> list[str]:
+    names = ["agent0"] + state.layout.room_names + state.layout.door_names + state.layout.toy_names
+    return names
 
 
-def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary,
-           context_roles: bool) -> tuple[RoleBinding, ...]:
-    lifted = next(t for t in library.tasks if t.name == task.task)
+def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary) -> tuple[RoleBinding, ...]:
+    lifted = library.task(task.task)
     binding = dict(task.binding)
     bindings = []
     for var in lifted.variables:
@@ -116,22 +116,15 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         obj = binding[var.name]
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,))
         bindings.append(RoleBinding(role, obj, var.cls, said))
-    if not context_roles:
-        return tuple(bindings)
-    start = _room_of(state, state.agent.x, state.agent.y)
-    if start is not None:
-        bindings.append(RoleBinding("agentStartRoom", start, "room", object_tokens(state, start)))
-    for var in lifted.variables:
-        if var.cls == "toy":
-            toy = state.toys[int(binding[var.name][len("block"):])]
-            room = _room_of(state, toy.x, toy.y)
-            if room is not None:
-                bindings.append(RoleBinding("toyStartRoom", room, "room", object_tokens(state, room)))
-            break
+    bound = set(binding.values())
+    for obj in _objects(state):
+        if obj not in bound:
+            cls = class_of(obj)
+            bindings.append(RoleBinding(f"other:{cls}", obj, cls, object_tokens(state, obj)))
     return tuple(bindings)
 
 
-def interpretations(state: State, library: TaskLibrary, context_roles: bool = False) -> list[Interpretation]:
+def interpretations(state: State, library: TaskLibrary) -> list[Interpretation]:
     """Every (L, T, C) of ``state`` with its log prior, in a deterministic order.
 
     Raises ValueError when no lifted task has a grounding that is not already
@@ -154,7 +147,7 @@ def interpretations(state: State, library: TaskLibrary, context_roles: bool = Fa
                     task,
                     constraint,
                     log_prior_t - math.log(len(constraints)),
-                    _roles(task, constraint, state, library, context_roles),
+                    _roles(task, constraint, state, library),
                 )
             )
     return result

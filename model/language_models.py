@@ -133,19 +133,22 @@ class ParseAligned(LanguageModel):
     def reading_table(self, g: dict, batch: Batch):
         """``(log P(words | j) [I, J], per reading [I, J, R], per type and role [I, J, V, K])``.
 
-        A noun phrase of type k aligns with role v of interpretation j with
-        probability ``align[prep_k, role_v]`` renormalised over the roles j
-        offers (so tasks with more variables are not penalised for it); its
+        A noun phrase of type k aligns with role v with probability
+        ``align[prep_k, role_v]``; a role that interpretation j does not offer
+        cannot be chosen, so its share of the probability is lost (the model
+        stays a product of categoricals, which keeps EM exact). The phrase's
         words then come from that role's mixture.
         """
         log_emit = mixture_log_emissions(g, batch)  # [X, I, U]
-        role_words = _gather_mixtures(log_emit, batch.role_mix)  # [I, J, V, U]
-        type_ll = torch.einsum("ijvu,iku->ijvk", role_words, batch.type_counts)  # [I, J, V, K]
+        modifiers = _gather_mixtures(log_emit, batch.role_mix)  # [I, J, V, U]
+        heads = _gather_mixtures(log_emit, batch.role_head_mix)  # [I, J, V, U]
+        type_ll = torch.einsum("ijvu,iku->ijvk", modifiers, batch.type_counts) + torch.einsum(
+            "ijvu,iku->ijvk", heads, batch.type_head_counts
+        )  # [I, J, V, K]
         log_align = g["align"].clamp_min(1e-30).log()[
             batch.type_prep[:, None, None, :], batch.role[:, :, :, None]
         ]  # [I, J, V, K]
-        log_align = log_align.masked_fill(~batch.role_mask[..., None], PAD_LOGIT)
-        log_align = log_align - torch.logsumexp(log_align, dim=2, keepdim=True)
+        log_align = (log_align + batch.role_logw[..., None]).masked_fill(~batch.role_mask[..., None], PAD_LOGIT)
         joint = type_ll + log_align
         per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]
         entities = torch.einsum("ijk,irk->ijr", per_type, batch.reading_types)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 from collections.abc import Sequence
 from functools import cached_property
 
@@ -36,6 +37,21 @@ NUM_ACTIONS = len(ACTION_DELTAS)
 # Largest key space (entries) for which the search keeps a dense int32 index
 # map (4 bytes per entry, so at most 128 MiB); beyond it, sorted keys.
 DENSE_KEY_LIMIT = 1 << 25
+
+# Default refusal threshold of enumerate_states; users of the CLI raise it
+# with this environment variable (library callers pass max_states).
+DEFAULT_MAX_STATES = 2_000_000
+MAX_STATES_VARIABLE = "GROUNDLANG_MAX_STATES"
+
+
+def default_max_states() -> int:
+    """``$GROUNDLANG_MAX_STATES`` when set (a positive integer), else DEFAULT_MAX_STATES."""
+    text = os.environ.get(MAX_STATES_VARIABLE, "").replace("_", "").replace(",", "").strip()
+    if not text:
+        return DEFAULT_MAX_STATES
+    if not text.isdigit() or int(text) < 1:
+        raise StateSpaceError(f"{MAX_STATES_VARIABLE}={os.environ[MAX_STATES_VARIABLE]!r}: expected a positive integer")
+    return int(text)
 
 
 class StateSpaceError(ValueError):
@@ -227,15 +243,16 @@ def _pair_tables(neighbour: np.ndarray, powers: np.ndarray, dtype: type) -> list
     return tables
 
 
-def enumerate_states(state: State, max_states: int = 2_000_000) -> StateSpace:
+def enumerate_states(state: State, max_states: int | None = None) -> StateSpace:
     """Breadth-first enumeration of every state reachable from ``state``.
 
     Returns a StateSpace whose index 0 is ``state``. Raises StateSpaceError
     (a ValueError) when the initial state is invalid, or when the layout could
     hold more than ``max_states`` states (checked up front, from the number of
-    walkable cells and toys; pass a larger ``max_states`` to allow it).
+    walkable cells and toys; pass a larger ``max_states`` to allow it; the
+    default is ``$GROUNDLANG_MAX_STATES`` or 2,000,000).
     """
-    return _enumerate(state, max_states, dense=None)
+    return _enumerate(state, default_max_states() if max_states is None else max_states, dense=None)
 
 
 def _enumerate(state: State, max_states: int, dense: bool | None) -> StateSpace:
@@ -249,7 +266,8 @@ def _enumerate(state: State, max_states: int, dense: bool | None) -> StateSpace:
         raise StateSpaceError(
             f"this layout could reach up to {bound:,} states ({num_cells} walkable cells, "
             f"{num_toys} toy(s)), more than max_states={max_states:,}; "
-            f"pass max_states={bound:,} (or more) to enumerate_states to allow it"
+            f"pass max_states={bound:,} (or more) to enumerate_states, or set "
+            f"{MAX_STATES_VARIABLE}={bound} in the environment, to allow it"
         )
     key_space = num_cells ** (1 + num_toys)
     if key_space >= 2**60:

@@ -13,12 +13,11 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-__all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "UNALIGNED", "OTHER_PREP", "DIRECT_OBJECT", "class_token"]
+__all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "OTHER_PREP", "DIRECT_OBJECT", "class_token"]
 
 NULL = "NULL"
 UNK = "<unk>"
 NO_ROLE = "none"
-UNALIGNED = "NP:none"  # the words of noun phrases aligned with no role
 OTHER_PREP = "<other>"
 DIRECT_OBJECT = "<dobj>"
 

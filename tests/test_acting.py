@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from groundlang.inference.acting import rollout
+from groundlang.inference.acting import rollout, rollout_states
 from groundlang.inference.planning import PlanningError, soft_value_iteration, solve_task
 
 # The corridor of test_planning: 0-1-2-3, action 2 = east, 3 = west, 0 and 1 bump into walls.
@@ -36,3 +36,21 @@ def test_sampled_rollouts_are_reproducible_by_seed():
 def test_a_policy_table_of_the_wrong_size_is_a_value_error():
     with pytest.raises(PlanningError, match=r"policy must be \[4, A\], got shape \(3, 5\)"):
         rollout(CORRIDOR, np.zeros((3, 5)))
+
+
+def test_rollout_states_turns_a_trajectory_into_corpus_states_and_actions():
+    from groundlang.model.statespace import enumerate_states
+    from groundlang.model.world import Action, Agent, Door, Layout, Room, State, Toy, get_palette, step
+
+    rooms = (Room("green", 0, 6, 6, 3), Room("red", 0, 3, 6, 0))
+    layout = Layout(rooms, (Door(2, 3, 2, 3),), (("yellow", "star"),), get_palette("sokoban"))
+    start = State(layout, Agent(1, 1), (Toy("yellow", "star", 4, 4),))
+    space = enumerate_states(start)
+    goal = np.array([space.state_at(i).positions[0, 1] == 4 for i in range(space.num_states)])  # agent at y = 4
+    path = rollout(space.next_state, solve_task(space.next_state, goal), start=space.index_of(start), goal_mask=goal)
+    states, actions = rollout_states(space, path)
+    assert path.reason == "goal" and states[0] == start and len(states) == len(actions) + 1
+    assert all(isinstance(a, Action) for a in actions)
+    for before, action, after in zip(states, actions, states[1:]):
+        assert step(before, action) == after
+    assert states[-1].positions[0, 1] == 4

@@ -126,3 +126,39 @@ def test_mlirl_recovers_the_goal_feature_in_a_cleanup_world_and_its_policy_reach
     for s in starts[6:]:
         path = rollout(space.next_state, fitted, start=s, max_steps=100)
         assert path.reason == "terminated" and goal[path.states[-1]], f"from state {s}"
+
+
+def test_warm_started_gradients_equal_cold_ones():
+    # The second gradient starts its values and adjoint from the first's: same answer as from scratch.
+    warm = _random_problem("terminate", 0.9, warm_start_adjoint=True)
+    cold = _random_problem("terminate", 0.9)
+    grads = []
+    for problem, points in ((warm, ([0.9, 0.1, -0.4, 1.3], [0.3, -0.2, 0.5, 0.8])), (cold, ([0.3, -0.2, 0.5, 0.8],))):
+        for x in points:
+            theta = torch.tensor(x[:3], dtype=torch.float64, requires_grad=True)
+            temperature = torch.tensor(x[3], dtype=torch.float64, requires_grad=True)
+            problem.log_likelihood(theta, temperature).backward()
+        grads.append(np.r_[theta.grad.numpy(), temperature.grad.item()])
+    assert warm.last_adjoint_steps <= cold.last_adjoint_steps
+    np.testing.assert_allclose(grads[0], grads[1], rtol=1e-8, atol=1e-10)
+
+
+@pytest.mark.slow
+def test_compiled_gradient_agrees_with_eager():
+    rng = np.random.default_rng(4)
+    S = 2000
+    ns = rng.integers(0, S, (S, 4))
+    features = rng.normal(size=(S, 3)).astype(np.float32)
+    states, actions = [7], []
+    for a in (0, 2, 2, 1):
+        actions.append(a)
+        states.append(int(ns[states[-1], a]))
+    results = []
+    for backend in ("eager", "compiled"):
+        problem = MLIRLProblem(ns, features, [(states, actions)], backend=backend, tol=1e-6, step_cost=2.0)
+        theta = torch.tensor([0.5, -0.3, 0.2], requires_grad=True)
+        temperature = torch.tensor(0.9, requires_grad=True)
+        ll = problem.log_likelihood(theta, temperature)
+        ll.backward()
+        results.append(np.r_[ll.detach().item(), theta.grad.numpy(), temperature.grad.item()])
+    np.testing.assert_allclose(results[1], results[0], rtol=1e-3, atol=1e-3)

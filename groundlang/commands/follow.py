@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from groundlang.model.world import PALETTES
@@ -51,8 +52,9 @@ def run(args: argparse.Namespace) -> int:
             "actions": [a.word for a in result.actions],
             "final_state": format_state(result.final_state),
             "reached": result.reached,
+            "reason": result.reason,
         }))
-        return 0
+        return 0 if result.reached else 1
     print(f"command: {args.command_text}")
     print("interpretations:")
     for goal, p in goals:
@@ -61,4 +63,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"goal {format_goal(result.goal)} {'reached' if result.reached else 'NOT reached'} ({result.reason})")
     if args.out:
         print(f"picture written to {args.out}")
+    if not result.reached:
+        why = ("no state reachable from the start satisfies it, so no plan can carry it out"
+               if result.reason == "unreachable" else f"the plan stopped ({result.reason}) before it held")
+        print(f"groundlang follow: goal {format_goal(result.goal)} not reached: {why}", file=sys.stderr)
+        return 1
     return 0

@@ -1,0 +1,111 @@
+"""Graceful interruption: SIGTERM behaves like Ctrl-C, and the CLI says what an interrupted run kept.
+
+Every file groundlang writes goes through a temporary file and a rename, so
+an interruption can only lose the piece of work in progress. Three helpers:
+
+- :func:`terminate_as_interrupt` (a context manager used by ``cli.main``)
+  makes SIGTERM raise ``KeyboardInterrupt`` as SIGINT does, and restores
+  the previous handler on exit (main thread only; elsewhere it does nothing);
+- :func:`deferred_interrupts` holds SIGINT/SIGTERM back while a group of
+  renames that belong together runs (a model's tensors and its JSON), then
+  delivers the interrupt;
+- :func:`what_was_kept` describes, after an interruption, the outputs named
+  by a command's arguments (model directory, result file, picture) and the
+  behaviour-likelihood cache entries written since the command started.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+__all__ = ["terminate_as_interrupt", "deferred_interrupts", "what_was_kept"]
+
+_SIGNALS = tuple(s for s in (signal.SIGINT, getattr(signal, "SIGTERM", None)) if s is not None)
+
+
+def _raise_interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM raises KeyboardInterrupt (like Ctrl-C)."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "SIGTERM"):
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+@contextlib.contextmanager
+def deferred_interrupts() -> Iterator[None]:
+    """Hold SIGINT/SIGTERM until the block ends, then raise KeyboardInterrupt if one arrived.
+
+    For a few renames that must all happen or none (main thread only;
+    elsewhere, and for signals whose handler is not Python's, it does nothing).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received: list[int] = []
+    previous = {}
+    for sig in _SIGNALS:
+        handler = signal.getsignal(sig)
+        # Only take over signals that would raise in Python anyway; leave ignored/default ones alone.
+        if callable(handler):
+            previous[sig] = signal.signal(sig, lambda signum, frame: received.append(signum))
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if received:
+        raise KeyboardInterrupt(signal.Signals(received[0]).name)
+
+
+def _describe_output(path: Path, what: str, started: float) -> str:
+    stamp = path / "model.json" if path.is_dir() else path
+    if not path.exists():
+        return f"nothing written to {path}"
+    if not stamp.exists():
+        return f"{path} holds no complete {what}"
+    if stamp.stat().st_mtime < started:
+        return f"{path} left as it was (the previous complete {what})"
+    return f"the {what} in {path} was complete before the interruption"
+
+
+def _new_cache_entries(root: Path, started: float) -> int:
+    folder = root / "behaviour"
+    if not folder.is_dir():
+        return 0
+    # Temporary files start with "."; only renamed, whole entries count.
+    return sum(1 for p in folder.glob("*/*.json") if not p.name.startswith(".") and p.stat().st_mtime >= started)
+
+
+# (argument name, what it holds); a command's arguments name its outputs.
+_OUTPUTS = (("output", "model"), ("json", "result"), ("out", "picture"))
+
+
+def what_was_kept(args, started: float, uses_cache: bool) -> str:
+    """One line saying what an interrupted command left behind (``started``: ``time.time()`` at start)."""
+    parts = []
+    for attr, what in _OUTPUTS:
+        value = getattr(args, attr, None)
+        if isinstance(value, (str, Path)):
+            parts.append(_describe_output(Path(value), what, started))
+    if uses_cache and getattr(args, "no_cache", False) is not True:
+        from groundlang.inference.likelihoods import cache_directory
+
+        root = cache_directory(getattr(args, "cache_dir", None))
+        count = _new_cache_entries(root, started - 1.0)  # mtimes may be coarser than time.time()
+        if count:
+            entries = "entry is" if count == 1 else "entries are"
+            parts.append(f"{count} new behaviour-likelihood cache {entries} kept in {root} (a rerun resumes from them)")
+    return "; ".join(parts) or "no output files were due"
