@@ -15,7 +15,7 @@ import logging
 import sys
 import time
 
-from groundlang.interrupt import terminate_as_interrupt, what_was_kept
+from groundlang.interrupt import close_progress_bars, terminate_as_interrupt, what_was_kept
 
 # Order is the order of ``groundlang --help``.
 COMMANDS = ["demo", "check", "show", "parse", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate"]
@@ -52,6 +52,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"groundlang {args.command}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        close_progress_bars()
         kept = what_was_kept(args, started, uses_cache=args.command in CACHING_COMMANDS)
         print(f"groundlang {args.command}: interrupted; {kept}", file=sys.stderr)
         return 130

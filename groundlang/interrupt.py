@@ -9,6 +9,7 @@ an interruption can only lose the piece of work in progress. Three helpers:
 - :func:`deferred_interrupts` holds SIGINT/SIGTERM back while a group of
   renames that belong together runs (a model's tensors and its JSON), then
   delivers the interrupt;
+- :func:`close_progress_bars` ends the progress bars a run left open;
 - :func:`what_was_kept` describes, after an interruption, the outputs named
   by a command's arguments (model directory, result file, picture) and the
   behaviour-likelihood cache entries written since the command started.
@@ -18,11 +19,12 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["terminate_as_interrupt", "deferred_interrupts", "what_was_kept"]
+__all__ = ["terminate_as_interrupt", "deferred_interrupts", "what_was_kept", "close_progress_bars"]
 
 _SIGNALS = tuple(s for s in (signal.SIGINT, getattr(signal, "SIGTERM", None)) if s is not None)
 
@@ -68,6 +70,14 @@ def deferred_interrupts() -> Iterator[None]:
             signal.signal(sig, handler)
     if received:
         raise KeyboardInterrupt(signal.Signals(received[0]).name)
+
+
+def close_progress_bars() -> None:
+    """Close the tqdm bars an interruption left open, so that the report starts on a line of its own."""
+    tqdm_module = sys.modules.get("tqdm")  # never import tqdm just for this
+    for bar in list(getattr(getattr(tqdm_module, "tqdm", None), "_instances", ())):
+        with contextlib.suppress(Exception):
+            bar.close()
 
 
 def _describe_output(path: Path, what: str, started: float) -> str:

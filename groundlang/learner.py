@@ -137,7 +137,9 @@ class Learner:
     # ----------------------------------------------------------------- observing
     def _interpretations(self, state: State) -> list[Interpretation]:
         if state not in self._interp_cache:
-            self._interp_cache[state] = interpretations(state, self.library)
+            self._interp_cache[state] = interpretations(
+                state, self.library, enumerate_constraints=self.lm.enumerates_constraints
+            )
         return self._interp_cache[state]
 
     def observe(self, instances: Sequence, progress: bool = False) -> list[Observation]:

@@ -124,8 +124,16 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
     return tuple(bindings)
 
 
-def interpretations(state: State, library: TaskLibrary) -> list[Interpretation]:
+def interpretations(state: State, library: TaskLibrary, enumerate_constraints: bool = True) -> list[Interpretation]:
     """Every (L, T, C) of ``state`` with its log prior, in a deterministic order.
+
+    With ``enumerate_constraints=False`` each grounding appears once, with C
+    the largest conjunction (every colour/shape PF of its bound objects) and
+    no C term in the prior: for a language model that lets each word pick
+    the property it expresses (the parse-aligned model), enumerating C would
+    only tax the goal's description with the C prior, which other objects'
+    descriptions do not pay (measured: the model then learned to read "to the
+    orange room" as a room other than the goal).
 
     Raises ValueError when no lifted task has a grounding that is not already
     true in ``state`` (nothing could be asked of the agent).
@@ -141,6 +149,10 @@ def interpretations(state: State, library: TaskLibrary) -> list[Interpretation]:
     result = []
     for task, constraints in candidates:
         log_prior_t = -math.log(n_lifted) - math.log(per_lifted[task.task])
+        if not enumerate_constraints:
+            largest = max(constraints, key=lambda c: len(c.atoms))
+            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library)))
+            continue
         for constraint in constraints:
             result.append(
                 Interpretation(

@@ -35,6 +35,8 @@ class LanguageModel:
     """Base: Dirichlet word distributions per semantic token."""
 
     name = "base"
+    # Whether interpretations enumerate binding constraints C (see model.interpretations).
+    enumerates_constraints = True
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True):
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
@@ -111,6 +113,7 @@ class IBMModel2(LanguageModel):
 
 class ParseAligned(LanguageModel):
     name = "parse"
+    enumerates_constraints = False
 
     def __init__(self, word_concentration: float = 1.05, align_concentration: float = 1.5):
         super().__init__(word_concentration)

@@ -1,0 +1,230 @@
+"""Interrupted runs (Ctrl-C, SIGTERM) keep the last complete outputs, say what they kept, and resume.
+
+groundlang.interrupt and the CLI's handling: in-process checks of the
+signal helpers, then real ``groundlang train`` / ``groundlang evaluate``
+processes stopped with SIGTERM or SIGINT while they work.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from groundlang.cli import main
+from groundlang.corpus import example_corpus_path
+from groundlang.interrupt import deferred_interrupts, terminate_as_interrupt, what_was_kept
+
+EXAMPLES = example_corpus_path()
+
+
+def _signal_self(sig: int) -> None:
+    os.kill(os.getpid(), sig)
+    time.sleep(0.05)  # the handler runs at the next bytecode boundary
+
+
+# ----------------------------------------------------------------- the helpers, in-process
+def test_sigterm_raises_keyboard_interrupt_inside_and_not_after():
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(KeyboardInterrupt, match="SIGTERM"):
+        with terminate_as_interrupt():
+            _signal_self(signal.SIGTERM)
+    assert signal.getsignal(signal.SIGTERM) == before
+
+
+def test_deferred_interrupts_finish_the_block_then_interrupt():
+    done = []
+    with pytest.raises(KeyboardInterrupt, match="SIGINT"):
+        with deferred_interrupts():
+            _signal_self(signal.SIGINT)
+            done.append("first")
+            done.append("second")
+    assert done == ["first", "second"]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    with deferred_interrupts():  # nothing received: nothing raised
+        done.append("third")
+    assert done[-1] == "third"
+
+
+@pytest.fixture(scope="module")
+def learner():
+    from groundlang.corpus import read_corpus
+    from groundlang.learner import Learner
+
+    return Learner(steps=20, cache_dir=False).fit(read_corpus(EXAMPLES, "sokoban").instances[:6])
+
+
+def test_save_interrupted_between_its_two_files_still_writes_both(learner, tmp_path, monkeypatch):
+    """Ctrl-C after the tensors are renamed: the JSON naming them is still written, then the interrupt."""
+    import groundlang.model_io as model_io
+    from groundlang.model_io import load_learner
+
+    real = model_io.write_atomically
+    calls = []
+
+    def write_then_interrupt(path, data):
+        real(path, data)
+        calls.append(Path(path).name)
+        if len(calls) == 1:
+            _signal_self(signal.SIGINT)
+
+    monkeypatch.setattr(model_io, "write_atomically", write_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        learner.save(tmp_path / "model")
+    assert calls == ["globals.npz", "model.json"]
+    monkeypatch.undo()
+    loaded = load_learner(tmp_path / "model")
+    assert loaded.vocab.words == learner.vocab.words
+
+
+def test_cli_reports_what_an_interrupted_train_kept(tmp_path, monkeypatch, capsys):
+    """A SIGTERM in the middle of fitting: exit 130, one line saying nothing was written."""
+    from groundlang.learner import Learner
+
+    monkeypatch.setenv("GROUNDLANG_CACHE", str(tmp_path / "cache"))
+
+    def fit(self, *args, **kwargs):
+        _signal_self(signal.SIGTERM)
+        raise AssertionError("SIGTERM did not interrupt")
+
+    monkeypatch.setattr(Learner, "fit", fit)
+    code = main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "model")])
+    out, err = capsys.readouterr()
+    assert code == 130
+    assert err == f"groundlang train: interrupted; nothing written to {tmp_path / 'model'}\n"
+    assert not (tmp_path / "model").exists()
+
+
+def test_what_was_kept_describes_each_output(tmp_path):
+    class Args:
+        output = str(tmp_path / "model")
+        json = str(tmp_path / "result.json")
+        cache_dir = str(tmp_path / "cache")
+
+    start = time.time()
+    assert what_was_kept(Args, start, uses_cache=False) == (
+        f"nothing written to {tmp_path / 'model'}; nothing written to {tmp_path / 'result.json'}"
+    )
+    (tmp_path / "model").mkdir()
+    assert what_was_kept(Args, start, uses_cache=False).startswith(f"{tmp_path / 'model'} holds no complete model")
+    (tmp_path / "model" / "model.json").write_text("{}")
+    os.utime(tmp_path / "model" / "model.json", (start - 100, start - 100))
+    entry = tmp_path / "cache" / "behaviour" / "ab" / "abc.json"
+    entry.parent.mkdir(parents=True)
+    entry.write_text("{}")
+    (entry.parent / ".tmp-x.json").write_text("{")  # a temporary file is not an entry
+    assert what_was_kept(Args, start, uses_cache=True) == (
+        f"{tmp_path / 'model'} left as it was (the previous complete model); "
+        f"nothing written to {tmp_path / 'result.json'}; "
+        f"1 new behaviour-likelihood cache entry is kept in {tmp_path / 'cache'} (a rerun resumes from them)"
+    )
+
+
+# ----------------------------------------------------------------- real processes
+def _cache_entries(cache: Path) -> list[Path]:
+    return sorted((cache / "behaviour").glob("*/*.json")) if (cache / "behaviour").is_dir() else []
+
+
+def _assert_whole_entries(cache: Path) -> None:
+    """Every cache file is a finished entry: it parses and records its own key; no temporary files."""
+    files = [p for p in (cache / "behaviour").rglob("*") if p.is_file()]
+    assert files and all(not p.name.startswith(".") for p in files), files
+    for path in files:
+        data = json.loads(path.read_text())
+        assert data["key"] == path.stem and isinstance(data["log_likelihood"], float)
+
+
+def _start(argv: list[str], cache: Path) -> subprocess.Popen:
+    env = dict(os.environ, GROUNDLANG_CACHE=str(cache), PYTHONUNBUFFERED="1")
+    return subprocess.Popen([sys.executable, "-m", "groundlang.cli", *argv], env=env, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+
+def _interrupt_when(proc: subprocess.Popen, ready, sig: int, timeout: float = 60.0) -> tuple[int, str, str]:
+    """Poll ``ready()`` every 5 ms; send ``sig`` when it turns true; return (code, stdout, stderr)."""
+    deadline = time.monotonic() + timeout
+    while proc.poll() is None and not ready():
+        if time.monotonic() > deadline:
+            proc.kill()
+            pytest.fail("the run never reached the point to interrupt")
+        time.sleep(0.005)
+    assert proc.poll() is None, "the run finished before it could be interrupted"
+    proc.send_signal(sig)
+    out, err = proc.communicate(timeout=timeout)
+    return proc.returncode, out, err
+
+
+def _last_line(err: str) -> str:
+    # tqdm redraws with carriage returns; the report is the last thing on stderr
+    return re.split(r"[\r\n]", err.strip())[-1]
+
+
+@pytest.mark.slow
+def test_train_interrupted_keeps_nothing_then_resumes_and_protects_the_previous_model(tmp_path):
+    cache, model = tmp_path / "cache", tmp_path / "model"
+    argv = ["train", str(EXAMPLES), "--palette", "sokoban", "-o", str(model)]
+
+    # 1. SIGTERM as soon as the first behaviour likelihood is cached.
+    code, out, err = _interrupt_when(_start(argv, cache), lambda: bool(_cache_entries(cache)), signal.SIGTERM)
+    assert code == 130, err
+    assert "Traceback" not in err
+    kept = len(_cache_entries(cache))
+    assert _last_line(err).startswith(f"groundlang train: interrupted; nothing written to {model}; "
+                                      f"{kept} new behaviour-likelihood cache ")
+    assert _last_line(err).endswith(f"kept in {cache} (a rerun resumes from them)")
+    assert not model.exists()
+    _assert_whole_entries(cache)
+
+    # 2. The rerun starts from the kept entries and finishes.
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", *argv], capture_output=True, text=True,
+                          env=dict(os.environ, GROUNDLANG_CACHE=str(cache)), timeout=120)
+    assert done.returncode == 0, done.stderr
+    hits = int(re.search(r"behaviour likelihoods: (\d+) cached", done.stderr).group(1))
+    assert hits >= kept > 0
+    assert f"model written to {model}" in done.stdout
+    before = {p.name: p.read_bytes() for p in model.iterdir()}
+
+    # 3. Ctrl-C while training over that model (another seed): the previous model stays, whole.
+    proc = _start([*argv, "--seed", "1"], cache)
+    seen = []
+
+    def fitting() -> bool:
+        line = proc.stderr.readline()
+        seen.append(line)
+        return "behaviour likelihoods:" in line
+
+    code, out, err = _interrupt_when(proc, fitting, signal.SIGINT)
+    assert code == 130, "".join(seen) + err
+    assert "Traceback" not in err
+    assert _last_line(err) == f"groundlang train: interrupted; {model} left as it was (the previous complete model)"
+    assert {p.name: p.read_bytes() for p in model.iterdir()} == before
+    from groundlang.model_io import load_learner
+
+    assert load_learner(model).lexicon()
+
+
+@pytest.mark.slow
+def test_evaluate_interrupted_writes_no_result_and_keeps_cache(tmp_path):
+    cache, result = tmp_path / "cache", tmp_path / "result.json"
+    argv = ["evaluate", "--corpus", str(EXAMPLES), "--palette", "sokoban", "--labels", str(EXAMPLES / "labels.csv"),
+            "--protocol", "loo", "--limit", "2", "--json", str(result)]
+    code, out, err = _interrupt_when(_start(argv, cache), lambda: bool(_cache_entries(cache)), signal.SIGTERM)
+    assert code == 130, err
+    assert "Traceback" not in err
+    kept = len(_cache_entries(cache))
+    entries = "entry is" if kept == 1 else "entries are"
+    assert _last_line(err) == (
+        f"groundlang evaluate: interrupted; nothing written to {result}; "
+        f"{kept} new behaviour-likelihood cache {entries} kept in {cache} (a rerun resumes from them)"
+    )
+    assert not result.exists()
+    assert [p for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+    _assert_whole_entries(cache)
