@@ -173,8 +173,11 @@ def test_learning_from_scratch(demo, library, tmp_path):
     found = discover_tasks([demo], cache_dir=False)
     report = found.demonstrations[0]
     assert report.instances == ("push_star_green_0",)
-    assert [(str(a), round(w, 2)) for a, w in report.top_features] == [
-        ("toyInRoom(block0, room0)", 7.40), ("agentTouchingToy(agent0, block0)", 4.04)]
+    # Same tolerance as the MLIRL scenario above: the likelihood is flat to ~0.01
+    # nats along these weights, so the optimiser's stopping point moves by a few 0.01.
+    assert [str(a) for a, _ in report.top_features] == [
+        "toyInRoom(block0, room0)", "agentTouchingToy(agent0, block0)"]
+    assert [w for _, w in report.top_features] == pytest.approx([7.40, 4.04], abs=0.1)
     assert [t.name for t in found.tasks] == ["toyToRoom"]
     task = found.tasks[0]
     assert lifted_key(task) == lifted_key(library.task("toyToRoom"))
