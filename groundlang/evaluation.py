@@ -23,6 +23,7 @@ from dataclasses import asdict, dataclass, field
 from groundlang.corpus import Corpus, Instance
 from groundlang.labels import goal_holds, label_for
 from groundlang.learner import Learner
+from groundlang.model.encoding import encode
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.world import State
 
@@ -181,7 +182,7 @@ def _fold(index: int) -> dict:
             keep = [k for k in range(len(ctx["instances"])) if k != index]
             learner.fit(
                 [ctx["instances"][k] for k in keep],
-                observations=[ctx["observations"][k] for k in keep],
+                batch=ctx["batch"].subset(keep),
                 init=ctx["globals"],
             )
         record = _score(learner, instance, ctx["golds"][index], ctx["novel_states"])
@@ -268,7 +269,7 @@ def evaluate(
     context = {
         "learner": learner,
         "instances": instances,
-        "observations": observations,
+        "batch": encode(observations, learner.vocab),
         "golds": golds,
         "globals": dict(learner.globals),
         "novel_states": list(novel_states),

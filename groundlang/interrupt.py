@@ -29,6 +29,10 @@ __all__ = ["terminate_as_interrupt", "deferred_interrupts", "what_was_kept", "cl
 _SIGNALS = tuple(s for s in (signal.SIGINT, getattr(signal, "SIGTERM", None)) if s is not None)
 
 
+# Non-empty while a deferred_interrupts block runs in the main thread.
+_deferring: list[bool] = []
+
+
 def _raise_interrupt(signum, frame) -> None:
     raise KeyboardInterrupt(signal.Signals(signum).name)
 
@@ -50,10 +54,12 @@ def terminate_as_interrupt() -> Iterator[None]:
 def deferred_interrupts() -> Iterator[None]:
     """Hold SIGINT/SIGTERM until the block ends, then raise KeyboardInterrupt if one arrived.
 
-    For a few renames that must all happen or none (main thread only;
-    elsewhere, and for signals whose handler is not Python's, it does nothing).
+    For a few renames that must all happen or none, or a temporary file that
+    must not be left behind. Nested blocks defer to the outermost one. Main
+    thread only; elsewhere, and for signals whose handler is not Python's,
+    it does nothing.
     """
-    if threading.current_thread() is not threading.main_thread():
+    if threading.current_thread() is not threading.main_thread() or _deferring:
         yield
         return
     received: list[int] = []
@@ -63,9 +69,11 @@ def deferred_interrupts() -> Iterator[None]:
         # Only take over signals that would raise in Python anyway; leave ignored/default ones alone.
         if callable(handler):
             previous[sig] = signal.signal(sig, lambda signum, frame: received.append(signum))
+    _deferring.append(True)
     try:
         yield
     finally:
+        _deferring.pop()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     if received:

@@ -133,6 +133,7 @@ class Learner:
         self.globals: dict[str, torch.Tensor] | None = None
         self.fit_result: FitResult | None = None
         self._interp_cache: dict[State, list[Interpretation]] = {}
+        self._plans: dict = {}
 
     # ----------------------------------------------------------------- observing
     def _interpretations(self, state: State) -> list[Interpretation]:
@@ -193,24 +194,28 @@ class Learner:
         return vocab
 
     def fit(self, instances: Sequence, progress: bool = False, init: dict | None = None,
-            observations: list[Observation] | None = None) -> "Learner":
+            observations: list[Observation] | None = None, batch: Batch | None = None) -> "Learner":
         """Train on instances (anything with ``command``, ``initial_state``, ``states``, ``actions``).
 
         ``observations`` may be passed to reuse behaviour likelihoods computed
-        once for several fits (as leave-one-out does); ``init`` warm-starts
-        the globals and requires the vocabulary they were fitted with
-        (``self.vocab``) to stay in place.
+        once for several fits, and ``batch`` to reuse their encoding (as
+        leave-one-out does with :meth:`Batch.subset`); both require the
+        vocabulary they were encoded with to stay in place, as does ``init``,
+        which warm-starts the globals.
         """
         instances = list(instances)
         if not instances:
             raise ValueError("cannot fit on an empty corpus")
-        if observations is None:
-            observations = self.observe(instances, progress=progress)
-        if init is None or self.vocab is None:
-            palettes = {inst.initial_state.layout.palette for inst in instances}
-            self.vocab = self._build_vocabulary(observations, palettes)
-            init = None
-        batch = encode(observations, self.vocab)
+        if batch is None:
+            if observations is None:
+                observations = self.observe(instances, progress=progress)
+            if init is None or self.vocab is None:
+                palettes = {inst.initial_state.layout.palette for inst in instances}
+                self.vocab = self._build_vocabulary(observations, palettes)
+                init = None
+            batch = encode(observations, self.vocab)
+        elif self.vocab is None:
+            raise ValueError("fit(batch=...) needs the vocabulary the batch was encoded with")
         if init is None and not isinstance(self.lm, BagOfWords):
             # Alignment models start from the bag of words' word distributions,
             # as IBM Model 2 is classically started from Model 1: the MAP of an
@@ -251,15 +256,19 @@ class Learner:
         """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act."""
         post = self.posterior(command, state)
         goal = post.best_goal
-        space = enumerate_states(state)
-        mask = goal_mask(space, goal, cell_tables(state.layout))
-        solved = solve_task(space.next_state, mask, self.settings)
-        trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
-        states, actions = rollout_states(space, trajectory)
-        reached = bool(mask[int(trajectory.states[-1])])
-        # The space holds only states reachable from ``state``: no goal state in it means no plan can succeed.
-        reason = trajectory.reason if reached or bool(np.asarray(mask).any()) else "unreachable"
-        return FollowResult(command, post, goal, states, actions, reached, reason)
+        key = (state, goal, max_steps)
+        if key not in self._plans:  # plans depend on the world only, never on the words
+            space = enumerate_states(state)
+            mask = goal_mask(space, goal, cell_tables(state.layout))
+            solved = solve_task(space.next_state, mask, self.settings)
+            trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
+            states, actions = rollout_states(space, trajectory)
+            reached = bool(mask[int(trajectory.states[-1])])
+            # The space holds only states reachable from ``state``: no goal state in it means no plan can succeed.
+            reason = trajectory.reason if reached or bool(np.asarray(mask).any()) else "unreachable"
+            self._plans[key] = (states, actions, reached, reason)
+        states, actions, reached, reason = self._plans[key]
+        return FollowResult(command, post, goal, list(states), list(actions), reached, reason)
 
     def lexicon(self, top: int = 3) -> dict[str, list[tuple[str, float]]]:
         """Each known word's most probable meanings, ``P(token | word)``.

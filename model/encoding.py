@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import torch
 
@@ -81,6 +81,19 @@ class Batch:
     @property
     def num_instances(self) -> int:
         return self.log_prior.shape[0]
+
+    def subset(self, indices) -> "Batch":
+        """The same encoding restricted to some instances (e.g. a leave-one-out fold).
+
+        Padding widths stay those of the full batch, which changes no
+        likelihood: padded entries are masked or carry zero counts.
+        """
+        index = torch.as_tensor(indices, dtype=torch.long)
+        values = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            values[f.name] = value if f.name == "mixtures" else value[index]
+        return Batch(**values)
 
 
 def entity_words(lf: LogicalForm) -> list[tuple[str | None, tuple[str, ...]]]:
