@@ -18,7 +18,7 @@ import time
 from groundlang.interrupt import close_progress_bars, terminate_as_interrupt, what_was_kept
 
 # Order is the order of ``groundlang --help``.
-COMMANDS = ["demo", "check", "show", "parse", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate"]
+COMMANDS = ["demo", "check", "show", "parse", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate", "ablate"]
 # Commands that fill the behaviour-likelihood cache (reported after an interruption).
 CACHING_COMMANDS = {"train", "evaluate", "discover"}
 

@@ -18,6 +18,7 @@ import math
 import multiprocessing
 import time
 from collections import Counter, defaultdict
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
 from groundlang.corpus import Corpus, Instance
@@ -239,8 +240,15 @@ def evaluate(
     progress: bool = False,
     limit: int | None = None,
     learner_options: dict | None = None,
+    train_indices: Sequence[int] | None = None,
 ) -> EvaluationResult:
-    """Run ``loo`` or ``train`` on a corpus; ``limit`` scores only the first N held-out instances."""
+    """Run ``loo`` or ``train`` on a corpus; ``limit`` scores only the first N held-out instances.
+
+    ``train_indices`` (default: all) trains one model on those instances only
+    (learning curves): ``loo`` then scores the held-out remainder, each
+    instance unseen in training (reported as protocol ``heldout``), and
+    ``train`` scores the training instances.
+    """
     if protocol not in ("loo", "train"):
         raise ValueError(f"unknown protocol {protocol!r}; expected loo or train")
     started = time.perf_counter()
@@ -257,13 +265,21 @@ def evaluate(
         for inst, gold in zip(instances, golds):
             translate_goal(gold, inst.initial_state, state, name)
 
+    training = list(range(len(instances)))
+    if train_indices is not None:
+        training = sorted(set(train_indices))
+        if not training or training[0] < 0 or training[-1] >= len(instances):
+            raise ValueError(f"{corpus.directory}: train_indices must be non-empty and within 0..{len(instances) - 1}")
+        if protocol == "loo" and len(training) == len(instances):
+            raise ValueError(f"{corpus.directory}: train_indices covers every instance; nothing is held out")
+
     timings = {}
     learner = Learner(language_model=language_model, **(learner_options or {}))
     t = time.perf_counter()
-    observations = learner.observe(instances, progress=progress)
+    observations = learner.observe([instances[k] for k in training], progress=progress)
     timings["behaviour likelihoods"] = time.perf_counter() - t
     t = time.perf_counter()
-    learner.fit(instances, observations=observations, progress=progress)
+    learner.fit([instances[k] for k in training], observations=observations, progress=progress)
     timings["training on all instances"] = time.perf_counter() - t
 
     context = {
@@ -273,12 +289,17 @@ def evaluate(
         "golds": golds,
         "globals": dict(learner.globals),
         "novel_states": list(novel_states),
-        "protocol": protocol,
+        # One model trained on a subset scores every instance as it is: no per-fold refit.
+        "protocol": protocol if train_indices is None else "train",
     }
-    indices = list(range(len(instances)))[: limit or None]
+    if train_indices is not None and protocol == "loo":
+        protocol = "heldout"
+        indices = sorted(set(range(len(instances))) - set(training))[: limit or None]
+    else:
+        indices = training[: limit or None]
     t = time.perf_counter()
     records = _run_folds(context, indices, workers, ray_address, progress)
-    timings["folds" if protocol == "loo" else "following commands"] = time.perf_counter() - t
+    timings["folds" if context["protocol"] == "loo" else "following commands"] = time.perf_counter() - t
 
     failed = [r for r in records if "error" in r]
     scored = [r for r in records if "error" not in r]

@@ -1,7 +1,7 @@
 """Graceful interruption: SIGTERM behaves like Ctrl-C, and the CLI says what an interrupted run kept.
 
 Every file groundlang writes goes through a temporary file and a rename, so
-an interruption can only lose the piece of work in progress. Three helpers:
+an interruption can only lose the piece of work in progress. Four helpers:
 
 - :func:`terminate_as_interrupt` (a context manager used by ``cli.main``)
   makes SIGTERM raise ``KeyboardInterrupt`` as SIGINT does, and restores
@@ -108,7 +108,9 @@ def _new_cache_entries(root: Path, started: float) -> int:
 
 
 # (argument name, what it holds); a command's arguments name its outputs.
-_OUTPUTS = (("output", "model"), ("json", "result"), ("out", "picture"))
+_OUTPUTS = (("output", "output"), ("json", "result"), ("out", "picture"))
+# What ``-o/--output`` holds, per command.
+_OUTPUT_KIND = {"train": "model", "discover": "task library"}
 
 
 def what_was_kept(args, started: float, uses_cache: bool) -> str:
@@ -117,6 +119,8 @@ def what_was_kept(args, started: float, uses_cache: bool) -> str:
     for attr, what in _OUTPUTS:
         value = getattr(args, attr, None)
         if isinstance(value, (str, Path)):
+            if attr == "output":
+                what = _OUTPUT_KIND.get(getattr(args, "command", None), what)
             parts.append(_describe_output(Path(value), what, started))
     if uses_cache and getattr(args, "no_cache", False) is not True:
         from groundlang.inference.likelihoods import cache_directory

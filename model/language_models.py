@@ -120,14 +120,16 @@ class ParseAligned(LanguageModel):
         self.align_concentration = align_concentration
 
     def settings(self) -> dict:
-        return {"word_concentration": self.word_concentration, "align_concentration": self.align_concentration}
+        return {
+            "word_concentration": self.word_concentration,
+            "align_concentration": self.align_concentration,
+        }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
+        concentration = torch.full((num_roles,), self.align_concentration)
         with pyro.plate("preps", num_preps, dim=-1):
-            g["align"] = pyro.sample(
-                "align", dist.Dirichlet(torch.full((num_roles,), self.align_concentration))
-            )
+            g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
         return g
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:

@@ -316,6 +316,7 @@ def test_script_did_not_run(tmp_path):
     assert not Path("/tmp/groundlang-pwned").exists()
 
 
+@pytest.mark.slow
 def test_errors_through_the_real_executable(tmp_path, trained_model):
     """Two rows in a fresh interpreter: what a user at a shell sees (exit code, one line, no traceback)."""
     import subprocess

@@ -105,6 +105,7 @@ def test_cli_reports_what_an_interrupted_train_kept(tmp_path, monkeypatch, capsy
 
 def test_what_was_kept_describes_each_output(tmp_path):
     class Args:
+        command = "train"
         output = str(tmp_path / "model")
         json = str(tmp_path / "result.json")
         cache_dir = str(tmp_path / "cache")

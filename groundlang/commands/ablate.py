@@ -1,0 +1,92 @@
+"""``groundlang ablate --corpus DIR --palette NAME --labels CSV [--language-models ...] [--sizes ...] ...``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from groundlang.model.world import PALETTES
+
+
+def _names(text: str) -> list[str]:
+    names = [x.strip() for x in text.split(",") if x.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError("expected a comma-separated list, e.g. bow,ibm2,parse")
+    return names
+
+
+def _sizes(text: str) -> list[int]:
+    try:
+        sizes = [int(x) for x in _names(text)]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers, e.g. 24,60,120,240; got {text!r}")
+    return sizes
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("ablate", help="accuracy over language models x task libraries x training sizes")
+    p.add_argument("--corpus", required=True, metavar="DIR")
+    p.add_argument("--palette", required=True, choices=sorted(PALETTES))
+    p.add_argument("--labels", required=True, metavar="CSV")
+    p.add_argument("--language-models", type=_names, default=["bow", "ibm2", "parse"], metavar="LIST",
+                   help="comma-separated: bow,ibm2,parse (default: all three)")
+    p.add_argument("--libraries", type=_names, default=["authored", "discovered"], metavar="LIST",
+                   help="comma-separated: authored,discovered (default: both)")
+    p.add_argument("--sizes", type=_sizes, metavar="LIST",
+                   help="training sizes, e.g. 24,60,120,240 (default: the whole corpus)")
+    p.add_argument("--protocol", default="loo", choices=["loo", "train"],
+                   help="loo: unseen commands (held-out remainder below the full size); train: training commands")
+    p.add_argument("--seed", type=int, default=0, help="seed of the training subsets")
+    p.add_argument("--workers", type=int, default=1, help="folds in parallel (processes)")
+    p.add_argument("--ray", metavar="ADDRESS", help="run cells on Ray ('local', 'auto' or host:port)")
+    p.add_argument("--skip-inconsistent", action="store_true")
+    p.add_argument("--limit", type=int, help="score only the first N instances of each cell")
+    p.add_argument("--json", metavar="OUT", help="write the rows as JSON here")
+    p.add_argument("--plot", metavar="PNG", help="write a plot of accuracy by cell here")
+    p.set_defaults(func=run)
+
+
+def write_plot(result, path: Path) -> None:
+    """Save the ablation plot as PNG, atomically."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import io
+
+    import matplotlib.pyplot as plt
+
+    from groundlang.ablation import plot_ablation
+    from groundlang.model_io import write_atomically
+
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    plot_ablation(result.rows, ax=ax, title=f"{Path(result.corpus).name}, {result.protocol}")
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=120)
+    plt.close(fig)
+    write_atomically(path, buffer.getvalue())
+
+
+def run(args: argparse.Namespace) -> int:
+    from groundlang.ablation import run_ablation
+    from groundlang.corpus import read_corpus
+    from groundlang.labels import read_labels
+    from groundlang.model_io import write_atomically
+
+    corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
+    labels = read_labels(args.labels)
+    result = run_ablation(
+        corpus, labels, language_models=args.language_models, libraries=args.libraries, sizes=args.sizes,
+        protocol=args.protocol, seed=args.seed, workers=args.workers, ray_address=args.ray,
+        progress=not args.quiet, limit=args.limit,
+    )
+    print(result.table())
+    print(f"wall time {result.seconds:.1f} s")
+    if args.json:
+        write_atomically(Path(args.json), json.dumps(result.to_json(), indent=1).encode("utf-8"))
+        print(f"rows written to {args.json}")
+    if args.plot:
+        write_plot(result, Path(args.plot))
+        print(f"plot written to {args.plot}")
+    return 0 if all(r.error is None and not r.failed_folds for r in result.rows) else 1

@@ -1,0 +1,378 @@
+"""Cleanup World as a gymnasium environment, and a learned model's policy for it.
+
+    import gymnasium, groundlang.gym_env          # registers "groundlang/Cleanup-v0"
+    env = gymnasium.make("groundlang/Cleanup-v0", render_mode="rgb_array")
+    obs, info = env.reset(seed=0)                 # obs["grid"]: [H, W, 6] uint8, obs["command"]: str
+    act = policy(learner, obs["command"], env.unwrapped.state)
+    obs, reward, terminated, truncated, info = env.step(act(obs))
+
+Without ``gymnasium`` installed this module cannot be imported (``pip install
+groundlang[gym]``); the rest of groundlang never imports it. With gymnasium
+1.x, ``gymnasium.make("groundlang.gym_env:groundlang/Cleanup-v0")`` imports
+and registers in one go.
+
+Observation channels of ``grid`` (row 0 is the north edge, column 0 the west
+edge, as the pictures of :mod:`groundlang.render` show them):
+
+    0 wall          1 on wall cells no door clears
+    1 door          1 on door cells
+    2 room colour   1 + palette colour index of the room the cell lies in, 0 elsewhere
+    3 agent         1 where the agent stands
+    4 toy colour    1 + palette colour index of the toy on the cell, 0 where none
+    5 toy shape     1 + palette shape index of the toy on the cell, 0 where none
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+import string
+from functools import lru_cache
+from itertools import permutations
+from typing import Any, Callable
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+
+from groundlang.logic.atoms import Atom, parse_goal
+from groundlang.model.world import State, step
+
+__all__ = [
+    "ENV_ID",
+    "CleanupAction",
+    "CleanupEnv",
+    "CHANNELS",
+    "COMMAND_CHARSET",
+    "MAX_COMMAND_LENGTH",
+    "CommandPolicy",
+    "policy",
+    "observation_positions",
+    "register_envs",
+]
+
+log = logging.getLogger(__name__)
+
+ENV_ID = "groundlang/Cleanup-v0"
+CHANNELS = ("wall", "door", "room_colour", "agent", "toy_colour", "toy_shape")
+# Printable ASCII without tabs and line breaks: what a command line holds after normalisation.
+COMMAND_CHARSET = "".join(c for c in string.printable if c not in "\t\n\r\x0b\x0c")
+MAX_COMMAND_LENGTH = 1024
+# Typographic characters crowd workers type, and their ASCII spelling in observations.
+_ASCII = str.maketrans({"\u2018": "'", "\u2019": "'", "\u201c": '"', "\u201d": '"', "\u2013": "-", "\u2014": "-"})
+
+
+class CleanupAction(enum.IntEnum):
+    """The four moves (same values as :class:`groundlang.model.world.Action`) and TERMINATE."""
+
+    NORTH = 0
+    SOUTH = 1
+    EAST = 2
+    WEST = 3
+    TERMINATE = 4
+
+
+def command_text(command: str) -> str:
+    """The command as the observation holds it: one line of printable ASCII.
+
+    Typographic quotes and dashes become ASCII, other characters outside
+    ``COMMAND_CHARSET`` become ``?``; longer than ``MAX_COMMAND_LENGTH`` is a ValueError.
+    """
+    text = " ".join(str(command).translate(_ASCII).split())
+    text = "".join(c if c in COMMAND_CHARSET else "?" for c in text)
+    if len(text) > MAX_COMMAND_LENGTH:
+        raise ValueError(f"command of {len(text)} characters; at most {MAX_COMMAND_LENGTH} fit the observation")
+    return text
+
+
+@lru_cache(maxsize=1)
+def _example_pool() -> tuple[tuple[State, str, tuple[Atom, ...] | None], ...]:
+    """(initial state, command, gold goal) of every example-corpus instance, in file order."""
+    from groundlang.corpus import example_corpus_path, read_corpus
+    from groundlang.labels import label_for, read_labels
+
+    root = example_corpus_path()
+    corpus = read_corpus(root, "sokoban")
+    labels = read_labels(root / "labels.csv")
+    return tuple((inst.initial_state, inst.command, label_for(inst, labels)) for inst in corpus)
+
+
+def _static_grid(state: State, shape: tuple[int, int]) -> np.ndarray:
+    """Channels 0-2 ``[H, W, 3]`` (north up) of a layout, padded to ``shape`` = (H, W)."""
+    lay = state.layout
+    H, W = shape
+    grid = np.zeros((H, W, 3), dtype=np.uint8)
+    wall, walkable = lay.wall, lay.walkable  # [width, height]
+    door = wall & walkable
+    h = lay.height
+    # layout grids are [x, y]; the observation is [row, col] with row 0 = y = h - 1
+    grid[H - h:, : lay.width, 0] = (wall & ~walkable).T[::-1]
+    grid[H - h:, : lay.width, 1] = door.T[::-1]
+    for r in lay.rooms:
+        value = lay.palette.colour_index(r.colour) + 1
+        # Rows H-1-y for y in bottom+1..top-1.
+        grid[H - r.top: H - r.bottom - 1, r.left + 1: r.right, 2] = value
+    return grid
+
+
+def _dynamic_grid(state: State, shape: tuple[int, int]) -> np.ndarray:
+    """Channels 3-5 ``[H, W, 3]`` (agent, toy colour, toy shape)."""
+    H, W = shape
+    grid = np.zeros((H, W, 3), dtype=np.uint8)
+    pal = state.layout.palette
+    grid[H - 1 - state.agent.y, state.agent.x, 0] = 1
+    for toy in state.toys:
+        grid[H - 1 - toy.y, toy.x, 1] = pal.colour_index(toy.colour) + 1
+        grid[H - 1 - toy.y, toy.x, 2] = pal.shape_index(toy.shape) + 1
+    return grid
+
+
+def observation_positions(grid: np.ndarray, layout) -> np.ndarray | None:
+    """Agent and toy positions ``[1 + k, 2]`` (x, y) read from an observation grid.
+
+    Toys are matched to the layout's toys by colour and shape; toys alike in
+    both are interchangeable, and every assignment of them is returned by
+    :func:`_position_candidates`. Returns None when the grid does not show the
+    layout's agent and toys.
+    """
+    candidates = _position_candidates(grid, layout)
+    return candidates[0] if candidates else None
+
+
+def _position_candidates(grid: np.ndarray, layout) -> list[np.ndarray]:
+    grid = np.asarray(grid)
+    H = grid.shape[0]
+    rows, cols = np.nonzero(grid[:, :, 3])
+    if len(rows) != 1:
+        return []
+    agent = (int(cols[0]), H - 1 - int(rows[0]))
+    pal = layout.palette
+    cells: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    for r, c in zip(*np.nonzero(grid[:, :, 4])):
+        key = (int(grid[r, c, 4]) - 1, int(grid[r, c, 5]) - 1)
+        cells.setdefault(key, []).append((int(c), H - 1 - int(r)))
+    wanted: dict[tuple[int, int], list[int]] = {}
+    for i, (colour, shape) in enumerate(layout.toy_attributes):
+        wanted.setdefault((pal.colour_index(colour), pal.shape_index(shape)), []).append(i)
+    if {k: len(v) for k, v in wanted.items()} != {k: len(v) for k, v in cells.items()}:
+        return []
+    out = [np.zeros((1 + len(layout.toy_attributes), 2), dtype=np.int64)]
+    out[0][0] = agent
+    for key, toys in wanted.items():
+        extended = []
+        for base in out:
+            for perm in permutations(cells[key]):
+                new = base.copy()
+                new[[1 + t for t in toys]] = perm
+                extended.append(new)
+        out = extended
+    return out
+
+
+class CleanupEnv(gymnasium.Env):
+    """Cleanup World with a command: move (and push toys), then TERMINATE.
+
+    ``state``: the initial state; None picks one example-corpus instance per
+    reset (by the reset's seed) with its command and gold goal.
+    ``command``: the text in every observation (default: the picked instance's).
+    ``goal``: atoms, or text like ``"toyInRoom(block0, room1)"``; optional.
+    Reward is 1 on the step that makes the goal hold (or on TERMINATE while
+    it holds), else 0. An episode terminates on TERMINATE or when the goal
+    holds, and is truncated after ``max_steps`` steps. ``info["goal_holds"]``
+    says whether the goal holds (False without a goal); ``info["state"]`` is
+    the :class:`State`. ``reset(options={"state": ..., "command": ...,
+    "goal": ...})`` overrides any of them for that episode.
+    """
+
+    metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 4}
+
+    def __init__(self, state: State | None = None, command: str = "", goal=None,
+                 render_mode: str | None = None, max_steps: int = 200):
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode {render_mode!r} is not supported; expected one of "
+                             f"{', '.join(self.metadata['render_modes'])} or None")
+        if max_steps < 1:
+            raise ValueError(f"max_steps must be at least 1, got {max_steps}")
+        self.render_mode = render_mode
+        self.max_steps = int(max_steps)
+        self._fixed_state = state
+        self._fixed_command = command_text(command) if command else ""
+        self._fixed_goal = self._goal(goal)
+        layouts = [state.layout] if state is not None else [s.layout for s, _, _ in _example_pool()]
+        self.grid_shape = (max(l.height for l in layouts), max(l.width for l in layouts))
+        # Colour and shape indices + 1 must fit uint8.
+        top = max(max(len(l.palette.colours), len(l.palette.shapes)) for l in layouts) + 1
+        self.action_space = spaces.Discrete(len(CleanupAction))
+        self.observation_space = spaces.Dict({
+            "grid": spaces.Box(0, top, shape=(*self.grid_shape, len(CHANNELS)), dtype=np.uint8),
+            "command": spaces.Text(MAX_COMMAND_LENGTH, min_length=0, charset=COMMAND_CHARSET),
+        })
+        self.state: State | None = None
+        self.command = ""
+        self.goal: tuple[Atom, ...] | None = None
+        self.steps = 0
+        self._static: np.ndarray | None = None
+
+    @staticmethod
+    def _goal(goal) -> tuple[Atom, ...] | None:
+        if goal is None or goal == "" or goal == ():
+            return None
+        return parse_goal(goal) if isinstance(goal, str) else tuple(goal)
+
+    def _holds(self) -> bool:
+        from groundlang.labels import goal_holds
+
+        return self.goal is not None and goal_holds(self.goal, self.state)
+
+    def _observation(self) -> dict[str, Any]:
+        grid = np.concatenate([self._static, _dynamic_grid(self.state, self.grid_shape)], axis=-1)
+        return {"grid": grid, "command": self.command}
+
+    def _info(self) -> dict[str, Any]:
+        return {"goal_holds": self._holds(), "state": self.state, "goal": self.goal, "steps": self.steps}
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        options = dict(options or {})
+        state, command, goal = self._fixed_state, self._fixed_command, self._fixed_goal
+        if "state" not in options and state is None:
+            pool = _example_pool()
+            picked, picked_command, picked_goal = pool[int(self.np_random.integers(len(pool)))]
+            state = picked
+            command = command or command_text(picked_command)
+            goal = goal if goal is not None else picked_goal
+        if "state" in options:
+            state = options["state"]
+        if "command" in options:
+            command = command_text(options["command"])
+        if "goal" in options:
+            goal = self._goal(options["goal"])
+        if state.layout.height > self.grid_shape[0] or state.layout.width > self.grid_shape[1]:
+            raise ValueError(f"state of size {state.layout.height}x{state.layout.width} does not fit the "
+                             f"observation grid {self.grid_shape[0]}x{self.grid_shape[1]} of this env")
+        self.state, self.command, self.goal, self.steps = state, command, goal, 0
+        self._static = _static_grid(state, self.grid_shape)
+        return self._observation(), self._info()
+
+    def step(self, action):
+        if self.state is None:
+            raise RuntimeError("call reset() before step()")
+        action = CleanupAction(int(action))
+        self.steps += 1
+        if action == CleanupAction.TERMINATE:
+            holds = self._holds()
+            return self._observation(), float(holds), True, False, self._info()
+        self.state = step(self.state, action)
+        holds = self._holds()
+        truncated = not holds and self.steps >= self.max_steps
+        return self._observation(), float(holds), holds, truncated, self._info()
+
+    def render(self):
+        if self.render_mode is None or self.state is None:
+            return None
+        if self.render_mode == "ansi":
+            from groundlang.render import ascii_state
+
+            return ascii_state(self.state) + "\n"
+        return render_rgb(self.state, title=self.command or None)
+
+
+def render_rgb(state: State, title: str | None = None, trajectory=None, dpi: int = 60) -> np.ndarray:
+    """An RGB picture ``[height, width, 3]`` uint8 of a state (matplotlib Agg, no display)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from groundlang.render import draw_state
+
+    lay = state.layout
+    fig = Figure(figsize=(0.5 * lay.width + 1.5, 0.5 * lay.height + 1.5), dpi=dpi)
+    canvas = FigureCanvasAgg(fig)
+    ax = fig.add_subplot(1, 1, 1)
+    draw_state(state, ax=ax, trajectory=trajectory, title=title)
+    fig.tight_layout()
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
+
+
+class CommandPolicy:
+    """A closed-loop policy for one command: observation -> CleanupAction.
+
+    Plans once, on every state reachable from the initial state, for the most
+    probable grounded goal of the command; then each observation is looked up
+    in that state space. TERMINATE where the goal holds or when the observation
+    is outside the planned space (nothing sensible to do).
+    """
+
+    def __init__(self, goal, posterior, space, log_policy, mask):
+        self.goal = goal  # tuple[Atom, ...]
+        self.posterior = posterior
+        self.space = space
+        self.log_policy = np.asarray(log_policy)  # [S, 5]
+        self.mask = np.asarray(mask, dtype=bool)  # [S]
+
+    def state_index(self, observation) -> int:
+        grid = observation["grid"] if isinstance(observation, dict) else observation
+        if isinstance(grid, State):
+            return int(self.space.indices_of(grid.positions[None])[0])
+        candidates = _position_candidates(np.asarray(grid), self.space.layout)
+        if not candidates:
+            return -1
+        found = self.space.indices_of(np.stack(candidates))
+        hits = found[found >= 0]
+        return int(hits[0]) if len(hits) else -1
+
+    def __call__(self, observation) -> CleanupAction:
+        s = self.state_index(observation)
+        if s < 0 or self.mask[s]:
+            return CleanupAction.TERMINATE
+        return CleanupAction(int(np.argmax(self.log_policy[s])))
+
+
+def policy(learner, command: str, state) -> CommandPolicy:
+    """Wrap a trained :class:`groundlang.Learner` into a callable ``observation -> action``.
+
+    ``state`` is the initial :class:`State` or a reset :class:`CleanupEnv`
+    (its current state). The reading of the command and the plan are the
+    ones :meth:`Learner.follow` uses (most probable grounded goal, soft value
+    iteration with the learner's settings). Raises NotFittedError for an
+    untrained learner.
+    """
+    from groundlang.inference.planning import solve_task
+    from groundlang.model.features import goal_mask
+    from groundlang.model.geometry import cell_tables
+    from groundlang.model.statespace import enumerate_states
+
+    if isinstance(state, gymnasium.Env):
+        state = state.unwrapped.state
+        if state is None:
+            raise ValueError("the environment has no state yet: call reset() first")
+    post = learner.posterior(command, state)
+    goal = post.best_goal
+    space = enumerate_states(state)
+    mask = goal_mask(space, goal, cell_tables(state.layout))
+    solved = solve_task(space.next_state, mask, learner.settings)
+    return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask)
+
+
+def run_episode(env: gymnasium.Env, act: Callable, seed: int | None = None, options: dict | None = None):
+    """Reset ``env`` and act until the episode ends; returns (states, actions, total reward, info)."""
+    obs, info = env.reset(seed=seed, options=options)
+    states, actions, total = [info["state"]], [], 0.0
+    while True:
+        a = act(obs)
+        obs, reward, terminated, truncated, info = env.step(a)
+        total += reward
+        actions.append(CleanupAction(int(a)))
+        if CleanupAction(int(a)) != CleanupAction.TERMINATE:
+            states.append(info["state"])
+        if terminated or truncated:
+            return states, actions, total, info
+
+
+def register_envs() -> None:
+    """Register ``groundlang/Cleanup-v0`` with gymnasium (idempotent)."""
+    if ENV_ID not in gymnasium.registry:
+        gymnasium.register(id=ENV_ID, entry_point="groundlang.gym_env:CleanupEnv", max_episode_steps=None)
+
+
+register_envs()

@@ -1,0 +1,148 @@
+"""The gymnasium environment: checker, spaces, dynamics, rewards, determinism, and a learned policy."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+gymnasium = pytest.importorskip("gymnasium", reason="gymnasium is not installed (pip install groundlang[gym])")
+
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+
+from groundlang.corpus import example_corpus_path, parse_state, read_state_file  # noqa: E402
+from groundlang.gym_env import (  # noqa: E402
+    ENV_ID,
+    CleanupAction,
+    CleanupEnv,
+    command_text,
+    observation_positions,
+    policy,
+    run_episode,
+)
+from groundlang.model.world import Action, step  # noqa: E402
+
+# Green room west, red north-east, blue south-east (the example corpus's layout); star at (8,2), agent at (9,7).
+STATE = ("room,5,0,9,5,0 room,10,5,9,12,4 room,1,5,4,12,0 door,5,7,5,7 door,5,2,5,2 door,9,4,9,4 "
+         "block,12,0,8,2 agent,9,7")
+
+
+@pytest.fixture
+def state():
+    return parse_state(STATE, "sokoban")
+
+
+def test_registered_and_check_env_passes():
+    assert ENV_ID in gymnasium.registry
+    env = gymnasium.make(ENV_ID, render_mode="rgb_array")
+    check_env(env.unwrapped, skip_render_check=False)
+    env.close()
+
+
+def test_observation_channels(state):
+    env = CleanupEnv(state, command="go to the green room")
+    obs, info = env.reset(seed=0)
+    grid = obs["grid"]
+    assert grid.shape == (10, 13, 6) and grid.dtype == np.uint8
+    assert obs["command"] == "go to the green room"
+    assert obs in env.observation_space
+    # Row 0 is north (y = 9): the agent at (9, 7) is on row 2, column 9; the star at (8, 2) on row 7.
+    assert list(zip(*np.nonzero(grid[:, :, 3]))) == [(2, 9)]
+    assert (grid[7, 8, 4], grid[7, 8, 5]) == (13, 1)  # yellow = 12 + 1, star = 0 + 1
+    # Room colour indices + 1: green 6 (west), red 11 (north-east), blue 2 (south-east).
+    assert (grid[4, 2, 2], grid[2, 8, 2], grid[7, 8, 2]) == (6, 11, 2)
+    # Doors at (5,7), (5,2), (9,4): door channel set, wall channel clear.
+    assert {(int(c), 9 - int(r)) for r, c in zip(*np.nonzero(grid[:, :, 1]))} == {(5, 7), (5, 2), (9, 4)}
+    assert grid[2, 5, 0] == 0 and grid[0, 0, 0] == 1
+    assert (observation_positions(grid, state.layout) == state.positions).all()
+    assert info["goal_holds"] is False and info["state"] == state
+
+
+def test_step_follows_the_world_dynamics_and_rewards_the_goal(state):
+    env = CleanupEnv(state, command="go to the blue room", goal="agentInRoom(agent0, room2)", max_steps=50)
+    env.reset(seed=0)
+    # (9,7) -> south twice -> (9,5); south: door (9,4); south: (9,3) inside the blue room.
+    rewards, expected = [], state
+    for k in range(4):
+        obs, reward, terminated, truncated, info = env.step(CleanupAction.SOUTH)
+        expected = step(expected, Action.SOUTH)
+        assert info["state"] == expected
+        rewards.append(reward)
+    assert rewards == [0.0, 0.0, 0.0, 1.0]
+    assert terminated and not truncated and info["goal_holds"]
+
+
+def test_terminate_ends_the_episode_without_reward_when_the_goal_fails(state):
+    env = CleanupEnv(state, goal="agentInRoom(agent0, room0)")
+    env.reset()
+    _, reward, terminated, truncated, info = env.step(CleanupAction.TERMINATE)
+    assert (reward, terminated, truncated, info["goal_holds"]) == (0.0, True, False, False)
+
+
+def test_truncated_at_max_steps(state):
+    env = CleanupEnv(state, max_steps=3)
+    env.reset()
+    outcomes = [env.step(CleanupAction.NORTH)[2:4] for _ in range(3)]
+    assert outcomes == [(False, False), (False, False), (False, True)]
+
+
+def test_seeded_resets_are_deterministic():
+    a, b = CleanupEnv(), CleanupEnv()
+    picks = []
+    for seed in range(6):
+        oa, ia = a.reset(seed=seed)
+        ob, ib = b.reset(seed=seed)
+        assert oa["command"] == ob["command"] and (oa["grid"] == ob["grid"]).all()
+        assert ia["goal"] == ib["goal"]
+        picks.append(oa["command"])
+    assert len(set(picks)) > 1  # the seed does choose among the example instances
+    # The same seed and actions give the same trajectory.
+    rng = np.random.default_rng(7)
+    actions = rng.integers(0, 4, size=20)
+    runs = []
+    for env in (a, b):
+        env.reset(seed=11)
+        runs.append([env.step(int(x))[0]["grid"].copy() for x in actions])
+    assert all((x == y).all() for x, y in zip(*runs))
+
+
+def test_reset_options_and_rendering(state):
+    env = CleanupEnv(render_mode="rgb_array")
+    obs, info = env.reset(seed=0, options={"state": state, "command": "Go to the \u2018green\u2019 room\n",
+                                            "goal": "agentInRoom(agent0, room0)"})
+    assert obs["command"] == "Go to the 'green' room"
+    assert info["state"] == state
+    image = env.render()
+    assert image.ndim == 3 and image.shape[2] == 3 and image.dtype == np.uint8
+    assert image.std() > 10  # a picture, not a blank canvas
+    text_env = CleanupEnv(state, render_mode="ansi")
+    text_env.reset()
+    assert "legend" in text_env.render()
+
+
+def test_bad_arguments_are_value_errors(state):
+    with pytest.raises(ValueError, match="render_mode"):
+        CleanupEnv(state, render_mode="human")
+    with pytest.raises(ValueError, match="max_steps"):
+        CleanupEnv(state, max_steps=0)
+    with pytest.raises(ValueError, match="at most"):
+        command_text("x" * 2000)
+
+
+@pytest.mark.slow
+def test_a_learned_policy_carries_out_a_command_in_a_novel_layout():
+    from groundlang.corpus import read_corpus
+    from groundlang.learner import Learner
+
+    corpus = read_corpus(example_corpus_path(), "sokoban")
+    learner = Learner(cache_dir=False).fit(corpus.instances)
+    novel = read_state_file(example_corpus_path() / "novel_b.state", "sokoban")
+    # novel_b: room0 red, room1 blue, room2 green.
+    env = CleanupEnv(novel, command="take the star to the red room", goal="toyInRoom(block0, room0)")
+    env.reset(seed=0)
+    act = policy(learner, "take the star to the red room", env)
+    assert [str(a) for a in act.goal] == ["toyInRoom(block0, room0)"]
+    states, actions, total, info = run_episode(env, act, seed=0)
+    assert total == 1.0 and info["goal_holds"]
+    followed = learner.follow("take the star to the red room", novel)
+    assert [int(a) for a in actions] == [int(a) for a in followed.actions]
+    assert states == followed.states
