@@ -59,18 +59,19 @@ def _register_serializers(ray) -> None:
 
 
 @contextlib.contextmanager
-def ray_session(address: str, num_cpus: int | None = None) -> Iterator[object]:
+def ray_session(address: str, num_cpus: int | None = None, **init_options) -> Iterator[object]:
     """Connect to Ray for the duration of a block; yields the ``ray`` module.
 
     ``address``: ``"local"`` starts a local instance with ``num_cpus`` CPUs
     (default: all of this machine's); ``"auto"`` or ``"host:port"`` joins a
-    running cluster. When Ray is already initialised (an enclosing session),
-    it is reused and left running; otherwise it is shut down on exit.
+    running cluster; ``init_options`` go to ``ray.init`` (e.g. ``runtime_env``).
+    When Ray is already initialised (an enclosing session), it is reused and
+    left running; otherwise it is shut down on exit.
     """
     ray = _import_ray()
     started = False
     if not ray.is_initialized():
-        options = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
+        options = dict(include_dashboard=False, log_to_driver=False, configure_logging=False) | init_options
         if address == "local":
             ray.init(num_cpus=num_cpus or os.cpu_count() or 1, **options)
         else:

@@ -194,8 +194,15 @@ def _fold(index: int) -> dict:
 
 
 def _init_worker(context: dict) -> None:
+    import signal
+
     import torch
 
+    # Forked workers inherit the CLI's SIGTERM-as-Ctrl-C handler; the pool
+    # stops them with SIGTERM when it closes, which must stay silent. Ctrl-C
+    # goes to the parent, which reports the interruption once.
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     torch.set_num_threads(1)
     _CONTEXT.clear()
     _CONTEXT.update(context)

@@ -172,7 +172,7 @@ ax.set_yticks(range(len(words)), words, fontsize=8)
 fig.colorbar(im, ax=ax, label="P(token | word)")
 ax.set_title("learned lexicon (example corpus)")
 fig.tight_layout()'''),
-    ("md", "## The posterior sharpens as training data grows\n\nTrain on the first *n* commands of every task (same demonstrations) and ask, in the three novel layouts, for the probability of the right goal."),
+    ("md", "## Does the posterior sharpen as training data grows?\n\nTrain on the first *n* commands of every task (same demonstrations) and ask, in the three novel layouts, for the probability of the right goal for each task's first command. On this tiny corpus the curve is measured, not assumed: it need not be monotone (a second and third phrasing per task first spreads the verbs' meaning before all four pin it down)."),
     ("code", '''from groundlang.evaluation import translate_goal
 from groundlang.labels import read_labels, label_for
 
@@ -180,23 +180,25 @@ labels = read_labels(examples / "labels.csv")
 by_prefix = {}
 for inst in corpus:
     by_prefix.setdefault(inst.prefix, []).append(inst)
-tests = [(inst.command, inst, label_for(inst, labels)) for inst in (group[-1] for group in by_prefix.values())]
-sizes = [1, 2, 3] if QUICK else [1, 2, 3, 4]
-mean_p = []
+sizes = [1, 2, 4] if QUICK else [1, 2, 3, 4]
+mean_p, min_p = [], []
 for n in sizes:
     train = [i for group in by_prefix.values() for i in group[:n]]
     model = Learner(cache_dir=False).fit(train)
     ps = []
-    for command, inst, gold in tests:
+    for group in by_prefix.values():
+        inst = group[0]
+        gold = label_for(inst, labels)
         for s in novel.values():
             target = translate_goal(gold, inst.initial_state, s)
-            ps.append(dict((g, p) for g, p in model.posterior(command, s).goals()).get(target, 0.0))
-    mean_p.append(float(np.mean(ps)))
-    print(f"{len(train):3d} training instances: mean P(right goal) = {mean_p[-1]:.3f}")
+            ps.append(dict(model.posterior(inst.command, s).goals()).get(target, 0.0))
+    mean_p.append(float(np.mean(ps))); min_p.append(float(np.min(ps)))
+    print(f"{len(train):3d} training instances: P(right goal) mean {mean_p[-1]:.3f}, min {min_p[-1]:.3f}")
 fig, ax = plt.subplots(figsize=(5, 3.2))
-ax.plot([6 * n for n in sizes], mean_p, "o-")
-ax.set_xlabel("training instances"); ax.set_ylabel("mean posterior of the right goal")
-ax.set_ylim(0, 1); ax.set_title("novel layouts, one command per task")
+ax.plot([6 * n for n in sizes], mean_p, "o-", label="mean")
+ax.plot([6 * n for n in sizes], min_p, "s--", label="worst command")
+ax.set_xlabel("training instances"); ax.set_ylabel("posterior of the right goal")
+ax.set_ylim(0, 1); ax.legend(); ax.set_title("6 commands x 3 novel layouts")
 fig.tight_layout()'''),
     ("md", "## The crowd-sourced corpus (when present, full mode only)\n\nThe commands-to-tasks corpus is not part of the repository; this cell uses it where it is, with the real, messy commands."),
     ("code", '''shared = Path(os.environ.get("GROUNDLANG_CORPUS", "../../shared/data/commands-to-tasks")) / "allTurkTrain"
@@ -255,7 +257,7 @@ SENTENCES = {
 train = [demonstration(start_star if task == "star to green" else start_agent, TASKS[task], s)
          for task, sentences in SENTENCES.items() for s in sentences]
 goals = list(TASKS.values())
-behaviour = torch.tensor(behaviour_likelihood_table(train, [goals] * len(train), cache_dir=False))
+behaviour = torch.as_tensor(np.asarray(behaviour_likelihood_table(train, [goals] * len(train), cache_dir=False)))
 print("log Pr(demonstration | task), rows = training sentences:")
 print(behaviour.numpy().round(1))
 
@@ -284,15 +286,23 @@ for sentence in TESTS:
     print(f"{sentence!r:32s}", {t: round(float(p), 3) for t, p in zip(TASKS, model0_posteriors[sentence])})'''),
     ("md", """## The Pyro model: bag of words vs parse-aligned
 
-The same six instances through `Learner`. The candidates now are every grounding of the default task library (lifted task, grounding, constraints), not just the two reward functions; we report the posterior mass of the two true goals. The parse-aligned model sees "the star" as an argument of the command and sends the second command to the toy task."""),
-    ("code", '''rows = {}
+The same six instances through `Learner`, with a library of the two lifted tasks of the example (`toyToRoom`, `agentToRoom`), so that the comparison with Model 0's two reward functions is like for like; we report the posterior over lifted tasks. The paper's argument is that a model which parses the command sees "the star" as an argument and sends "Go with the star to green." to the toy task. The cell below prints what groundlang measures, whichever way it goes."""),
+    ("code", '''from groundlang.logic.tasks import TaskLibrary, format_lifted_task
+
+default = TaskLibrary.load()
+two_tasks = TaskLibrary.from_text("".join(format_lifted_task(default.task(n)) for n in ("toyToRoom", "agentToRoom")))
+LIFTED = {"star to green": "toyToRoom", "agent to green": "agentToRoom"}
+rows = {}
 for lm in ["bow", "parse"]:
-    learner = Learner(language_model=lm, cache_dir=False).fit(train)
+    learner = Learner(language_model=lm, library=two_tasks, cache_dir=False).fit(train)
     for sentence in TESTS:
-        goal_probs = dict(learner.posterior(sentence, start_star).goals())
-        rows[(lm, sentence)] = [goal_probs.get(g, 0.0) for g in goals]
-        print(f"{lm:5s} {sentence!r:32s}", {t: round(p, 3) for t, p in zip(TASKS, rows[(lm, sentence)])},
-              "| lifted:", next(iter(learner.posterior(sentence, start_star).lifted_tasks())))
+        lifted = learner.posterior(sentence, start_star).lifted_tasks()
+        rows[(lm, sentence)] = [lifted.get(LIFTED[t], 0.0) for t in TASKS]
+        print(f"{lm:5s} {sentence!r:32s}", {t: round(p, 3) for t, p in zip(TASKS, rows[(lm, sentence)])})
+for name, probs in [("Model 0", model0_posteriors[TESTS[1]]), ("Pyro bow", rows[("bow", TESTS[1])]),
+                    ("Pyro parse", rows[("parse", TESTS[1])])]:
+    verdict = "toy task" if probs[0] > probs[1] else "agent task"
+    print(f"{name:10s} sends {TESTS[1]!r} to the {verdict} ({max(probs):.2f})")
 fig, axes = plt.subplots(1, 2, figsize=(11, 3.2), sharey=True)
 for ax, sentence in zip(axes, TESTS):
     labels = ["Model 0 (EM)", "Pyro bow", "Pyro parse"]
@@ -303,6 +313,7 @@ for ax, sentence in zip(axes, TESTS):
     ax.set_xticks(x, labels); ax.set_ylim(0, 1); ax.set_title(repr(sentence))
 axes[0].set_ylabel("posterior"); axes[0].legend()
 fig.tight_layout()'''),
+    ("md", """**Measured (seed 0):** Model 0 and the Pyro bag of words lean to the toy task for "Go with the star to green." (0.54 and 0.59), while the parse-aligned model sends it to the agent task (0.92): in six sentences "go" occurs only with the agent task, and the parse model reads *go* as the verb naming the task, with "the star" and "green" as its arguments. The paper's claim that parsing fixes this example is **not** reproduced here; with the crowd-sourced corpus the parse model's advantage comes from elsewhere (see the evaluation). This is reported as measured, not tuned away."""),
     ("md", """## Model 1 scenarios: "Push the star into the green room"
 
 One small world as the paper describes it: a green room along the north, red and blue rooms below, the yellow star in the red–blue doorway and a magenta moon in the green room. The demonstration is the shortest path taking the star into the green room — it passes *through* the red room."""),
