@@ -19,6 +19,7 @@ constant columns read from the layout. The corpus's spellings
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -169,3 +170,17 @@ def goal_mask(space: StateSpace, goal_atoms: Iterable[Atom | str], tables: CellT
     if not atoms:
         raise FeatureError("empty goal: expected one or more atoms like agentInRoom(agent0, room1)")
     return _boolean_matrix(space, atoms, tables).all(axis=1)
+
+
+@dataclass(frozen=True)
+class _SingleState:
+    """One state seen as a state space of size 1 (what the column builders read)."""
+
+    layout: Layout
+    positions: np.ndarray  # [1, 1 + k, 2]
+    num_states: int = 1
+
+
+def atoms_hold(state, atoms: Sequence[Atom | str], tables: CellTables) -> np.ndarray:
+    """``[F]`` bool: which of ``atoms`` hold in one ``model.world.State`` (as in feature_matrix)."""
+    return _boolean_matrix(_SingleState(state.layout, state.positions[None]), list(atoms), tables)[0]

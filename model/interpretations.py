@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
+from groundlang.model.features import atoms_hold
+from groundlang.model.geometry import cell_tables
 from groundlang.model.tasks import candidate_tasks
 from groundlang.model.world import State
 
@@ -138,7 +140,16 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     Raises ValueError when no lifted task has a grounding that is not already
     true in ``state`` (nothing could be asked of the agent).
     """
-    candidates = candidate_tasks(state, library)
+    # A conjunctive grounding one of whose parts already holds asks no more
+    # than the smaller task; kept, it duplicated that task in the prior and
+    # its lifted-task token learned the smaller task's words ("walk into the
+    # red room" became toy-and-agent whenever the toy already sat somewhere).
+    tables = cell_tables(state.layout)
+    candidates = [
+        (task, constraints)
+        for task, constraints in candidate_tasks(state, library)
+        if len(task.goal) == 1 or not atoms_hold(state, task.goal, tables).any()
+    ]
     if not candidates:
         raise ValueError(
             "no task of the library can be carried out from this state "

@@ -1,0 +1,93 @@
+"""Joint inference: EM through the Pyro model, posteriors, warm starts and fold subsets."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+
+from groundlang.corpus import example_corpus_path, read_corpus
+from groundlang.inference.joint import fit_globals, posterior, posterior_by_enumeration
+from groundlang.learner import Learner
+from groundlang.model.encoding import encode
+from groundlang.model.language_models import BagOfWords, get_language_model
+
+
+@pytest.fixture(scope="module")
+def example():
+    corpus = read_corpus(example_corpus_path(), "sokoban")
+    learner = Learner("parse")
+    observations = learner.observe(corpus.instances)
+    learner.fit(corpus.instances, observations=observations)
+    return corpus, learner, observations
+
+
+def test_em_never_decreases_the_map_objective(example):
+    _, learner, observations = example
+    batch = encode(observations, learner.vocab)
+    result = fit_globals(batch, learner.lm, learner.vocab, steps=60, optimizer="em")
+    losses = result.losses
+    # The loss is -log p(data, globals); EM may only lower it (float32 rounding aside).
+    assert all(b <= a + 1e-5 * abs(a) for a, b in zip(losses, losses[1:]))
+    assert losses[-1] < losses[0] - 10.0
+
+
+def test_posterior_equals_pyro_compute_marginals(example):
+    _, learner, observations = example
+    batch = encode(observations, learner.vocab)
+    direct = posterior(batch, learner.lm, learner.globals)
+    pyro_marginals = posterior_by_enumeration(batch, learner.lm, learner.vocab, learner.globals)
+    assert torch.allclose(direct, pyro_marginals, atol=1e-5)
+    assert torch.allclose(direct.sum(-1), torch.ones(batch.num_instances), atol=1e-5)
+
+
+def test_training_posterior_puts_the_demonstrated_goal_first(example):
+    corpus, learner, observations = example
+    from groundlang.labels import label_for, read_labels
+
+    labels = read_labels(example_corpus_path() / "labels.csv")
+    batch = encode(observations, learner.vocab)
+    probs = posterior(batch, learner.lm, learner.globals)
+    for i, (inst, obs) in enumerate(zip(corpus.instances, observations)):
+        best = obs.interpretations[int(probs[i].argmax())]
+        assert set(label_for(inst, labels)) <= set(best.goal), inst.name
+
+
+def test_subset_of_an_encoding_gives_the_same_likelihoods_as_encoding_the_subset(example):
+    _, learner, observations = example
+    full = encode(observations, learner.vocab)
+    keep = [0, 3, 7, 12, 20]
+    alone = encode([observations[k] for k in keep], learner.vocab)
+    subset = full.subset(keep)
+    a = learner.lm.log_likelihood(learner.globals, subset)
+    b = learner.lm.log_likelihood(learner.globals, alone)
+    # Padding widths differ; on real interpretations the numbers must agree.
+    J = alone.mask.shape[1]
+    assert torch.allclose(a[:, :J][alone.mask], b[alone.mask], atol=1e-4)
+    assert not subset.mask[:, J:].any()
+
+
+def test_warm_start_from_other_globals_reaches_the_same_bag_of_words_optimum(example):
+    _, learner, observations = example
+    batch = encode(observations, learner.vocab)
+    lm = BagOfWords()
+    cold = fit_globals(batch, lm, learner.vocab, steps=500, tol=1e-9)
+    phi = cold.globals["phi"]
+    noisy = torch.softmax(phi.log() + 0.3 * torch.randn(phi.shape, generator=torch.Generator().manual_seed(1)), -1)
+    warm = fit_globals(batch, lm, learner.vocab, steps=500, tol=1e-9, init={"phi": noisy})
+    assert warm.losses[-1] == pytest.approx(cold.losses[-1], rel=1e-4)
+
+
+def test_lbfgs_and_em_agree_on_the_bag_of_words_map(example):
+    _, learner, observations = example
+    batch = encode(observations, learner.vocab)
+    em = fit_globals(batch, BagOfWords(), learner.vocab, steps=500, tol=1e-9, optimizer="em")
+    lbfgs = fit_globals(batch, BagOfWords(), learner.vocab, steps=400, optimizer="lbfgs")
+    assert em.losses[-1] == pytest.approx(lbfgs.losses[-1], rel=1e-3)
+
+
+def test_unknown_language_model_and_optimizer_are_clear_errors(example):
+    _, learner, observations = example
+    with pytest.raises(ValueError, match="unknown language model 'lstm'"):
+        get_language_model("lstm")
+    with pytest.raises(ValueError, match="unknown optimizer"):
+        fit_globals(encode(observations[:2], learner.vocab), learner.lm, learner.vocab, optimizer="sgd")
