@@ -20,7 +20,7 @@ from groundlang.interrupt import close_progress_bars, terminate_as_interrupt, wh
 # Order is the order of ``groundlang --help``.
 COMMANDS = ["demo", "check", "show", "parse", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate", "ablate"]
 # Commands that fill the behaviour-likelihood cache (reported after an interruption).
-CACHING_COMMANDS = {"train", "evaluate", "discover"}
+CACHING_COMMANDS = {"train", "evaluate", "discover", "ablate"}
 
 
 def build_parser() -> argparse.ArgumentParser:
