@@ -40,6 +40,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    # Progress bars only where a person watches a terminal: quiet in CI, in
+    # pipes and under --quiet.
+    args.progress = not args.quiet and sys.stderr.isatty()
     level = logging.WARNING if args.quiet else (logging.DEBUG if args.verbose else logging.INFO)
     logging.basicConfig(level=level, format="%(message)s")
     started = time.time()

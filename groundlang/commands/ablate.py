@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     result = run_ablation(
         corpus, labels, language_models=args.language_models, libraries=args.libraries, sizes=args.sizes,
         protocol=args.protocol, seed=args.seed, workers=args.workers, ray_address=args.ray,
-        progress=not args.quiet, limit=args.limit,
+        progress=args.progress, limit=args.limit,
     )
     print(result.table())
     print(f"wall time {result.seconds:.1f} s")

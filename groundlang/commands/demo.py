@@ -36,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
           f"{len(corpus.distinct_layouts())} layouts; every demonstration replays; "
           f"gold goal holds at the end of {coverage.holding}/{coverage.total}")
     started = time.perf_counter()
-    learner = Learner(args.language_model).fit(corpus.instances, progress=not args.quiet)
+    learner = Learner(args.language_model).fit(corpus.instances, progress=args.progress)
     print(f"trained the {args.language_model} model in {time.perf_counter() - started:.1f} s")
     state = read_state_file(folder / DEMO_LAYOUT, "sokoban")
     print(f"\na layout the corpus never showed ({DEMO_LAYOUT}):\n{ascii_state(state)}")

@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     result = evaluate(
         corpus, labels, protocol=args.protocol, language_model=args.language_model,
         novel_states=novel, workers=args.workers, ray_address=args.ray,
-        progress=not args.quiet, limit=args.limit,
+        progress=args.progress, limit=args.limit,
     )
     print(result.summary())
     if args.json:

@@ -32,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     library = TaskLibrary.load(args.library) if args.library else None
     started = time.perf_counter()
     learner = Learner(args.language_model, library=library, seed=args.seed)
-    learner.fit(corpus.instances, progress=not args.quiet)
+    learner.fit(corpus.instances, progress=args.progress)
     learner.save(args.output)
     fit = learner.fit_result
     print(
