@@ -70,7 +70,9 @@ class Batch:
     type_prep: torch.Tensor  # [I, K] preposition class of each type
     type_mask: torch.Tensor  # [I, K] bool
     reading_types: torch.Tensor  # [I, R, K] occurrences of each type in each reading
-    frame_counts: torch.Tensor  # [I, R, U] words outside noun phrases, per reading
+    frame_counts: torch.Tensor  # [I, R, U] words outside noun phrases and verbs, per reading
+    verb_counts: torch.Tensor  # [I, R, U] the clauses' verbs, per reading
+    task_mix: torch.Tensor  # [I, J] mixture of {L} alone
     role: torch.Tensor  # [I, J, V] role ids (0 = aligned with nothing)
     role_mask: torch.Tensor  # [I, J, V] bool
     role_logw: torch.Tensor  # [I, J, V] -log(objects sharing the role's label): "other:room" picks one room
@@ -170,6 +172,8 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
         inside = Counter(w for _, mods, head in ents for w in mods + head)
         frame = Counter(obs.words)
         frame.subtract(inside)
+        verbs = Counter(c.verb for c in reading.logical_form.clauses if c.verb and frame[c.verb] > 0)
+        frame.subtract(verbs)
         ent_types = Counter()
         for prep, mods, head in ents:
             if not mods and not head:
@@ -181,7 +185,8 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
             )
             ent_types[types.setdefault(key, len(types))] += 1
         frame_key = tuple(sorted((col[vocab.word_id(w)], c) for w, c in frame.items() if c > 0))
-        signature = (tuple(sorted(ent_types.items())), frame_key)
+        verb_key = tuple(sorted((col[vocab.word_id(w)], c) for w, c in verbs.items() if c > 0))
+        signature = (tuple(sorted(ent_types.items())), frame_key, verb_key)
         merged[signature] = merged.get(signature, 0.0) + reading.probability
     return types, merged
 
@@ -199,10 +204,11 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     log_prior = torch.full((I, J), PAD_LOGIT)
     behaviour = torch.zeros(I, J)
     mask = torch.zeros(I, J, dtype=torch.bool)
-    pad_mix = mix([null])
+    pad_mix = mix([null])  # first, so always mixture 0 (language_models.NULL_MIXTURE)
     bow_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     bow_mix_no_null = torch.full((I, J), pad_mix, dtype=torch.long)
     frame_mix = torch.full((I, J), pad_mix, dtype=torch.long)
+    task_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     machines = [[[null] for _ in range(J)] for _ in range(I)]
     V = max(len(interp.roles) for o in observations for interp in o.interpretations) + 1
     role = torch.zeros(I, J, V, dtype=torch.long)
@@ -230,6 +236,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             bow_mix[i, j] = mix([lid, null] + said)
             bow_mix_no_null[i, j] = mix([lid] + said)
             frame_mix[i, j] = mix([lid, null])
+            task_mix[i, j] = mix([lid])
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
             role_mask[i, j, 0] = True  # aligned with nothing
             sharing = Counter(rb.role for rb in interp.roles)
@@ -275,6 +282,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     type_mask = torch.zeros(I, K, dtype=torch.bool)
     reading_types = torch.zeros(I, R, K)
     frame_counts = torch.zeros(I, R, U)
+    verb_counts = torch.zeros(I, R, U)
     for i, (types, merged) in enumerate(structures):
         for (prep, mods, head), k in types.items():
             type_prep[i, k] = prep
@@ -283,7 +291,9 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
                 type_counts[i, k, u] += 1.0
             for u in head:
                 type_head_counts[i, k, u] += 1.0
-        for r, ((ent_types, frame_key), prob) in enumerate(merged.items()):
+        for r, ((ent_types, frame_key, verb_key), prob) in enumerate(merged.items()):
+            for u, c in verb_key:
+                verb_counts[i, r, u] = c
             reading_logp[i, r] = math.log(max(prob, 1e-12))
             for k, c in ent_types:
                 reading_types[i, r, k] = c
@@ -293,6 +303,6 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     return Batch(
         log_prior, behaviour, mask, mix.table(S), bow_mix, bow_mix_no_null, frame_mix,
         uniq, word_counts, words, word_mask, machine, machine_mask,
-        reading_logp, type_counts, type_head_counts, type_prep, type_mask, reading_types, frame_counts,
+        reading_logp, type_counts, type_head_counts, type_prep, type_mask, reading_types, frame_counts, verb_counts, task_mix,
         role, role_mask, role_logw, role_mix, role_head_mix,
     )

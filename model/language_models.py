@@ -57,6 +57,9 @@ class LanguageModel:
         raise NotImplementedError
 
 
+NULL_MIXTURE = 0  # encode() interns the {NULL} mixture first
+
+
 def mixture_log_emissions(g: dict, batch: Batch) -> torch.Tensor:
     """``log P(word u of instance i | mixture x)`` as ``[X, I, U]``."""
     emit = batch.mixtures @ g["phi"]  # [X, W]
@@ -128,6 +131,9 @@ class ParseAligned(LanguageModel):
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
         concentration = torch.full((num_roles,), self.align_concentration)
+        share = torch.full((2,), self.align_concentration)
+        g["frame_source"] = pyro.sample("frame_source", dist.Dirichlet(share))
+        g["verb_source"] = pyro.sample("verb_source", dist.Dirichlet(share))
         with pyro.plate("preps", num_preps, dim=-1):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
         return g
@@ -157,9 +163,17 @@ class ParseAligned(LanguageModel):
         joint = type_ll + log_align
         per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]
         entities = torch.einsum("ijk,irk->ijr", per_type, batch.reading_types)
-        frame_words = _gather_mixtures(log_emit, batch.frame_mix)  # [I, J, U]
+        # Words outside noun phrases come from the lifted task's token or NULL
+        # with learned shares, one pair for verbs and one for the other words:
+        # a verb says more about the task than "to" or "the" does.
+        task_words = _gather_mixtures(log_emit, batch.task_mix)  # [I, J, U]
+        null_words = log_emit[NULL_MIXTURE][:, None, :].expand_as(task_words)  # [I, J, U]
+        both = torch.stack([task_words, null_words], dim=-1)  # [I, J, U, 2]
+        frame_words = torch.logsumexp(both + g["frame_source"].log(), dim=-1)
+        verb_words = torch.logsumexp(both + g["verb_source"].log(), dim=-1)
         frame = torch.einsum("iju,iru->ijr", frame_words, batch.frame_counts)
-        per_reading = entities + frame + batch.reading_logp[:, None, :]
+        verbs = torch.einsum("iju,iru->ijr", verb_words, batch.verb_counts)
+        per_reading = entities + frame + verbs + batch.reading_logp[:, None, :]
         return torch.logsumexp(per_reading, dim=-1), per_reading, joint
 
 

@@ -26,6 +26,18 @@ from groundlang.interrupt import deferred_interrupts, terminate_as_interrupt, wh
 EXAMPLES = example_corpus_path()
 
 
+@pytest.fixture(autouse=True)
+def _python_sigint_handler():
+    """Runners that start tests in the background ignore SIGINT; these tests need Python's handler."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)  # so the child Python installs its own handler
+
+
 def _signal_self(sig: int) -> None:
     os.kill(os.getpid(), sig)
     time.sleep(0.05)  # the handler runs at the next bytecode boundary
@@ -154,7 +166,7 @@ def _assert_whole_entries(cache: Path) -> None:
 def _start(argv: list[str], cache: Path) -> subprocess.Popen:
     env = dict(os.environ, GROUNDLANG_CACHE=str(cache), PYTHONUNBUFFERED="1")
     return subprocess.Popen([sys.executable, "-m", "groundlang.cli", *argv], env=env, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, preexec_fn=_default_sigint)
 
 
 def _interrupt_when(proc: subprocess.Popen, ready, sig: int, timeout: float = 60.0) -> tuple[int, str, str]:
