@@ -53,11 +53,39 @@ def fit_file(path, palette) -> dict:
     ranked = sorted(zip(atoms, fit.weights.tolist()), key=lambda aw: -aw[1])
     return {
         "weights": {str(a): round(w, 6) for a, w in ranked},
+        "ranking": [str(a) for a in _break_near_ties(space, ranked, states, instance.actions)],
         "log_likelihood": fit.log_likelihood,
         "temperature": fit.temperature,
         "states": space.num_states,
         "seconds": time.perf_counter() - start,
     }
+
+
+# Weights within this fraction of the largest count as tied.
+NEAR_TIE = 0.05
+
+
+def _break_near_ties(space, ranked, states, actions) -> list:
+    """Atoms by weight, with near-ties at the top ordered by the behaviour likelihood of each as a goal.
+
+    Propositions that first become true together at the end of one
+    demonstration (a toy pushed onto a door cell inside the goal room) get
+    nearly equal weights; the likelihood of "make this atom true, then stop"
+    over the whole path still tells them apart, as the joint model's
+    behaviour term does.
+    """
+    from groundlang.inference.planning import task_log_likelihood
+    from groundlang.model.features import goal_mask
+    from groundlang.model.geometry import cell_tables
+
+    top = ranked[0][1]
+    tied = [a for a, w in ranked if top > 0 and w >= (1 - NEAR_TIE) * top]
+    if len(tied) < 2:
+        return [a for a, _ in ranked]
+    tables = cell_tables(space.layout)
+    moves = [int(a) for a in actions]
+    score = {a: task_log_likelihood(space, goal_mask(space, (a,), tables), states, moves) for a in tied}
+    return sorted(tied, key=lambda a: -score[a]) + [a for a, _ in ranked if a not in score]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -66,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(result))
         return 0
     width = max(len(a) for a in result["weights"])
+    print(f"most likely goal: {result['ranking'][0]}")
     for atom, weight in result["weights"].items():
         print(f"{atom:<{width}}  {weight:8.3f}")
     print(f"log-likelihood: {result['log_likelihood']:.4f}")
