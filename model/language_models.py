@@ -85,32 +85,44 @@ class BagOfWords(LanguageModel):
 
 
 class IBMModel2(LanguageModel):
+    """IBM Model 2: word n aligns with machine position m with a learned distortion.
+
+    The distortion is Brown et al.'s a(m | n, N, M) with the word's position
+    coarsened to ``POSITION_BINS`` bins of n / N: one categorical over the
+    machine positions (NULL first) per (bin, M). Everything is then a
+    Dirichlet-categorical, so EM through the Pyro model is exact, as for the
+    other language models.
+    """
+
     name = "ibm2"
+    # A machine token need not generate any word, so the string can carry every
+    # colour/shape PF of the bound objects and alignment picks what was said.
+    enumerates_constraints = False
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
-        # Sharpness of the diagonal preference, and the share of NULL.
-        g["distortion"] = pyro.sample("distortion", dist.Gamma(2.0, 0.5))
-        g["null_share"] = pyro.sample("null_share", dist.Beta(2.0, 8.0))
+        contexts = POSITION_BINS * (MAX_MACHINE + 1)
+        with pyro.plate("distortion_contexts", contexts, dim=-1):
+            g["distortion"] = pyro.sample(
+                "distortion", dist.Dirichlet(torch.full((MAX_MACHINE,), self.word_concentration))
+            )
         return g
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
-        phi = g["phi"]
         words, wmask = batch.words, batch.word_mask  # [I, N]
         machine, mmask = batch.machine, batch.machine_mask  # [I, J, M]
-        n_len = wmask.sum(-1).clamp_min(1).float()  # [I]
-        m_len = (mmask.sum(-1) - 1).clamp_min(1).float()  # [I, J] non-NULL positions
-        N, M = words.shape[1], machine.shape[2]
-        rel_n = (torch.arange(N).float() + 0.5)[None, :] / n_len[:, None]  # [I, N]
-        rel_m = (torch.arange(M).float() - 0.5)[None, None, :] / m_len[..., None]  # [I, J, M]
-        dist_logits = -g["distortion"] * (rel_m[:, :, :, None] - rel_n[:, None, None, :]).abs()
-        real = mmask.clone()
-        real[..., 0] = False
-        dist_logits = dist_logits.masked_fill(~real[..., None], PAD_LOGIT)
-        d = torch.softmax(dist_logits, dim=2) * (1 - g["null_share"])  # [I, J, M, N]
-        d[:, :, 0, :] = g["null_share"]
-        emit = phi[machine[:, :, :, None], words[:, None, None, :]]  # [I, J, M, N]
-        p = (d * emit).sum(2)  # [I, J, N]
+        M = machine.shape[2]
+        if M > MAX_MACHINE:
+            raise ValueError(f"machine strings of {M} tokens exceed IBM Model 2's limit of {MAX_MACHINE}")
+        n_len = wmask.sum(-1).clamp_min(1)  # [I]
+        position_bin = (torch.arange(words.shape[1])[None, :] * POSITION_BINS) // n_len[:, None]
+        position_bin = position_bin.clamp_max(POSITION_BINS - 1)  # [I, N]
+        m_len = mmask.sum(-1)  # [I, J]
+        context = position_bin[:, None, :] * (MAX_MACHINE + 1) + m_len[:, :, None]  # [I, J, N]
+        d = g["distortion"][context][..., :M]  # [I, J, N, M]
+        d = d * mmask[:, :, None, :]
+        emit = g["phi"][machine[:, :, None, :], words[:, None, :, None]]  # [I, J, N, M]
+        p = (d * emit).sum(-1)  # [I, J, N]
         return (p.clamp_min(1e-30).log() * wmask[:, None, :]).sum(-1)
 
 
@@ -176,6 +188,9 @@ class ParseAligned(LanguageModel):
         per_reading = entities + frame + verbs + batch.reading_logp[:, None, :]
         return torch.logsumexp(per_reading, dim=-1), per_reading, joint
 
+
+POSITION_BINS = 4  # IBM Model 2: word positions coarsened to quarters of the command
+MAX_MACHINE = 24  # IBM Model 2: longest machine string (NULL included)
 
 LANGUAGE_MODELS = {"bow": BagOfWords, "ibm2": IBMModel2, "parse": ParseAligned}
 
