@@ -80,6 +80,18 @@ def _set_version(d: Path) -> None:
     (d / "model.json").write_text(json.dumps(meta))
 
 
+def _globals(d: Path) -> dict:
+    with np.load(d / "globals.npz", allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}
+
+
+def _with(d: Path, drop: str | None = None, **replace) -> None:
+    """Rewrite globals.npz from the model's own tensors, replacing or dropping some."""
+    arrays = {k: v for k, v in _globals(d).items() if k != drop}
+    arrays.update(replace)
+    _npz(d, **arrays)
+
+
 def _phi_shape(d: Path) -> tuple[int, int]:
     with np.load(d / "globals.npz", allow_pickle=False) as z:
         return z["phi"].shape
@@ -104,13 +116,12 @@ MODEL_DIRS: dict[str, tuple[Callable[[Path], None], list[str]]] = {
                                      ["model.json: not valid JSON", "can't decode byte 0x89"]),
     "model.json of another program": (lambda d: (d / "model.json").write_text('{"format": "keras"}'),
                                       ["model.json: not a groundlang model (format field is not 'groundlang-model')"]),
-    "tensor of the wrong shape": (lambda d: _npz(d, phi=np.ones((3, 4), np.float32), align=np.ones((2, 2), np.float32)),
+    "tensor of the wrong shape": (lambda d: _with(d, phi=np.ones((3, 4), np.float32)),
                                   ["globals.npz: phi is torch.float32 (3, 4); expected finite floats of shape"]),
-    "tensor with NaN": (lambda d: _npz(d, phi=np.full(_phi_shape(d), np.nan, np.float32),
-                                       align=np.ones((1, 1), np.float32)),
+    "tensor with NaN": (lambda d: _with(d, phi=np.full(_phi_shape(d), np.nan, np.float32)),
                         ["globals.npz: phi is torch.float32", "expected finite floats"]),
-    "tensor missing": (lambda d: _npz(d, phi=np.ones(_phi_shape(d), np.float32)),
-                       ["globals.npz: holds ['phi']; language model parse needs ['align', 'phi']"]),
+    "tensor missing": (lambda d: _with(d, drop="align"),
+                       ["globals.npz: holds [", "language model parse needs [", "'align'"]),
     "pickled object array": (lambda d: _npz(d, phi=np.array([{"x": 1}], dtype=object), align=np.ones(1)),
                              ["Object arrays cannot be loaded when allow_pickle=False"]),
     "directory does not exist": (lambda d: shutil.rmtree(d), ["not a model directory (it does not exist"]),
