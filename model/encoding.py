@@ -248,7 +248,10 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
                 # Adjectives say properties, nouns say kinds: a class token
                 # that could emit modifiers would learn every colour word.
                 role_mix[i, j, v] = mix(tokens + [null])
-                role_head_mix[i, j, v] = mix([vocab.token_id(class_token(rb.cls))])
+                # A head noun names the class ("block") or, for a toy, its shape ("chair").
+                role_head_mix[i, j, v] = mix(
+                    [vocab.token_id(class_token(rb.cls))] + [vocab.token_id(t) for t in rb.kind_tokens]
+                )
 
     M = max(len(m) for row in machines for m in row)
     machine = torch.full((I, J, M), null, dtype=torch.long)

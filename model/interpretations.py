@@ -39,6 +39,7 @@ __all__ = [
     "RoleBinding",
     "interpretations",
     "object_tokens",
+    "shape_tokens",
     "class_of",
     "OTHER_ROLES",
 ]
@@ -54,6 +55,7 @@ class RoleBinding:
     obj: str  # object name, e.g. "room2"
     cls: str  # object class: agent, room, door, toy
     constraint_tokens: tuple[str, ...]  # PFs words may express: C's for a bound object, all for others
+    kind_tokens: tuple[str, ...] = ()  # PFs a head noun may express besides the class: a toy's shape
 
 
 @dataclass(frozen=True)
@@ -102,6 +104,14 @@ def object_tokens(state: State, obj: str) -> tuple[str, ...]:
     return ()
 
 
+def shape_tokens(state: State, obj: str) -> tuple[str, ...]:
+    """The shape PF of a toy (``toyIsChair``): what its head noun names; () for other objects."""
+    if class_of(obj) != "toy":
+        return ()
+    _, shape = state.layout.toy_attributes[int(obj[len("block"):])]
+    return (f"toyIs{_capital(shape)}",)
+
+
 def _objects(state: State) -> list[str]:
     names = ["agent0"] + state.layout.room_names + state.layout.door_names + state.layout.toy_names
     return names
@@ -117,12 +127,12 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         )
         obj = binding[var.name]
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,))
-        bindings.append(RoleBinding(role, obj, var.cls, said))
+        bindings.append(RoleBinding(role, obj, var.cls, said, shape_tokens(state, obj)))
     bound = set(binding.values())
     for obj in _objects(state):
         if obj not in bound:
             cls = class_of(obj)
-            bindings.append(RoleBinding(f"other:{cls}", obj, cls, object_tokens(state, obj)))
+            bindings.append(RoleBinding(f"other:{cls}", obj, cls, object_tokens(state, obj), shape_tokens(state, obj)))
     return tuple(bindings)
 
 
