@@ -250,9 +250,10 @@ start_agent = examples["agent2green_0"].initial_state
 TASKS = {"star to green": parse_goal("toyInRoom(block0, room0)"),
          "agent to green": parse_goal("agentInRoom(agent0, room0)")}
 SENTENCES = {
-    "star to green": ["Take the star to the green room.", "Push the star into the green room.",
-                      "Bring the star to green."],
-    "agent to green": ["Go to the green room.", "Walk into the green room.", "Move to green."],
+    # The same sentences as tests/test_model0.py, which checks Model 0's numbers.
+    "star to green": ["Take the star to the green room.", "Move the star into the green room.",
+                      "Push the star to the green room."],
+    "agent to green": ["Go to the green room.", "Go into the green room.", "Go to green."],
 }
 train = [demonstration(start_star if task == "star to green" else start_agent, TASKS[task], s)
          for task, sentences in SENTENCES.items() for s in sentences]
@@ -313,7 +314,7 @@ for ax, sentence in zip(axes, TESTS):
     ax.set_xticks(x, labels); ax.set_ylim(0, 1); ax.set_title(repr(sentence))
 axes[0].set_ylabel("posterior"); axes[0].legend()
 fig.tight_layout()'''),
-    ("md", """**Measured (seed 0):** Model 0 and the Pyro bag of words lean to the toy task for "Go with the star to green." (0.54 and 0.59), while the parse-aligned model sends it to the agent task (0.92): in six sentences "go" occurs only with the agent task, and the parse model reads *go* as the verb naming the task, with "the star" and "green" as its arguments. The paper's claim that parsing fixes this example is **not** reproduced here; with the crowd-sourced corpus the parse model's advantage comes from elsewhere (see the evaluation). This is reported as measured, not tuned away."""),
+    ("md", """**Measured (seed 0), printed above:** Model 0 sends "Go to green room." to the agent task and, as in the paper, *wrongly* sends "Go with the star to green." there too: in six sentences "go" occurs only with the agent task and outweighs "star" (tests/test_model0.py checks these numbers: 3.2e-7 vs 9.5e-5 for the first sentence, 1.6e-10 vs 8.6e-10 for the second). The Pyro bag of words makes the same mistake. The paper's claim that parsing fixes this example is **not** reproduced: the parse-aligned model reads "the star" as an object the agent goes *with*, a bystander the agent task may mention, and six sentences cannot teach it otherwise. On the crowd-sourced corpus the parse model's advantage is real (see the README's evaluation); here it is reported as measured, not tuned away."""),
     ("md", """## Model 1 scenarios: "Push the star into the green room"
 
 One small world as the paper describes it: a green room along the north, red and blue rooms below, the yellow star in the red–blue doorway and a magenta moon in the green room. The demonstration is the shortest path taking the star into the green room — it passes *through* the red room."""),
