@@ -47,7 +47,7 @@ import math
 import os
 import tempfile
 from dataclasses import dataclass, field, replace
-from itertools import combinations, permutations
+from itertools import combinations
 from pathlib import Path
 from typing import Sequence
 
@@ -57,7 +57,9 @@ from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.mlirl import mlirl
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.atoms import Atom
-from groundlang.logic.tasks import CLASS_ORDER, GroundedTask, LiftedTask, TaskLibrary, Variable, format_lifted_task
+# lifted_key is part of discovery's public surface (tests and notebooks import it from here).
+from groundlang.inference.lifting import lift_goal, lifted_key, singling_out, structure_key, task_name  # noqa: F401
+from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary, format_lifted_task
 
 __all__ = ["DISCOVERY_IRL", "DiscoverySettings", "DemonstrationReport", "Discovery", "discover_tasks",
            "lift_goal", "structure_key", "task_name", "singling_out", "write_library"]
@@ -71,7 +73,6 @@ DISCOVERY_IRL = dict(temperature=0.5, l1=0.1, nonnegative=True)
 MAX_EXHAUSTIVE_SUBSETS = 200_000
 # How many of the best libraries the result lists (to show the winning margin).
 RANKED_LIBRARIES = 5
-VARIABLE_LETTER = {"agent": "A", "toy": "T", "room": "R", "door": "D"}
 
 
 @dataclass(frozen=True)
@@ -163,120 +164,6 @@ class Discovery:
 
 
 # ---------------------------------------------------------------- lifting
-
-
-def structure_key(goal: Sequence[tuple[str, Sequence[str]]], classes: dict[str, str]) -> tuple:
-    """Canonical form of a goal up to renaming its variables/objects: ``((pred, (cls#k, ...)), ...)``.
-
-    ``classes`` maps each argument to its class. Two goals have the same key exactly when
-    one is the other with arguments renamed one-to-one within classes.
-    """
-    best = None
-    for order in permutations(sorted(goal, key=lambda pa: pa[0])):
-        if [p for p, _ in order] != sorted(p for p, _ in order):
-            continue  # only orders that keep predicates sorted; ties between equal predicates are tried
-        names: dict[str, str] = {}
-        counts: dict[str, int] = {}
-        key = []
-        for pred, args in order:
-            renamed = []
-            for a in args:
-                if a not in names:
-                    c = classes[a]
-                    counts[c] = counts.get(c, 0) + 1
-                    names[a] = f"{c}#{counts[c]}"
-                renamed.append(names[a])
-            key.append((pred, tuple(renamed)))
-        key = tuple(key)
-        best = key if best is None or key < best else best
-    return best
-
-
-def lifted_key(task: LiftedTask) -> tuple:
-    """:func:`structure_key` of a lifted task (e.g. to compare with the default library)."""
-    return structure_key(task.goal, {v.name: v.cls for v in task.variables})
-
-
-def _mover_rank(pred_args: tuple[str, tuple[str, ...]], classes: dict[str, str]) -> tuple:
-    # The toy's goal before the agent's, as tasks.lp names toyToRoomAgentToRoom.
-    first = classes[pred_args[1][0]]
-    return ({"toy": 0, "agent": 1}.get(first, 2), pred_args[0], pred_args[1])
-
-
-def task_name(goal: Sequence[tuple[str, Sequence[str]]], classes: dict[str, str]) -> str:
-    """A readable name from the goal predicates: toyInRoom -> toyToRoom, agentTouchingToy -> agentToToy."""
-    parts = []
-    for pred, _ in sorted(goal, key=lambda pa: _mover_rank((pa[0], tuple(pa[1])), classes)):
-        name = pred
-        for word in ("In", "Touching"):
-            head, sep, tail = pred.partition(word)
-            if sep and head and tail[:1].isupper():
-                name = f"{head}To{tail}"
-                break
-        parts.append(name)
-    return parts[0] + "".join(p[:1].upper() + p[1:] for p in parts[1:])
-
-
-def lift_goal(goal: Sequence[Atom], classes: dict[str, str], name: str | None = None) -> LiftedTask:
-    """Replace the objects of a grounded goal by typed variables (``A``, ``T``, ``R``, ``R2``, ...).
-
-    ``classes``: object name -> class. One object, one variable; distinct objects of a class get
-    distinct variables (as groundings bind them). Raises KeyError for an object of unknown class.
-    """
-    key = structure_key([(a.predicate, a.args) for a in goal], classes)
-    names: dict[str, str] = {}
-    counts: dict[str, int] = {}
-    for _, args in key:
-        for slot in args:
-            if slot not in names:
-                cls = slot.split("#")[0]
-                counts[cls] = counts.get(cls, 0) + 1
-                letter = VARIABLE_LETTER.get(cls, cls[:1].upper())
-                names[slot] = letter if counts[cls] == 1 else f"{letter}{counts[cls]}"
-    rank = {c: i for i, c in enumerate(CLASS_ORDER)}
-    variables = sorted({Variable(n, s.split("#")[0]) for s, n in names.items()},
-                       key=lambda v: (rank.get(v.cls, len(rank)), v.cls, v.name))
-    lifted_goal = tuple(sorted({(p, tuple(names[s] for s in args)) for p, args in key}))
-    var_classes = {v.name: v.cls for v in variables}
-    return LiftedTask(name or task_name(lifted_goal, var_classes), tuple(variables), lifted_goal)
-
-
-# ---------------------------------------------------------------- colour/shape PFs that pick an object out
-
-
-def _capitalised(name: str) -> str:
-    return name[:1].upper() + name[1:]
-
-
-def _attribute_atoms(layout) -> dict[str, tuple[Atom, ...]]:
-    """Colour/shape PFs true of each room and toy, named as pfs.lp names them (roomIsGreen, toyIsStar)."""
-    out: dict[str, tuple[Atom, ...]] = {}
-    for name, room in zip(layout.room_names, layout.rooms):
-        out[name] = (Atom(f"roomIs{_capitalised(room.colour)}", (name,)),)
-    for name, (colour, shape) in zip(layout.toy_names, layout.toy_attributes):
-        out[name] = (Atom(f"toyIs{_capitalised(colour)}", (name,)), Atom(f"toyIs{_capitalised(shape)}", (name,)))
-    return out
-
-
-def singling_out(layout, obj: str, peers: Sequence[str]) -> tuple[Atom, ...] | None:
-    """Smallest colour/shape conjunction true of ``obj`` and of none of ``peers`` (same class).
-
-    ``()`` when there are no peers; None when no conjunction of its PFs tells it apart.
-    """
-    if not peers:
-        return ()
-    attributes = _attribute_atoms(layout)
-    own = attributes.get(obj, ())
-    others = [{a.predicate for a in attributes.get(p, ())} for p in peers]
-    for k in range(1, len(own) + 1):
-        for subset in combinations(own, k):
-            wanted = {a.predicate for a in subset}
-            if not any(wanted <= o for o in others):
-                return subset
-    return None
-
-
-# ---------------------------------------------------------------- library search
 
 
 def _library_score(table: np.ndarray, chosen: Sequence[int], sizes: np.ndarray, atom_cost: float) -> float:

@@ -127,3 +127,16 @@ def test_trained_on_the_simplified_crowd_corpus_it_follows_its_training_commands
     # Workers saw room1 (red in the file) drawn orange and room0 (green) drawn tan.
     assert lexicon["orange"][0][0] == "roomIsRed"
     assert lexicon["tan"][0][0] == "roomIsGreen"
+
+
+def test_cli_parser_is_light_and_knows_every_language_model():
+    import subprocess
+    import sys
+
+    from groundlang.commands import LANGUAGE_MODEL_NAMES
+    from groundlang.model.language_models import LANGUAGE_MODELS
+
+    assert LANGUAGE_MODEL_NAMES == tuple(LANGUAGE_MODELS)
+    code = "import sys, groundlang.cli as c; c.build_parser(); print(sorted({'torch', 'matplotlib', 'gymnasium'} & set(sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.model.language_models import LANGUAGE_MODELS
+from groundlang.commands import LANGUAGE_MODEL_NAMES
 from groundlang.model.world import PALETTES
 
 
@@ -17,7 +17,7 @@ def register(subparsers) -> None:
     p.add_argument("--labels", required=True, metavar="CSV")
     p.add_argument("--protocol", default="loo", choices=["loo", "train"])
     p.add_argument("--novel-envs", metavar="DIR", help="folder of *.state files to execute each command in too")
-    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODELS))
+    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
     p.add_argument("--workers", type=int, default=1, help="folds in parallel (processes)")
     p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
     p.add_argument("--skip-inconsistent", action="store_true")

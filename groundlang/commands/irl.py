@@ -21,11 +21,6 @@ import time
 from groundlang.model.world import PALETTES
 
 
-# One demonstration cannot tell apart propositions that first hold together at its end; an L2 prior
-# splits weight evenly among them. Non-negative weights with a sparsity (L1) prior let the likelihood
-# of the whole path choose; a fixed temperature keeps a single demonstration from driving it to 0.
-IRL_SETTINGS = dict(temperature=0.5, l1=0.1, nonnegative=True)
-
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("irl", help="fit reward weights over position PFs to one file's demonstration (MLIRL)")
@@ -38,6 +33,9 @@ def register(subparsers) -> None:
 def fit_file(path, palette) -> dict:
     """MLIRL on one file; returns the --json object (weights ordered largest first)."""
     from groundlang.corpus import read_instance
+    # The settings task discovery uses (one demonstration: non-negative weights with a sparsity prior
+    # let the whole path pick the proposition; a fixed temperature keeps it from driving T to 0).
+    from groundlang.inference.discovery import DISCOVERY_IRL
     from groundlang.inference.mlirl import mlirl
     from groundlang.model.features import feature_matrix, position_atoms
     from groundlang.model.geometry import cell_tables
@@ -49,7 +47,7 @@ def fit_file(path, palette) -> dict:
     atoms = position_atoms(space.layout)
     features = feature_matrix(space, atoms, cell_tables(space.layout))
     states = trajectory_indices(space, list(instance.states))
-    fit = mlirl(space.next_state, features, [(states, [int(a) for a in instance.actions])], **IRL_SETTINGS)
+    fit = mlirl(space.next_state, features, [(states, [int(a) for a in instance.actions])], **DISCOVERY_IRL)
     ranked = sorted(zip(atoms, fit.weights.tolist()), key=lambda aw: -aw[1])
     return {
         "weights": {str(a): round(w, 6) for a, w in ranked},

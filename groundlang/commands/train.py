@@ -6,7 +6,7 @@ import argparse
 import time
 
 from groundlang.corpus import read_corpus
-from groundlang.model.language_models import LANGUAGE_MODELS
+from groundlang.commands import LANGUAGE_MODEL_NAMES
 from groundlang.model.world import PALETTES
 
 
@@ -15,7 +15,7 @@ def register(subparsers) -> None:
     p.add_argument("corpus", metavar="CORPUS", help="folder of corpus files")
     p.add_argument("--palette", required=True, choices=sorted(PALETTES))
     p.add_argument("-o", "--output", required=True, metavar="MODEL_DIR", help="folder to write the model to")
-    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODELS))
+    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
     p.add_argument("--library", metavar="LP", action="append", help="task library .lp file(s) instead of the default")
     p.add_argument("--skip-inconsistent", action="store_true")
     p.add_argument("--seed", type=int, default=0)
