@@ -11,8 +11,6 @@ files are written atomically (a temporary file in the same folder, then
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 from typing import Sequence
 
@@ -61,15 +59,10 @@ def save_animation(path: str | Path, states: Sequence[State], title: str | None 
     draw(0)
     fig.tight_layout()
     animation = FuncAnimation(fig, draw, frames=frames, blit=False, repeat=False)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".gif", dir=path.parent)
-    os.close(fd)
-    try:
-        animation.save(tmp, writer=PillowWriter(fps=fps), dpi=dpi)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    from groundlang.model.storage import atomic_path
+
+    with atomic_path(path, suffix=".gif") as tmp:
+        animation.save(str(tmp), writer=PillowWriter(fps=fps), dpi=dpi)
     return path
 
 

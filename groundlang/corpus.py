@@ -17,13 +17,12 @@ the file, the line and what was expected.
 from __future__ import annotations
 
 import logging
-import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
+from groundlang.model.storage import write_atomically
 from groundlang.model.world import (
     Action,
     Agent,
@@ -368,21 +367,6 @@ def read_corpus(directory: str | Path, palette: str | Palette, skip_inconsistent
     return corpus
 
 
-def _write_atomically(path: Path, text: str) -> None:
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-
-
 def write_instance(path: str | Path, instance: Instance) -> None:
     """Write an instance in the corpus format (atomically: tmp file + rename).
 
@@ -397,7 +381,7 @@ def write_instance(path: str | Path, instance: Instance) -> None:
         )
     lines = [instance.command, ",".join(a.word for a in instance.actions)]
     lines += [format_state(s) for s in instance.states]
-    _write_atomically(Path(path), "\n".join(lines) + "\n")
+    write_atomically(Path(path), "\n".join(lines) + "\n")
 
 
 def read_state_file(path: str | Path, palette: str | Palette) -> State:

@@ -13,8 +13,6 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-import os
-import tempfile
 import zipfile
 from pathlib import Path
 
@@ -22,6 +20,7 @@ import numpy as np
 import torch
 
 from groundlang.interrupt import deferred_interrupts
+from groundlang.model import storage
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner", "write_atomically"]
 
@@ -37,20 +36,9 @@ class ModelFormatError(ValueError):
 
 def write_atomically(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # Ctrl-C between mkstemp and the try would leave the temporary file behind.
+    # Ctrl-C between creating the temporary file and its cleanup would leave it behind.
     with deferred_interrupts():
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as handle:
-                handle.write(data)
-                handle.flush()
-                os.fsync(handle.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        storage.write_atomically(path, data)
 
 
 def save_learner(learner, directory: str | Path) -> Path:

@@ -6,8 +6,6 @@ pyplot), so importing this module costs nothing and needs no display.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 from typing import Sequence
 
@@ -136,15 +134,10 @@ def save_picture(path: str | Path, state: State, trajectory=None, title: str | N
     ax = fig.add_subplot(1, 1, 1)
     draw_state(state, ax=ax, trajectory=trajectory, title=title)
     fig.tight_layout()
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            fig.savefig(f, format=fmt, dpi=100)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    from groundlang.model.storage import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=fmt, dpi=100)
     return path
 
 

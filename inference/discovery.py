@@ -45,7 +45,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import tempfile
 from dataclasses import dataclass, field, replace
 from itertools import combinations
 from pathlib import Path
@@ -60,6 +59,7 @@ from groundlang.logic.atoms import Atom
 # lifted_key is part of discovery's public surface (tests and notebooks import it from here).
 from groundlang.inference.lifting import lift_goal, lifted_key, singling_out, structure_key, task_name  # noqa: F401
 from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary, format_lifted_task
+from groundlang.model.storage import write_atomically
 
 __all__ = ["DISCOVERY_IRL", "DiscoverySettings", "DemonstrationReport", "Discovery", "discover_tasks",
            "lift_goal", "structure_key", "task_name", "singling_out", "write_library"]
@@ -404,14 +404,4 @@ def _describe_pick(conjunction) -> str:
 
 def write_library(discovery: Discovery, path: str | os.PathLike) -> Path:
     """Write the discovered library's ASP text to ``path`` atomically (temporary file + os.replace)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write(discovery.text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return write_atomically(path, discovery.text)

@@ -30,7 +30,6 @@ import json
 import logging
 import math
 import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -38,6 +37,7 @@ import numpy as np
 
 from groundlang.inference.planning import TaskSettings, as_transitions, demonstration_log_likelihood, solve_task
 from groundlang.logic.atoms import Atom, parse_atom
+from groundlang.model.storage import write_atomically
 
 __all__ = ["CACHE_VERSION", "behaviour_likelihood_table", "cache_directory", "entry_key", "pad_table"]
 
@@ -111,16 +111,8 @@ def _read_entry(path: Path, key: str) -> float | None:
 
 
 def _write_entry(path: Path, key: str, value: float, goal: Sequence[Atom]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
     text = json.dumps({"key": key, "goal": " ".join(str(a) for a in goal), "log_likelihood": value})
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_atomically(path, text)
 
 
 def behaviour_likelihood_table(

@@ -13,8 +13,6 @@ holds at the start). Output is byte-identical from run to run.
 from __future__ import annotations
 
 import argparse
-import os
-import tempfile
 from collections import deque
 from pathlib import Path
 
@@ -22,6 +20,7 @@ from groundlang.corpus import Instance, format_state, parse_state, write_instanc
 from groundlang.labels import goal_holds
 from groundlang.logic.atoms import format_goal, parse_goal
 from groundlang.model.world import Action, State, step
+from groundlang.model.storage import write_atomically
 
 PALETTE = "sokoban"
 
@@ -115,10 +114,7 @@ def _replay(start: State, actions: tuple[Action, ...]) -> tuple[State, ...]:
 
 
 def _write_text(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-        f.write(text)
-    os.replace(tmp, path)
+    write_atomically(path, text)
 
 
 def build(out_dir: str | Path) -> list[Path]:
