@@ -15,7 +15,7 @@ import logging
 import sys
 import time
 
-from groundlang.interrupt import close_progress_bars, terminate_as_interrupt, what_was_kept
+from groundlang.interrupt import cache_entry_count, close_progress_bars, terminate_as_interrupt, what_was_kept
 
 # Order is the order of ``groundlang --help``.
 COMMANDS = ["demo", "check", "show", "parse", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate", "ablate"]
@@ -46,6 +46,8 @@ def main(argv: list[str] | None = None) -> int:
     level = logging.WARNING if args.quiet else (logging.DEBUG if args.verbose else logging.INFO)
     logging.basicConfig(level=level, format="%(message)s")
     started = time.time()
+    caching = args.command in CACHING_COMMANDS
+    cache_entries_before = cache_entry_count(args) if caching else 0
     try:
         # SIGTERM (a scheduler, `kill`) stops a run the way Ctrl-C does.
         with terminate_as_interrupt():
@@ -56,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:
         close_progress_bars()
-        kept = what_was_kept(args, started, uses_cache=args.command in CACHING_COMMANDS)
+        kept = what_was_kept(args, started, uses_cache=caching, cache_entries_before=cache_entries_before)
         print(f"groundlang {args.command}: interrupted; {kept}", file=sys.stderr)
         return 130
 

@@ -99,12 +99,17 @@ def _describe_output(path: Path, what: str, started: float) -> str:
     return f"the {what} in {path} was complete before the interruption"
 
 
-def _new_cache_entries(root: Path, started: float) -> int:
-    folder = root / "behaviour"
+def cache_entry_count(args) -> int:
+    """Whole behaviour-likelihood cache entries now in the cache a command uses (0 without one)."""
+    if getattr(args, "no_cache", False) is True:
+        return 0
+    from groundlang.inference.likelihoods import cache_directory
+
+    folder = cache_directory(getattr(args, "cache_dir", None)) / "behaviour"
     if not folder.is_dir():
         return 0
     # Temporary files start with "."; only renamed, whole entries count.
-    return sum(1 for p in folder.glob("*/*.json") if not p.name.startswith(".") and p.stat().st_mtime >= started)
+    return sum(1 for p in folder.glob("*/*.json") if not p.name.startswith("."))
 
 
 # (argument name, what it holds); a command's arguments name its outputs.
@@ -113,8 +118,13 @@ _OUTPUTS = (("output", "output"), ("json", "result"), ("out", "picture"))
 _OUTPUT_KIND = {"train": "model", "discover": "task library"}
 
 
-def what_was_kept(args, started: float, uses_cache: bool) -> str:
-    """One line saying what an interrupted command left behind (``started``: ``time.time()`` at start)."""
+def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: int = 0) -> str:
+    """One line saying what an interrupted command left behind.
+
+    ``started`` is ``time.time()`` at the start; ``cache_entries_before`` is
+    :func:`cache_entry_count` then (counting, not mtimes, tells which entries
+    are new: a run that starts right after another must not claim its entries).
+    """
     parts = []
     for attr, what in _OUTPUTS:
         value = getattr(args, attr, None)
@@ -126,7 +136,7 @@ def what_was_kept(args, started: float, uses_cache: bool) -> str:
         from groundlang.inference.likelihoods import cache_directory
 
         root = cache_directory(getattr(args, "cache_dir", None))
-        count = _new_cache_entries(root, started - 1.0)  # mtimes may be coarser than time.time()
+        count = cache_entry_count(args) - cache_entries_before
         if count:
             entries = "entry is" if count == 1 else "entries are"
             parts.append(f"{count} new behaviour-likelihood cache {entries} kept in {root} (a rerun resumes from them)")
