@@ -9,7 +9,6 @@
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,7 +30,7 @@ from groundlang.model.interpretations import OTHER_ROLES, Interpretation, interp
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
 from groundlang.model.statespace import enumerate_states
 from groundlang.model.vocabulary import Vocabulary, class_token
-from groundlang.model.world import Action, State, get_palette
+from groundlang.model.world import Action, State
 
 __all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError"]
 

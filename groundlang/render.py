@@ -7,7 +7,6 @@ pyplot), so importing this module costs nothing and needs no display.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
