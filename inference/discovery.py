@@ -83,6 +83,11 @@ class DiscoverySettings:
     max_conjuncts: int = 2  # candidate goals: conjunctions of up to this many top features
     atom_cost: float = math.log(5)  # nats per goal atom written into the library
     max_tasks: int = 4  # largest library the search considers
+    # Restrict each lifted variable by the colour/shape PFs that single out its object in every
+    # demonstration the task explains (restrict/3 facts). Off by default: the paper's lifted tasks
+    # keep those PFs as parameters (P1(t), P2(r)), which the binding constraints are; a restriction
+    # learned from one star demonstration would forbid the same task for the moon.
+    restrict: bool = False
     irl: dict = field(default_factory=lambda: dict(DISCOVERY_IRL))
     task: TaskSettings = TaskSettings()  # behaviour likelihood settings (part of the cache key)
 
@@ -357,11 +362,50 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
                              singled_out=picked)
         reports.append(report)
     tasks = tuple(candidates.tasks[j] for j in chosen)
+    if settings.restrict:
+        tasks = tuple(_restricted(t, reports, demos) for t in tasks)
     text = _library_text(tasks, reports, score, settings, len(instances))
     library = TaskLibrary.from_text(text, "<discovered tasks>")
     logger.info("discovery: library %s (score %.3f)", ", ".join(t.name for t in tasks), score)
     alternatives = tuple((tuple(candidates.tasks[j].name for j in subset), s) for subset, s in ranked)
     return Discovery(library, library.tasks, candidates.tasks, tuple(reports), score, text, alternatives)
+
+
+def _pf_terms(layout, obj: str) -> dict[str, str]:
+    """groundlang PF name -> ASP term for the colour/shape PFs of one object (``roomIsRed`` -> ``roomIs(red)``)."""
+    if obj.startswith("room"):
+        values = (("roomIs", layout.rooms[int(obj[4:])].colour),)
+    elif obj.startswith("block"):
+        colour, shape = layout.toy_attributes[int(obj[5:])]
+        values = (("toyIs", colour), ("toyIs", shape))
+    else:
+        return {}
+    return {f"{p}{v[:1].upper()}{v[1:]}": f"{p}({v})" for p, v in values}
+
+
+def _restricted(task: LiftedTask, reports, demos) -> LiftedTask:
+    """``task`` restricted, per variable, by the PFs that single out its object in every demonstration it explains.
+
+    A variable whose object had no peers in some demonstration, or could not be told apart from them,
+    is left free; so is one whose demonstrations single it out by different PFs (the room of
+    toy-to-room, reached in rooms of every colour): only what all of them share restricts it.
+    """
+    by_name = {d.names: d for d in demos}
+    explained = [r for r in reports if r.task == task.name]
+    restrictions = []
+    for var in task.variables:
+        common = None
+        for r in explained:
+            picked = dict(r.singled_out).get(var.name)
+            if not picked:  # () no peers, None no distinguishing PFs
+                common = set()
+                break
+            layout = by_name[r.instances].instance.initial_state.layout
+            terms = _pf_terms(layout, r.grounding.object_of(var.name))
+            names = {terms[a.predicate] for a in picked if a.predicate in terms}
+            common = names if common is None else common & names
+        restrictions += [(var.name, term) for term in sorted(common or ())]
+    return replace(task, restrictions=tuple(restrictions)) if restrictions else task
 
 
 def _library_text(tasks, reports, score, settings: DiscoverySettings, num_instances: int) -> str:

@@ -73,6 +73,8 @@ class LiftedTask:
     name: str
     variables: tuple[Variable, ...]
     goal: tuple[tuple[str, tuple[str, ...]], ...]
+    # (variable, PF term as ASP writes it, e.g. ("T", "toyIs(star)")): the bound object must satisfy it.
+    restrictions: tuple[tuple[str, str], ...] = ()
 
     def variable(self, name: str) -> Variable:
         for v in self.variables:
@@ -83,7 +85,8 @@ class LiftedTask:
     def __str__(self) -> str:
         params = ", ".join(f"{v.name}: {v.cls}" for v in self.variables)
         body = " ∧ ".join(f"{p}({', '.join(a)})" for p, a in self.goal)
-        return f"{self.name}({params}) := {body}"
+        where = "".join(f", {term} of {v}" for v, term in self.restrictions)
+        return f"{self.name}({params}) := {body}" + (f" where{where[1:]}" if where else "")
 
 
 @dataclass(frozen=True)
@@ -149,11 +152,12 @@ def format_lifted_task(task: LiftedTask) -> str:
     for pred, args in task.goal:
         vs = ", ".join(f'"{a}"' for a in args)
         lines.append(f"goal({task.name}, {pred}, ({vs}{',' if len(args) == 1 else ''})).")
+    lines += [f'restrict({task.name}, "{v}", {term}).' for v, term in task.restrictions]
     return "\n".join(lines) + "\n"
 
 
 # Shown atoms of a library solved without an environment (a user's own #show cannot hide them).
-_LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #show goal/3. #show pf/3.")
+_LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #show goal/3. #show pf/3. #show restrict/3.")
 
 
 def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[LiftedTask, ...]:
@@ -167,6 +171,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[Lift
     names = sorted(_text(a.arguments[0]) for a in by_signature.get(("task", 1), []))
     variables: dict[str, list[Variable]] = {n: [] for n in names}
     goals: dict[str, list[tuple[str, tuple[str, ...]]]] = {n: [] for n in names}
+    restrictions: dict[str, list[tuple[str, str]]] = {n: [] for n in names}
     signatures: dict[str, tuple[str, ...]] = {}
     for a in by_signature.get(("pf", 3), []):
         cls_, name, sig = a.arguments
@@ -183,6 +188,12 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[Lift
         if t not in goals:
             raise AspError(f"{program.names}: goal({t}, ...) names no task({t})")
         goals[t].append((pf_name(p), tuple(_text(x) for x in _tuple_args(args))))
+    for a in by_signature.get(("restrict", 3), []):
+        t, v, p = a.arguments
+        t, v = _text(t), _text(v)
+        if t not in restrictions:
+            raise AspError(f"{program.names}: restrict({t}, ...) names no task({t})")
+        restrictions[t].append((v, str(p)))
     tasks = []
     rank = {c: i for i, c in enumerate(CLASS_ORDER)}
     for n in names:
@@ -204,7 +215,11 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[Lift
             if sig is not None and tuple(by_name[a] for a in args) != sig:
                 raise AspError(f"{program.names}: task {n}: goal {pred}({', '.join(args)}) "
                                f"needs arguments of classes {sig}")
-        tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n])))))
+        for v, term in restrictions[n]:
+            if v not in by_name:
+                raise AspError(f"{program.names}: task {n}: restrict uses variable {v!r} "
+                               f"that has no var({n}, \"{v}\", Class)")
+        tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n]))), tuple(sorted(set(restrictions[n])))))
     return tuple(tasks)
 
 

@@ -252,3 +252,25 @@ def test_cli_tasks_runaway_library_stops_at_the_time_limit(tmp_path, capsys):
     assert main(["tasks", str(state), "--palette", "sokoban", "--library", str(lib), "--time-limit", "0.5"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "forever.lp" in err[0] and "did not finish within 0.5 s" in err[0]
+
+
+def test_restricted_task_grounds_only_objects_with_the_pf_and_round_trips():
+    from groundlang.corpus import example_corpus_path, read_state_file
+    from groundlang.model.tasks import candidate_tasks
+
+    text = ('task(starToRed). var(starToRed, "T", toy). var(starToRed, "R", room). '
+            'goal(starToRed, toyInRoom, ("T", "R")). restrict(starToRed, "R", roomIs(red)).')
+    library = TaskLibrary.from_text(text)
+    assert library.tasks[0].restrictions == (("R", "roomIs(red)"),)
+    assert TaskLibrary.from_text(library.to_lp()).tasks == library.tasks
+    state = read_state_file(example_corpus_path() / "novel_a.state", "sokoban")
+    red = next(f"room{i}" for i, r in enumerate(state.layout.rooms) if r.colour == "red")
+    goals = [g.goal_text for g, _ in candidate_tasks(state, library)]
+    assert goals == [f"toyInRoom(block0, {red})"]
+
+
+def test_restriction_on_an_undeclared_variable_is_refused():
+    text = ('task(t). var(t, "T", toy). var(t, "R", room). goal(t, toyInRoom, ("T", "R")). '
+            'restrict(t, "X", toyIs(star)).')
+    with pytest.raises(AspError, match="restrict uses variable 'X'"):
+        TaskLibrary.from_text(text)

@@ -197,3 +197,21 @@ def test_learning_from_scratch(demo, library, tmp_path):
     # The moon already lies in the green room, so that grounding is left out.
     assert goals == ["toyInRoom(block0, room0)", "toyInRoom(block0, room1)", "toyInRoom(block0, room2)",
                      "toyInRoom(block1, room1)", "toyInRoom(block1, room2)"]
+
+
+def test_learning_from_scratch_with_restrictions(demo, tmp_path):
+    """With restrictions on, the discovered task keeps the PF that singled out the star."""
+    from groundlang.inference.discovery import DiscoverySettings
+    from groundlang.logic.tasks import TaskLibrary
+
+    found = discover_tasks([demo], DiscoverySettings(restrict=True), cache_dir=False)
+    task = found.tasks[0]
+    assert task.name == "toyToRoom"
+    # From one demonstration, each bound object is restricted by what tells it from its peers:
+    # the star by its colour (the moon is magenta), the goal room by its colour.
+    assert task.restrictions == (("R", "roomIs(green)"), ("T", "toyIs(yellow)"))
+    path = write_library(found, tmp_path / "restricted.lp")
+    assert 'restrict(toyToRoom, "T", toyIs(yellow)).' in path.read_text()
+    library = TaskLibrary.load([path])
+    groundings = candidate_tasks(demo.initial_state, library)
+    assert [str(g.goal_text) for g, _ in groundings] == ["toyInRoom(block0, room0)"]

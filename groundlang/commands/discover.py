@@ -33,6 +33,9 @@ def register(subparsers) -> None:
     p.add_argument("--cache-dir", metavar="DIR",
                    help="behaviour-likelihood cache (default $GROUNDLANG_CACHE or ./.groundlang-cache)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the behaviour-likelihood cache")
+    p.add_argument("--restrict", action="store_true",
+                   help="restrict each task variable by the colour/shape PFs that single out its object "
+                        "in every demonstration the task explains (restrict/3 facts)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=run)
 
@@ -46,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     if not corpus.instances:
         raise ValueError(f"{args.directory}: no corpus files (*.txt) found")
     settings = DiscoverySettings(weight_margin=args.weight_margin, max_conjuncts=args.max_conjuncts,
-                                 max_tasks=args.max_tasks)
+                                 max_tasks=args.max_tasks, restrict=args.restrict)
     cache = False if args.no_cache else args.cache_dir
     quiet = args.json or getattr(args, "quiet", False)
     discovery = discover_tasks(corpus.instances, settings, cache_dir=cache, progress=not quiet)
