@@ -23,7 +23,7 @@ from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
+from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string, reading_groups
 from groundlang.model.features import goal_mask
 from groundlang.model.geometry import cell_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, interpretations
@@ -245,9 +245,15 @@ class Learner:
         reading_probs = None
         if isinstance(self.lm, ParseAligned):
             with torch.no_grad():
-                _, per_reading, _ = self.lm.reading_table(self.globals, batch)  # [1, J, R]
-                joint = per_reading[0, :J] + torch.log(probs[:J].clamp_min(1e-30))[:, None]
-                reading_probs = torch.softmax(torch.logsumexp(joint, 0), 0)[: len(obs.readings)].numpy()
+                # per_reading[j, s] = log P(words, s | j) for merged reading structures s.
+                _, per_reading, _ = self.lm.reading_table(self.globals, batch)  # [1, J, S]
+                joint = per_reading[0, :J] + batch.log_prior[0, :J, None]
+                structure = torch.softmax(torch.logsumexp(joint, 0), 0).numpy()  # P(s | words)
+            groups = reading_groups(obs, self.vocab)
+            prior = np.array([r.probability for r in obs.readings])
+            share = np.array([prior[k] / prior[[i for i, g in enumerate(groups) if g == groups[k]]].sum()
+                              for k in range(len(groups))])
+            reading_probs = structure[groups] * share  # P(reading | words), one per reading
         return Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
                          list(obs.readings), reading_probs)
 

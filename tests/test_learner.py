@@ -63,6 +63,17 @@ def test_posterior_is_a_distribution_with_readings(learner, corpus):
     assert "toyToRoom" in post.table().splitlines()[1]
 
 
+def test_reading_probabilities_line_up_with_readings_when_readings_merge(learner, corpus):
+    # Four parses of this command give only two distinct word structures to the model.
+    post = learner.posterior("bring the star into the blue room", corpus.instances[0].initial_state)
+    assert len(post.readings) == 4 == len(post.reading_probabilities)
+    assert post.reading_probabilities.sum() == pytest.approx(1.0, abs=1e-5)
+    prior = [r.probability for r in post.readings]
+    # Readings with the same structure keep their prior ratio.
+    assert post.reading_probabilities[0] / post.reading_probabilities[1] != pytest.approx(1.0)
+    assert all(p > 0 for p in post.reading_probabilities) and sum(prior) == pytest.approx(1.0)
+
+
 def test_lexicon_ties_colour_words_to_room_pfs(learner):
     lexicon = learner.lexicon(top=2)
     assert lexicon["red"][0][0] == "roomIsRed"
