@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from groundlang.corpus import Corpus, CorpusError, Instance, file_prefix
-from groundlang.logic.atoms import AtomError, Atom, parse_goal
+from groundlang.logic.atoms import Atom, AtomError, attribute_pf, parse_goal
 from groundlang.model.world import State
 
 __all__ = [
@@ -98,21 +98,17 @@ def _article(word: str) -> str:
     return "an" if word[:1] in "aeiou" else "a"
 
 
-def _capitalised(word: str) -> str:
-    return word[:1].upper() + word[1:]
-
-
 def _attribute_predicates(state: State) -> dict[str, tuple[str, str, str]]:
     """``roomIsGreen -> ('room', 'colour', 'green')`` etc. for the state's palette."""
     pal = state.layout.palette
     table: dict[str, tuple[str, str, str]] = {}
     for colour in pal.colours:
-        table[f"roomIs{_capitalised(colour)}"] = ("room", "colour", colour)
+        table[attribute_pf("roomIs", colour)] = ("room", "colour", colour)
         for cls in ("toy", "block"):
-            table[f"{cls}Is{_capitalised(colour)}"] = ("toy", "colour", colour)
+            table[attribute_pf(f"{cls}Is", colour)] = ("toy", "colour", colour)
     for shape in pal.shapes:
         for cls in ("toy", "block"):
-            table[f"{cls}Is{_capitalised(shape)}"] = ("toy", "shape", shape)
+            table[attribute_pf(f"{cls}Is", shape)] = ("toy", "shape", shape)
     return table
 
 

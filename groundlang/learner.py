@@ -21,7 +21,7 @@ from groundlang.inference.acting import rollout, rollout_states
 from groundlang.inference.joint import FitResult, fit_globals, posterior
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
-from groundlang.logic.atoms import Atom, format_goal
+from groundlang.logic.atoms import Atom, attribute_pf, format_goal
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string, reading_groups
 from groundlang.model.features import goal_mask
@@ -39,10 +39,6 @@ log = logging.getLogger(__name__)
 
 class NotFittedError(ValueError):
     """A learner was asked to interpret a command before it was trained or loaded."""
-
-
-def _capital(word: str) -> str:
-    return word[:1].upper() + word[1:]
 
 
 @dataclass
@@ -183,9 +179,9 @@ class Learner:
                     roles.append(rb.role)
                     tokens.append(class_token(rb.cls))
         for palette in sorted(palettes, key=lambda p: p.name):
-            tokens.extend(f"roomIs{_capital(c)}" for c in palette.colours)
-            tokens.extend(f"toyIs{_capital(c)}" for c in palette.colours)
-            tokens.extend(f"toyIs{_capital(s)}" for s in palette.shapes)
+            tokens.extend(attribute_pf("roomIs", c) for c in palette.colours)
+            tokens.extend(attribute_pf("toyIs", c) for c in palette.colours)
+            tokens.extend(attribute_pf("toyIs", s) for s in palette.shapes)
         tokens.extend(class_token(c) for c in ("agent", "room", "door", "toy"))
         vocab.add_tokens(tokens)
         vocab.add_roles(roles + list(OTHER_ROLES))

@@ -55,7 +55,7 @@ import numpy as np
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.mlirl import mlirl
 from groundlang.inference.planning import TaskSettings
-from groundlang.logic.atoms import Atom
+from groundlang.logic.atoms import Atom, attribute_pf
 # lifted_key is part of discovery's public surface (tests and notebooks import it from here).
 from groundlang.inference.lifting import lift_goal, lifted_key, singling_out, structure_key, task_name  # noqa: F401
 from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary, format_lifted_task
@@ -380,7 +380,7 @@ def _pf_terms(layout, obj: str) -> dict[str, str]:
         values = (("toyIs", colour), ("toyIs", shape))
     else:
         return {}
-    return {f"{p}{v[:1].upper()}{v[1:]}": f"{p}({v})" for p, v in values}
+    return {attribute_pf(p, v): f"{p}({v})" for p, v in values}
 
 
 def _restricted(task: LiftedTask, reports, demos) -> LiftedTask:

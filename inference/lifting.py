@@ -12,7 +12,7 @@ from __future__ import annotations
 from itertools import combinations, permutations
 from typing import Sequence
 
-from groundlang.logic.atoms import Atom
+from groundlang.logic.atoms import Atom, attribute_pf
 from groundlang.logic.tasks import CLASS_ORDER, LiftedTask, Variable
 
 __all__ = ["VARIABLE_LETTER", "structure_key", "lifted_key", "task_name", "lift_goal", "singling_out"]
@@ -99,17 +99,13 @@ def lift_goal(goal: Sequence[Atom], classes: dict[str, str], name: str | None = 
 # ---------------------------------------------------------------- colour/shape PFs that pick an object out
 
 
-def _capitalised(name: str) -> str:
-    return name[:1].upper() + name[1:]
-
-
 def _attribute_atoms(layout) -> dict[str, tuple[Atom, ...]]:
     """Colour/shape PFs true of each room and toy, named as pfs.lp names them (roomIsGreen, toyIsStar)."""
     out: dict[str, tuple[Atom, ...]] = {}
     for name, room in zip(layout.room_names, layout.rooms):
-        out[name] = (Atom(f"roomIs{_capitalised(room.colour)}", (name,)),)
+        out[name] = (Atom(attribute_pf("roomIs", room.colour), (name,)),)
     for name, (colour, shape) in zip(layout.toy_names, layout.toy_attributes):
-        out[name] = (Atom(f"toyIs{_capitalised(colour)}", (name,)), Atom(f"toyIs{_capitalised(shape)}", (name,)))
+        out[name] = (Atom(attribute_pf("toyIs", colour), (name,)), Atom(attribute_pf("toyIs", shape), (name,)))
     return out
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["Atom", "AtomError", "PREDICATE_ALIASES", "parse_atom", "parse_goal", "format_goal"]
+__all__ = ["Atom", "AtomError", "PREDICATE_ALIASES", "attribute_pf", "parse_atom", "parse_goal", "format_goal"]
 
 # Corpus spelling -> groundlang (paper) spelling.
 PREDICATE_ALIASES = {
@@ -75,3 +75,8 @@ def parse_goal(text: str) -> tuple[Atom, ...]:
 def format_goal(atoms: tuple[Atom, ...] | list[Atom]) -> str:
     """Write a conjunction the way the labels CSV does."""
     return " ".join(str(a) for a in atoms)
+
+
+def attribute_pf(stem: str, value: str) -> str:
+    """A colour/shape PF's name as logic/pfs.lp spells it: ``attribute_pf("roomIs", "darkGray")`` -> ``roomIsDarkGray``."""
+    return stem + value[:1].upper() + value[1:]

@@ -26,7 +26,7 @@ from typing import Iterable, Sequence
 
 import clingo
 
-from .atoms import Atom, format_goal
+from .atoms import Atom, attribute_pf, format_goal
 from .program import (
     DEFAULT_TIME_LIMIT,
     AspError,
@@ -123,11 +123,10 @@ def pf_name(term: clingo.Symbol) -> str:
     """groundlang's name for a PF term: ``toyInRoom`` stays, ``roomIs(darkGray)`` -> ``roomIsDarkGray``."""
     if term.type is not clingo.SymbolType.Function or not term.name:
         raise AspError(f"PF name {term} must be a constant or a term like roomIs(green)")
-    parts = [term.name]
+    name = term.name
     for arg in term.arguments:
-        text = arg.string if arg.type is clingo.SymbolType.String else str(arg)
-        parts.append(text[:1].upper() + text[1:])
-    return "".join(parts)
+        name = attribute_pf(name, arg.string if arg.type is clingo.SymbolType.String else str(arg))
+    return name
 
 
 def _natural_key(name: str) -> tuple:

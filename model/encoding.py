@@ -57,7 +57,6 @@ class Batch:
     mixtures: torch.Tensor  # [X, S] rows: uniform weights over a token set
     bow_mix: torch.Tensor  # [I, J] mixture of {L} + C + {NULL}
     bow_mix_no_null: torch.Tensor  # [I, J] mixture of {L} + C (Model 0 has no NULL)
-    frame_mix: torch.Tensor  # [I, J] mixture of {L, NULL}: words outside noun phrases
     uniq: torch.Tensor  # [I, U] distinct word ids of the command (0-padded)
     word_counts: torch.Tensor  # [I, U] occurrences of each distinct word
     words: torch.Tensor  # [I, N] word ids in order
@@ -216,7 +215,6 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     pad_mix = mix([null])  # first, so always mixture 0 (language_models.NULL_MIXTURE)
     bow_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     bow_mix_no_null = torch.full((I, J), pad_mix, dtype=torch.long)
-    frame_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     task_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     machines = [[[null] for _ in range(J)] for _ in range(I)]
     V = max(len(interp.roles) for o in observations for interp in o.interpretations) + 1
@@ -244,7 +242,6 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             said = [vocab.token_id(t) for t in interp.constraint_tokens]
             bow_mix[i, j] = mix([lid, null] + said)
             bow_mix_no_null[i, j] = mix([lid] + said)
-            frame_mix[i, j] = mix([lid, null])
             task_mix[i, j] = mix([lid])
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
             role_mask[i, j, 0] = True  # aligned with nothing
@@ -313,7 +310,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
                 frame_counts[i, r, u] = c
 
     return Batch(
-        log_prior, behaviour, mask, mix.table(S), bow_mix, bow_mix_no_null, frame_mix,
+        log_prior, behaviour, mask, mix.table(S), bow_mix, bow_mix_no_null,
         uniq, word_counts, words, word_mask, machine, machine_mask,
         reading_logp, type_counts, type_head_counts, type_prep, type_mask, reading_types, frame_counts, verb_counts, task_mix,
         role, role_mask, role_logw, role_mix, role_head_mix,

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import torch
 
-from groundlang.logic.atoms import PREDICATE_ALIASES, Atom, parse_atom
+from groundlang.logic.atoms import PREDICATE_ALIASES, Atom, attribute_pf, parse_atom
 
 from .statespace import StateSpace
 from .world import Layout
@@ -58,10 +58,6 @@ def position_atoms(layout: Layout) -> list[Atom]:
     atoms += [Atom("toyInDoor", (t, d)) for t in layout.toy_names for d in layout.door_names]
     atoms += [Atom("agentTouchingToy", (agent, t)) for t in layout.toy_names]
     return atoms
-
-
-def _capitalised(name: str) -> str:
-    return name[:1].upper() + name[1:]
 
 
 class _Columns:
@@ -129,8 +125,8 @@ class _Columns:
             if not predicate.startswith(prefix) or len(predicate) == len(prefix):
                 continue
             value = predicate[len(prefix):]
-            colours = {_capitalised(c): c for c in palette.colours}
-            shapes = {_capitalised(s): s for s in palette.shapes} if kind == "toy" else {}
+            colours = {attribute_pf("", c): c for c in palette.colours}
+            shapes = {attribute_pf("", s): s for s in palette.shapes} if kind == "toy" else {}
             if value not in colours and value not in shapes:
                 break
             if len(atom.args) != 1:

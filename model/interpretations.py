@@ -27,7 +27,7 @@ import math
 from collections import Counter
 from dataclasses import dataclass
 
-from groundlang.logic.atoms import Atom
+from groundlang.logic.atoms import Atom, attribute_pf
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
 from groundlang.model.features import atoms_hold
 from groundlang.model.geometry import cell_tables
@@ -88,19 +88,15 @@ def class_of(obj: str) -> str:
     raise ValueError(f"cannot tell the class of object {obj!r}")
 
 
-def _capital(word: str) -> str:
-    return word[:1].upper() + word[1:]
-
-
 def object_tokens(state: State, obj: str) -> tuple[str, ...]:
     """Names of the colour and shape PFs true of ``obj`` in ``state``."""
     cls = class_of(obj)
     index = int(obj.lstrip("abcdefghijklmnopqrstuvwxyz"))
     if cls == "room":
-        return (f"roomIs{_capital(state.layout.rooms[index].colour)}",)
+        return (attribute_pf("roomIs", state.layout.rooms[index].colour),)
     if cls == "toy":
         colour, shape = state.layout.toy_attributes[index]
-        return (f"toyIs{_capital(colour)}", f"toyIs{_capital(shape)}")
+        return (attribute_pf("toyIs", colour), attribute_pf("toyIs", shape))
     return ()
 
 
@@ -109,7 +105,7 @@ def shape_tokens(state: State, obj: str) -> tuple[str, ...]:
     if class_of(obj) != "toy":
         return ()
     _, shape = state.layout.toy_attributes[int(obj[len("block"):])]
-    return (f"toyIs{_capital(shape)}",)
+    return (attribute_pf("toyIs", shape),)
 
 
 def _objects(state: State) -> list[str]:

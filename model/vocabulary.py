@@ -45,29 +45,24 @@ class Vocabulary:
         if self.words[:1] != [UNK] or self.tokens[:1] != [NULL]:
             raise ValueError("a vocabulary starts with <unk> among words and NULL among tokens")
 
+    @staticmethod
+    def _intern(items: list[str], index: dict[str, int], new: Iterable[str]) -> None:
+        for item in new:
+            if item not in index:
+                index[item] = len(items)
+                items.append(item)
+
     def add_words(self, words: Iterable[str]) -> None:
-        for w in words:
-            if w not in self._word_index:
-                self._word_index[w] = len(self.words)
-                self.words.append(w)
+        self._intern(self.words, self._word_index, words)
 
     def add_tokens(self, tokens: Iterable[str]) -> None:
-        for t in tokens:
-            if t not in self._token_index:
-                self._token_index[t] = len(self.tokens)
-                self.tokens.append(t)
+        self._intern(self.tokens, self._token_index, tokens)
 
     def add_roles(self, roles: Iterable[str]) -> None:
-        for r in roles:
-            if r not in self._role_index:
-                self._role_index[r] = len(self.roles)
-                self.roles.append(r)
+        self._intern(self.roles, self._role_index, roles)
 
     def add_preps(self, preps: Iterable[str]) -> None:
-        for p in preps:
-            if p not in self._prep_index:
-                self._prep_index[p] = len(self.preps)
-                self.preps.append(p)
+        self._intern(self.preps, self._prep_index, preps)
 
     def role_id(self, role: str) -> int:
         """Index of a role; a role training never saw aligns like nothing."""

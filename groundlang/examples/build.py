@@ -106,15 +106,11 @@ def shortest_demonstration(start: State, goal) -> tuple[Action, ...]:
     raise ValueError(f"no reachable state satisfies {format_goal(goal)}")
 
 
-def _replay(start: State, actions: tuple[Action, ...]) -> tuple[State, ...]:
+def replay(start: State, actions: tuple[Action, ...]) -> tuple[State, ...]:
     states = [start]
     for a in actions:
         states.append(step(states[-1], a))
     return tuple(states)
-
-
-def _write_text(path: Path, text: str) -> None:
-    write_atomically(path, text)
 
 
 def build(out_dir: str | Path) -> list[Path]:
@@ -127,13 +123,13 @@ def build(out_dir: str | Path) -> list[Path]:
         if goal_holds(goal, start):
             raise ValueError(f"{prefix}: the goal already holds in the initial state")
         actions = shortest_demonstration(start, goal)
-        states = _replay(start, actions)
+        states = replay(start, actions)
         for n, command in enumerate(COMMANDS[prefix]):
             path = out / f"{prefix}{n}.txt"
             write_instance(path, Instance(path, command, actions, states))
             written.append(path)
     labels = ["prefix,goal"] + [f'{p},"{g}"' for p, (g, _) in TASKS.items()]
-    _write_text(out / "labels.csv", "\n".join(labels) + "\n")
+    write_atomically(out / "labels.csv", "\n".join(labels) + "\n")
     written.append(out / "labels.csv")
     for name, (rooms, doors, toy, agent) in NOVEL.items():
         state = _state(toy, agent, rooms, doors)
@@ -142,7 +138,7 @@ def build(out_dir: str | Path) -> list[Path]:
             if goal_holds(goal, state):
                 raise ValueError(f"{name}: {goal_text} holds at the start")
             shortest_demonstration(state, goal)  # raises when a task cannot be done there
-        _write_text(out / name, format_state(state) + "\n")
+        write_atomically(out / name, format_state(state) + "\n")
         written.append(out / name)
     return written
 
