@@ -132,7 +132,7 @@ def _checked_globals(learner, values: dict, tensor_path: Path) -> dict:
 
     v = learner.vocab
     with pyro.poutine.block():
-        expected = learner.lm.sample_globals(len(v.tokens), len(v.words), len(v.roles), len(v.preps))
+        expected = learner.lm.sample_globals(len(v.tokens), len(v.words), len(v.roles), len(v.preps), tuple(v.roles))
     if sorted(values) != sorted(expected):
         raise ModelFormatError(
             f"{tensor_path}: holds {sorted(values)}; language model {learner.lm.name} needs {sorted(expected)}"

@@ -28,6 +28,7 @@ __all__ = ["Observation", "Batch", "encode", "entity_words", "machine_string", "
 # Padded interpretations get this log-weight: exp() underflows to 0 while
 # logsumexp and its gradient stay finite (an -inf would give NaN gradients).
 PAD_LOGIT = -1.0e4
+MAX_ARITY = 4  # readings with more noun phrases share the last arity bin
 
 
 @dataclass(frozen=True)
@@ -72,6 +73,10 @@ class Batch:
     frame_counts: torch.Tensor  # [I, R, U] words outside noun phrases and verbs, per reading
     verb_counts: torch.Tensor  # [I, R, U] the clauses' verbs, per reading
     task_mix: torch.Tensor  # [I, J] mixture of {L} alone
+    task_token: torch.Tensor  # [I, J] token id of L
+    reading_arity: torch.Tensor  # [I, R] noun phrases of each reading, capped at MAX_ARITY
+    cover_slot: torch.Tensor  # [I, J, G] role slot (index into V) of each toy, bound or bystander
+    cover_mask: torch.Tensor  # [I, J, G] bool
     role: torch.Tensor  # [I, J, V] role ids (0 = aligned with nothing)
     role_mask: torch.Tensor  # [I, J, V] bool
     role_logw: torch.Tensor  # [I, J, V] -log(objects sharing the role's label): "other:room" picks one room
@@ -216,6 +221,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     bow_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     bow_mix_no_null = torch.full((I, J), pad_mix, dtype=torch.long)
     task_mix = torch.full((I, J), pad_mix, dtype=torch.long)
+    task_token = torch.full((I, J), null, dtype=torch.long)
     machines = [[[null] for _ in range(J)] for _ in range(I)]
     V = max(len(interp.roles) for o in observations for interp in o.interpretations) + 1
     role = torch.zeros(I, J, V, dtype=torch.long)
@@ -226,6 +232,10 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     # explain every phrase (see model.interpretations).
     role_mix = torch.full((I, J, V), pad_mix, dtype=torch.long)
     role_head_mix = torch.full((I, J, V), pad_mix, dtype=torch.long)
+    G = max(1, max(sum(1 for rb in interp.roles if rb.cls == "toy")
+                   for o in observations for interp in o.interpretations))
+    cover_slot = torch.zeros(I, J, G, dtype=torch.long)
+    cover_mask = torch.zeros(I, J, G, dtype=torch.bool)
 
     for i, obs in enumerate(observations):
         if obs.behaviour is not None and len(obs.behaviour) != len(obs.interpretations):
@@ -243,10 +253,21 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             bow_mix[i, j] = mix([lid, null] + said)
             bow_mix_no_null[i, j] = mix([lid] + said)
             task_mix[i, j] = mix([lid])
+            task_token[i, j] = lid
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
             role_mask[i, j, 0] = True  # aligned with nothing
             sharing = Counter(rb.role for rb in interp.roles)
+            toy_slots = [v for v, rb in enumerate(interp.roles, start=1) if rb.cls == "toy"]
+            for g_, v in enumerate(toy_slots):
+                cover_slot[i, j, g_] = v
+                cover_mask[i, j, g_] = True
             for v, rb in enumerate(interp.roles, start=1):
+                if rb.cls == "agent":
+                    # The addressee is "you", which the parser leaves without
+                    # words. Alignable, its class token had no words of its own
+                    # to learn and took the toy's noun: trained on three "take
+                    # the star ..." commands, "star" named the agent.
+                    continue
                 role_logw[i, j, v] = -math.log(sharing[rb.role])
                 role[i, j, v] = vocab.role_id(rb.role)
                 role_mask[i, j, v] = True
@@ -292,6 +313,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     reading_types = torch.zeros(I, R, K)
     frame_counts = torch.zeros(I, R, U)
     verb_counts = torch.zeros(I, R, U)
+    reading_arity = torch.zeros(I, R, dtype=torch.long)
     for i, (types, merged) in enumerate(structures):
         for (prep, mods, head), k in types.items():
             type_prep[i, k] = prep
@@ -306,12 +328,13 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             reading_logp[i, r] = math.log(max(prob, 1e-12))
             for k, c in ent_types:
                 reading_types[i, r, k] = c
+            reading_arity[i, r] = min(sum(c for _, c in ent_types), MAX_ARITY)
             for u, c in frame_key:
                 frame_counts[i, r, u] = c
 
     return Batch(
         log_prior, behaviour, mask, mix.table(S), bow_mix, bow_mix_no_null,
         uniq, word_counts, words, word_mask, machine, machine_mask,
-        reading_logp, type_counts, type_head_counts, type_prep, type_mask, reading_types, frame_counts, verb_counts, task_mix,
+        reading_logp, type_counts, type_head_counts, type_prep, type_mask, reading_types, frame_counts, verb_counts, task_mix, task_token, reading_arity, cover_slot, cover_mask,
         role, role_mask, role_logw, role_mix, role_head_mix,
     )

@@ -30,6 +30,7 @@ def global_sizes(vocab: Vocabulary) -> dict:
         "num_words": len(vocab.words),
         "num_roles": len(vocab.roles),
         "num_preps": len(vocab.preps),
+        "role_names": tuple(vocab.roles),
     }
 
 

@@ -17,16 +17,25 @@ table, and the interpretation itself is enumerated by the model in
   agent's start room, ...) or with nothing, with a learned table
   ``P(role | preposition)``; its words come from the tokens of the object in
   that role, the remaining words from L or ``NULL``. Readings are weighted by
-  the parser's probabilities.
+  the parser's probabilities. Two more parts of the logical form depend on
+  the task: which toys it names (a learned ``P(named | role)``, so a command
+  that never mentions a toy speaks against "take the toy somewhere", and one
+  that names a bystander toy speaks against the tasks that leave it alone)
+  and how many noun phrases it has (``P(arity | L)``). The prior over
+  alignments favours the task's own roles (``argument_bonus``), which is what
+  decides for prepositions training never saw: "go *with* the star to green".
 """
 
 from __future__ import annotations
+
+import itertools
 
 import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import PAD_LOGIT, Batch
+from groundlang.model.encoding import MAX_ARITY, PAD_LOGIT, Batch
+from groundlang.model.vocabulary import is_task_role
 
 __all__ = ["LanguageModel", "BagOfWords", "IBMModel2", "ParseAligned", "LANGUAGE_MODELS", "get_language_model"]
 
@@ -46,7 +55,9 @@ class LanguageModel:
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token}
 
-    def sample_globals(self, num_tokens: int, num_words: int, num_roles: int, num_preps: int) -> dict:
+    def sample_globals(
+        self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = ()
+    ) -> dict:
         with pyro.plate("tokens", num_tokens, dim=-1):
             phi = pyro.sample(
                 "phi", dist.Dirichlet(torch.full((num_words,), self.word_concentration))
@@ -99,7 +110,7 @@ class IBMModel2(LanguageModel):
     # colour/shape PF of the bound objects and alignment picks what was said.
     enumerates_constraints = False
 
-    def sample_globals(self, num_tokens, num_words, num_roles, num_preps):
+    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=()):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
         contexts = POSITION_BINS * (MAX_MACHINE + 1)
         with pyro.plate("distortion_contexts", contexts, dim=-1):
@@ -130,24 +141,58 @@ class ParseAligned(LanguageModel):
     name = "parse"
     enumerates_constraints = False
 
-    def __init__(self, word_concentration: float = 1.05, align_concentration: float = 1.5):
+    def __init__(
+        self,
+        word_concentration: float = 1.05,
+        align_concentration: float = 1.5,
+        argument_bonus: float = 3.0,
+        mention_concentration: float | None = 1.05,
+        arity_concentration: float | None = 1.05,
+    ):
+        """``argument_bonus`` is added to the alignment prior's concentration of
+        the task's own roles (a phrase names an argument of the task more often
+        than a bystander; it decides for prepositions training never saw).
+        ``mention_concentration`` turns on the toy mention model (None: off),
+        ``arity_concentration`` the number of noun phrases given L (None: off);
+        both are Dirichlet concentrations, so EM stays exact."""
         super().__init__(word_concentration)
         self.align_concentration = align_concentration
+        self.argument_bonus = argument_bonus
+        self.mention_concentration = mention_concentration
+        self.arity_concentration = arity_concentration
 
     def settings(self) -> dict:
         return {
             "word_concentration": self.word_concentration,
             "align_concentration": self.align_concentration,
+            "argument_bonus": self.argument_bonus,
+            "mention_concentration": self.mention_concentration,
+            "arity_concentration": self.arity_concentration,
         }
 
-    def sample_globals(self, num_tokens, num_words, num_roles, num_preps):
+    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=()):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
         concentration = torch.full((num_roles,), self.align_concentration)
+        for r, name in enumerate(role_names):
+            if is_task_role(name):
+                concentration[r] += self.argument_bonus
         share = torch.full((2,), self.align_concentration)
         g["frame_source"] = pyro.sample("frame_source", dist.Dirichlet(share))
         g["verb_source"] = pyro.sample("verb_source", dist.Dirichlet(share))
         with pyro.plate("preps", num_preps, dim=-1):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
+        if self.mention_concentration is not None:
+            # Per role: P(a toy in this role is named by some phrase), P(it is not).
+            with pyro.plate("mention_roles", num_roles, dim=-1):
+                g["mention"] = pyro.sample(
+                    "mention", dist.Dirichlet(torch.full((2,), self.mention_concentration))
+                )
+        if self.arity_concentration is not None:
+            # Per lifted-task token: how many noun phrases a command of the task has.
+            with pyro.plate("arity_tokens", num_tokens, dim=-1):
+                g["arity"] = pyro.sample(
+                    "arity", dist.Dirichlet(torch.full((MAX_ARITY + 1,), self.arity_concentration))
+                )
         return g
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
@@ -175,6 +220,8 @@ class ParseAligned(LanguageModel):
         joint = type_ll + log_align
         per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]
         entities = torch.einsum("ijk,irk->ijr", per_type, batch.reading_types)
+        if "mention" in g:
+            entities = entities + self._mentions(g, batch, joint, entities)
         # Words outside noun phrases come from the lifted task's token or NULL
         # with learned shares, one pair for verbs and one for the other words:
         # a verb says more about the task than "to" or "the" does.
@@ -186,7 +233,50 @@ class ParseAligned(LanguageModel):
         frame = torch.einsum("iju,iru->ijr", frame_words, batch.frame_counts)
         verbs = torch.einsum("iju,iru->ijr", verb_words, batch.verb_counts)
         per_reading = entities + frame + verbs + batch.reading_logp[:, None, :]
+        if "arity" in g:
+            arity = g["arity"].clamp_min(1e-30).log()
+            per_reading = per_reading + arity[batch.task_token[:, :, None], batch.reading_arity[:, None, :]]
         return torch.logsumexp(per_reading, dim=-1), per_reading, joint
+
+
+    @staticmethod
+    def _mentions(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.Tensor) -> torch.Tensor:
+        """``log`` of the mention model's factor per ``[I, J, R]``.
+
+        Each toy g of the interpretation is named by some phrase ("covered")
+        with probability ``mention[role_g, 0]`` and not with ``mention[role_g, 1]``.
+        The alignments in which exactly the toys W go unnamed carry the mass
+        ``E(W)``; with ``P(U)`` the mass of alignments avoiding the toys U
+        (phrases choose roles independently, so it is a product over phrases),
+        inclusion-exclusion gives ``sum_W E(W) prod_{W} m1 prod_{not W} m0 =
+        sum_U P(U) prod_{U} (m1 - m0) prod_{not U} m0``, a polynomial in the
+        mention parameters with non-negative coefficients in the E(W) form:
+        ``phi * grad`` still gives EM's expected counts. Returned relative to
+        ``P({})`` (= ``entities``), to which it is added.
+        """
+        G = batch.cover_slot.shape[-1]
+        V = joint.shape[2]
+        role_of_slot = torch.gather(batch.role, 2, batch.cover_slot)  # [I, J, G]
+        mention = g["mention"][role_of_slot]  # [I, J, G, 2]
+        named = torch.where(batch.cover_mask, mention[..., 0], torch.ones_like(mention[..., 0]))
+        unnamed_minus_named = torch.where(
+            batch.cover_mask, mention[..., 1] - mention[..., 0], torch.zeros_like(named)
+        )
+        slot_onehot = torch.nn.functional.one_hot(batch.cover_slot, V).bool() & batch.cover_mask[..., None]
+        total = torch.zeros_like(entities)
+        for size in range(G + 1):
+            for subset in itertools.combinations(range(G), size):
+                chosen = torch.zeros(G, dtype=torch.bool)
+                chosen[list(subset)] = True
+                weight = torch.where(chosen, unnamed_minus_named, named).prod(-1)  # [I, J]
+                if not subset:
+                    total = total + weight[..., None]
+                    continue
+                avoided = slot_onehot[:, :, chosen].any(2)  # [I, J, V]
+                avoid = torch.logsumexp(joint.masked_fill(avoided[..., None], PAD_LOGIT), dim=2)
+                avoid = torch.einsum("ijk,irk->ijr", avoid * batch.type_mask[:, None, :], batch.reading_types)
+                total = total + weight[..., None] * (avoid - entities).exp()
+        return total.clamp_min(1e-30).log()
 
 
 POSITION_BINS = 4  # IBM Model 2: word positions coarsened to quarters of the command

@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-__all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "OTHER_PREP", "DIRECT_OBJECT", "class_token"]
+__all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "OTHER_PREP", "DIRECT_OBJECT", "class_token", "is_task_role"]
 
 NULL = "NULL"
 UNK = "<unk>"
@@ -24,6 +24,11 @@ DIRECT_OBJECT = "<dobj>"
 
 def class_token(cls: str) -> str:
     return f"CLASS:{cls}"
+
+
+def is_task_role(role: str) -> bool:
+    """A role of the task's own variables (``toyInRoom.0``), not a bystander's or none."""
+    return role != NO_ROLE and not role.startswith("other:")
 
 
 @dataclass
