@@ -183,10 +183,13 @@ class ParseAligned(LanguageModel):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
         if self.mention_concentration is not None:
             # Per role: P(a toy in this role is named by some phrase), P(it is not).
+            # A priori a task's toy is named and a bystander is not, by as many
+            # pseudo-counts as the alignment prior's argument bonus.
+            mention = torch.full((num_roles, 2), self.mention_concentration)
+            for r, name in enumerate(role_names):
+                mention[r, 0 if is_task_role(name) else 1] += self.argument_bonus
             with pyro.plate("mention_roles", num_roles, dim=-1):
-                g["mention"] = pyro.sample(
-                    "mention", dist.Dirichlet(torch.full((2,), self.mention_concentration))
-                )
+                g["mention"] = pyro.sample("mention", dist.Dirichlet(mention))
         if self.arity_concentration is not None:
             # Per lifted-task token: how many noun phrases a command of the task has.
             with pyro.plate("arity_tokens", num_tokens, dim=-1):

@@ -3,7 +3,9 @@
 The story of the paper's "A Simplified System Example": three training
 sentences per task for two tasks (take the star to the green room; go to the
 green room). Model 0 sends "Go to green room." to the agent task and, wrongly,
-"Go with the star to green." there too, because "go" outweighs "star".
+"Go with the star to green." there too, because "go" outweighs "star". The
+parse-aligned model (Model 1's direction) sends it to the toy task: the star
+is named, and a command names the toys its task moves, not bystanders.
 """
 
 from __future__ import annotations
@@ -117,3 +119,17 @@ def test_pyro_bag_of_words_makes_model0s_mistake_and_gets_the_first_sentence_rig
     state = by_name["agent2green_0"].initial_state
     assert learner.posterior(GO_TO_GREEN, state).lifted_tasks()["agentToRoom"] > 0.9
     assert learner.posterior(GO_WITH_STAR, state).lifted_tasks()["agentToRoom"] > 0.5
+
+
+def test_parse_sends_go_with_the_star_to_the_toy_task(story):
+    train, by_name, _ = story
+    learner = Learner("parse", library=_two_task_library()).fit(train)
+    for name in ("agent2green_0", "star2green_0"):
+        state = by_name[name].initial_state
+        assert learner.posterior(GO_TO_GREEN, state).lifted_tasks()["agentToRoom"] > 0.99
+        with_star = learner.posterior(GO_WITH_STAR, state)
+        assert with_star.lifted_tasks()["toyToRoom"] > 0.9
+        (goal,) = with_star.goals()[0][0]
+        room = state.layout.rooms[int(goal.args[1][len("room"):])]
+        assert goal.predicate == "toyInRoom" and room.colour == "green"
+

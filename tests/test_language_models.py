@@ -1,0 +1,144 @@
+"""The parse-aligned language model's parts, checked against brute-force enumeration.
+
+The mention model sums, in closed form by inclusion-exclusion, over every
+alignment of the command's noun phrases to roles, weighting each by whether
+each toy ends up named. These tests enumerate the alignments one by one on a
+two-toy layout and compare.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from pathlib import Path
+
+import pyro
+import pytest
+import torch
+
+from groundlang.corpus import read_state_file
+from groundlang.learner import Learner
+from groundlang.model.encoding import encode
+from groundlang.model.generative import global_sizes
+from groundlang.model.language_models import ParseAligned
+from groundlang.model.vocabulary import Vocabulary, is_task_role
+
+TWO_TOYS = Path(__file__).parent / "fixtures" / "sokoban2_corpus" / "L1_novel.state"
+COMMANDS = [
+    "take the red chair to the green room",
+    "go with the bag into the blue room and push the chair there",
+    "walk to the red room",
+]
+
+
+@pytest.fixture(scope="module")
+def setting():
+    state = read_state_file(TWO_TOYS, "sokoban2")
+    learner = Learner("parse")
+    observations = [learner._command_observation(c, state) for c in COMMANDS]
+    learner.vocab = learner._build_vocabulary(observations, {state.layout.palette})
+    # Observations made before the vocabulary existed still encode with it.
+    batch = encode(observations, learner.vocab)
+    pyro.set_rng_seed(3)
+    with pyro.poutine.block():
+        g = learner.lm.sample_globals(**global_sizes(learner.vocab))  # a random draw from the prior
+    return learner, observations, batch, g
+
+
+def test_two_toy_layout_offers_both_toys_to_every_interpretation(setting):
+    _, _, batch, _ = setting
+    assert batch.cover_mask.shape[-1] == 2
+    assert bool(batch.cover_mask[batch.mask].all())
+
+
+def test_mention_model_equals_summing_over_every_alignment(setting):
+    learner, observations, batch, g = setting
+    _, with_mentions, joint = learner.lm.reading_table(g, batch)
+    without = {k: v for k, v in g.items() if k != "mention"}
+    _, plain, _ = learner.lm.reading_table(without, batch)
+    mention = g["mention"]
+    checked = 0
+    for i, obs in enumerate(observations):
+        K = int(batch.type_mask[i].sum())
+        for j in range(len(obs.interpretations)):
+            slots = batch.cover_slot[i, j][batch.cover_mask[i, j]].tolist()
+            roles = batch.role[i, j]
+            for r in range(batch.reading_types.shape[1]):
+                if batch.reading_logp[i, r] < -1e3:
+                    continue
+                # One entry per phrase occurrence: its type.
+                phrases = [k for k in range(K) for _ in range(int(batch.reading_types[i, r, k]))]
+                options = [v for v in range(joint.shape[2]) if batch.role_mask[i, j, v]]
+                total = 0.0
+                plain_total = 0.0
+                for choice in itertools.product(options, repeat=len(phrases)):
+                    p = math.exp(sum(float(joint[i, j, v, k]) for v, k in zip(choice, phrases)))
+                    weight = 1.0
+                    for slot in slots:
+                        m = mention[int(roles[slot])]
+                        weight *= float(m[0]) if slot in choice else float(m[1])
+                    total += p * weight
+                    plain_total += p
+                got = float(with_mentions[i, j, r] - plain[i, j, r])
+                assert got == pytest.approx(math.log(total / plain_total), abs=1e-4)
+                checked += 1
+    assert checked > 50
+
+
+def test_gradient_times_mention_parameters_gives_the_expected_counts(setting):
+    """What EM's M step relies on: mention * dlogP/dmention = expected (named, unnamed) counts."""
+    learner, observations, batch, g = setting
+    i, j, r = 1, 0, 0  # the two-phrase command, its first interpretation and reading
+    mention = g["mention"].clone().requires_grad_(True)
+    _, per_reading, joint = learner.lm.reading_table({**g, "mention": mention}, batch)
+    per_reading[i, j, r].backward()
+    counts = (mention * mention.grad).detach()
+    slots = batch.cover_slot[i, j][batch.cover_mask[i, j]].tolist()
+    roles = batch.role[i, j]
+    K = int(batch.type_mask[i].sum())
+    phrases = [k for k in range(K) for _ in range(int(batch.reading_types[i, r, k]))]
+    options = [v for v in range(joint.shape[2]) if batch.role_mask[i, j, v]]
+    expected = torch.zeros_like(counts, dtype=torch.float64)
+    total = 0.0
+    for choice in itertools.product(options, repeat=len(phrases)):
+        p = math.exp(sum(float(joint[i, j, v, k]) for v, k in zip(choice, phrases)))
+        for slot in slots:
+            p *= float(g["mention"][int(roles[slot]), 0 if slot in choice else 1])
+        total += p
+        for slot in slots:
+            expected[int(roles[slot]), 0 if slot in choice else 1] += p
+    assert len(phrases) >= 2 and len(slots) == 2
+    assert torch.allclose(counts.double(), expected / total, atol=1e-4)
+
+
+def test_prior_favours_the_tasks_own_roles_and_unnamed_bystanders(setting):
+    learner, _, _, _ = setting
+    vocab: Vocabulary = learner.vocab
+    sizes = global_sizes(vocab)
+    lm = ParseAligned()
+    trace = pyro.poutine.trace(lm.sample_globals).get_trace(**sizes)
+
+    def concentration(site):
+        fn = trace.nodes[site]["fn"]
+        fn = getattr(fn, "base_dist", fn)
+        return fn.concentration.reshape(-1, fn.concentration.shape[-1])
+
+    align_c = concentration("align")[0]
+    mention_c = concentration("mention")
+    for r, name in enumerate(vocab.roles):
+        if is_task_role(name):
+            assert float(align_c[r]) == pytest.approx(lm.align_concentration + lm.argument_bonus)
+            assert float(mention_c[r, 0]) > float(mention_c[r, 1])
+        else:
+            assert float(align_c[r]) == pytest.approx(lm.align_concentration)
+            assert float(mention_c[r, 1]) > float(mention_c[r, 0])
+
+
+def test_switching_the_parts_off_removes_their_globals(setting):
+    learner, _, _, _ = setting
+    sizes = global_sizes(learner.vocab)
+    with pyro.poutine.block():
+        full = ParseAligned().sample_globals(**sizes)
+        bare = ParseAligned(argument_bonus=0.0, mention_concentration=None, arity_concentration=None).sample_globals(**sizes)
+    assert {"mention", "arity"} <= set(full)
+    assert not {"mention", "arity"} & set(bare)
