@@ -25,7 +25,7 @@ from groundlang.model import storage
 __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner", "write_atomically"]
 
 FORMAT = "groundlang-model"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: the parse model gained the mention and arity globals
 MODEL_JSON = "model.json"
 GLOBALS = "globals.npz"
 
@@ -83,7 +83,8 @@ def _read_json(directory: Path) -> dict:
         raise ModelFormatError(f"{path}: not a groundlang model (format field is not {FORMAT!r})")
     if meta.get("version") != FORMAT_VERSION:
         raise ModelFormatError(
-            f"{path}: model format version {meta.get('version')!r}, this groundlang reads version {FORMAT_VERSION}"
+            f"{path}: model format version {meta.get('version')!r}, this groundlang reads version {FORMAT_VERSION}; "
+            "train the model again with `groundlang train`"
         )
     return meta
 

@@ -76,7 +76,7 @@ def _truncate(d: Path) -> None:
 
 def _set_version(d: Path) -> None:
     meta = json.loads((d / "model.json").read_text())
-    meta["version"] = 2
+    meta["version"] = 99
     (d / "model.json").write_text(json.dumps(meta))
 
 
@@ -105,8 +105,8 @@ MODEL_DIRS: dict[str, tuple[Callable[[Path], None], list[str]]] = {
                                       "truncated or swapped?"]),
     "truncated tensors, hash rewritten": (lambda d: (_truncate(d), _rehash(d)),
                                           ["model files are incomplete or corrupt", "BadZipFile"]),
-    "JSON from format version 2": (_set_version, ["model.json: model format version 2",
-                                                  "this groundlang reads version 1"]),
+    "JSON from format version 99": (_set_version, ["model.json: model format version 99",
+                                                   "this groundlang reads version 2", "train the model again"]),
     "globals.npz swapped for a PNG": (lambda d: (d / "globals.npz").write_bytes(PNG),
                                       ["globals.npz: contents do not match the hash"]),
     "globals.npz swapped for a PNG, hash rewritten": (
