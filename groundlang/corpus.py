@@ -47,6 +47,7 @@ __all__ = [
     "read_corpus",
     "write_instance",
     "read_state_file",
+    "read_initial_state",
     "parse_state",
     "format_state",
     "example_corpus_path",
@@ -393,6 +394,13 @@ def read_state_file(path: str | Path, palette: str | Palette) -> State:
     if len(lines) > 1:
         raise CorpusError(f"{path}, line 2: extra line; expected exactly one state line")
     return parse_state(lines[0], palette, where=f"{path}, line 1")
+
+
+def read_initial_state(path: str | Path, palette: str | Palette) -> State:
+    """The initial state of a corpus file, or the state of a one-line ``.state`` file."""
+    if Path(path).suffix == ".state":
+        return read_state_file(path, palette)
+    return read_instance(path, palette).initial_state
 
 
 def example_corpus_path() -> Path:

@@ -28,7 +28,6 @@ __all__ = ["Observation", "Batch", "encode", "entity_words", "machine_string", "
 # Padded interpretations get this log-weight: exp() underflows to 0 while
 # logsumexp and its gradient stay finite (an -inf would give NaN gradients).
 PAD_LOGIT = -1.0e4
-MAX_ARITY = 4  # readings with more noun phrases share the last arity bin
 
 
 @dataclass(frozen=True)
@@ -74,7 +73,6 @@ class Batch:
     verb_counts: torch.Tensor  # [I, R, U] the clauses' verbs, per reading
     task_mix: torch.Tensor  # [I, J] mixture of {L} alone
     task_token: torch.Tensor  # [I, J] token id of L
-    reading_arity: torch.Tensor  # [I, R] noun phrases of each reading, capped at MAX_ARITY
     cover_slot: torch.Tensor  # [I, J, G] role slot (index into V) of each toy, bound or bystander
     cover_mask: torch.Tensor  # [I, J, G] bool
     role: torch.Tensor  # [I, J, V] role ids (0 = aligned with nothing)
@@ -257,11 +255,12 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
             role_mask[i, j, 0] = True  # aligned with nothing
             sharing = Counter(rb.role for rb in interp.roles)
-            toy_slots = [v for v, rb in enumerate(interp.roles, start=1) if rb.cls == "toy"]
-            for g_, v in enumerate(toy_slots):
-                cover_slot[i, j, g_] = v
-                cover_mask[i, j, g_] = True
+            toys = 0
             for v, rb in enumerate(interp.roles, start=1):
+                if rb.cls == "toy":  # the mention model asks whether each toy is named
+                    cover_slot[i, j, toys] = v
+                    cover_mask[i, j, toys] = True
+                    toys += 1
                 if rb.cls == "agent":
                     # The addressee is "you", which the parser leaves without
                     # words. Alignable, its class token had no words of its own
@@ -313,7 +312,6 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     reading_types = torch.zeros(I, R, K)
     frame_counts = torch.zeros(I, R, U)
     verb_counts = torch.zeros(I, R, U)
-    reading_arity = torch.zeros(I, R, dtype=torch.long)
     for i, (types, merged) in enumerate(structures):
         for (prep, mods, head), k in types.items():
             type_prep[i, k] = prep
@@ -328,13 +326,12 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             reading_logp[i, r] = math.log(max(prob, 1e-12))
             for k, c in ent_types:
                 reading_types[i, r, k] = c
-            reading_arity[i, r] = min(sum(c for _, c in ent_types), MAX_ARITY)
             for u, c in frame_key:
                 frame_counts[i, r, u] = c
 
     return Batch(
         log_prior, behaviour, mask, mix.table(S), bow_mix, bow_mix_no_null,
         uniq, word_counts, words, word_mask, machine, machine_mask,
-        reading_logp, type_counts, type_head_counts, type_prep, type_mask, reading_types, frame_counts, verb_counts, task_mix, task_token, reading_arity, cover_slot, cover_mask,
+        reading_logp, type_counts, type_head_counts, type_prep, type_mask, reading_types, frame_counts, verb_counts, task_mix, task_token, cover_slot, cover_mask,
         role, role_mask, role_logw, role_mix, role_head_mix,
     )

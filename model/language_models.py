@@ -34,7 +34,7 @@ import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import MAX_ARITY, PAD_LOGIT, Batch
+from groundlang.model.encoding import PAD_LOGIT, Batch
 from groundlang.model.vocabulary import is_task_role
 
 __all__ = ["LanguageModel", "BagOfWords", "IBMModel2", "ParseAligned", "LANGUAGE_MODELS", "get_language_model"]
@@ -238,7 +238,8 @@ class ParseAligned(LanguageModel):
         per_reading = entities + frame + verbs + batch.reading_logp[:, None, :]
         if "arity" in g:
             arity = g["arity"].clamp_min(1e-30).log()
-            per_reading = per_reading + arity[batch.task_token[:, :, None], batch.reading_arity[:, None, :]]
+            phrases = batch.reading_types.sum(-1).long().clamp_max(MAX_ARITY)  # [I, R]
+            per_reading = per_reading + arity[batch.task_token[:, :, None], phrases[:, None, :]]
         return torch.logsumexp(per_reading, dim=-1), per_reading, joint
 
 
@@ -282,6 +283,7 @@ class ParseAligned(LanguageModel):
         return total.clamp_min(1e-30).log()
 
 
+MAX_ARITY = 4  # parse: readings with more noun phrases share the last arity bin
 POSITION_BINS = 4  # IBM Model 2: word positions coarsened to quarters of the command
 MAX_MACHINE = 24  # IBM Model 2: longest machine string (NULL included)
 

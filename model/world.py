@@ -33,6 +33,7 @@ __all__ = [
     "Layout",
     "State",
     "step",
+    "replay",
     "WorldError",
 ]
 
@@ -315,3 +316,11 @@ def step(state: State, action: Action) -> State:
     new = pos.copy()
     new[0] = (tx, ty)
     return state.with_positions(new)
+
+
+def replay(start: State, actions) -> tuple[State, ...]:
+    """The states a sequence of actions visits from ``start``, ``start`` included."""
+    states = [start]
+    for action in actions:
+        states.append(step(states[-1], action))
+    return tuple(states)

@@ -209,6 +209,8 @@ def test_example_corpus_is_consistent_and_labelled():
 
 
 def test_example_corpus_build_is_deterministic(tmp_path):
+    """Every data file shipped in groundlang/examples is written by its builder (our commands,
+    shortest-path demonstrations): nothing there comes from the crowd corpus."""
     from groundlang.examples.build import build
 
     written = build(tmp_path)
@@ -216,6 +218,8 @@ def test_example_corpus_build_is_deterministic(tmp_path):
     shipped = example_corpus_path()
     for path in written:
         assert path.read_bytes() == (shipped / path.name).read_bytes(), path.name
+    data = sorted(p.name for p in shipped.iterdir() if p.suffix in {".txt", ".csv", ".state"})
+    assert data == sorted(p.name for p in written)
 
 
 def test_shortest_demonstration_replays():

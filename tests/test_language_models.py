@@ -51,34 +51,33 @@ def test_two_toy_layout_offers_both_toys_to_every_interpretation(setting):
     assert bool(batch.cover_mask[batch.mask].all())
 
 
+def _alignments(batch, joint, g, i, j, r):
+    """Every alignment of reading r's phrase occurrences to the roles interpretation j offers:
+    (roles chosen, product of the phrases' terms, mention weight of the toys' named/unnamed states)."""
+    K = int(batch.type_mask[i].sum())
+    phrases = [k for k in range(K) for _ in range(int(batch.reading_types[i, r, k]))]
+    options = [v for v in range(joint.shape[2]) if batch.role_mask[i, j, v]]
+    slots = batch.cover_slot[i, j][batch.cover_mask[i, j]].tolist()
+    for choice in itertools.product(options, repeat=len(phrases)):
+        p = math.exp(sum(float(joint[i, j, v, k]) for v, k in zip(choice, phrases)))
+        states = [(int(batch.role[i, j, slot]), 0 if slot in choice else 1) for slot in slots]
+        weight = math.prod(float(g["mention"][role, named]) for role, named in states)
+        yield states, p, weight
+
+
 def test_mention_model_equals_summing_over_every_alignment(setting):
     learner, observations, batch, g = setting
     _, with_mentions, joint = learner.lm.reading_table(g, batch)
     without = {k: v for k, v in g.items() if k != "mention"}
     _, plain, _ = learner.lm.reading_table(without, batch)
-    mention = g["mention"]
     checked = 0
     for i, obs in enumerate(observations):
-        K = int(batch.type_mask[i].sum())
         for j in range(len(obs.interpretations)):
-            slots = batch.cover_slot[i, j][batch.cover_mask[i, j]].tolist()
-            roles = batch.role[i, j]
             for r in range(batch.reading_types.shape[1]):
                 if batch.reading_logp[i, r] < -1e3:
                     continue
-                # One entry per phrase occurrence: its type.
-                phrases = [k for k in range(K) for _ in range(int(batch.reading_types[i, r, k]))]
-                options = [v for v in range(joint.shape[2]) if batch.role_mask[i, j, v]]
-                total = 0.0
-                plain_total = 0.0
-                for choice in itertools.product(options, repeat=len(phrases)):
-                    p = math.exp(sum(float(joint[i, j, v, k]) for v, k in zip(choice, phrases)))
-                    weight = 1.0
-                    for slot in slots:
-                        m = mention[int(roles[slot])]
-                        weight *= float(m[0]) if slot in choice else float(m[1])
-                    total += p * weight
-                    plain_total += p
+                terms = [(p * w, p) for _, p, w in _alignments(batch, joint, g, i, j, r)]
+                total, plain_total = sum(t for t, _ in terms), sum(p for _, p in terms)
                 got = float(with_mentions[i, j, r] - plain[i, j, r])
                 assert got == pytest.approx(math.log(total / plain_total), abs=1e-4)
                 checked += 1
@@ -93,21 +92,13 @@ def test_gradient_times_mention_parameters_gives_the_expected_counts(setting):
     _, per_reading, joint = learner.lm.reading_table({**g, "mention": mention}, batch)
     per_reading[i, j, r].backward()
     counts = (mention * mention.grad).detach()
-    slots = batch.cover_slot[i, j][batch.cover_mask[i, j]].tolist()
-    roles = batch.role[i, j]
-    K = int(batch.type_mask[i].sum())
-    phrases = [k for k in range(K) for _ in range(int(batch.reading_types[i, r, k]))]
-    options = [v for v in range(joint.shape[2]) if batch.role_mask[i, j, v]]
     expected = torch.zeros_like(counts, dtype=torch.float64)
     total = 0.0
-    for choice in itertools.product(options, repeat=len(phrases)):
-        p = math.exp(sum(float(joint[i, j, v, k]) for v, k in zip(choice, phrases)))
-        for slot in slots:
-            p *= float(g["mention"][int(roles[slot]), 0 if slot in choice else 1])
-        total += p
-        for slot in slots:
-            expected[int(roles[slot]), 0 if slot in choice else 1] += p
-    assert len(phrases) >= 2 and len(slots) == 2
+    for states, p, weight in _alignments(batch, joint, g, i, j, r):
+        total += p * weight
+        for role, named in states:
+            expected[role, named] += p * weight
+    assert int(batch.reading_types[i, r].sum()) >= 2 and int(batch.cover_mask[i, j].sum()) == 2
     assert torch.allclose(counts.double(), expected / total, atol=1e-4)
 
 

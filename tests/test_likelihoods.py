@@ -13,7 +13,7 @@ from groundlang.inference import likelihoods
 from groundlang.inference.likelihoods import behaviour_likelihood_table, cache_directory, entry_key, pad_table
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.atoms import Atom, parse_goal
-from groundlang.model.world import Action, Agent, Door, Layout, Room, State, get_palette, step
+from groundlang.model.world import Action, Agent, Door, Layout, Room, State, get_palette, replay
 
 
 @dataclass(frozen=True)
@@ -25,10 +25,7 @@ class _Instance:
 
 def _demo(state: State, words: str) -> _Instance:
     actions = tuple(Action.parse(w) for w in words.split(","))
-    states = [state]
-    for a in actions:
-        states.append(step(states[-1], a))
-    return _Instance(state, tuple(states), actions)
+    return _Instance(state, replay(state, actions), actions)
 
 
 def _corpus_like_state(x: int, y: int) -> State:

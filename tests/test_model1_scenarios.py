@@ -32,7 +32,7 @@ from groundlang.model.features import feature_matrix, position_atoms
 from groundlang.model.geometry import cell_tables
 from groundlang.model.statespace import enumerate_states, trajectory_indices
 from groundlang.model.tasks import candidate_tasks, narrow_by_known
-from groundlang.model.world import step
+from groundlang.model.world import replay
 
 COMMAND = "Push the star into the green room"
 # room,COLOUR,LEFT,TOP,RIGHT,BOTTOM (green=5, red=10, blue=1); block,COLOUR,SHAPE,X,Y (yellow star, magenta moon).
@@ -47,10 +47,7 @@ IRL = dict(temperature=0.5, l1=0.1, nonnegative=True)
 def demo() -> Instance:
     start = parse_state(WORLD, "sokoban")
     actions = shortest_demonstration(start, GOLD)
-    states = [start]
-    for a in actions:
-        states.append(step(states[-1], a))
-    return Instance(Path("push_star_green_0.txt"), COMMAND, actions, tuple(states))
+    return Instance(Path("push_star_green_0.txt"), COMMAND, actions, replay(start, actions))
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from groundlang.model.world import PALETTES
 
@@ -23,21 +22,12 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def load_environment(path: str, palette: str):
-    """The initial state of a corpus file or of a one-line ``.state`` file."""
-    from groundlang.corpus import read_instance, read_state_file
-
-    if Path(path).suffix == ".state":
-        return read_state_file(path, palette)
-    return read_instance(path, palette).initial_state
-
-
 def run(args: argparse.Namespace) -> int:
-    from groundlang.corpus import format_state
+    from groundlang.corpus import format_state, read_initial_state
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
 
-    state = load_environment(args.env, args.palette)
+    state = read_initial_state(args.env, args.palette)
     learner = Learner.load(args.model)
     result = learner.follow(args.command_text, state, max_steps=args.max_steps)
     goals = result.posterior.goals()[: args.top]

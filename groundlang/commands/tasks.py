@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
-from groundlang.corpus import read_instance, read_state_file
+from groundlang.corpus import read_initial_state
 from groundlang.model.world import PALETTES
 
 
@@ -30,11 +29,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.tasks import candidate_tasks
 
-    path = Path(args.file)
-    if path.suffix == ".state":
-        state = read_state_file(path, args.palette)
-    else:
-        state = read_instance(path, args.palette).initial_state
+    state = read_initial_state(args.file, args.palette)
     library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
     candidates = candidate_tasks(state, library)
     if args.json:
@@ -54,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"lifted tasks ({len(library.tasks)}):")
     for t in library.tasks:
         print(f"  {t}")
-    print(f"groundings in the initial state of {path} ({len(candidates)}):")
+    print(f"groundings in the initial state of {args.file} ({len(candidates)}):")
     for g, constraints in candidates:
         print(f"  {g.task}: {g.goal_text}")
         for c in constraints:

@@ -19,7 +19,7 @@ from pathlib import Path
 from groundlang.corpus import Instance, format_state, parse_state, write_instance
 from groundlang.labels import goal_holds
 from groundlang.logic.atoms import format_goal, parse_goal
-from groundlang.model.world import Action, State, step
+from groundlang.model.world import Action, State, replay, step
 from groundlang.model.storage import write_atomically
 
 PALETTE = "sokoban"
@@ -106,31 +106,31 @@ def shortest_demonstration(start: State, goal) -> tuple[Action, ...]:
     raise ValueError(f"no reachable state satisfies {format_goal(goal)}")
 
 
-def replay(start: State, actions: tuple[Action, ...]) -> tuple[State, ...]:
-    states = [start]
-    for a in actions:
-        states.append(step(states[-1], a))
-    return tuple(states)
+def write_tasks(out: Path, tasks) -> list[Path]:
+    """For each ``(prefix, goal text, initial state, commands)``: a shortest demonstration of
+    the goal and one corpus file per command; then ``labels.csv``. Returns the paths written."""
+    written = []
+    labels = ["prefix,goal"]
+    for prefix, goal_text, start, commands in tasks:
+        actions = shortest_demonstration(start, parse_goal(goal_text))
+        states = replay(start, actions)
+        for n, command in enumerate(commands):
+            path = out / f"{prefix}{n}.txt"
+            write_instance(path, Instance(path, command, actions, states))
+            written.append(path)
+        labels.append(f'{prefix},"{goal_text}"')
+    write_atomically(out / "labels.csv", "\n".join(labels) + "\n")
+    return written + [out / "labels.csv"]
 
 
 def build(out_dir: str | Path) -> list[Path]:
     """Write the example corpus, labels.csv and the novel .state files into ``out_dir``; return the paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written = []
     for prefix, (goal_text, start) in TASKS.items():
-        goal = parse_goal(goal_text)
-        if goal_holds(goal, start):
+        if goal_holds(parse_goal(goal_text), start):
             raise ValueError(f"{prefix}: the goal already holds in the initial state")
-        actions = shortest_demonstration(start, goal)
-        states = replay(start, actions)
-        for n, command in enumerate(COMMANDS[prefix]):
-            path = out / f"{prefix}{n}.txt"
-            write_instance(path, Instance(path, command, actions, states))
-            written.append(path)
-    labels = ["prefix,goal"] + [f'{p},"{g}"' for p, (g, _) in TASKS.items()]
-    write_atomically(out / "labels.csv", "\n".join(labels) + "\n")
-    written.append(out / "labels.csv")
+    written = write_tasks(out, [(p, g, start, COMMANDS[p]) for p, (g, start) in TASKS.items()])
     for name, (rooms, doors, toy, agent) in NOVEL.items():
         state = _state(toy, agent, rooms, doors)
         for goal_text, _ in TASKS.values():
