@@ -172,7 +172,15 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
     for name, state in novel_states:
         translated = translate_goal(gold, instance.initial_state, state, name)
         novel = learner.follow(instance.command, state)
-        record["novel"].append({"environment": name, "correct": goal_holds(translated, novel.final_state)})
+        record["novel"].append(
+            {
+                "environment": name,
+                "gold": format_goal(translated),
+                "predicted": format_goal(novel.goal),
+                "predicted_task": describe_goal(novel.goal, state),
+                "correct": goal_holds(translated, novel.final_state),
+            }
+        )
     return record
 
 

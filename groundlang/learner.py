@@ -183,6 +183,7 @@ class Learner:
             tokens.extend(attribute_pf("toyIs", c) for c in palette.colours)
             tokens.extend(attribute_pf("toyIs", s) for s in palette.shapes)
         tokens.extend(class_token(c) for c in ("agent", "room", "door", "toy"))
+        tokens.extend(self.library.spatial_pfs)  # a layout of the test may have sides training never saw
         vocab.add_tokens(tokens)
         vocab.add_roles(roles + list(OTHER_ROLES))
         vocab.add_preps(preps)

@@ -46,6 +46,7 @@ __all__ = [
     "format_lifted_task",
     "binding_constraints",
     "enumerate_groundings",
+    "describe_objects",
     "DOMAIN_FILES",
     "CLASS_ORDER",
 ]
@@ -159,8 +160,9 @@ def format_lifted_task(task: LiftedTask) -> str:
 _LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #show goal/3. #show pf/3. #show restrict/3.")
 
 
-def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[LiftedTask, ...]:
-    """Solve the library without an environment and read task/1, var/3, goal/3."""
+def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tuple[LiftedTask, ...], tuple[str, ...]]:
+    """Solve the library without an environment: the lifted tasks (task/1, var/3, goal/3,
+    restrict/3) and the names of the spatial PFs (pf/3 of class spatial), sorted."""
     models = program.solve("", models=1, time_limit=time_limit)
     if not models:
         raise AspError(f"{program.names}: the task library has no answer set (a constraint always fails)")
@@ -172,10 +174,13 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[Lift
     goals: dict[str, list[tuple[str, tuple[str, ...]]]] = {n: [] for n in names}
     restrictions: dict[str, list[tuple[str, str]]] = {n: [] for n in names}
     signatures: dict[str, tuple[str, ...]] = {}
+    spatial = set()
     for a in by_signature.get(("pf", 3), []):
         cls_, name, sig = a.arguments
         if cls_.name == "position":
             signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
+        elif cls_.name == "spatial":
+            spatial.add(pf_name(name))
     for a in by_signature.get(("var", 3), []):
         t, v, c = (_text(x) for x in a.arguments)
         if t not in variables:
@@ -219,7 +224,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[Lift
                 raise AspError(f"{program.names}: task {n}: restrict uses variable {v!r} "
                                f"that has no var({n}, \"{v}\", Class)")
         tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n]))), tuple(sorted(set(restrictions[n])))))
-    return tuple(tasks)
+    return tuple(tasks), tuple(sorted(spatial))
 
 
 class TaskLibrary:
@@ -237,7 +242,10 @@ class TaskLibrary:
         self.grounding_program = Program(
             domain + self.sources + (package_source("groundings.lp"),), allow_scripts, isolated
         )
-        self.tasks: tuple[LiftedTask, ...] = _read_lifted_tasks(self.program, time_limit)
+        self.description_program = Program(
+            domain + self.sources + (package_source("descriptions.lp"),), allow_scripts, isolated
+        )
+        self.tasks, self.spatial_pfs = _read_lifted_tasks(self.program, time_limit)
 
     @classmethod
     def load(cls, paths: Iterable[str | Path] | None = None, allow_scripts: bool = False,
@@ -284,6 +292,23 @@ def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
     for k in range(len(atoms), -1, -1):
         out.extend(BindingConstraint(c) for c in combinations(atoms, k))
     return out
+
+
+def describe_objects(
+    library: TaskLibrary, facts: str, *, time_limit: float | None = None
+) -> dict[str, tuple[str, ...]]:
+    """The spatial PFs true of each object of one environment (``descriptions.lp``), names sorted.
+
+    ``facts``: one environment in the vocabulary of ``domain.lp``. Objects no spatial PF
+    holds of are left out, e.g. ``{"door1": ("doorWestOfAgent",)}``.
+    """
+    limit = library.time_limit if time_limit is None else time_limit
+    models = library.description_program.solve(facts, models=1, time_limit=limit)
+    found: dict[str, list[str]] = {}
+    for sym in models[0] if models else ():
+        name, obj = sym.arguments
+        found.setdefault(_text(obj), []).append(pf_name(name))
+    return {obj: tuple(sorted(names)) for obj, names in sorted(found.items(), key=lambda kv: _natural_key(kv[0]))}
 
 
 def enumerate_groundings(

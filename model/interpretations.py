@@ -19,6 +19,11 @@ left for phrases to escape into (an earlier design with one "unaligned"
 distribution learned to explain every phrase there: measured 58% on the
 crowd corpus). A phrase may still align with nothing (role ``none``); its
 words then come from ``NULL``.
+
+Every object, bound or not, may also be described by the spatial PFs
+(``pfs.lp``) true of it where the agent stands: "the door on the left"
+(``doorWestOfAgent``). They are not part of C: a side is not a property the
+object keeps in another layout.
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ from groundlang.logic.atoms import Atom, attribute_pf
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
 from groundlang.model.features import atoms_hold
 from groundlang.model.geometry import cell_tables
-from groundlang.model.tasks import candidate_tasks
+from groundlang.model.tasks import candidate_tasks, spatial_descriptions
 from groundlang.model.world import State
 
 __all__ = [
@@ -54,7 +59,7 @@ class RoleBinding:
     role: str  # "toyInRoom.1", "other:room", ...
     obj: str  # object name, e.g. "room2"
     cls: str  # object class: agent, room, door, toy
-    constraint_tokens: tuple[str, ...]  # PFs words may express: C's for a bound object, all for others
+    constraint_tokens: tuple[str, ...]  # PFs words may express: C's for a bound object, all for others; then spatial PFs
     kind_tokens: tuple[str, ...] = ()  # PFs a head noun may express besides the class: a toy's shape
 
 
@@ -116,19 +121,21 @@ def _objects(state: State) -> list[str]:
 def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary) -> tuple[RoleBinding, ...]:
     lifted = library.task(task.task)
     binding = dict(task.binding)
+    spatial = spatial_descriptions(state, library)
     bindings = []
     for var in lifted.variables:
         role = next(
             f"{pred}.{args.index(var.name)}" for pred, args in lifted.goal if var.name in args
         )
         obj = binding[var.name]
-        said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,))
+        said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + spatial.get(obj, ())
         bindings.append(RoleBinding(role, obj, var.cls, said, shape_tokens(state, obj)))
     bound = set(binding.values())
     for obj in _objects(state):
         if obj not in bound:
             cls = class_of(obj)
-            bindings.append(RoleBinding(f"other:{cls}", obj, cls, object_tokens(state, obj), shape_tokens(state, obj)))
+            said = object_tokens(state, obj) + spatial.get(obj, ())
+            bindings.append(RoleBinding(f"other:{cls}", obj, cls, said, shape_tokens(state, obj)))
     return tuple(bindings)
 
 

@@ -18,13 +18,14 @@ from groundlang.logic.tasks import (
     BindingConstraint,
     GroundedTask,
     TaskLibrary,
+    describe_objects,
     enumerate_groundings,
 )
 
 from .geometry import state_facts
 from .world import State
 
-__all__ = ["Candidate", "candidate_tasks", "narrow_by_known", "NarrowedCandidate"]
+__all__ = ["Candidate", "candidate_tasks", "spatial_descriptions", "narrow_by_known", "NarrowedCandidate"]
 
 Candidate = tuple[GroundedTask, list[BindingConstraint]]
 
@@ -43,6 +44,16 @@ def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
     cached (the library is keyed by identity, the state by value). Raises AspError.
     """
     return [(g, list(c)) for g, c in _candidates(state, library)]
+
+
+@lru_cache(maxsize=64)
+def spatial_descriptions(state: State, library: TaskLibrary) -> dict[str, tuple[str, ...]]:
+    """The spatial PFs (``pfs.lp``) true of each object where the agent stands in ``state``.
+
+    One clingo solve per (state, library), cached like :func:`candidate_tasks`; objects
+    no spatial PF holds of are absent. Treat the result as read-only. Raises AspError.
+    """
+    return describe_objects(library, state_facts(state))
 
 
 @dataclass(frozen=True)

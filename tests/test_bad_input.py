@@ -28,7 +28,7 @@ from hypothesis import strategies as st
 
 from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus
-from groundlang.model_io import ModelFormatError, load_learner
+from groundlang.model_io import FORMAT_VERSION, ModelFormatError, load_learner
 from test_corpus import MALFORMED  # the corpus-file rows and their messages, shared with test_corpus
 
 TESTS = Path(__file__).parent
@@ -106,7 +106,7 @@ MODEL_DIRS: dict[str, tuple[Callable[[Path], None], list[str]]] = {
     "truncated tensors, hash rewritten": (lambda d: (_truncate(d), _rehash(d)),
                                           ["model files are incomplete or corrupt", "BadZipFile"]),
     "JSON from format version 99": (_set_version, ["model.json: model format version 99",
-                                                   "this groundlang reads version 2", "train the model again"]),
+                                                   f"this groundlang reads version {FORMAT_VERSION}", "train the model again"]),
     "globals.npz swapped for a PNG": (lambda d: (d / "globals.npz").write_bytes(PNG),
                                       ["globals.npz: contents do not match the hash"]),
     "globals.npz swapped for a PNG, hash rewritten": (

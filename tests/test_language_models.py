@@ -133,3 +133,31 @@ def test_switching_the_parts_off_removes_their_globals(setting):
         bare = ParseAligned(argument_bonus=0.0, mention_concentration=None, arity_concentration=None).sample_globals(**sizes)
     assert {"mention", "arity"} <= set(full)
     assert not {"mention", "arity"} & set(bare)
+
+
+@pytest.mark.parametrize("command, keys", [
+    ("take the star to the red room", [None, "to+obj"]),  # where the object goes
+    ("go to the red room", ["to"]),  # where the agent goes
+    ("go into the green room and push it to the blue room", ["into", None, "to+obj"]),
+    ("do not enter the green room", ["not:dobj"]),
+])
+def test_preposition_keys_tell_transitive_clauses_apart(command, keys):
+    from groundlang.grammar.parser import parse
+    from groundlang.model.encoding import entity_words
+
+    assert [key for key, _, _ in entity_words(parse(command)[0].logical_form)] == keys
+
+
+def test_doors_are_described_by_their_side_of_the_agent(setting):
+    from groundlang.logic.tasks import describe_objects
+    from groundlang.model.geometry import state_facts
+
+    learner, observations, _, _ = setting
+    state = read_state_file(TWO_TOYS, "sokoban2")
+    sides = describe_objects(learner.library, state_facts(state))
+    assert sides and all(o.startswith("door") for o in sides)
+    for interp in observations[0].interpretations:
+        for rb in interp.roles:
+            spatial = tuple(t for t in rb.constraint_tokens if t in learner.library.spatial_pfs)
+            assert spatial == sides.get(rb.obj, ())
+    assert set(learner.library.spatial_pfs) <= set(learner.vocab.tokens)

@@ -69,11 +69,19 @@ CASES = [
     ("toy colour and shape", ("domain.lp", "pfs.lp"), TWO_ROOMS + TOYS,
      ["holds(toyIs(yellow),(block0,))", "holds(toyIs(star),(block0,))", "holds(toyIs(moon),(block1,))"],
      ["holds(toyIs(star),(block1,))", "holds(toyIs(red),(block0,))", "holds(roomIs(yellow),(block0,))"]),
+    ("spatial PFs: a door level with the agent is on one side only", ("domain.lp", "pfs.lp"), TWO_ROOMS + TOYS,
+     ["holds(doorEastOfAgent,(door0,))", "holds(doorEastOfAgent,(door1,))"],
+     ["holds(doorWestOfAgent,(door0,))", "holds(doorNorthOfAgent,(door0,))", "holds(doorSouthOfAgent,(door0,))"]),
+    ("spatial PFs: diagonal sides, doors only", ("domain.lp", "pfs.lp"), TWO_ROOMS + "agent(agent0). at(agent0, 6, 3).",
+     ["holds(doorWestOfAgent,(door0,))", "holds(doorSouthOfAgent,(door0,))",
+      "holds(doorEastOfAgent,(door1,))", "holds(doorSouthOfAgent,(door1,))"],
+     ["holds(doorEastOfAgent,(door0,))", "holds(doorNorthOfAgent,(door1,))",
+      "holds(doorWestOfAgent,(room0,))", "holds(doorWestOfAgent,(agent0,))"]),
     ("PF classes and signatures", ("domain.lp", "pfs.lp"), TWO_ROOMS,
      ["pf(position,agentInRoom,(agent,room))", "pf(position,toyInRoom,(toy,room))",
       "pf(position,agentInDoor,(agent,door))", "pf(position,toyInDoor,(toy,door))",
       "pf(position,agentTouchingToy,(agent,toy))", "pf(colour,roomIs(darkGray),(room,))",
-      "pf(colour,toyIs(red),(toy,))", "pf(shape,toyIs(moon),(toy,))"],
+      "pf(colour,toyIs(red),(toy,))", "pf(shape,toyIs(moon),(toy,))", "pf(spatial,doorWestOfAgent,(door,))"],
      ["pf(shape,toyIs(red),(toy,))", "pf(colour,toyIs(star),(toy,))", "pf(position,roomIs(green),(room,))"]),
 ]
 
@@ -96,4 +104,4 @@ def test_pf_names_capitalise_the_value():
     (model,) = program("domain.lp", "pfs.lp").solve(TWO_ROOMS + TOYS, models=1)
     names = {pf_name(s.arguments[0]) for s in model if s.name == "holds"}
     assert names == {"agentInRoom", "toyInRoom", "toyInDoor", "agentTouchingToy", "roomIsGreen",
-                     "roomIsDarkGray", "toyIsYellow", "toyIsStar", "toyIsRed", "toyIsMoon"}
+                     "roomIsDarkGray", "toyIsYellow", "toyIsStar", "toyIsRed", "toyIsMoon", "doorEastOfAgent"}

@@ -274,3 +274,20 @@ def test_restriction_on_an_undeclared_variable_is_refused():
             'restrict(t, "X", toyIs(star)).')
     with pytest.raises(AspError, match="restrict uses variable 'X'"):
         TaskLibrary.from_text(text)
+
+
+def test_spatial_pfs_describe_objects_but_never_bind_them(library):
+    """Spatial PFs (pfs.lp) are read per environment for the language model and stay out of C."""
+    from groundlang.logic.tasks import describe_objects
+
+    assert library.spatial_pfs == ("doorEastOfAgent", "doorNorthOfAgent", "doorSouthOfAgent", "doorWestOfAgent")
+    # agent at (1,1), door0 at (4,2): east and north of the agent
+    assert describe_objects(library, TWO_TOYS) == {"door0": ("doorEastOfAgent", "doorNorthOfAgent")}
+    assert describe_objects(library, NO_TOYS) == {}  # the agent stands in the door
+    doors = TaskLibrary.from_text(
+        'task(agentToDoor). var(agentToDoor, "A", agent). var(agentToDoor, "D", door).'
+        ' goal(agentToDoor, agentInDoor, ("A", "D")).'
+    )
+    ((grounded, constraints),) = enumerate_groundings(doors, TWO_TOYS)
+    assert grounded.goal_text == "agentInDoor(agent0, door0)"
+    assert constraints == [BindingConstraint(())]  # a side is not a binding constraint
