@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import logging
+from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -169,8 +170,10 @@ class Learner:
         tokens: list[str] = [task.name for task in self.library.tasks]
         roles: list[str] = []
         preps: list[str] = []
+        counts: Counter = Counter()
         for obs in observations:
             vocab.add_words(obs.words)
+            counts.update(obs.words)
             for reading in obs.readings:
                 preps.extend(p for p, _, _ in entity_words(reading.logical_form) if p is not None)
             for interp in obs.interpretations:
@@ -187,6 +190,7 @@ class Learner:
         vocab.add_tokens(tokens)
         vocab.add_roles(roles + list(OTHER_ROLES))
         vocab.add_preps(preps)
+        vocab.read_misspellings(counts)
         return vocab
 
     def fit(self, instances: Sequence, progress: bool = False, init: dict | None = None,

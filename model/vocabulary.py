@@ -5,12 +5,15 @@ of lifted tasks (``toyToRoom``), of colour and shape PFs (``roomIsRed``), of
 object classes (``CLASS:room``) and the catch-all ``NULL`` that explains
 words with no meaning in the domain ("the", "please"). Index 0 of the word
 vocabulary is ``<unk>``: a word never seen in training gets only the prior's
-share of every token's distribution.
+share of every token's distribution. Crowd-sourced commands are typed in a
+hurry: a word seen once that is one edit from exactly one common word
+("orage", "whlite") is read as that word, and so is an unknown word at test
+time that is one edit from exactly one known word.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
 __all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "OTHER_PREP", "DIRECT_OBJECT", "class_token", "is_task_role"]
@@ -31,6 +34,31 @@ def is_task_role(role: str) -> bool:
     return role != NO_ROLE and not role.startswith("other:")
 
 
+# Unknown words this long or longer are read as a known word one edit away (shorter ones
+# have too many neighbours: "back" is one edit from "black").
+MIN_SPELLING_LENGTH = 5
+_LETTERS = "abcdefghijklmnopqrstuvwxyz"
+
+
+def _one_edit(word: str) -> set[str]:
+    """Every string one deletion, transposition, substitution or insertion away from ``word``."""
+    splits = [(word[:i], word[i:]) for i in range(len(word) + 1)]
+    deletes = {a + b[1:] for a, b in splits if b}
+    transposes = {a + b[1] + b[0] + b[2:] for a, b in splits if len(b) > 1}
+    replaces = {a + c + b[1:] for a, b in splits if b for c in _LETTERS}
+    inserts = {a + c + b for a, b in splits for c in _LETTERS}
+    return (deletes | transposes | replaces | inserts) - {word}
+
+
+def _neighbours(word: str, known: Callable[[str], bool]) -> str | None:
+    """The one word one edit from ``word`` that ``known`` accepts, or None (none, or several)."""
+    if len(word) < MIN_SPELLING_LENGTH or not word.isalpha():
+        return None
+    # Hurried typing keeps the first letter; an edit there makes other words ("reach", "peach").
+    found = {w for w in _one_edit(word) if w[0] == word[0] and len(w) >= MIN_SPELLING_LENGTH and known(w)}
+    return found.pop() if len(found) == 1 else None
+
+
 @dataclass
 class Vocabulary:
     """Two index maps: words (``<unk>`` first) and semantic tokens (``NULL`` first)."""
@@ -41,12 +69,15 @@ class Vocabulary:
     # that introduce noun phrases (index 0: unseen preposition, 1: direct object).
     roles: list[str] = field(default_factory=lambda: [NO_ROLE])
     preps: list[str] = field(default_factory=lambda: [OTHER_PREP, DIRECT_OBJECT])
+    # Misspellings read as another word of the vocabulary ("whlite" -> "white").
+    aliases: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self._word_index = {w: i for i, w in enumerate(self.words)}
         self._token_index = {t: i for i, t in enumerate(self.tokens)}
         self._role_index = {r: i for i, r in enumerate(self.roles)}
         self._prep_index = {p: i for i, p in enumerate(self.preps)}
+        self._spelling: dict[str, int] = {}  # unknown word -> index it is read as
         if self.words[:1] != [UNK] or self.tokens[:1] != [NULL]:
             raise ValueError("a vocabulary starts with <unk> among words and NULL among tokens")
 
@@ -59,6 +90,7 @@ class Vocabulary:
 
     def add_words(self, words: Iterable[str]) -> None:
         self._intern(self.words, self._word_index, words)
+        self._spelling.clear()
 
     def add_tokens(self, tokens: Iterable[str]) -> None:
         self._intern(self.tokens, self._token_index, tokens)
@@ -79,7 +111,30 @@ class Vocabulary:
         return self._prep_index.get(prep, 0)
 
     def word_id(self, word: str) -> int:
-        return self._word_index.get(word, 0)
+        """Index of a word. A misspelling (see :meth:`read_misspellings`) reads as its word;
+        an unknown word of ``MIN_SPELLING_LENGTH`` letters or more one edit away from
+        exactly one known word ("orage") reads as that word; any other unknown word is ``<unk>``."""
+        word = self.aliases.get(word, word)
+        index = self._word_index.get(word)
+        if index is not None:
+            return index
+        if word not in self._spelling:
+            found = _neighbours(word, lambda w: w in self._word_index and w not in self.aliases)
+            self._spelling[word] = self._word_index[found] if found else 0
+        return self._spelling[word]
+
+    def read_misspellings(self, counts: Mapping[str, int], rare: int = 1, common: int = 3) -> dict[str, str]:
+        """Read each word seen at most ``rare`` times as the one word seen at least ``common``
+        times one edit away ("whlite" as "white"), if there is exactly one; returns the new aliases."""
+        new = {}
+        for word, n in counts.items():
+            if n <= rare and word not in self.aliases:
+                found = _neighbours(word, lambda w: counts.get(w, 0) >= common)
+                if found:
+                    new[word] = found
+        self.aliases.update(new)
+        self._spelling.clear()
+        return new
 
     def token_id(self, token: str) -> int:
         """Index of a semantic token; tokens unknown to training map to NULL."""
@@ -94,8 +149,10 @@ class Vocabulary:
             "tokens": list(self.tokens),
             "roles": list(self.roles),
             "preps": list(self.preps),
+            "aliases": dict(sorted(self.aliases.items())),
         }
 
     @classmethod
     def from_json(cls, data: dict) -> "Vocabulary":
-        return cls(list(data["words"]), list(data["tokens"]), list(data["roles"]), list(data["preps"]))
+        return cls(list(data["words"]), list(data["tokens"]), list(data["roles"]), list(data["preps"]),
+                   dict(data.get("aliases", {})))

@@ -1,0 +1,51 @@
+"""Vocabularies: indices, and misspellings read as the word meant (model.vocabulary)."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+from groundlang.model.vocabulary import UNK, Vocabulary
+
+WORDS = ["orange", "white", "through", "room", "peach", "reach", "right", "light", "star"]
+
+
+def vocabulary(counts: dict[str, int]) -> Vocabulary:
+    vocab = Vocabulary()
+    vocab.add_words(counts)
+    vocab.read_misspellings(Counter(counts))
+    return vocab
+
+
+def test_a_rare_word_one_edit_from_one_common_word_reads_as_it():
+    counts = {"orange": 30, "white": 5, "through": 9, "orage": 1, "whlite": 1, "throught": 1, "ornge": 1}
+    vocab = vocabulary(counts)
+    assert vocab.aliases == {"orage": "orange", "ornge": "orange", "whlite": "white", "throught": "through"}
+    assert vocab.word_id("orage") == vocab.word_id("orange") != 0
+    assert vocab.word_id("whlite") == vocab.word_id("white")
+
+
+def test_real_words_and_short_words_are_left_alone():
+    # "reach"/"peach" and "light"/"right" differ in the first letter; "star"/"stars" is
+    # too short to tell from another word; "white" is common itself.
+    counts = {"peach": 5, "reach": 1, "right": 9, "light": 1, "stars": 4, "star": 1, "white": 5, "whites": 1,
+              "whitey": 1}
+    vocab = vocabulary(counts)
+    assert vocab.aliases == {"whites": "white", "whitey": "white"}
+    assert vocab.word_id("reach") != vocab.word_id("peach")
+
+
+def test_an_unknown_word_reads_as_its_one_known_neighbour_or_unk():
+    vocab = vocabulary({w: 5 for w in WORDS})
+    assert vocab.word_id("orangey") == vocab.word_id("orange")
+    assert vocab.word_id("rigth") == vocab.word_id("right")  # a transposition
+    assert vocab.word_id("peaches") == 0  # two edits
+    assert vocab.word_id("lighd") == vocab.word_id("light")
+    assert vocab.word_id("xyzzy") == 0 and vocab.words[0] == UNK
+    assert vocab.word_id("stat") == 0  # shorter than five letters: never corrected
+
+
+def test_aliases_survive_a_round_trip_through_json():
+    vocab = vocabulary({"orange": 30, "orage": 1})
+    again = Vocabulary.from_json(vocab.to_json())
+    assert again.aliases == {"orage": "orange"}
+    assert again.word_id("orage") == again.word_id("orange")
