@@ -43,6 +43,8 @@ PRONOUNS = frozenset(
 )
 AUXILIARIES = frozenset("would will should can could must may might do does did shall have has had".split())
 NEGATIONS = frozenset("not don't dont never doesn't didn't can't cant won't wont shouldn't n't no".split())
+# Prepositions that negate the gerund clause they introduce: "without going into the tan room".
+NEGATING_PREPOSITIONS = frozenset({"without"})
 NUMBERS = frozenset(
     "one two three four five six seven eight nine ten first second third fourth fifth last couple few "
     "several many next half".split()

@@ -14,7 +14,7 @@ from typing import Any, Union
 
 from lark import Token
 
-from .lexicon import NEGATIONS
+from .lexicon import NEGATING_PREPOSITIONS, NEGATIONS
 
 # Default rule weights (a PCFG-like score; a reading's weight is the product of the weights of its
 # choice rules, then readings are normalised). Only rules that compete with each other matter:
@@ -129,6 +129,10 @@ def _verb_phrase(values: list) -> VP:
     return VP(verb=verb, negated=negated, obj=obj, comps=tuple(comps), adverbs=adverbs)
 
 
+def _negated(clause: ClauseValue) -> ClauseValue:
+    return replace(clause, negated=True) if isinstance(clause, VP) else clause
+
+
 def _fragment(values: list) -> VP:
     nps = [v for v in values if isinstance(v, NP)]
     comps = tuple(c for v in values if isinstance(v, tuple) and v and v[0] == "comps" for c in v[1])
@@ -172,7 +176,7 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "c_adv": lambda vs: Adv(str(vs[0])),
     "c_inf": lambda vs: Sub("to", vs[1]),
     "c_sub": lambda vs: Sub(*_connective(vs)),
-    "c_ger": lambda vs: Sub(str(vs[0]), vs[1]),
+    "c_ger": lambda vs: Sub(str(vs[0]), _negated(vs[1]) if str(vs[0]).lower() in NEGATING_PREPOSITIONS else vs[1]),
     "c_part": lambda vs: Sub("ing", vs[0]),
     "c_measure": lambda vs: Measure(_np_head(vs)),
     "np_pp": lambda vs: _attach(vs[0], vs[1]),

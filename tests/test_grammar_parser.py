@@ -89,6 +89,9 @@ def test_negation_subordinate_and_gerund_clauses():
     lf = parse("push star into teal room without walking into teal room")[0].logical_form
     assert lf.verbs == ("push", "walk")
     assert lf.clauses[1].connective == "without"
+    # "without" negates its gerund clause: its phrases may learn to name no goal
+    assert not lf.clauses[0].negated and lf.clauses[1].negated
+    assert "not walk(room2)" in lf.paper_str()
     lf = parse("do not enter green room")[0].logical_form
     assert lf.clauses[0].negated and lf.paper_str().startswith("not enter(room1)")
 
