@@ -25,7 +25,7 @@ from groundlang.model import storage
 __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner", "write_atomically"]
 
 FORMAT = "groundlang-model"
-FORMAT_VERSION = 3  # 2: the parse model gained the mention and arity globals; 3: prepositions of transitive clauses and spatial PF tokens
+FORMAT_VERSION = 4  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model
 MODEL_JSON = "model.json"
 GLOBALS = "globals.npz"
 

@@ -20,10 +20,10 @@ from dataclasses import dataclass, fields
 import torch
 
 from groundlang.grammar.logical_form import LogicalForm, Reading
-from groundlang.model.interpretations import Interpretation, class_of
-from groundlang.model.vocabulary import NULL, Vocabulary, class_token
+from groundlang.model.interpretations import Interpretation, RoleBinding, class_of
+from groundlang.model.vocabulary import NULL, Vocabulary, class_token, is_task_role
 
-__all__ = ["Observation", "Batch", "encode", "entity_words", "machine_string", "PAD_LOGIT"]
+__all__ = ["Observation", "Batch", "encode", "entity_words", "is_mentionable", "machine_string", "PAD_LOGIT"]
 
 # Padded interpretations get this log-weight: exp() underflows to 0 while
 # logsumexp and its gradient stay finite (an -inf would give NaN gradients).
@@ -73,7 +73,7 @@ class Batch:
     verb_counts: torch.Tensor  # [I, R, U] the clauses' verbs, per reading
     task_mix: torch.Tensor  # [I, J] mixture of {L} alone
     task_token: torch.Tensor  # [I, J] token id of L
-    cover_slot: torch.Tensor  # [I, J, G] role slot (index into V) of each toy, bound or bystander
+    cover_slot: torch.Tensor  # [I, J, G] role slot (index into V) of each mentionable object (is_mentionable)
     cover_mask: torch.Tensor  # [I, J, G] bool
     role: torch.Tensor  # [I, J, V] role ids (0 = aligned with nothing)
     role_mask: torch.Tensor  # [I, J, V] bool
@@ -127,6 +127,15 @@ def entity_words(lf: LogicalForm) -> list[tuple[str | None, tuple[str, ...]]]:
             key = f"not:{key or 'dobj'}"
         result.append((key, tuple(entity.modifiers), (entity.head,) if entity.head else ()))
     return result
+
+
+def is_mentionable(rb: RoleBinding) -> bool:
+    """Whether the mention model asks if a phrase names this object: every toy (a command
+    names the toys its task moves, not bystanders) and every other object the task binds
+    but the agent, who is "you" (a command names the room its task ends in). Measured on the
+    crowd corpus, rooms added to toys: leave-one-out 218 against 212 of 240 original commands
+    (223 against 224 simplified), in novel layouts 571 against 585 of 720 (629 against 622)."""
+    return rb.cls == "toy" or (rb.cls != "agent" and is_task_role(rb.role))
 
 
 def machine_string(interp: Interpretation) -> list[str]:
@@ -235,7 +244,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     # explain every phrase (see model.interpretations).
     role_mix = torch.full((I, J, V), pad_mix, dtype=torch.long)
     role_head_mix = torch.full((I, J, V), pad_mix, dtype=torch.long)
-    G = max(1, max(sum(1 for rb in interp.roles if rb.cls == "toy")
+    G = max(1, max(sum(1 for rb in interp.roles if is_mentionable(rb))
                    for o in observations for interp in o.interpretations))
     cover_slot = torch.zeros(I, J, G, dtype=torch.long)
     cover_mask = torch.zeros(I, J, G, dtype=torch.bool)
@@ -260,12 +269,12 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
             role_mask[i, j, 0] = True  # aligned with nothing
             sharing = Counter(rb.role for rb in interp.roles)
-            toys = 0
+            slots = 0
             for v, rb in enumerate(interp.roles, start=1):
-                if rb.cls == "toy":  # the mention model asks whether each toy is named
-                    cover_slot[i, j, toys] = v
-                    cover_mask[i, j, toys] = True
-                    toys += 1
+                if is_mentionable(rb):  # the mention model asks whether it is named
+                    cover_slot[i, j, slots] = v
+                    cover_mask[i, j, slots] = True
+                    slots += 1
                 if rb.cls == "agent":
                     # The addressee is "you", which the parser leaves without
                     # words. Alignable, its class token had no words of its own

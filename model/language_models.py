@@ -18,9 +18,11 @@ table, and the interpretation itself is enumerated by the model in
   ``P(role | preposition)``; its words come from the tokens of the object in
   that role, the remaining words from L or ``NULL``. Readings are weighted by
   the parser's probabilities. Two more parts of the logical form depend on
-  the task: which toys it names (a learned ``P(named | role)``, so a command
-  that never mentions a toy speaks against "take the toy somewhere", and one
-  that names a bystander toy speaks against the tasks that leave it alone)
+  the task: which objects it names (a learned ``P(named | role)`` for every
+  toy and every object the task binds, see ``encoding.is_mentionable``: a
+  command that never mentions a toy speaks against "take the toy somewhere",
+  one that names a bystander toy speaks against the tasks that leave it alone,
+  and one whose only unknown phrase is "the skin coloured room" names its goal)
   and how many noun phrases it has (``P(arity | L)``). The prior over
   alignments favours the task's own roles (``argument_bonus``), which is what
   decides for prepositions training never saw: "go *with* the star to green".
@@ -152,7 +154,7 @@ class ParseAligned(LanguageModel):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
         than a bystander; it decides for prepositions training never saw).
-        ``mention_concentration`` turns on the toy mention model (None: off),
+        ``mention_concentration`` turns on the mention model (None: off),
         ``arity_concentration`` the number of noun phrases given L (None: off);
         both are Dirichlet concentrations, so EM stays exact."""
         super().__init__(word_concentration)
@@ -182,8 +184,8 @@ class ParseAligned(LanguageModel):
         with pyro.plate("preps", num_preps, dim=-1):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
         if self.mention_concentration is not None:
-            # Per role: P(a toy in this role is named by some phrase), P(it is not).
-            # A priori a task's toy is named and a bystander is not, by as many
+            # Per role: P(an object in this role is named by some phrase), P(it is not).
+            # A priori a task's object is named and a bystander is not, by as many
             # pseudo-counts as the alignment prior's argument bonus.
             mention = torch.full((num_roles, 2), self.mention_concentration)
             for r, name in enumerate(role_names):
@@ -247,10 +249,11 @@ class ParseAligned(LanguageModel):
     def _mentions(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.Tensor) -> torch.Tensor:
         """``log`` of the mention model's factor per ``[I, J, R]``.
 
-        Each toy g of the interpretation is named by some phrase ("covered")
+        Each mentionable object g of the interpretation (every toy, every object
+        the task binds but the agent) is named by some phrase ("covered")
         with probability ``mention[role_g, 0]`` and not with ``mention[role_g, 1]``.
-        The alignments in which exactly the toys W go unnamed carry the mass
-        ``E(W)``; with ``P(U)`` the mass of alignments avoiding the toys U
+        The alignments in which exactly the objects W go unnamed carry the mass
+        ``E(W)``; with ``P(U)`` the mass of alignments avoiding the objects U
         (phrases choose roles independently, so it is a product over phrases),
         inclusion-exclusion gives ``sum_W E(W) prod_{W} m1 prod_{not W} m0 =
         sum_U P(U) prod_{U} (m1 - m0) prod_{not U} m0``, a polynomial in the

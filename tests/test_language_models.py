@@ -45,10 +45,18 @@ def setting():
     return learner, observations, batch, g
 
 
-def test_two_toy_layout_offers_both_toys_to_every_interpretation(setting):
-    _, _, batch, _ = setting
-    assert batch.cover_mask.shape[-1] == 2
-    assert bool(batch.cover_mask[batch.mask].all())
+def test_the_mention_model_asks_about_every_toy_and_every_object_the_task_binds(setting):
+    """Both toys of the two-toy layout, bound or bystanders, and the task's rooms; never the agent."""
+    _, observations, batch, _ = setting
+    for j, interp in enumerate(observations[0].interpretations):
+        slots = batch.cover_slot[0, j][batch.cover_mask[0, j]].tolist()
+        asked = [interp.roles[v - 1] for v in slots]
+        bound_rooms = [rb.obj for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:")]
+        assert sorted(rb.obj for rb in asked if rb.cls == "toy") == ["block0", "block1"]
+        assert sorted(rb.obj for rb in asked if rb.cls != "toy") == sorted(bound_rooms)
+        assert bound_rooms and all(rb.cls != "agent" for rb in asked)
+    # the conjunctive task binds two rooms: 2 toys + 2 rooms
+    assert batch.cover_mask.shape[-1] == 4
 
 
 def _alignments(batch, joint, g, i, j, r):
@@ -98,7 +106,7 @@ def test_gradient_times_mention_parameters_gives_the_expected_counts(setting):
         total += p * weight
         for role, named in states:
             expected[role, named] += p * weight
-    assert int(batch.reading_types[i, r].sum()) >= 2 and int(batch.cover_mask[i, j].sum()) == 2
+    assert int(batch.reading_types[i, r].sum()) >= 2 and int(batch.cover_mask[i, j].sum()) == 3  # 2 toys, 1 room
     assert torch.allclose(counts.double(), expected / total, atol=1e-4)
 
 
