@@ -123,6 +123,11 @@ def lemma(word: str) -> str:
     return VERB_FORMS.get(word, word)
 
 
+def listed_categories(word: str) -> frozenset[str]:
+    """Categories the lexicon lists for ``word``; empty for a word it does not know (no guessing)."""
+    return frozenset(_closed_categories(word))
+
+
 def _closed_categories(word: str) -> set[str]:
     cats: set[str] = set()
     table = (

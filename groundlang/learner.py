@@ -290,6 +290,8 @@ class Learner:
         meaning = meaning / meaning.sum(0, keepdim=True).clamp_min(1e-30)
         out = {}
         for w, word in enumerate(self.vocab.words[1:], start=1):
+            if word in self.vocab.aliases:
+                continue  # read as another word: its own column was never trained
             order = torch.argsort(meaning[:, w], descending=True)[:top]
             out[word] = [(self.vocab.tokens[int(s)], float(meaning[s, w])) for s in order]
         return out

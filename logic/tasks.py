@@ -162,7 +162,7 @@ _LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #sh
 
 def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tuple[LiftedTask, ...], tuple[str, ...]]:
     """Solve the library without an environment: the lifted tasks (task/1, var/3, goal/3,
-    restrict/3) and the names of the spatial PFs (pf/3 of class spatial), sorted."""
+    restrict/3) and the names of the unary spatial PFs (pf/3 of class spatial), sorted."""
     models = program.solve("", models=1, time_limit=time_limit)
     if not models:
         raise AspError(f"{program.names}: the task library has no answer set (a constraint always fails)")
@@ -179,8 +179,8 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
         cls_, name, sig = a.arguments
         if cls_.name == "position":
             signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
-        elif cls_.name == "spatial":
-            spatial.add(pf_name(name))
+        elif cls_.name == "spatial" and len(_tuple_args(sig)) == 1:
+            spatial.add(pf_name(name))  # descriptions.lp reads unary spatial PFs only
     for a in by_signature.get(("var", 3), []):
         t, v, c = (_text(x) for x in a.arguments)
         if t not in variables:
@@ -304,8 +304,13 @@ def describe_objects(
     """
     limit = library.time_limit if time_limit is None else time_limit
     models = library.description_program.solve(facts, models=1, time_limit=limit)
+    if not models:
+        raise AspError(f"{library.description_program.names}: no answer set for this environment "
+                       "(a constraint of the library fails)")
     found: dict[str, list[str]] = {}
-    for sym in models[0] if models else ():
+    for sym in models[0]:
+        if sym.name != "described" or len(sym.arguments) != 2:
+            continue  # atoms a user library shows for its own purposes
         name, obj = sym.arguments
         found.setdefault(_text(obj), []).append(pf_name(name))
     return {obj: tuple(sorted(names)) for obj, names in sorted(found.items(), key=lambda kv: _natural_key(kv[0]))}

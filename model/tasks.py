@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from types import MappingProxyType
 from typing import Collection, Mapping, Sequence
 
 from groundlang.logic.atoms import Atom
@@ -47,13 +48,13 @@ def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
 
 
 @lru_cache(maxsize=64)
-def spatial_descriptions(state: State, library: TaskLibrary) -> dict[str, tuple[str, ...]]:
+def spatial_descriptions(state: State, library: TaskLibrary) -> Mapping[str, tuple[str, ...]]:
     """The spatial PFs (``pfs.lp``) true of each object where the agent stands in ``state``.
 
-    One clingo solve per (state, library), cached like :func:`candidate_tasks`; objects
-    no spatial PF holds of are absent. Treat the result as read-only. Raises AspError.
+    One clingo solve per (state, library), cached like :func:`candidate_tasks` (hence a
+    read-only mapping); objects no spatial PF holds of are absent. Raises AspError.
     """
-    return describe_objects(library, state_facts(state))
+    return MappingProxyType(describe_objects(library, state_facts(state)))
 
 
 @dataclass(frozen=True)

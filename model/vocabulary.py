@@ -16,6 +16,8 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
+from groundlang.grammar.lexicon import listed_categories
+
 __all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "OTHER_PREP", "DIRECT_OBJECT", "class_token", "is_task_role"]
 
 NULL = "NULL"
@@ -56,7 +58,13 @@ def _neighbours(word: str, known: Callable[[str], bool]) -> str | None:
         return None
     # Hurried typing keeps the first letter; an edit there makes other words ("reach", "peach").
     found = {w for w in _one_edit(word) if w[0] == word[0] and len(w) >= MIN_SPELLING_LENGTH and known(w)}
-    return found.pop() if len(found) == 1 else None
+    if len(found) != 1:
+        return None
+    meant = found.pop()
+    # Two words the grammar's lexicon lists with no category in common are two words ("while" and
+    # "white", "three" and "there", "block" and "black"), not a typo of one another.
+    mine, theirs = listed_categories(word), listed_categories(meant)
+    return None if mine and theirs and mine.isdisjoint(theirs) else meant
 
 
 @dataclass

@@ -291,3 +291,15 @@ def test_spatial_pfs_describe_objects_but_never_bind_them(library):
     ((grounded, constraints),) = enumerate_groundings(doors, TWO_TOYS)
     assert grounded.goal_text == "agentInDoor(agent0, door0)"
     assert constraints == [BindingConstraint(())]  # a side is not a binding constraint
+
+
+def test_descriptions_ignore_what_a_user_library_shows_and_non_unary_spatial_pfs():
+    from groundlang.logic.tasks import describe_objects
+
+    mine = TaskLibrary.from_text(
+        'task(agentToRoom). var(agentToRoom, "A", agent). var(agentToRoom, "R", room).'
+        ' goal(agentToRoom, agentInRoom, ("A", "R")). #show var/3.'
+        ' pf(spatial, near, (agent, door)). holds(near, (A, D)) :- agent(A), door(D).'
+    )
+    assert mine.spatial_pfs == ("doorEastOfAgent", "doorNorthOfAgent", "doorSouthOfAgent", "doorWestOfAgent")
+    assert describe_objects(mine, TWO_TOYS) == {"door0": ("doorEastOfAgent", "doorNorthOfAgent")}

@@ -44,8 +44,35 @@ def test_an_unknown_word_reads_as_its_one_known_neighbour_or_unk():
     assert vocab.word_id("stat") == 0  # shorter than five letters: never corrected
 
 
+def test_words_the_lexicon_lists_as_other_kinds_stay_apart():
+    vocab = vocabulary({"white": 9, "there": 9, "black": 9, "while": 1, "three": 1, "block": 1})
+    assert vocab.aliases == {}
+    for word in ("while", "three", "block"):
+        assert vocab.word_id(word) != vocab.word_id({"while": "white", "three": "there", "block": "black"}[word])
+    unseen = vocabulary({"white": 9, "orange": 9})
+    assert unseen.word_id("while") == 0  # unknown, but not a typo of "white"
+    assert unseen.word_id("orangey") == unseen.word_id("orange")  # both colours in the lexicon
+
+
 def test_aliases_survive_a_round_trip_through_json():
     vocab = vocabulary({"orange": 30, "orage": 1})
     again = Vocabulary.from_json(vocab.to_json())
     assert again.aliases == {"orage": "orange"}
     assert again.word_id("orage") == again.word_id("orange")
+
+
+def test_a_saved_learner_keeps_its_aliases_and_its_lexicon_leaves_them_out(tmp_path):
+    import dataclasses
+
+    from groundlang.corpus import example_corpus_path, read_corpus
+    from groundlang.learner import Learner
+
+    corpus = read_corpus(example_corpus_path(), "sokoban")
+    green = next(i for i in corpus.instances if "green" in i.command)
+    typo = dataclasses.replace(green, command=green.command.replace("green", "greeen"))
+    learner = Learner("bow").fit(list(corpus.instances) + [typo])
+    assert learner.vocab.aliases == {"greeen": "green"}
+    assert "greeen" not in learner.lexicon() and "green" in learner.lexicon()
+    again = Learner.load(learner.save(tmp_path / "model"))
+    assert again.vocab.aliases == {"greeen": "green"}
+    assert again.vocab.word_id("greeen") == again.vocab.word_id("green")
