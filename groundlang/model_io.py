@@ -57,7 +57,7 @@ def save_learner(learner, directory: str | Path) -> Path:
         "language_model": learner.lm.name,
         "language_model_settings": learner.lm.settings(),
         "vocabulary": learner.vocab.to_json(),
-        "task_library": learner.library.to_lp(),
+        "task_library": learner.library.source_text(),
         "planning": learner.settings.as_dict(),
         "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed},
         "globals_sha256": hashlib.sha256(tensors).hexdigest(),

@@ -277,6 +277,11 @@ class TaskLibrary:
     def names(self) -> list[str]:
         return [t.name for t in self.tasks]
 
+    def source_text(self) -> str:
+        """The library's own ASP text, every source in order with its rules and comments
+        (PFs a user defined beside the tasks included): what a saved model keeps."""
+        return "".join(f"% from {s.name}\n{s.text.rstrip()}\n" for s in self.sources)
+
     def to_lp(self) -> str:
         """The library as ASP facts (normalised; comments and rules of the sources are not kept)."""
         return "".join(format_lifted_task(t) for t in self.tasks)

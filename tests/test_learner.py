@@ -151,3 +151,22 @@ def test_cli_parser_is_light_and_knows_every_language_model():
     code = "import sys, groundlang.cli as c; c.build_parser(); print(sorted({'torch', 'matplotlib', 'gymnasium'} & set(sys.modules)))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_a_saved_learner_keeps_the_pfs_its_library_defines(tmp_path):
+    """A user library's own PF rules travel with the model, not only its task facts."""
+    from groundlang.corpus import example_corpus_path, read_corpus
+    from groundlang.learner import Learner
+    from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.tasks import spatial_descriptions
+
+    text = (TaskLibrary.load().to_lp()
+            + "pf(spatial, roomWestOfAgent, (room,)).\n"
+            + "holds(roomWestOfAgent, (R,)) :- room(R), rect(R, _, _, Rt, _), agent(A), at(A, X, _), Rt <= X.\n")
+    corpus = read_corpus(example_corpus_path(), "sokoban")
+    learner = Learner("bow", library=TaskLibrary.from_text(text, "mine.lp")).fit(corpus.instances)
+    again = Learner.load(learner.save(tmp_path / "model"))
+    assert "roomWestOfAgent" in again.library.spatial_pfs
+    state = next(i.initial_state for i in corpus.instances
+                 if "roomWestOfAgent" in str(dict(spatial_descriptions(i.initial_state, learner.library))))
+    assert spatial_descriptions(state, again.library) == spatial_descriptions(state, learner.library)

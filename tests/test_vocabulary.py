@@ -76,3 +76,4 @@ def test_a_saved_learner_keeps_its_aliases_and_its_lexicon_leaves_them_out(tmp_p
     again = Learner.load(learner.save(tmp_path / "model"))
     assert again.vocab.aliases == {"greeen": "green"}
     assert again.vocab.word_id("greeen") == again.vocab.word_id("green")
+
