@@ -262,14 +262,20 @@ class ParseAligned(LanguageModel):
         ``P({})`` (= ``entities``), to which it is added.
         """
         G = batch.cover_slot.shape[-1]
-        V = joint.shape[2]
         role_of_slot = torch.gather(batch.role, 2, batch.cover_slot)  # [I, J, G]
         mention = g["mention"][role_of_slot]  # [I, J, G, 2]
         named = torch.where(batch.cover_mask, mention[..., 0], torch.ones_like(mention[..., 0]))
         unnamed_minus_named = torch.where(
             batch.cover_mask, mention[..., 1] - mention[..., 0], torch.zeros_like(named)
         )
-        slot_onehot = torch.nn.functional.one_hot(batch.cover_slot, V).bool() & batch.cover_mask[..., None]
+        # Each slot is its own role binding, so the roles avoiding U carry the mass of all roles
+        # less the slots' own: one subtraction per subset instead of a masked logsumexp.
+        K = joint.shape[3]
+        top = joint.max(dim=2, keepdim=True).values  # [I, J, 1, K]
+        mass = (joint - top).exp()  # [I, J, V, K]
+        all_roles = mass.sum(2)  # [I, J, K]
+        slot_mass = torch.gather(mass, 2, batch.cover_slot[..., None].expand(-1, -1, -1, K))
+        slot_mass = slot_mass * batch.cover_mask[..., None]  # [I, J, G, K]
         total = torch.zeros_like(entities)
         for size in range(G + 1):
             for subset in itertools.combinations(range(G), size):
@@ -279,10 +285,9 @@ class ParseAligned(LanguageModel):
                 if not subset:
                     total = total + weight[..., None]
                     continue
-                avoided = slot_onehot[:, :, chosen].any(2)  # [I, J, V]
-                avoid = torch.logsumexp(joint.masked_fill(avoided[..., None], PAD_LOGIT), dim=2)
-                avoid = torch.einsum("ijk,irk->ijr", avoid * batch.type_mask[:, None, :], batch.reading_types)
-                total = total + weight[..., None] * (avoid - entities).exp()
+                share = ((all_roles - slot_mass[:, :, chosen].sum(2)) / all_roles).clamp_min(1e-30).log()
+                share = torch.einsum("ijk,irk->ijr", share * batch.type_mask[:, None, :], batch.reading_types)
+                total = total + weight[..., None] * share.exp()
         return total.clamp_min(1e-30).log()
 
 
