@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 import time
 
@@ -52,6 +53,10 @@ def main(argv: list[str] | None = None) -> int:
         # SIGTERM (a scheduler, `kill`) stops a run the way Ctrl-C does.
         with terminate_as_interrupt():
             return int(args.func(args) or 0)
+    except BrokenPipeError:
+        # The reader went away (`groundlang tasks ... | head`): nothing left to say, to anyone.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except (ValueError, OSError) as exc:
         message = " ".join(str(exc).splitlines())  # one line, whatever the library said
         print(f"groundlang {args.command}: error: {message}", file=sys.stderr)

@@ -225,6 +225,8 @@ def test_cli_tasks_json(tmp_path, capsys):
     assert out["groundings"][0] == {"task": "agentToRoom", "goal": "agentInRoom(agent0, room1)",
                                     "constraints": [["roomIsBlue(room1)"], []]}
     assert len(out["groundings"]) == 6
+    # the agent at (1,1), the door at (4,2)
+    assert out["descriptions"] == {"door0": ["doorEastOfAgent", "doorNorthOfAgent"]}
 
 
 def test_cli_tasks_bad_library_is_one_line(tmp_path, capsys):
@@ -303,3 +305,17 @@ def test_descriptions_ignore_what_a_user_library_shows_and_non_unary_spatial_pfs
     )
     assert mine.spatial_pfs == ("doorEastOfAgent", "doorNorthOfAgent", "doorSouthOfAgent", "doorWestOfAgent")
     assert describe_objects(mine, TWO_TOYS) == {"door0": ("doorEastOfAgent", "doorNorthOfAgent")}
+
+
+def test_cli_output_cut_short_by_its_reader_is_no_error():
+    """`groundlang tasks ... | head`: the reader leaves early; no error message, no traceback."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    state = Path(__file__).parent / "fixtures" / "sokoban2_corpus" / "L1_novel.state"
+    proc = subprocess.Popen([sys.executable, "-m", "groundlang.cli", "tasks", str(state), "--palette", "sokoban2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # 12 kB of output will not fit the closed pipe
+    err = proc.stderr.read().decode()
+    assert proc.wait() == 1 and err == ""
