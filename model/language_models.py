@@ -15,7 +15,9 @@ table, and the interpretation itself is enumerated by the model in
 - ``parse``: words are generated through the logical form. Each noun phrase
   aligns with a role of the interpretation (the toy, the goal room, the
   agent's start room, ...) or with nothing, with a learned table
-  ``P(role | preposition)``; its words come from the tokens of the object in
+  ``P(role | preposition, L)`` per lifted task ("go *into* the tan room" names
+  the goal of "go somewhere" but, in a command that then pushes the star, the
+  room the star is in); its words come from the tokens of the object in
   that role, the remaining words from L or ``NULL``. Readings are weighted by
   the parser's probabilities. Two more parts of the logical form depend on
   the task: which objects it names (a learned ``P(named | role)`` for every
@@ -150,18 +152,22 @@ class ParseAligned(LanguageModel):
         argument_bonus: float = 3.0,
         mention_concentration: float | None = 1.05,
         arity_concentration: float | None = 1.05,
+        align_by_task: bool = True,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
         than a bystander; it decides for prepositions training never saw).
         ``mention_concentration`` turns on the mention model (None: off),
         ``arity_concentration`` the number of noun phrases given L (None: off);
-        both are Dirichlet concentrations, so EM stays exact."""
+        both are Dirichlet concentrations, so EM stays exact. ``align_by_task``:
+        one alignment table ``P(role | preposition, L)`` per lifted task (False:
+        one ``P(role | preposition)`` shared by all tasks)."""
         super().__init__(word_concentration)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus
         self.mention_concentration = mention_concentration
         self.arity_concentration = arity_concentration
+        self.align_by_task = align_by_task
 
     def settings(self) -> dict:
         return {
@@ -170,6 +176,7 @@ class ParseAligned(LanguageModel):
             "argument_bonus": self.argument_bonus,
             "mention_concentration": self.mention_concentration,
             "arity_concentration": self.arity_concentration,
+            "align_by_task": self.align_by_task,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=()):
@@ -181,7 +188,10 @@ class ParseAligned(LanguageModel):
         share = torch.full((2,), self.align_concentration)
         g["frame_source"] = pyro.sample("frame_source", dist.Dirichlet(share))
         g["verb_source"] = pyro.sample("verb_source", dist.Dirichlet(share))
-        with pyro.plate("preps", num_preps, dim=-1):
+        # One table per (lifted-task token, preposition) when aligning by task, kept flat
+        # (one plate); reading_table views it as [tokens, preps, roles].
+        contexts = num_tokens * num_preps if self.align_by_task else num_preps
+        with pyro.plate("align_contexts", contexts, dim=-1):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
         if self.mention_concentration is not None:
             # Per role: P(an object in this role is named by some phrase), P(it is not).
@@ -218,9 +228,14 @@ class ParseAligned(LanguageModel):
         type_ll = torch.einsum("ijvu,iku->ijvk", modifiers, batch.type_counts) + torch.einsum(
             "ijvu,iku->ijvk", heads, batch.type_head_counts
         )  # [I, J, V, K]
-        log_align = g["align"].clamp_min(1e-30).log()[
-            batch.type_prep[:, None, None, :], batch.role[:, :, :, None]
-        ]  # [I, J, V, K]
+        log_table = g["align"].clamp_min(1e-30).log()
+        if self.align_by_task:
+            log_table = log_table.reshape(g["phi"].shape[0], -1, log_table.shape[-1])  # [tokens, preps, roles]
+            log_align = log_table[
+                batch.task_token[:, :, None, None], batch.type_prep[:, None, None, :], batch.role[:, :, :, None]
+            ]  # [I, J, V, K]
+        else:
+            log_align = log_table[batch.type_prep[:, None, None, :], batch.role[:, :, :, None]]  # [I, J, V, K]
         log_align = (log_align + batch.role_logw[..., None]).masked_fill(~batch.role_mask[..., None], PAD_LOGIT)
         joint = type_ll + log_align
         per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]

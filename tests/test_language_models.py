@@ -169,3 +169,21 @@ def test_doors_are_described_by_their_side_of_the_agent(setting):
             spatial = tuple(t for t in rb.constraint_tokens if t in learner.library.spatial_pfs)
             assert spatial == sides.get(rb.obj, ())
     assert set(learner.library.spatial_pfs) <= set(learner.vocab.tokens)
+
+
+def test_each_lifted_task_reads_prepositions_with_its_own_alignment_table(setting):
+    """P(role | preposition, L): changing the table of one lifted task changes only its interpretations."""
+    learner, observations, batch, g = setting
+    vocab = learner.vocab
+    before = learner.lm.log_likelihood(g, batch)
+    tables = g["align"].reshape(len(vocab.tokens), len(vocab.preps), -1).clone()
+    agent = vocab.token_id("agentToRoom")
+    tables[agent] = torch.roll(tables[agent], 1, dims=-1)  # another valid table for agentToRoom only
+    after = learner.lm.log_likelihood({**g, "align": tables.reshape(g["align"].shape)}, batch)
+    for i, obs in enumerate(observations):
+        for j, interp in enumerate(obs.interpretations):
+            changed = not torch.isclose(before[i, j], after[i, j])
+            assert changed == (interp.lifted == "agentToRoom"), (i, interp.lifted)
+    shared = ParseAligned(align_by_task=False)
+    with pyro.poutine.block():
+        assert shared.sample_globals(**global_sizes(vocab))["align"].shape[0] == len(vocab.preps)
