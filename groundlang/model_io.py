@@ -25,7 +25,7 @@ from groundlang.model import storage
 __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner", "write_atomically"]
 
 FORMAT = "groundlang-model"
-FORMAT_VERSION = 5  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task
+FORMAT_VERSION = 6  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys
 MODEL_JSON = "model.json"
 GLOBALS = "globals.npz"
 

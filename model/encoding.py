@@ -111,7 +111,11 @@ def entity_words(lf: LogicalForm) -> list[tuple[str | None, tuple[str, ...]]]:
     the red room" where the agent goes (measured on the crowd corpus: 555
     against 549 of 720 commands carried out in novel layouts, leave-one-out
     unchanged). Phrases in a negated clause ("do not enter the green room")
-    get a ``not:`` prefix, so they may learn to align with nothing.
+    get a ``not:`` prefix, so they may learn to align with nothing. The last
+    phrase with words gets a ``|last`` suffix: commands end with where things
+    go (measured with alignment per task: leave-one-out 227 and 218 of 240
+    against 225 and 221 without, simplified and original commands; in novel
+    layouts 646 and 623 of 720 against 650 and 598).
     """
     negated = {i for i, clause in enumerate(lf.clauses) if getattr(clause, "negated", False)}
     transitive = {entity.clause for entity in lf.entities if entity.role == "dobj"}
@@ -126,6 +130,13 @@ def entity_words(lf: LogicalForm) -> list[tuple[str | None, tuple[str, ...]]]:
         if entity.clause in negated:
             key = f"not:{key or 'dobj'}"
         result.append((key, tuple(entity.modifiers), (entity.head,) if entity.head else ()))
+    # Commands end with where things go ("..., then push it to the blue room"): the last
+    # phrase with words gets its own key, ``|last``.
+    for n in range(len(result) - 1, -1, -1):
+        key, modifiers, head = result[n]
+        if modifiers or head:
+            result[n] = (f"{key or 'dobj'}|last", modifiers, head)
+            break
     return result
 
 

@@ -144,10 +144,12 @@ def test_switching_the_parts_off_removes_their_globals(setting):
 
 
 @pytest.mark.parametrize("command, keys", [
-    ("take the star to the red room", [None, "to+obj"]),  # where the object goes
-    ("go to the red room", ["to"]),  # where the agent goes
-    ("go into the green room and push it to the blue room", ["into", None, "to+obj"]),
-    ("do not enter the green room", ["not:dobj"]),
+    ("take the star to the red room", [None, "to+obj|last"]),  # where the object goes
+    ("go to the red room", ["to|last"]),  # where the agent goes
+    ("go into the green room and push it to the blue room", ["into", None, "to+obj|last"]),
+    ("take the star to the red room with you", [None, "to+obj|last", "with+obj"]),  # "you" has no words
+    ("push the star", ["dobj|last"]),
+    ("do not enter the green room", ["not:dobj|last"]),
 ])
 def test_preposition_keys_tell_transitive_clauses_apart(command, keys):
     from groundlang.grammar.parser import parse

@@ -132,8 +132,8 @@ def test_trained_on_the_simplified_crowd_corpus_it_follows_its_training_commands
         goal_holds(label_for(i, labels), learner.follow(i.command, i.initial_state).final_state)
         for i in corpus.instances
     )
-    # Issue 6 asks for 95%: measured 231/240.
-    assert reached >= 231
+    # Issue 6 asks for 95% (228/240): measured 230/240 (231 before the last-phrase keys).
+    assert reached >= 230
     lexicon = learner.lexicon(top=1)
     # Workers saw room1 (red in the file) drawn orange and room0 (green) drawn tan.
     assert lexicon["orange"][0][0] == "roomIsRed"
