@@ -252,8 +252,8 @@ class Learner:
                 structure = torch.softmax(torch.logsumexp(joint, 0), 0).numpy()  # P(s | words)
             groups = reading_groups(obs, self.vocab)
             prior = np.array([r.probability for r in obs.readings])
-            share = np.array([prior[k] / prior[[i for i, g in enumerate(groups) if g == groups[k]]].sum()
-                              for k in range(len(groups))])
+            group = np.asarray(groups)
+            share = prior / np.bincount(group, weights=prior)[group]  # a reading's share of its structure
             reading_probs = structure[groups] * share  # P(reading | words), one per reading
         return Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
                          list(obs.readings), reading_probs)

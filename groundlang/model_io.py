@@ -131,9 +131,11 @@ def _checked_globals(learner, values: dict, tensor_path: Path) -> dict:
     """The loaded tensors, refused unless names, shapes and finiteness fit the vocabulary and language model."""
     import pyro.poutine
 
+    from groundlang.model.generative import global_sizes
+
     v = learner.vocab
     with pyro.poutine.block():
-        expected = learner.lm.sample_globals(len(v.tokens), len(v.words), len(v.roles), len(v.preps), tuple(v.roles))
+        expected = learner.lm.sample_globals(**global_sizes(v))
     if sorted(values) != sorted(expected):
         raise ModelFormatError(
             f"{tensor_path}: holds {sorted(values)}; language model {learner.lm.name} needs {sorted(expected)}"

@@ -195,6 +195,7 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
     """
     types: dict[tuple, int] = {}
     merged: dict[tuple, float] = {}
+    order: dict[tuple, int] = {}  # signature -> its index in ``merged``
     groups: list[int] = []  # per reading, the index of its structure in ``merged``
     for reading in obs.readings:
         ents = entity_words(reading.logical_form)
@@ -218,7 +219,7 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
         verb_key = tuple(sorted((col[vocab.word_id(w)], c) for w, c in verbs.items() if c > 0))
         signature = (tuple(sorted(ent_types.items())), frame_key, verb_key)
         merged[signature] = merged.get(signature, 0.0) + reading.probability
-        groups.append(list(merged).index(signature))
+        groups.append(order.setdefault(signature, len(order)))
     return types, merged, groups
 
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from groundlang.logic.atoms import Atom, attribute_pf
@@ -118,10 +119,10 @@ def _objects(state: State) -> list[str]:
     return names
 
 
-def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary) -> tuple[RoleBinding, ...]:
+def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary,
+           spatial: Mapping[str, tuple[str, ...]]) -> tuple[RoleBinding, ...]:
     lifted = library.task(task.task)
     binding = dict(task.binding)
-    spatial = spatial_descriptions(state, library)
     bindings = []
     for var in lifted.variables:
         role = next(
@@ -168,6 +169,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
             "no task of the library can be carried out from this state "
             "(every grounding is impossible or already true)"
         )
+    spatial = spatial_descriptions(state, library)  # once per state, shared by every interpretation
     per_lifted = Counter(task.task for task, _ in candidates)
     n_lifted = len(per_lifted)
     result = []
@@ -175,7 +177,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
         log_prior_t = -math.log(n_lifted) - math.log(per_lifted[task.task])
         if not enumerate_constraints:
             largest = max(constraints, key=lambda c: len(c.atoms))
-            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library)))
+            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, spatial)))
             continue
         for constraint in constraints:
             result.append(
@@ -183,7 +185,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
                     task,
                     constraint,
                     log_prior_t - math.log(len(constraints)),
-                    _roles(task, constraint, state, library),
+                    _roles(task, constraint, state, library, spatial),
                 )
             )
     return result

@@ -181,10 +181,10 @@ class ParseAligned(LanguageModel):
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=()):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
-        concentration = torch.full((num_roles,), self.align_concentration)
-        for r, name in enumerate(role_names):
-            if is_task_role(name):
-                concentration[r] += self.argument_bonus
+        task_role = torch.tensor([is_task_role(name) for name in role_names], dtype=torch.bool)
+        if task_role.numel() != num_roles:  # no names given: every role is a bystander's
+            task_role = torch.zeros(num_roles, dtype=torch.bool)
+        concentration = torch.full((num_roles,), self.align_concentration) + self.argument_bonus * task_role
         share = torch.full((2,), self.align_concentration)
         g["frame_source"] = pyro.sample("frame_source", dist.Dirichlet(share))
         g["verb_source"] = pyro.sample("verb_source", dist.Dirichlet(share))
@@ -198,8 +198,7 @@ class ParseAligned(LanguageModel):
             # A priori a task's object is named and a bystander is not, by as many
             # pseudo-counts as the alignment prior's argument bonus.
             mention = torch.full((num_roles, 2), self.mention_concentration)
-            for r, name in enumerate(role_names):
-                mention[r, 0 if is_task_role(name) else 1] += self.argument_bonus
+            mention += self.argument_bonus * torch.stack([task_role, ~task_role], dim=-1)
             with pyro.plate("mention_roles", num_roles, dim=-1):
                 g["mention"] = pyro.sample("mention", dist.Dirichlet(mention))
         if self.arity_concentration is not None:
