@@ -47,6 +47,7 @@ __all__ = [
     "binding_constraints",
     "enumerate_groundings",
     "describe_objects",
+    "ground_environment",
     "DOMAIN_FILES",
     "CLASS_ORDER",
 ]
@@ -180,7 +181,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
         if cls_.name == "position":
             signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
         elif cls_.name == "spatial" and len(_tuple_args(sig)) == 1:
-            spatial.add(pf_name(name))  # descriptions.lp reads unary spatial PFs only
+            spatial.add(pf_name(name))  # groundings.lp describes objects by unary spatial PFs only
     for a in by_signature.get(("var", 3), []):
         t, v, c = (_text(x) for x in a.arguments)
         if t not in variables:
@@ -242,9 +243,6 @@ class TaskLibrary:
         self.grounding_program = Program(
             domain + self.sources + (package_source("groundings.lp"),), allow_scripts, isolated
         )
-        self.description_program = Program(
-            domain + self.sources + (package_source("descriptions.lp"),), allow_scripts, isolated
-        )
         self.tasks, self.spatial_pfs = _read_lifted_tasks(self.program, time_limit)
 
     @classmethod
@@ -299,51 +297,54 @@ def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
     return out
 
 
+Descriptions = dict[str, tuple[str, ...]]
+
+
 def describe_objects(
     library: TaskLibrary, facts: str, *, time_limit: float | None = None
-) -> dict[str, tuple[str, ...]]:
-    """The spatial PFs true of each object of one environment (``descriptions.lp``), names sorted.
-
-    ``facts``: one environment in the vocabulary of ``domain.lp``. Objects no spatial PF
-    holds of are left out, e.g. ``{"door1": ("doorWestOfAgent",)}``.
-    """
-    limit = library.time_limit if time_limit is None else time_limit
-    models = library.description_program.solve(facts, models=1, time_limit=limit)
-    if not models:
-        raise AspError(f"{library.description_program.names}: no answer set for this environment "
-                       "(a constraint of the library fails)")
-    found: dict[str, list[str]] = {}
-    for sym in models[0]:
-        if sym.name != "described" or len(sym.arguments) != 2:
-            continue  # atoms a user library shows for its own purposes
-        name, obj = sym.arguments
-        found.setdefault(_text(obj), []).append(pf_name(name))
-    return {obj: tuple(sorted(names)) for obj, names in sorted(found.items(), key=lambda kv: _natural_key(kv[0]))}
+) -> Descriptions:
+    """The spatial PFs true of each object of one environment, names sorted: the second part of
+    :func:`ground_environment` (call that when the groundings are wanted too: one solve gives both)."""
+    return ground_environment(library, facts, time_limit=time_limit)[1]
 
 
 def enumerate_groundings(
     library: TaskLibrary, facts: str, *, time_limit: float | None = None
 ) -> list[tuple[GroundedTask, list[BindingConstraint]]]:
-    """Every permissible grounding not true initially, with its binding constraints.
+    """Every permissible grounding not true initially, with its binding constraints: the first part
+    of :func:`ground_environment`."""
+    return ground_environment(library, facts, time_limit=time_limit)[0]
+
+
+def ground_environment(
+    library: TaskLibrary, facts: str, *, time_limit: float | None = None
+) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions]:
+    """Every permissible grounding not true initially, with its binding constraints, and the
+    spatial PFs true of each object (``{"door1": ("doorWestOfAgent",)}``; objects none holds of
+    are left out).
 
     ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
     ``time_limit``: seconds, default the library's. One Control, one grounding, one solve
-    enumerating all answer sets. Order: library
+    enumerating all answer sets; the descriptions are the same in every answer set (an
+    environment where nothing can be asked has none, and no descriptions). Order: library
     order of tasks, then bound objects in variable order (``room2`` before ``room10``).
     """
     tasks = {t.name: t for t in library.tasks}
     order = {t.name: i for i, t in enumerate(library.tasks)}
     found = []
+    described: dict[str, set[str]] = {}
     # The same atoms recur in many answer sets; decoding clingo symbols is the costly part.
     decoded: dict[clingo.Symbol, tuple[str, object]] = {}
 
     def decode(sym: clingo.Symbol) -> tuple[str, object]:
         kind, args = sym.name, sym.arguments
-        if kind == "chosen":
+        if kind == "chosen" and len(args) == 1:
             return kind, _text(args[0])
-        if kind == "bind":
-            return kind, (_text(args[0]), _text(args[1]))
-        return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
+        if kind in ("bind", "described") and len(args) == 2:
+            return kind, (_text(args[0]) if kind == "bind" else pf_name(args[0]), _text(args[1]))
+        if kind in ("goal_atom", "constraint_atom") and len(args) == 2:
+            return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
+        return "other", None  # atoms a user library shows for its own purposes
 
     limit = library.time_limit if time_limit is None else time_limit
     for model in library.grounding_program.solve(facts, models=0, time_limit=limit):
@@ -360,6 +361,8 @@ def enumerate_groundings(
                 goal.append(value)
             elif kind == "constraint_atom":
                 extra.append(value)
+            elif kind == "described":
+                described.setdefault(value[1], set()).add(value[0])
         lifted = tasks[chosen]
         binding = tuple((v.name, bind[v.name]) for v in lifted.variables)
         # Goal atoms sorted (one text per goal, whatever the binding), constraint atoms in variable order.
@@ -370,4 +373,5 @@ def enumerate_groundings(
         key = (order[chosen], tuple(_natural_key(o) for _, o in binding))
         found.append((key, grounded, binding_constraints(extra)))
     found.sort(key=lambda item: item[0])
-    return [(g, c) for _, g, c in found]
+    descriptions = {o: tuple(sorted(described[o])) for o in sorted(described, key=_natural_key)}
+    return [(g, c) for _, g, c in found], descriptions

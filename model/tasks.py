@@ -19,8 +19,7 @@ from groundlang.logic.tasks import (
     BindingConstraint,
     GroundedTask,
     TaskLibrary,
-    describe_objects,
-    enumerate_groundings,
+    ground_environment,
 )
 
 from .geometry import state_facts
@@ -32,9 +31,9 @@ Candidate = tuple[GroundedTask, list[BindingConstraint]]
 
 
 @lru_cache(maxsize=64)
-def _candidates(state: State, library: TaskLibrary) -> tuple:
-    found = enumerate_groundings(library, state_facts(state))
-    return tuple((g, tuple(c)) for g, c in found)
+def _environment(state: State, library: TaskLibrary) -> tuple:
+    found, described = ground_environment(library, state_facts(state))
+    return tuple((g, tuple(c)) for g, c in found), MappingProxyType(described)
 
 
 def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
@@ -44,17 +43,16 @@ def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
     largest first, the empty conjunction last. One clingo Control per (state, library),
     cached (the library is keyed by identity, the state by value). Raises AspError.
     """
-    return [(g, list(c)) for g, c in _candidates(state, library)]
+    return [(g, list(c)) for g, c in _environment(state, library)[0]]
 
 
-@lru_cache(maxsize=64)
 def spatial_descriptions(state: State, library: TaskLibrary) -> Mapping[str, tuple[str, ...]]:
     """The spatial PFs (``pfs.lp``) true of each object where the agent stands in ``state``.
 
-    One clingo solve per (state, library), cached like :func:`candidate_tasks` (hence a
-    read-only mapping); objects no spatial PF holds of are absent. Raises AspError.
+    From the same cached solve as :func:`candidate_tasks` (hence a read-only mapping);
+    objects no spatial PF holds of are absent. Raises AspError.
     """
-    return MappingProxyType(describe_objects(library, state_facts(state)))
+    return _environment(state, library)[1]
 
 
 @dataclass(frozen=True)
