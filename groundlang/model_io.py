@@ -22,7 +22,7 @@ import torch
 from groundlang.interrupt import deferred_interrupts
 from groundlang.model import storage
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner", "write_atomically"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner"]
 
 FORMAT = "groundlang-model"
 FORMAT_VERSION = 6  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys
@@ -32,13 +32,6 @@ GLOBALS = "globals.npz"
 
 class ModelFormatError(ValueError):
     """A model directory that is missing, corrupt, foreign or from another format version."""
-
-
-def write_atomically(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
-    # Ctrl-C between creating the temporary file and its cleanup would leave it behind.
-    with deferred_interrupts():
-        storage.write_atomically(path, data)
 
 
 def save_learner(learner, directory: str | Path) -> Path:
@@ -64,8 +57,8 @@ def save_learner(learner, directory: str | Path) -> Path:
     }
     # Ctrl-C between the two renames would leave new tensors beside the old JSON: hold it back.
     with deferred_interrupts():
-        write_atomically(directory / GLOBALS, tensors)
-        write_atomically(directory / MODEL_JSON, json.dumps(meta, indent=1).encode("utf-8"))
+        storage.write_atomically(directory / GLOBALS, tensors)
+        storage.write_atomically(directory / MODEL_JSON, json.dumps(meta, indent=1).encode("utf-8"))
     return directory
 
 

@@ -19,8 +19,10 @@ settings), named by the sha256 of a canonical JSON description of those, in
 ``cache_dir``, else ``$GROUNDLANG_CACHE``, else ``.groundlang-cache`` in the
 working directory; ``cache_dir=False`` turns caching off. Files are written
 atomically (temporary file + ``os.replace``), so an interrupted run leaves
-only whole entries; an entry that does not parse or whose recorded key
-differs is logged as a warning and recomputed.
+only whole entries. They are not fsynced: a power cut may lose the latest
+ones, which only costs recomputing them, while an fsync per entry would
+slow every run. An entry that does not parse or whose recorded key differs is
+logged as a warning and recomputed.
 """
 
 from __future__ import annotations
@@ -91,14 +93,14 @@ def _entry_path(root: Path, key: str) -> Path:
 def _read_entry(path: Path, key: str) -> float | None:
     """The cached value, or None when absent; a corrupt entry is logged and treated as absent."""
     try:
-        text = path.read_text()
+        raw = path.read_bytes()
     except FileNotFoundError:
         return None
     except OSError as exc:
         logger.warning("behaviour cache entry %s unreadable (%s); recomputing", path, exc)
         return None
     try:
-        data = json.loads(text)
+        data = json.loads(raw.decode("utf-8"))  # UnicodeDecodeError is a ValueError: a corrupt entry
         if data.get("key") != key:
             raise ValueError(f"records key {str(data.get('key'))[:12]}..., expected {key[:12]}...")
         value = float(data["log_likelihood"])
@@ -112,7 +114,7 @@ def _read_entry(path: Path, key: str) -> float | None:
 
 def _write_entry(path: Path, key: str, value: float, goal: Sequence[Atom]) -> None:
     text = json.dumps({"key": key, "goal": " ".join(str(a) for a in goal), "log_likelihood": value})
-    write_atomically(path, text)
+    write_atomically(path, text, durable=False)  # a lost entry is recomputed: no fsync per entry
 
 
 def behaviour_likelihood_table(

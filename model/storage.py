@@ -10,9 +10,9 @@ would make them private to the owner).
 from __future__ import annotations
 
 import os
-import tempfile
+import secrets
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
 __all__ = ["atomic_path", "write_atomically"]
@@ -26,6 +26,10 @@ def _read_umask() -> int:
 
 _UMASK = _read_umask()
 
+# What tempfile.mkstemp opens with: new file only, never through a symlink.
+_CREATE_FLAGS = os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
+_ATTEMPTS = 100
+
 
 @contextmanager
 def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]:
@@ -33,28 +37,57 @@ def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]
 
     The folder is created if needed. On any exception (KeyboardInterrupt
     included) the temporary file is removed and ``path`` is left untouched.
+    The temporary file is named before it is created and created inside the
+    guarded region, so an interrupt arriving at any point, even right after
+    the file appears, cannot leave it behind.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent)
-    tmp = Path(name)
+    tmp: Path | None = None  # set before the file is created: cleanup must know the name
+    fd: int | None = None
     try:
-        os.close(fd)
+        for _ in range(_ATTEMPTS):
+            tmp = path.parent / f".{path.name}.{secrets.token_hex(8)}{suffix}"
+            try:
+                fd = os.open(tmp, _CREATE_FLAGS, 0o600)
+            except FileExistsError:  # someone else's file (64 random bits: practically never); not ours to remove
+                tmp = None
+                continue
+            break
+        else:
+            raise FileExistsError(f"{path.parent}: no free temporary name for {path.name} in {_ATTEMPTS} tries")
+        opened, fd = fd, None  # forgotten before closing: never closed twice (the number may be reused)
+        os.close(opened)
         os.chmod(tmp, 0o666 & ~_UMASK)
         yield tmp
         os.replace(tmp, path)
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        if fd is not None:
+            with suppress(OSError):
+                os.close(fd)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
         raise
 
 
-def write_atomically(path: str | os.PathLike, data: bytes | str) -> Path:
-    """Write bytes, or text as UTF-8 with ``\\n`` line ends, to ``path`` atomically; returns the path."""
+def write_atomically(path: str | os.PathLike, data: bytes | str, *, durable: bool = True) -> Path:
+    """Write bytes, or text as UTF-8 with ``\\n`` line ends, to ``path`` atomically; returns the path.
+
+    The rename is atomic either way: readers see the old file or the new
+    one, never part of one. ``durable`` (the default) also fsyncs the data
+    before the rename, so that after a power cut or an OS crash ``path``
+    holds the new contents rather than possibly an empty file. Models,
+    corpora, results and discovered libraries are written durably; the
+    behaviour-likelihood cache passes ``durable=False``, since an entry lost
+    in a power cut is recomputed (and one that comes back empty is logged
+    and recomputed) while a model is not, and an fsync per entry is slow.
+    """
     path = Path(path)
     payload = data.encode("utf-8") if isinstance(data, str) else data
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as handle:
             handle.write(payload)
-            handle.flush()
-            os.fsync(handle.fileno())
+            if durable:
+                handle.flush()
+                os.fsync(handle.fileno())
     return path

@@ -76,10 +76,10 @@ def learner():
 
 def test_save_interrupted_between_its_two_files_still_writes_both(learner, tmp_path, monkeypatch):
     """Ctrl-C after the tensors are renamed: the JSON naming them is still written, then the interrupt."""
-    import groundlang.model_io as model_io
+    from groundlang.model import storage
     from groundlang.model_io import load_learner
 
-    real = model_io.write_atomically
+    real = storage.write_atomically
     calls = []
 
     def write_then_interrupt(path, data):
@@ -88,7 +88,7 @@ def test_save_interrupted_between_its_two_files_still_writes_both(learner, tmp_p
         if len(calls) == 1:
             _signal_self(signal.SIGINT)
 
-    monkeypatch.setattr(model_io, "write_atomically", write_then_interrupt)
+    monkeypatch.setattr(storage, "write_atomically", write_then_interrupt)
     with pytest.raises(KeyboardInterrupt):
         learner.save(tmp_path / "model")
     assert calls == ["globals.npz", "model.json"]
@@ -252,13 +252,14 @@ def test_evaluate_interrupted_writes_no_result_and_keeps_cache(tmp_path):
 
 
 def test_nested_deferral_waits_for_the_outermost_block(tmp_path):
-    """write_atomically defers on its own; inside save's deferral it must not raise between the two files."""
-    from groundlang.model_io import write_atomically
+    """An inner deferral inside an outer one (save's, around its two files) must not raise at its own end."""
+    from groundlang.model.storage import write_atomically
 
     with pytest.raises(KeyboardInterrupt):
         with deferred_interrupts():
             write_atomically(tmp_path / "a", b"1")
             _signal_self(signal.SIGINT)
-            write_atomically(tmp_path / "b", b"2")  # the inner deferral passes the signal on, not raising here
-            (tmp_path / "c").write_bytes(b"3")
+            with deferred_interrupts():
+                write_atomically(tmp_path / "b", b"2")
+            (tmp_path / "c").write_bytes(b"3")  # the inner deferral passed the signal on, not raising
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "b", "c"]

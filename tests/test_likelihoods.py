@@ -87,10 +87,11 @@ def test_corrupt_entries_are_recomputed_with_a_warning(small_instances, tmp_path
     entries = sorted((tmp_path / "behaviour").rglob("*.json"))
     entries[0].write_text('{"key": "trunc')
     entries[1].write_text('{"key": "0000", "log_likelihood": 3.0}')
+    entries[2].write_bytes(b"\xff\xfe\x00garbage")  # not UTF-8: what a power cut may leave of an unsynced entry
     with caplog.at_level(logging.WARNING, logger="groundlang.inference.likelihoods"):
         again = behaviour_likelihood_table(small_instances, goals, cache_dir=tmp_path)
     corrupt = [r for r in caplog.records if "corrupt" in r.getMessage()]
-    assert len(corrupt) == 2
+    assert len(corrupt) == 3
     for a, b in zip(good, again):
         np.testing.assert_allclose(a, b)
     assert '"log_likelihood"' in entries[0].read_text()  # rewritten whole

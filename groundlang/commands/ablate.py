@@ -57,7 +57,7 @@ def write_plot(result, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     from groundlang.ablation import plot_ablation
-    from groundlang.model_io import write_atomically
+    from groundlang.model.storage import write_atomically
 
     fig, ax = plt.subplots(figsize=(7, 4.2))
     plot_ablation(result.rows, ax=ax, title=f"{Path(result.corpus).name}, {result.protocol}")
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.ablation import run_ablation
     from groundlang.corpus import read_corpus
     from groundlang.labels import read_labels
-    from groundlang.model_io import write_atomically
+    from groundlang.model.storage import write_atomically
 
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)

@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import read_corpus
     from groundlang.evaluation import evaluate
     from groundlang.labels import read_labels
-    from groundlang.model_io import write_atomically
+    from groundlang.model.storage import write_atomically
 
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)

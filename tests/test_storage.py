@@ -1,0 +1,116 @@
+"""model.storage: atomic writes leave the old file or the new one, never a temporary file, whatever interrupts them."""
+
+from __future__ import annotations
+
+import os
+import stat
+
+import pytest
+
+from groundlang.model import storage
+from groundlang.model.storage import atomic_path, write_atomically
+
+
+def _previous(tmp_path):
+    target = tmp_path / "target.json"
+    target.write_bytes(b"previous")
+    return target
+
+
+def _assert_untouched(tmp_path, target):
+    assert sorted(p.name for p in tmp_path.iterdir()) == [target.name], "a temporary file was left behind"
+    assert target.read_bytes() == b"previous"
+
+
+def test_write_replaces_the_target_and_leaves_nothing_else(tmp_path):
+    target = _previous(tmp_path)
+    assert write_atomically(target, "new\n") == target
+    assert target.read_bytes() == b"new\n"
+    write_atomically(tmp_path / "sub" / "b.bin", b"\x00\x01")  # the folder is created
+    assert (tmp_path / "sub" / "b.bin").read_bytes() == b"\x00\x01"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sub", target.name]
+
+
+def test_temporary_file_is_next_to_the_target_with_plain_open_permissions(tmp_path):
+    target = tmp_path / "out.gif"
+    with atomic_path(target, suffix=".gif") as tmp:
+        assert tmp.parent == tmp_path and tmp.name.startswith(".out.gif.") and tmp.name.endswith(".gif")
+        assert tmp.exists()
+        assert stat.S_IMODE(tmp.stat().st_mode) == 0o666 & ~storage._UMASK
+        tmp.write_bytes(b"x")
+    assert target.read_bytes() == b"x"
+
+
+def test_interrupt_in_the_block_keeps_the_previous_target(tmp_path):
+    target = _previous(tmp_path)
+    with pytest.raises(KeyboardInterrupt):
+        with atomic_path(target) as tmp:
+            tmp.write_bytes(b"half of the new")
+            raise KeyboardInterrupt
+    _assert_untouched(tmp_path, target)
+
+
+@pytest.mark.parametrize("where", ["open", "close", "chmod"])
+def test_interrupt_right_after_the_temporary_file_appears_leaves_nothing(tmp_path, monkeypatch, where):
+    """Ctrl-C just after the temporary file is created (even before its name reaches atomic_path) is cleaned up."""
+    target = _previous(tmp_path)
+    real = getattr(os, where)
+    created = []
+
+    def interrupted(*args, **kwargs):
+        real(*args, **kwargs)  # the temporary file exists now
+        created.append(args[0])
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, where, interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        write_atomically(target, b"new")
+    monkeypatch.undo()
+    assert created, f"os.{where} was not called"
+    _assert_untouched(tmp_path, target)
+
+
+def test_failed_write_keeps_the_previous_target(tmp_path, monkeypatch):
+    target = _previous(tmp_path)
+
+    def full_disk(fd):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(os, "fsync", full_disk)
+    with pytest.raises(OSError, match="No space"):
+        write_atomically(target, b"new")
+    _assert_untouched(tmp_path, target)
+
+
+@pytest.mark.parametrize("durable, fsyncs", [(True, 1), (False, 0)])
+def test_durable_decides_the_fsync(tmp_path, monkeypatch, durable, fsyncs):
+    real = os.fsync
+    calls = []
+
+    def recording_fsync(fd):
+        calls.append(fd)
+        real(fd)
+
+    monkeypatch.setattr(os, "fsync", recording_fsync)
+    target = _previous(tmp_path)
+    write_atomically(target, b"new", durable=durable)
+    assert len(calls) == fsyncs
+    assert target.read_bytes() == b"new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [target.name]
+
+
+def test_durable_is_keyword_only(tmp_path):
+    with pytest.raises(TypeError):
+        write_atomically(tmp_path / "a", b"1", False)
+
+
+def test_cache_entries_are_not_fsynced(tmp_path, monkeypatch):
+    """The behaviour-likelihood cache writes its entries with durable=False: a lost entry is recomputed."""
+    from groundlang.inference import likelihoods
+
+    calls = []
+    monkeypatch.setattr(os, "fsync", lambda fd: calls.append(fd))
+    path = tmp_path / "cache" / "behaviour" / "ab" / "abcd.json"
+    likelihoods._write_entry(path, "abcd", -1.5, ["in(box, red)"])
+    assert calls == []
+    assert likelihoods._read_entry(path, "abcd") == -1.5
