@@ -161,9 +161,69 @@ def format_lifted_task(task: LiftedTask) -> str:
 _LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #show goal/3. #show pf/3. #show restrict/3.")
 
 
+# PF classes (pfs.lp) a restrict/3 atom may name: what an object is, not where it lies.
+_RESTRICTION_CLASSES = ("colour", "shape")
+# PF term -> its declarations: (PF class, classes of its arguments), one per pf/3 atom.
+_Declarations = dict[clingo.Symbol, list[tuple[str, tuple[str, ...]]]]
+
+
+def _declare(declared: _Declarations, pf_atom: clingo.Symbol) -> None:
+    cls_, name, sig = pf_atom.arguments
+    declared.setdefault(name, []).append((_text(cls_), tuple(_text(s) for s in _tuple_args(sig))))
+
+
+def _declare_restricted_families(program: Program, restrictions: dict[str, list[tuple[str, clingo.Symbol]]],
+                                 declared: _Declarations, time_limit: float | None) -> None:
+    """Add to ``declared`` the pf/3 atoms of PFs named by restrict/3 that only an environment declares.
+
+    Colour and shape PFs are families over the environment's palette (``pf(colour, roomIs(C), (room,))
+    :- palette_colour(C)``), so the library solved alone declares none of them. One more solve, with
+    the values the restrictions name added as palette colours and shapes, declares those that exist.
+    (Whether a value is in a given environment's palette is that environment's business: where it is
+    not, the restricted variable binds no object.)
+    """
+    missing = {p for rs in restrictions.values() for _, p in rs if p not in declared}
+    values = sorted({str(x) for p in missing if p.type is clingo.SymbolType.Function for x in p.arguments})
+    if not values:
+        return
+    probe = "".join(f"palette_colour({x}). palette_shape({x}).\n" for x in values)
+    models = program.solve(probe, models=1, time_limit=time_limit)
+    if not models:
+        raise AspError(f"{program.names}: the task library has no answer set once the palette values its "
+                       f"restrict/3 PFs name ({', '.join(values)}) are added, so they cannot be checked")
+    for a in models[0]:
+        if a.name == "pf" and len(a.arguments) == 3 and a.arguments[1] in missing:
+            _declare(declared, a)
+
+
+def _restriction_problem(term: clingo.Symbol, var: str, cls: str,
+                         declarations: Sequence[tuple[str, tuple[str, ...]]]) -> str | None:
+    """What is wrong with restricting variable ``var`` of class ``cls`` by PF ``term``; None: nothing."""
+    if not declarations:
+        return (f"PF {term} is declared by no pf(Class, {term}, Signature); restrict needs a colour or "
+                "shape PF written as pf/3 declares it, e.g. toyIs(star) or roomIs(green)")
+    usable = [(c, sig) for c, sig in declarations if c in _RESTRICTION_CLASSES]
+    if not usable:
+        found = {c for c, _ in declarations}
+        classes = " and ".join(sorted(found))
+        hint = " (a position PF belongs in goal/3)" if "position" in found else ""
+        return f"PF {term} is a {classes} PF; restrict needs a colour or shape PF of one {cls}{hint}"
+    if all(sig != (cls,) for _, sig in usable):
+        classes = " and ".join(sorted({c for c, _ in usable}))
+        sigs = " or ".join(sorted({"(" + ", ".join(sig) + ("," if len(sig) == 1 else "") + ")"
+                                   for _, sig in usable}))
+        return (f"PF {term} is a {classes} PF of arguments {sigs}, but variable {var!r} is a {cls}; "
+                f"restrict needs a colour or shape PF of one {cls}")
+    return None
+
+
 def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tuple[LiftedTask, ...], tuple[str, ...]]:
     """Solve the library without an environment: the lifted tasks (task/1, var/3, goal/3,
-    restrict/3) and the names of the unary spatial PFs (pf/3 of class spatial), sorted."""
+    restrict/3) and the names of the unary spatial PFs (pf/3 of class spatial), sorted.
+
+    Checked here, each a one-line AspError naming the sources and the task: variables, goal PFs
+    and their argument classes, and that every restrict/3 names a declared colour or shape PF of
+    one argument of its variable's class."""
     models = program.solve("", models=1, time_limit=time_limit)
     if not models:
         raise AspError(f"{program.names}: the task library has no answer set (a constraint always fails)")
@@ -173,10 +233,12 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     names = sorted(_text(a.arguments[0]) for a in by_signature.get(("task", 1), []))
     variables: dict[str, list[Variable]] = {n: [] for n in names}
     goals: dict[str, list[tuple[str, tuple[str, ...]]]] = {n: [] for n in names}
-    restrictions: dict[str, list[tuple[str, str]]] = {n: [] for n in names}
+    restrictions: dict[str, list[tuple[str, clingo.Symbol]]] = {n: [] for n in names}
     signatures: dict[str, tuple[str, ...]] = {}
     spatial = set()
+    declared: _Declarations = {}
     for a in by_signature.get(("pf", 3), []):
+        _declare(declared, a)
         cls_, name, sig = a.arguments
         if cls_.name == "position":
             signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
@@ -198,7 +260,8 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
         t, v = _text(t), _text(v)
         if t not in restrictions:
             raise AspError(f"{program.names}: restrict({t}, ...) names no task({t})")
-        restrictions[t].append((v, str(p)))
+        restrictions[t].append((v, p))
+    _declare_restricted_families(program, restrictions, declared, time_limit)
     tasks = []
     rank = {c: i for i, c in enumerate(CLASS_ORDER)}
     for n in names:
@@ -224,7 +287,11 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
             if v not in by_name:
                 raise AspError(f"{program.names}: task {n}: restrict uses variable {v!r} "
                                f"that has no var({n}, \"{v}\", Class)")
-        tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n]))), tuple(sorted(set(restrictions[n])))))
+            problem = _restriction_problem(term, v, by_name[v], declared.get(term, ()))
+            if problem:
+                raise AspError(f"{program.names}: task {n}: restrict({n}, \"{v}\", {term}): {problem}")
+        kept = {(v, str(term)) for v, term in restrictions[n]}
+        tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n]))), tuple(sorted(kept))))
     return tuple(tasks), tuple(sorted(spatial))
 
 

@@ -278,6 +278,54 @@ def test_restriction_on_an_undeclared_variable_is_refused():
         TaskLibrary.from_text(text)
 
 
+_TOY_TO_ROOM = 'task(toyToRoom). var(toyToRoom, "T", toy). var(toyToRoom, "R", room). goal(toyToRoom, toyInRoom, ("T", "R")).\n'
+
+
+@pytest.mark.parametrize("restriction, pieces", [
+    # a position PF: where an object ends up is the goal's business
+    ('restrict(toyToRoom, "R", toyInRoom).',
+     ('restrict(toyToRoom, "R", toyInRoom)', "toyInRoom is a position PF", "needs a colour or shape PF")),
+    # a spatial PF: where an object lies seen from the agent is no property it keeps
+    ('restrict(toyToRoom, "T", doorWestOfAgent).',
+     ('restrict(toyToRoom, "T", doorWestOfAgent)', "doorWestOfAgent is a spatial PF")),
+    # undeclared: groundlang's name instead of the family term pfs.lp declares
+    ('restrict(toyToRoom, "T", toyIsStar).',
+     ('restrict(toyToRoom, "T", toyIsStar)', "toyIsStar is declared by no pf(", "toyIs(star)")),
+    ('restrict(toyToRoom, "T", toyIz(star)).',
+     ('restrict(toyToRoom, "T", toyIz(star))', "toyIz(star) is declared by no pf(")),
+    # a colour PF of rooms on a toy variable
+    ('restrict(toyToRoom, "T", roomIs(red)).',
+     ('restrict(toyToRoom, "T", roomIs(red))', "roomIs(red) is a colour PF of arguments (room,)",
+      "variable 'T' is a toy")),
+    # a shape PF of toys on a room variable
+    ('restrict(toyToRoom, "R", toyIs(star)).',
+     ('restrict(toyToRoom, "R", toyIs(star))', "variable 'R' is a room")),
+])
+def test_restriction_by_a_pf_that_is_not_a_colour_or_shape_pf_of_its_variable_is_refused(tmp_path, restriction, pieces):
+    path = tmp_path / "mine.lp"
+    path.write_text(_TOY_TO_ROOM + restriction + "\n")
+    with pytest.raises(AspError) as caught:
+        TaskLibrary.load([path])
+    message = str(caught.value)
+    assert "\n" not in message
+    for piece in (str(path), "task toyToRoom", *pieces):
+        assert piece in message
+
+
+def test_restriction_by_a_colour_or_shape_pf_of_the_library_or_its_variable_class_loads():
+    # Palette values need not be known at load time (roomIs(mauve) binds no room where there is none);
+    # a user's own colour PF, declared beside the tasks, restricts like pfs.lp's.
+    library = TaskLibrary.from_text(
+        _TOY_TO_ROOM + 'restrict(toyToRoom, "R", roomIs(mauve)). restrict(toyToRoom, "T", toyIs(star)).\n'
+        'restrict(toyToRoom, "T", toyIsShiny).\n'
+        'pf(colour, toyIsShiny, (toy,)). holds(toyIsShiny, (T,)) :- toy(T), colour(T, yellow).\n', "mine.lp")
+    assert library.tasks[0].restrictions == (("R", "roomIs(mauve)"), ("T", "toyIs(star)"), ("T", "toyIsShiny"))
+    shiny = TaskLibrary.from_text(
+        _TOY_TO_ROOM + 'restrict(toyToRoom, "T", toyIsShiny).\n'
+        'pf(colour, toyIsShiny, (toy,)). holds(toyIsShiny, (T,)) :- toy(T), colour(T, yellow).\n', "shiny.lp")
+    assert [g.goal_text for g, _ in enumerate_groundings(shiny, TWO_TOYS)] == ["toyInRoom(block0, room1)"]
+
+
 def test_spatial_pfs_describe_objects_but_never_bind_them(library):
     """Spatial PFs (pfs.lp) are read per environment for the language model and stay out of C."""
     from groundlang.logic.tasks import describe_objects
