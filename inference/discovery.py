@@ -55,9 +55,16 @@ import numpy as np
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.mlirl import mlirl
 from groundlang.inference.planning import TaskSettings
-from groundlang.logic.atoms import Atom, attribute_pf
+from groundlang.logic.atoms import Atom
 # lifted_key is part of discovery's public surface (tests and notebooks import it from here).
-from groundlang.inference.lifting import lift_goal, lifted_key, singling_out, structure_key, task_name  # noqa: F401
+from groundlang.inference.lifting import (  # noqa: F401
+    colour_shape_pfs,
+    lift_goal,
+    lifted_key,
+    singling_out,
+    structure_key,
+    task_name,
+)
 from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary, format_lifted_task
 from groundlang.model.storage import write_atomically
 
@@ -371,18 +378,6 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
     return Discovery(library, library.tasks, candidates.tasks, tuple(reports), score, text, alternatives)
 
 
-def _pf_terms(layout, obj: str) -> dict[str, str]:
-    """groundlang PF name -> ASP term for the colour/shape PFs of one object (``roomIsRed`` -> ``roomIs(red)``)."""
-    if obj.startswith("room"):
-        values = (("roomIs", layout.rooms[int(obj[4:])].colour),)
-    elif obj.startswith("block"):
-        colour, shape = layout.toy_attributes[int(obj[5:])]
-        values = (("toyIs", colour), ("toyIs", shape))
-    else:
-        return {}
-    return {attribute_pf(p, v): f"{p}({v})" for p, v in values}
-
-
 def _restricted(task: LiftedTask, reports, demos) -> LiftedTask:
     """``task`` restricted, per variable, by the PFs that single out its object in every demonstration it explains.
 
@@ -401,7 +396,7 @@ def _restricted(task: LiftedTask, reports, demos) -> LiftedTask:
                 common = set()
                 break
             layout = by_name[r.instances].instance.initial_state.layout
-            terms = _pf_terms(layout, r.grounding.object_of(var.name))
+            terms = dict(colour_shape_pfs(layout).get(r.grounding.object_of(var.name), ()))
             names = {terms[a.predicate] for a in picked if a.predicate in terms}
             common = names if common is None else common & names
         restrictions += [(var.name, term) for term in sorted(common or ())]

@@ -15,7 +15,8 @@ from typing import Sequence
 from groundlang.logic.atoms import Atom, attribute_pf
 from groundlang.logic.tasks import CLASS_ORDER, LiftedTask, Variable
 
-__all__ = ["VARIABLE_LETTER", "structure_key", "lifted_key", "task_name", "lift_goal", "singling_out"]
+__all__ = ["VARIABLE_LETTER", "structure_key", "lifted_key", "task_name", "lift_goal", "colour_shape_pfs",
+           "singling_out"]
 
 VARIABLE_LETTER = {"agent": "A", "toy": "T", "room": "R", "door": "D"}
 
@@ -99,14 +100,23 @@ def lift_goal(goal: Sequence[Atom], classes: dict[str, str], name: str | None = 
 # ---------------------------------------------------------------- colour/shape PFs that pick an object out
 
 
-def _attribute_atoms(layout) -> dict[str, tuple[Atom, ...]]:
-    """Colour/shape PFs true of each room and toy, named as pfs.lp names them (roomIsGreen, toyIsStar)."""
-    out: dict[str, tuple[Atom, ...]] = {}
+def colour_shape_pfs(layout) -> dict[str, tuple[tuple[str, str], ...]]:
+    """The colour and shape PFs true of each room and toy of ``layout`` (doors and the agent have none).
+
+    Object name -> ``((PF name, ASP term), ...)``, colour before shape: the name as pfs.lp's
+    families are written in groundlang (``roomIsGreen``, ``toyIsStar``, the predicate of an
+    :class:`Atom`) and the term a task library writes in ``restrict/3`` (``roomIs(green)``).
+    """
+    out: dict[str, tuple[tuple[str, str], ...]] = {}
     for name, room in zip(layout.room_names, layout.rooms):
-        out[name] = (Atom(attribute_pf("roomIs", room.colour), (name,)),)
+        out[name] = (_pf("roomIs", room.colour),)
     for name, (colour, shape) in zip(layout.toy_names, layout.toy_attributes):
-        out[name] = (Atom(attribute_pf("toyIs", colour), (name,)), Atom(attribute_pf("toyIs", shape), (name,)))
+        out[name] = (_pf("toyIs", colour), _pf("toyIs", shape))
     return out
+
+
+def _pf(stem: str, value: str) -> tuple[str, str]:
+    return attribute_pf(stem, value), f"{stem}({value})"
 
 
 def singling_out(layout, obj: str, peers: Sequence[str]) -> tuple[Atom, ...] | None:
@@ -116,9 +126,9 @@ def singling_out(layout, obj: str, peers: Sequence[str]) -> tuple[Atom, ...] | N
     """
     if not peers:
         return ()
-    attributes = _attribute_atoms(layout)
-    own = attributes.get(obj, ())
-    others = [{a.predicate for a in attributes.get(p, ())} for p in peers]
+    pfs = colour_shape_pfs(layout)
+    own = tuple(Atom(name, (obj,)) for name, _ in pfs.get(obj, ()))
+    others = [{name for name, _ in pfs.get(p, ())} for p in peers]
     for k in range(1, len(own) + 1):
         for subset in combinations(own, k):
             wanted = {a.predicate for a in subset}
