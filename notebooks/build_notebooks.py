@@ -7,10 +7,10 @@ built here.
 
 from __future__ import annotations
 
-import os
 import sys
-import tempfile
 from pathlib import Path
+
+from groundlang.model.storage import write_atomically
 
 HERE = Path(__file__).resolve().parent
 
@@ -36,7 +36,7 @@ from groundlang.learner import Learner
 from groundlang.logic.atoms import parse_goal
 from groundlang.logic.tasks import TaskLibrary, format_lifted_task
 from groundlang.model.tasks import candidate_tasks
-from groundlang.model.world import step
+from groundlang.model.world import replay
 from groundlang.render import draw_state
 
 examples = example_corpus_path()
@@ -78,15 +78,22 @@ for ax, (name, s) in zip(axes, [("training layout", train_state), ("novel_a", no
         label = room_name + ("\\nroomIsLarge" if room_name in large else "")
         ax.text((room.left + room.right) / 2, (room.bottom + room.top) / 2 + 1, label, ha="center", fontsize=8)
 fig.tight_layout()'''),
+    # Added after the cells around them were numbered: fixed ids, so the ids of the cells below stay.
+    ("md", """## Spatial PFs: words about where things are
+
+A PF of class `spatial` (`pfs.lp` declares `doorWestOfAgent(D)` and its three siblings) is not a binding constraint: a door's side of the agent is not a property it keeps in another layout. The parse model still lets words describe an object by it ("the door on the left"). `spatial_descriptions` is what clingo finds where the agent stands; `groundlang tasks FILE --palette sokoban` prints the same.""", "spatial-6"),
+    ("code", '''from groundlang.model.tasks import spatial_descriptions
+
+for name, s in [("training layout", train_state), ("novel_a", novel["a"])]:
+    print(name, dict(spatial_descriptions(s, library)))
+assert all(a.predicate not in library.spatial_pfs for _, cs in candidate_tasks(state, library) for c in cs for a in c.atoms)''', "spatial-7"),
     ("md", """## Demonstrations for the new words
 
 Nobody says what "big" or "approach" mean. We make a few demonstrations (shortest paths) in two layouts where the largest room has *different* colours (green in the training layout, red in `novel_a`), so only `roomIsLarge` explains "big" in both; and a few of walking up to the star."""),
     ("code", '''def demonstration(state, goal, command):
     actions = shortest_demonstration(state, parse_goal(goal))
-    states = [state]
-    for a in actions:
-        states.append(step(states[-1], a))
-    return Instance(f"authored_{len(states)}", command, tuple(actions), tuple(states))
+    states = replay(state, actions)
+    return Instance(f"authored_{len(states)}", command, tuple(actions), states)
 
 def agent_at(state, x, y):
     return state.with_positions(np.array([[x, y]] + [[t.x, t.y] for t in state.toys]))
@@ -234,15 +241,12 @@ from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.model0 import model0_em, sentence_log_likelihood
 from groundlang.learner import Learner
 from groundlang.logic.atoms import parse_goal, format_goal
-from groundlang.model.world import step
+from groundlang.model.world import replay
 from groundlang.render import draw_state
 
 def demonstration(state, goal, command):
     actions = shortest_demonstration(state, goal)
-    states = [state]
-    for a in actions:
-        states.append(step(states[-1], a))
-    return Instance(Path(f"{command}.txt"), command, tuple(actions), tuple(states))'''),
+    return Instance(Path(f"{command}.txt"), command, tuple(actions), replay(state, actions))'''),
     ("md", "## Model 0: two tasks, three sentences each\n\nThe example corpus's layout (green room west); each task demonstrated once, described three ways."),
     ("code", '''examples = {i.name: i for i in read_corpus(example_corpus_path(), "sokoban")}
 start_star = examples["star2green_0"].initial_state
@@ -393,28 +397,43 @@ NOTEBOOKS = {"01_domain_authoring": NB01, "02_posteriors": NB02, "04_paper": NB0
 
 
 def build(name: str, cells) -> "nbformat.NotebookNode":
+    """The notebook ``name`` made of ``cells``, ``(kind, source)`` or ``(kind, source, id)`` tuples.
+
+    Cell ids are stable, so that rebuilding changes nothing: a cell without an
+    id of its own gets ``NN-KK``, ``NN`` the notebook's number and ``KK`` its
+    rank among the cells without one. Give a cell inserted between numbered
+    ones a fixed id, and the ids of the cells after it do not change.
+    """
     import nbformat
 
     nb = nbformat.v4.new_notebook()
     nb.metadata = {"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"},
                    "language_info": {"name": "python"}}
-    for i, (kind, source) in enumerate(cells):
+    numbered = 0
+    for kind, source, *fixed in cells:
         cell = nbformat.v4.new_markdown_cell(source) if kind == "md" else nbformat.v4.new_code_cell(source)
-        cell.id = f"{name[:2]}-{i:02d}"  # stable ids: rebuilding changes nothing
+        if fixed:
+            (cell.id,) = fixed
+        else:
+            cell.id = f"{name[:2]}-{numbered:02d}"
+            numbered += 1
         nb.cells.append(cell)
+    ids = [cell.id for cell in nb.cells]
+    if len(set(ids)) != len(ids):
+        raise ValueError(f"{name}: duplicate cell ids {sorted({i for i in ids if ids.count(i) > 1})}")
     return nb
 
 
-def main(argv: list[str] | None = None) -> int:
+def notebook_text(name: str) -> str:
+    """The text ``main`` writes to ``<name>.ipynb`` (tests compare it with the committed file)."""
     import nbformat
 
-    for name, cells in NOTEBOOKS.items():
-        path = HERE / f"{name}.ipynb"
-        text = nbformat.writes(build(name, cells)) + "\n"
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=HERE)
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
+    return nbformat.writes(build(name, NOTEBOOKS[name])) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    for name in NOTEBOOKS:
+        path = write_atomically(HERE / f"{name}.ipynb", notebook_text(name))
         print("wrote", path)
     return 0
 
