@@ -24,7 +24,7 @@ from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.logic.atoms import Atom, attribute_pf, format_goal
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string, reading_groups
+from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
 from groundlang.model.geometry import cell_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, interpretations
@@ -250,11 +250,10 @@ class Learner:
                 _, per_reading, _ = self.lm.reading_table(self.globals, batch)  # [1, J, S]
                 joint = per_reading[0, :J] + batch.log_prior[0, :J, None]
                 structure = torch.softmax(torch.logsumexp(joint, 0), 0).numpy()  # P(s | words)
-            groups = reading_groups(obs, self.vocab)
+            group = batch.reading_group[0, : len(obs.readings)].numpy()
             prior = np.array([r.probability for r in obs.readings])
-            group = np.asarray(groups)
             share = prior / np.bincount(group, weights=prior)[group]  # a reading's share of its structure
-            reading_probs = structure[groups] * share  # P(reading | words), one per reading
+            reading_probs = structure[group] * share  # P(reading | words), one per reading
         return Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
                          list(obs.readings), reading_probs)
 

@@ -71,7 +71,7 @@ class Batch:
     reading_types: torch.Tensor  # [I, R, K] occurrences of each type in each reading
     frame_counts: torch.Tensor  # [I, R, U] words outside noun phrases and verbs, per reading
     verb_counts: torch.Tensor  # [I, R, U] the clauses' verbs, per reading
-    task_mix: torch.Tensor  # [I, J] mixture of {L} alone
+    reading_group: torch.Tensor  # [I, Q] per parser reading, its merged structure (index into R); -1 padded
     task_token: torch.Tensor  # [I, J] token id of L
     cover_slot: torch.Tensor  # [I, J, G] role slot (index into V) of each mentionable object (is_mentionable)
     cover_mask: torch.Tensor  # [I, J, G] bool
@@ -223,12 +223,6 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
     return types, merged, groups
 
 
-def reading_groups(obs: Observation, vocab: Vocabulary) -> list[int]:
-    """Per reading of ``obs``, the index of the merged reading structure :func:`encode` gives it."""
-    ids = sorted({vocab.word_id(w) for w in obs.words}) or [0]
-    return _reading_structure(obs, vocab, {w: u for u, w in enumerate(ids)})[2]
-
-
 def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     """Pad and index a list of observations with a fixed vocabulary."""
     if not observations:
@@ -245,7 +239,6 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     pad_mix = mix([null])  # first, so always mixture 0 (language_models.NULL_MIXTURE)
     bow_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     bow_mix_no_null = torch.full((I, J), pad_mix, dtype=torch.long)
-    task_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     task_token = torch.full((I, J), null, dtype=torch.long)
     machines = [[[null] for _ in range(J)] for _ in range(I)]
     V = max(len(interp.roles) for o in observations for interp in o.interpretations) + 1
@@ -277,7 +270,6 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             said = [vocab.token_id(t) for t in interp.constraint_tokens]
             bow_mix[i, j] = mix([lid, null] + said)
             bow_mix_no_null[i, j] = mix([lid] + said)
-            task_mix[i, j] = mix([lid])
             task_token[i, j] = lid
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
             role_mask[i, j, 0] = True  # aligned with nothing
@@ -325,12 +317,12 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
         col = {w: u for u, w in enumerate(ids)}
         uniq_rows.append(ids)
         count_rows.append([float(counts.get(w, 0)) for w in ids])
-        structures.append(_reading_structure(obs, vocab, col)[:2])
+        structures.append(_reading_structure(obs, vocab, col))
     uniq = _pad(uniq_rows, 0, torch.long)
     word_counts = _pad(count_rows, 0.0, torch.float32)
     U = uniq.shape[1]
-    R = max(len(merged) for _, merged in structures) or 1
-    K = max(len(types) for types, _ in structures) or 1
+    R = max(len(merged) for _, merged, _ in structures) or 1
+    K = max(len(types) for types, _, _ in structures) or 1
     reading_logp = torch.full((I, R), PAD_LOGIT)
     type_counts = torch.zeros(I, K, U)
     type_head_counts = torch.zeros(I, K, U)
@@ -339,7 +331,8 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     reading_types = torch.zeros(I, R, K)
     frame_counts = torch.zeros(I, R, U)
     verb_counts = torch.zeros(I, R, U)
-    for i, (types, merged) in enumerate(structures):
+    reading_group = _pad([groups for _, _, groups in structures], -1, torch.long)
+    for i, (types, merged, _) in enumerate(structures):
         for (prep, mods, head), k in types.items():
             type_prep[i, k] = prep
             type_mask[i, k] = True
@@ -357,8 +350,11 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
                 frame_counts[i, r, u] = c
 
     return Batch(
-        log_prior, behaviour, mask, mix.table(S), bow_mix, bow_mix_no_null,
-        uniq, word_counts, words, word_mask, machine, machine_mask,
-        reading_logp, type_counts, type_head_counts, type_prep, type_mask, reading_types, frame_counts, verb_counts, task_mix, task_token, cover_slot, cover_mask,
-        role, role_mask, role_logw, role_mix, role_head_mix,
+        log_prior=log_prior, behaviour=behaviour, mask=mask, mixtures=mix.table(S), bow_mix=bow_mix,
+        bow_mix_no_null=bow_mix_no_null, uniq=uniq, word_counts=word_counts, words=words, word_mask=word_mask,
+        machine=machine, machine_mask=machine_mask, reading_logp=reading_logp, type_counts=type_counts,
+        type_head_counts=type_head_counts, type_prep=type_prep, type_mask=type_mask, reading_types=reading_types,
+        frame_counts=frame_counts, verb_counts=verb_counts, reading_group=reading_group, task_token=task_token,
+        cover_slot=cover_slot, cover_mask=cover_mask, role=role, role_mask=role_mask, role_logw=role_logw,
+        role_mix=role_mix, role_head_mix=role_head_mix,
     )

@@ -244,7 +244,8 @@ class ParseAligned(LanguageModel):
         # Words outside noun phrases come from the lifted task's token or NULL
         # with learned shares, one pair for verbs and one for the other words:
         # a verb says more about the task than "to" or "the" does.
-        task_words = _gather_mixtures(log_emit, batch.task_mix)  # [I, J, U]
+        phi = g["phi"]
+        task_words = phi[batch.task_token[:, :, None], batch.uniq[:, None, :]].clamp_min(1e-30).log()  # [I, J, U]
         null_words = log_emit[NULL_MIXTURE][:, None, :].expand_as(task_words)  # [I, J, U]
         both = torch.stack([task_words, null_words], dim=-1)  # [I, J, U, 2]
         frame_words = torch.logsumexp(both + g["frame_source"].log(), dim=-1)
@@ -290,18 +291,13 @@ class ParseAligned(LanguageModel):
         all_roles = mass.sum(2)  # [I, J, K]
         slot_mass = torch.gather(mass, 2, batch.cover_slot[..., None].expand(-1, -1, -1, K))
         slot_mass = slot_mass * batch.cover_mask[..., None]  # [I, J, G, K]
-        total = torch.zeros_like(entities)
-        for size in range(G + 1):
-            for subset in itertools.combinations(range(G), size):
-                chosen = torch.zeros(G, dtype=torch.bool)
-                chosen[list(subset)] = True
-                weight = torch.where(chosen, unnamed_minus_named, named).prod(-1)  # [I, J]
-                if not subset:
-                    total = total + weight[..., None]
-                    continue
-                share = ((all_roles - slot_mass[:, :, chosen].sum(2)) / all_roles).clamp_min(1e-30).log()
-                share = torch.einsum("ijk,irk->ijr", share * batch.type_mask[:, None, :], batch.reading_types)
-                total = total + weight[..., None] * share.exp()
+        # Every subset U of the slots at once: chosen[u, g] says whether slot g is in subset u.
+        chosen = torch.tensor(list(itertools.product((False, True), repeat=G)), dtype=torch.bool)  # [2^G, G]
+        weight = torch.where(chosen, unnamed_minus_named[:, :, None, :], named[:, :, None, :]).prod(-1)  # [I, J, 2^G]
+        avoided = torch.einsum("ijgk,ug->ijuk", slot_mass, chosen.to(slot_mass.dtype))  # [I, J, 2^G, K]
+        share = ((all_roles[:, :, None, :] - avoided) / all_roles[:, :, None, :]).clamp_min(1e-30).log()
+        share = torch.einsum("ijuk,irk->ijur", share * batch.type_mask[:, None, None, :], batch.reading_types)
+        total = (weight[..., None] * share.exp()).sum(2)  # [I, J, R]
         return total.clamp_min(1e-30).log()
 
 
