@@ -364,14 +364,17 @@ def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
     return out
 
 
-Descriptions = dict[str, tuple[str, ...]]
+# Object -> PF class -> names of the unary PFs of that class true of the object, e.g.
+# {"room0": {"colour": ("roomIsGreen",)}, "door1": {"spatial": ("doorWestOfAgent",)}}.
+Descriptions = dict[str, dict[str, tuple[str, ...]]]
 
 
 def describe_objects(
     library: TaskLibrary, facts: str, *, time_limit: float | None = None
 ) -> Descriptions:
-    """The spatial PFs true of each object of one environment, names sorted: the second part of
-    :func:`ground_environment` (call that when the groundings are wanted too: one solve gives both)."""
+    """The unary PFs (every class but position) true of each object of one environment, by PF
+    class, names sorted: the second part of :func:`ground_environment` (call that when the
+    groundings are wanted too: one solve gives both)."""
     return ground_environment(library, facts, time_limit=time_limit)[1]
 
 
@@ -387,8 +390,8 @@ def ground_environment(
     library: TaskLibrary, facts: str, *, time_limit: float | None = None
 ) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions]:
     """Every permissible grounding not true initially, with its binding constraints, and the
-    spatial PFs true of each object (``{"door1": ("doorWestOfAgent",)}``; objects none holds of
-    are left out).
+    unary PFs of every class but position true of each object, by class
+    (``{"door1": {"spatial": ("doorWestOfAgent",)}}``; objects none holds of are left out).
 
     ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
     ``time_limit``: seconds, default the library's. One Control, one grounding, one solve
@@ -399,7 +402,7 @@ def ground_environment(
     tasks = {t.name: t for t in library.tasks}
     order = {t.name: i for i, t in enumerate(library.tasks)}
     found = []
-    described: dict[str, set[str]] = {}
+    described: dict[str, dict[str, set[str]]] = {}
     # The same atoms recur in many answer sets; decoding clingo symbols is the costly part.
     decoded: dict[clingo.Symbol, tuple[str, object]] = {}
 
@@ -407,8 +410,10 @@ def ground_environment(
         kind, args = sym.name, sym.arguments
         if kind == "chosen" and len(args) == 1:
             return kind, _text(args[0])
-        if kind in ("bind", "described") and len(args) == 2:
-            return kind, (_text(args[0]) if kind == "bind" else pf_name(args[0]), _text(args[1]))
+        if kind == "bind" and len(args) == 2:
+            return kind, (_text(args[0]), _text(args[1]))
+        if kind == "described" and len(args) == 3:
+            return kind, (_text(args[0]), pf_name(args[1]), _text(args[2]))
         if kind in ("goal_atom", "constraint_atom") and len(args) == 2:
             return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
         return "other", None  # atoms a user library shows for its own purposes
@@ -429,7 +434,8 @@ def ground_environment(
             elif kind == "constraint_atom":
                 extra.append(value)
             elif kind == "described":
-                described.setdefault(value[1], set()).add(value[0])
+                cls, name, obj = value
+                described.setdefault(obj, {}).setdefault(cls, set()).add(name)
         lifted = tasks[chosen]
         binding = tuple((v.name, bind[v.name]) for v in lifted.variables)
         # Goal atoms sorted (one text per goal, whatever the binding), constraint atoms in variable order.
@@ -440,5 +446,8 @@ def ground_environment(
         key = (order[chosen], tuple(_natural_key(o) for _, o in binding))
         found.append((key, grounded, binding_constraints(extra)))
     found.sort(key=lambda item: item[0])
-    descriptions = {o: tuple(sorted(described[o])) for o in sorted(described, key=_natural_key)}
+    descriptions = {
+        o: {cls: tuple(sorted(names)) for cls, names in sorted(described[o].items())}
+        for o in sorted(described, key=_natural_key)
+    }
     return [(g, c) for _, g, c in found], descriptions

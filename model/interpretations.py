@@ -23,7 +23,9 @@ words then come from ``NULL``.
 Every object, bound or not, may also be described by the spatial PFs
 (``pfs.lp``) true of it where the agent stands: "the door on the left"
 (``doorWestOfAgent``). They are not part of C: a side is not a property the
-object keeps in another layout.
+object keeps in another layout. What each object is described by comes from
+clingo (``groundings.lp`` shows ``described/3``), so a PF class a user's
+library declares describes bystanders as it constrains bound objects.
 """
 
 from __future__ import annotations
@@ -33,19 +35,17 @@ from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from groundlang.logic.atoms import Atom, attribute_pf
+from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
 from groundlang.model.features import atoms_hold
 from groundlang.model.geometry import cell_tables
-from groundlang.model.tasks import candidate_tasks, spatial_descriptions
+from groundlang.model.tasks import candidate_tasks, object_descriptions
 from groundlang.model.world import State
 
 __all__ = [
     "Interpretation",
     "RoleBinding",
     "interpretations",
-    "object_tokens",
-    "shape_tokens",
     "class_of",
     "OTHER_ROLES",
 ]
@@ -94,33 +94,17 @@ def class_of(obj: str) -> str:
     raise ValueError(f"cannot tell the class of object {obj!r}")
 
 
-def object_tokens(state: State, obj: str) -> tuple[str, ...]:
-    """Names of the colour and shape PFs true of ``obj`` in ``state``."""
-    cls = class_of(obj)
-    index = int(obj.lstrip("abcdefghijklmnopqrstuvwxyz"))
-    if cls == "room":
-        return (attribute_pf("roomIs", state.layout.rooms[index].colour),)
-    if cls == "toy":
-        colour, shape = state.layout.toy_attributes[index]
-        return (attribute_pf("toyIs", colour), attribute_pf("toyIs", shape))
-    return ()
-
-
-def shape_tokens(state: State, obj: str) -> tuple[str, ...]:
-    """The shape PF of a toy (``toyIsChair``): what its head noun names; () for other objects."""
-    if class_of(obj) != "toy":
-        return ()
-    _, shape = state.layout.toy_attributes[int(obj[len("block"):])]
-    return (attribute_pf("toyIs", shape),)
-
-
 def _objects(state: State) -> list[str]:
     names = ["agent0"] + state.layout.room_names + state.layout.door_names + state.layout.toy_names
     return names
 
 
 def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary,
-           spatial: Mapping[str, tuple[str, ...]]) -> tuple[RoleBinding, ...]:
+           described: Mapping[str, Mapping[str, tuple[str, ...]]]) -> tuple[RoleBinding, ...]:
+    """The roles of an interpretation: the task's variables (what words may say of a bound object:
+    its PFs in C, then its spatial PFs), then every other object (all its unary PFs, as clingo
+    describes it: colours, shapes, spatial PFs, any class a user's library adds). A head noun may
+    also say an object's shape PF."""
     lifted = library.task(task.task)
     binding = dict(task.binding)
     bindings = []
@@ -129,14 +113,16 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
             f"{pred}.{args.index(var.name)}" for pred, args in lifted.goal if var.name in args
         )
         obj = binding[var.name]
-        said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + spatial.get(obj, ())
-        bindings.append(RoleBinding(role, obj, var.cls, said, shape_tokens(state, obj)))
+        about = described.get(obj, {})
+        said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())
+        bindings.append(RoleBinding(role, obj, var.cls, said, about.get("shape", ())))
     bound = set(binding.values())
     for obj in _objects(state):
         if obj not in bound:
             cls = class_of(obj)
-            said = object_tokens(state, obj) + spatial.get(obj, ())
-            bindings.append(RoleBinding(f"other:{cls}", obj, cls, said, shape_tokens(state, obj)))
+            about = described.get(obj, {})
+            said = tuple(name for names in about.values() for name in names)
+            bindings.append(RoleBinding(f"other:{cls}", obj, cls, said, about.get("shape", ())))
     return tuple(bindings)
 
 
@@ -169,7 +155,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
             "no task of the library can be carried out from this state "
             "(every grounding is impossible or already true)"
         )
-    spatial = spatial_descriptions(state, library)  # once per state, shared by every interpretation
+    described = object_descriptions(state, library)  # once per state, shared by every interpretation
     per_lifted = Counter(task.task for task, _ in candidates)
     n_lifted = len(per_lifted)
     result = []
@@ -177,7 +163,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
         log_prior_t = -math.log(n_lifted) - math.log(per_lifted[task.task])
         if not enumerate_constraints:
             largest = max(constraints, key=lambda c: len(c.atoms))
-            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, spatial)))
+            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, described)))
             continue
         for constraint in constraints:
             result.append(
@@ -185,7 +171,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
                     task,
                     constraint,
                     log_prior_t - math.log(len(constraints)),
-                    _roles(task, constraint, state, library, spatial),
+                    _roles(task, constraint, state, library, described),
                 )
             )
     return result

@@ -25,7 +25,7 @@ from groundlang.logic.tasks import (
 from .geometry import state_facts
 from .world import State
 
-__all__ = ["Candidate", "candidate_tasks", "spatial_descriptions", "narrow_by_known", "NarrowedCandidate"]
+__all__ = ["Candidate", "candidate_tasks", "object_descriptions", "spatial_descriptions", "narrow_by_known", "NarrowedCandidate"]
 
 Candidate = tuple[GroundedTask, list[BindingConstraint]]
 
@@ -33,7 +33,9 @@ Candidate = tuple[GroundedTask, list[BindingConstraint]]
 @lru_cache(maxsize=64)
 def _environment(state: State, library: TaskLibrary) -> tuple:
     found, described = ground_environment(library, state_facts(state))
-    return tuple((g, tuple(c)) for g, c in found), MappingProxyType(described)
+    frozen = MappingProxyType({obj: MappingProxyType(by_class) for obj, by_class in described.items()})
+    spatial = MappingProxyType({obj: d["spatial"] for obj, d in described.items() if "spatial" in d})
+    return tuple((g, tuple(c)) for g, c in found), frozen, spatial
 
 
 def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
@@ -46,13 +48,21 @@ def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
     return [(g, list(c)) for g, c in _environment(state, library)[0]]
 
 
-def spatial_descriptions(state: State, library: TaskLibrary) -> Mapping[str, tuple[str, ...]]:
-    """The spatial PFs (``pfs.lp``) true of each object where the agent stands in ``state``.
+def object_descriptions(state: State, library: TaskLibrary) -> Mapping[str, Mapping[str, tuple[str, ...]]]:
+    """Object -> PF class -> the unary PFs of that class (every class but position) true of it in
+    ``state``: colours and shapes, the spatial PFs where the agent stands, and any class a user's
+    library declares (``{"room0": {"colour": ("roomIsGreen",)}}``).
 
-    From the same cached solve as :func:`candidate_tasks` (hence a read-only mapping);
-    objects no spatial PF holds of are absent. Raises AspError.
+    From the same cached solve as :func:`candidate_tasks` (hence read-only mappings);
+    objects no such PF holds of are absent. Raises AspError.
     """
     return _environment(state, library)[1]
+
+
+def spatial_descriptions(state: State, library: TaskLibrary) -> Mapping[str, tuple[str, ...]]:
+    """The spatial PFs (``pfs.lp``) true of each object where the agent stands in ``state``:
+    the ``spatial`` class of :func:`object_descriptions`; objects none holds of are absent."""
+    return _environment(state, library)[2]
 
 
 @dataclass(frozen=True)

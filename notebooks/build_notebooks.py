@@ -81,7 +81,7 @@ fig.tight_layout()'''),
     # Added after the cells around them were numbered: fixed ids, so the ids of the cells below stay.
     ("md", """## Spatial PFs: words about where things are
 
-A PF of class `spatial` (`pfs.lp` declares `doorWestOfAgent(D)` and its three siblings) is not a binding constraint: a door's side of the agent is not a property it keeps in another layout. The parse model still lets words describe an object by it ("the door on the left"). `spatial_descriptions` is what clingo finds where the agent stands; `groundlang tasks FILE --palette sokoban` prints the same.""", "spatial-6"),
+A PF of class `spatial` (`pfs.lp` declares `doorWestOfAgent(D)` and its three siblings) is not a binding constraint: a door's side of the agent is not a property it keeps in another layout. The parse model still lets words describe an object by it ("the door on the left"). `spatial_descriptions` is what clingo finds where the agent stands; `groundlang tasks FILE --palette sokoban` prints them with each object's other unary PFs (colours, shapes, and any class your library declares), all of which words may say of an object.""", "spatial-6"),
     ("code", '''from groundlang.model.tasks import spatial_descriptions
 
 for name, s in [("training layout", train_state), ("novel_a", novel["a"])]:

@@ -226,7 +226,13 @@ def test_cli_tasks_json(tmp_path, capsys):
                                     "constraints": [["roomIsBlue(room1)"], []]}
     assert len(out["groundings"]) == 6
     # the agent at (1,1), the door at (4,2)
-    assert out["descriptions"] == {"door0": ["doorEastOfAgent", "doorNorthOfAgent"]}
+    assert out["descriptions"] == {
+        "room0": {"colour": ["roomIsGreen"]},
+        "room1": {"colour": ["roomIsBlue"]},
+        "door0": {"spatial": ["doorEastOfAgent", "doorNorthOfAgent"]},
+        "block0": {"colour": ["toyIsYellow"], "shape": ["toyIsStar"]},
+        "block1": {"colour": ["toyIsRed"], "shape": ["toyIsMoon"]},
+    }
 
 
 def test_cli_tasks_bad_library_is_one_line(tmp_path, capsys):
@@ -332,8 +338,12 @@ def test_spatial_pfs_describe_objects_but_never_bind_them(library):
 
     assert library.spatial_pfs == ("doorEastOfAgent", "doorNorthOfAgent", "doorSouthOfAgent", "doorWestOfAgent")
     # agent at (1,1), door0 at (4,2): east and north of the agent
-    assert describe_objects(library, TWO_TOYS) == {"door0": ("doorEastOfAgent", "doorNorthOfAgent")}
-    assert describe_objects(library, NO_TOYS) == {}  # the agent stands in the door
+    described = describe_objects(library, TWO_TOYS)
+    assert described["door0"] == {"spatial": ("doorEastOfAgent", "doorNorthOfAgent")}
+    assert described["block1"] == {"colour": ("toyIsRed",), "shape": ("toyIsMoon",)}
+    assert described["room0"] == {"colour": ("roomIsGreen",)}
+    assert "agent0" not in described
+    assert "door0" not in describe_objects(library, NO_TOYS)  # the agent stands in the door
     doors = TaskLibrary.from_text(
         'task(agentToDoor). var(agentToDoor, "A", agent). var(agentToDoor, "D", door).'
         ' goal(agentToDoor, agentInDoor, ("A", "D")).'
@@ -352,7 +362,30 @@ def test_descriptions_ignore_what_a_user_library_shows_and_non_unary_spatial_pfs
         ' pf(spatial, near, (agent, door)). holds(near, (A, D)) :- agent(A), door(D).'
     )
     assert mine.spatial_pfs == ("doorEastOfAgent", "doorNorthOfAgent", "doorSouthOfAgent", "doorWestOfAgent")
-    assert describe_objects(mine, TWO_TOYS) == {"door0": ("doorEastOfAgent", "doorNorthOfAgent")}
+    assert describe_objects(mine, TWO_TOYS)["door0"] == {"spatial": ("doorEastOfAgent", "doorNorthOfAgent")}
+    assert not any("near" in names for d in describe_objects(mine, TWO_TOYS).values() for names in d.values())
+
+
+def test_a_pf_class_a_user_library_declares_describes_bystanders_too():
+    """What words may say of an object comes from clingo: a user's PF class describes every object it
+    holds of, bound or not (bound objects also through the binding constraints)."""
+    from groundlang.logic.tasks import describe_objects
+
+    shiny = TaskLibrary.from_text(
+        'task(agentToRoom). var(agentToRoom, "A", agent). var(agentToRoom, "R", room).'
+        ' goal(agentToRoom, agentInRoom, ("A", "R")).'
+        ' pf(material, toyIsShiny, (toy,)). holds(toyIsShiny, (T,)) :- toy(T), colour(T, yellow).'
+    )
+    described = describe_objects(shiny, TWO_TOYS)
+    assert described["block0"] == {"colour": ("toyIsYellow",), "material": ("toyIsShiny",), "shape": ("toyIsStar",)}
+    assert "material" not in described["block1"]
+
+    from groundlang.model.interpretations import interpretations
+
+    for interp in interpretations(two_toy_state(), shiny):  # agentToRoom: both toys are bystanders
+        said = {rb.obj: rb.constraint_tokens for rb in interp.roles}
+        assert set(said["block0"]) == {"toyIsYellow", "toyIsStar", "toyIsShiny"}
+        assert set(said["block1"]) == {"toyIsRed", "toyIsMoon"}
 
 
 def test_cli_output_cut_short_by_its_reader_is_no_error():

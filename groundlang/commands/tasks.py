@@ -1,5 +1,5 @@
 """``groundlang tasks FILE --palette NAME [--library LP] [--json]``: lifted tasks, groundings, constraints,
-and the spatial PFs that describe each object where the agent stands."""
+and the unary PFs that describe each object (colours, shapes, spatial PFs where the agent stands)."""
 
 from __future__ import annotations
 
@@ -28,12 +28,12 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
-    from groundlang.model.tasks import candidate_tasks, spatial_descriptions
+    from groundlang.model.tasks import candidate_tasks, object_descriptions
 
     state = read_initial_state(args.file, args.palette)
     library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
     candidates = candidate_tasks(state, library)
-    described = spatial_descriptions(state, library)
+    described = object_descriptions(state, library)
     if args.json:
         out = {
             "lifted_tasks": library.names,
@@ -45,7 +45,8 @@ def run(args: argparse.Namespace) -> int:
                 }
                 for g, constraints in candidates
             ],
-            "descriptions": {obj: list(pfs) for obj, pfs in described.items()},
+            "descriptions": {obj: {cls: list(pfs) for cls, pfs in by_class.items()}
+                             for obj, by_class in described.items()},
         }
         print(json.dumps(out, indent=1))
         return 0
@@ -57,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {g.task}: {g.goal_text}")
         for c in constraints:
             print(f"      {c}")
-    print(f"spatial PFs where the agent stands ({len(described)} objects):")
-    for obj, pfs in described.items():
-        print(f"  {obj}: {', '.join(pfs)}")
+    print(f"unary PFs of each object in the initial state, by class ({len(described)} objects):")
+    for obj, by_class in described.items():
+        print(f"  {obj}: " + "; ".join(f"{cls} {', '.join(pfs)}" for cls, pfs in by_class.items()))
     return 0
