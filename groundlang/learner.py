@@ -181,6 +181,7 @@ class Learner:
                 for rb in interp.roles:
                     roles.append(rb.role)
                     tokens.append(class_token(rb.cls))
+                    tokens.extend(rb.constraint_tokens + rb.kind_tokens)  # a user's PF may describe only bystanders
         for palette in sorted(palettes, key=lambda p: p.name):
             tokens.extend(attribute_pf("roomIs", c) for c in palette.colours)
             tokens.extend(attribute_pf("toyIs", c) for c in palette.colours)

@@ -388,6 +388,22 @@ def test_a_pf_class_a_user_library_declares_describes_bystanders_too():
         assert set(said["block1"]) == {"toyIsRed", "toyIsMoon"}
 
 
+def test_a_pf_that_only_describes_bystanders_gets_a_token_of_its_own():
+    from groundlang.corpus import example_corpus_path, read_corpus
+    from groundlang.learner import Learner
+
+    shiny = TaskLibrary.from_text(
+        'task(agentToRoom). var(agentToRoom, "A", agent). var(agentToRoom, "R", room).'
+        ' goal(agentToRoom, agentInRoom, ("A", "R")).'
+        ' pf(material, toyIsShiny, (toy,)). holds(toyIsShiny, (T,)) :- toy(T), colour(T, yellow).'
+    )
+    corpus = read_corpus(example_corpus_path(), "sokoban")
+    toys = [i for i in corpus.instances if i.initial_state.toys and i.name.startswith("agent")]
+    assert toys, "the example corpus has agent commands with a toy in the room"
+    learner = Learner("parse", library=shiny, steps=5).fit(toys)
+    assert learner.vocab.has_token("toyIsShiny")  # not read as NULL: words may learn it
+
+
 def test_cli_output_cut_short_by_its_reader_is_no_error():
     """`groundlang tasks ... | head`: the reader leaves early; no error message, no traceback."""
     import subprocess
