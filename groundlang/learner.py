@@ -167,7 +167,8 @@ class Learner:
     # ----------------------------------------------------------------- training
     def _build_vocabulary(self, observations: Iterable[Observation], palettes: set) -> Vocabulary:
         vocab = Vocabulary()
-        tokens: list[str] = [task.name for task in self.library.tasks]
+        vocab.add_tasks(task.name for task in self.library.tasks)
+        tokens: list[str] = []
         roles: list[str] = []
         preps: list[str] = []
         counts: Counter = Counter()

@@ -73,6 +73,8 @@ class Batch:
     verb_counts: torch.Tensor  # [I, R, U] the clauses' verbs, per reading
     reading_group: torch.Tensor  # [I, Q] per parser reading, its merged structure (index into R); -1 padded
     task_token: torch.Tensor  # [I, J] token id of L
+    task_index: torch.Tensor  # [I, J] index of L among the vocabulary's lifted tasks
+    align_context: torch.Tensor  # [I, J, K] row of the per-task alignment table: task_index * preps + type_prep
     cover_slot: torch.Tensor  # [I, J, G] role slot (index into V) of each mentionable object (is_mentionable)
     cover_mask: torch.Tensor  # [I, J, G] bool
     role: torch.Tensor  # [I, J, V] role ids (0 = aligned with nothing)
@@ -240,6 +242,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     bow_mix = torch.full((I, J), pad_mix, dtype=torch.long)
     bow_mix_no_null = torch.full((I, J), pad_mix, dtype=torch.long)
     task_token = torch.full((I, J), null, dtype=torch.long)
+    task_index = torch.zeros((I, J), dtype=torch.long)
     machines = [[[null] for _ in range(J)] for _ in range(I)]
     V = max(len(interp.roles) for o in observations for interp in o.interpretations) + 1
     role = torch.zeros(I, J, V, dtype=torch.long)
@@ -271,6 +274,8 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             bow_mix[i, j] = mix([lid, null] + said)
             bow_mix_no_null[i, j] = mix([lid] + said)
             task_token[i, j] = lid
+            # A vocabulary without lifted tasks serves the models that have no per-task tables.
+            task_index[i, j] = vocab.task_id(interp.lifted) if vocab.tasks else 0
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
             role_mask[i, j, 0] = True  # aligned with nothing
             sharing = Counter(rb.role for rb in interp.roles)
@@ -349,12 +354,14 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             for u, c in frame_key:
                 frame_counts[i, r, u] = c
 
+    align_context = task_index[:, :, None] * len(vocab.preps) + type_prep[:, None, :]  # [I, J, K]
     return Batch(
         log_prior=log_prior, behaviour=behaviour, mask=mask, mixtures=mix.table(S), bow_mix=bow_mix,
         bow_mix_no_null=bow_mix_no_null, uniq=uniq, word_counts=word_counts, words=words, word_mask=word_mask,
         machine=machine, machine_mask=machine_mask, reading_logp=reading_logp, type_counts=type_counts,
         type_head_counts=type_head_counts, type_prep=type_prep, type_mask=type_mask, reading_types=reading_types,
         frame_counts=frame_counts, verb_counts=verb_counts, reading_group=reading_group, task_token=task_token,
+        task_index=task_index, align_context=align_context,
         cover_slot=cover_slot, cover_mask=cover_mask, role=role, role_mask=role_mask, role_logw=role_logw,
         role_mix=role_mix, role_head_mix=role_head_mix,
     )

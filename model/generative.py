@@ -27,6 +27,7 @@ __all__ = ["instance_model", "global_sizes"]
 def global_sizes(vocab: Vocabulary) -> dict:
     return {
         "num_tokens": len(vocab.tokens),
+        "num_tasks": len(vocab.tasks),
         "num_words": len(vocab.words),
         "num_roles": len(vocab.roles),
         "num_preps": len(vocab.preps),

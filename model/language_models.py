@@ -60,7 +60,8 @@ class LanguageModel:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token}
 
     def sample_globals(
-        self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = ()
+        self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),
+        num_tasks: int = 0,
     ) -> dict:
         with pyro.plate("tokens", num_tokens, dim=-1):
             phi = pyro.sample(
@@ -114,7 +115,7 @@ class IBMModel2(LanguageModel):
     # colour/shape PF of the bound objects and alignment picks what was said.
     enumerates_constraints = False
 
-    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=()):
+    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
         contexts = POSITION_BINS * (MAX_MACHINE + 1)
         with pyro.plate("distortion_contexts", contexts, dim=-1):
@@ -179,8 +180,10 @@ class ParseAligned(LanguageModel):
             "align_by_task": self.align_by_task,
         }
 
-    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=()):
+    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
+        if num_tasks < 1:
+            raise ValueError("the parse model needs the lifted tasks of the vocabulary (Vocabulary.add_tasks)")
         task_role = torch.tensor([is_task_role(name) for name in role_names], dtype=torch.bool)
         if task_role.numel() != num_roles:  # no names given: every role is a bystander's
             task_role = torch.zeros(num_roles, dtype=torch.bool)
@@ -188,9 +191,9 @@ class ParseAligned(LanguageModel):
         share = torch.full((2,), self.align_concentration)
         g["frame_source"] = pyro.sample("frame_source", dist.Dirichlet(share))
         g["verb_source"] = pyro.sample("verb_source", dist.Dirichlet(share))
-        # One table per (lifted-task token, preposition) when aligning by task, kept flat
-        # (one plate); reading_table views it as [tokens, preps, roles].
-        contexts = num_tokens * num_preps if self.align_by_task else num_preps
+        # One table per (lifted task, preposition) when aligning by task, kept flat
+        # (one plate); reading_table views it as [tasks, preps, roles].
+        contexts = num_tasks * num_preps if self.align_by_task else num_preps
         with pyro.plate("align_contexts", contexts, dim=-1):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
         if self.mention_concentration is not None:
@@ -202,8 +205,8 @@ class ParseAligned(LanguageModel):
             with pyro.plate("mention_roles", num_roles, dim=-1):
                 g["mention"] = pyro.sample("mention", dist.Dirichlet(mention))
         if self.arity_concentration is not None:
-            # Per lifted-task token: how many noun phrases a command of the task has.
-            with pyro.plate("arity_tokens", num_tokens, dim=-1):
+            # Per lifted task: how many noun phrases a command of the task has.
+            with pyro.plate("arity_tasks", num_tasks, dim=-1):
                 g["arity"] = pyro.sample(
                     "arity", dist.Dirichlet(torch.full((MAX_ARITY + 1,), self.arity_concentration))
                 )
@@ -229,10 +232,7 @@ class ParseAligned(LanguageModel):
         )  # [I, J, V, K]
         log_table = g["align"].clamp_min(1e-30).log()
         if self.align_by_task:
-            log_table = log_table.reshape(g["phi"].shape[0], -1, log_table.shape[-1])  # [tokens, preps, roles]
-            log_align = log_table[
-                batch.task_token[:, :, None, None], batch.type_prep[:, None, None, :], batch.role[:, :, :, None]
-            ]  # [I, J, V, K]
+            log_align = log_table[batch.align_context[:, :, None, :], batch.role[:, :, :, None]]  # [I, J, V, K]
         else:
             log_align = log_table[batch.type_prep[:, None, None, :], batch.role[:, :, :, None]]  # [I, J, V, K]
         log_align = (log_align + batch.role_logw[..., None]).masked_fill(~batch.role_mask[..., None], PAD_LOGIT)
@@ -256,7 +256,7 @@ class ParseAligned(LanguageModel):
         if "arity" in g:
             arity = g["arity"].clamp_min(1e-30).log()
             phrases = batch.reading_types.sum(-1).long().clamp_max(MAX_ARITY)  # [I, R]
-            per_reading = per_reading + arity[batch.task_token[:, :, None], phrases[:, None, :]]
+            per_reading = per_reading + arity[batch.task_index[:, :, None], phrases[:, None, :]]
         return torch.logsumexp(per_reading, dim=-1), per_reading, joint
 
 

@@ -79,12 +79,15 @@ class Vocabulary:
     preps: list[str] = field(default_factory=lambda: [OTHER_PREP, DIRECT_OBJECT])
     # Misspellings read as another word of the vocabulary ("whlite" -> "white").
     aliases: dict[str, str] = field(default_factory=dict)
+    # The lifted tasks, in library order: what the parse model's per-task tables are indexed by.
+    tasks: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self._word_index = {w: i for i, w in enumerate(self.words)}
         self._token_index = {t: i for i, t in enumerate(self.tokens)}
         self._role_index = {r: i for i, r in enumerate(self.roles)}
         self._prep_index = {p: i for i, p in enumerate(self.preps)}
+        self._task_index = {t: i for i, t in enumerate(self.tasks)}
         self._spelling: dict[str, int] = {}  # unknown word -> index it is read as
         if self.words[:1] != [UNK] or self.tokens[:1] != [NULL]:
             raise ValueError("a vocabulary starts with <unk> among words and NULL among tokens")
@@ -108,6 +111,22 @@ class Vocabulary:
 
     def add_preps(self, preps: Iterable[str]) -> None:
         self._intern(self.preps, self._prep_index, preps)
+
+    def add_tasks(self, tasks: Iterable[str]) -> None:
+        """Lifted task names; each is also a semantic token (its words)."""
+        tasks = list(tasks)
+        self._intern(self.tasks, self._task_index, tasks)
+        self.add_tokens(tasks)
+
+    def task_id(self, task: str) -> int:
+        """Index of a lifted task among :attr:`tasks`; a task the vocabulary never saw is an error."""
+        try:
+            return self._task_index[task]
+        except KeyError:
+            raise ValueError(
+                f"lifted task {task!r} is not in the vocabulary (it knows {', '.join(self.tasks) or 'none'}): "
+                "train with the task library the model is used with"
+            ) from None
 
     def role_id(self, role: str) -> int:
         """Index of a role; a role training never saw aligns like nothing."""
@@ -158,9 +177,10 @@ class Vocabulary:
             "roles": list(self.roles),
             "preps": list(self.preps),
             "aliases": dict(sorted(self.aliases.items())),
+            "tasks": list(self.tasks),
         }
 
     @classmethod
     def from_json(cls, data: dict) -> "Vocabulary":
         return cls(list(data["words"]), list(data["tokens"]), list(data["roles"]), list(data["preps"]),
-                   dict(data.get("aliases", {})))
+                   dict(data.get("aliases", {})), list(data.get("tasks", [])))

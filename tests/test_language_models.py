@@ -178,8 +178,10 @@ def test_each_lifted_task_reads_prepositions_with_its_own_alignment_table(settin
     learner, observations, batch, g = setting
     vocab = learner.vocab
     before = learner.lm.log_likelihood(g, batch)
-    tables = g["align"].reshape(len(vocab.tokens), len(vocab.preps), -1).clone()
-    agent = vocab.token_id("agentToRoom")
+    assert g["align"].shape[0] == len(vocab.tasks) * len(vocab.preps)  # one table per lifted task, not per token
+    assert g["arity"].shape[0] == len(vocab.tasks)
+    tables = g["align"].reshape(len(vocab.tasks), len(vocab.preps), -1).clone()
+    agent = vocab.task_id("agentToRoom")
     tables[agent] = torch.roll(tables[agent], 1, dims=-1)  # another valid table for agentToRoom only
     after = learner.lm.log_likelihood({**g, "align": tables.reshape(g["align"].shape)}, batch)
     for i, obs in enumerate(observations):

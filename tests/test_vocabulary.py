@@ -77,3 +77,18 @@ def test_a_saved_learner_keeps_its_aliases_and_its_lexicon_leaves_them_out(tmp_p
     assert again.vocab.aliases == {"greeen": "green"}
     assert again.vocab.word_id("greeen") == again.vocab.word_id("green")
 
+
+
+def test_lifted_tasks_are_indexed_apart_from_tokens_and_survive_json():
+    import pytest
+
+    vocab = Vocabulary()
+    vocab.add_tokens(["roomIsRed"])
+    vocab.add_tasks(["agentToRoom", "toyToRoom"])
+    assert vocab.tasks == ["agentToRoom", "toyToRoom"]
+    assert [vocab.task_id(t) for t in vocab.tasks] == [0, 1]
+    assert vocab.has_token("toyToRoom")  # a task is also a token: the words it explains
+    again = Vocabulary.from_json(vocab.to_json())
+    assert again.tasks == vocab.tasks and again.task_id("toyToRoom") == 1
+    with pytest.raises(ValueError, match="agentToDoor.*not in the vocabulary.*agentToRoom, toyToRoom"):
+        vocab.task_id("agentToDoor")
