@@ -25,6 +25,8 @@ from groundlang.model.vocabulary import NULL, Vocabulary, class_token, is_task_r
 
 __all__ = ["Observation", "Batch", "encode", "entity_words", "is_mentionable", "machine_string", "PAD_LOGIT"]
 
+CLAUSE_ARITY_BINS = 5  # clauses with 4 or more noun phrases share the last bin
+
 # Padded interpretations get this log-weight: exp() underflows to 0 while
 # logsumexp and its gradient stay finite (an -inf would give NaN gradients).
 PAD_LOGIT = -1.0e4
@@ -71,6 +73,7 @@ class Batch:
     reading_types: torch.Tensor  # [I, R, K] occurrences of each type in each reading
     frame_counts: torch.Tensor  # [I, R, U] words outside noun phrases and verbs, per reading
     verb_counts: torch.Tensor  # [I, R, U] the clauses' verbs, per reading
+    clause_arity: torch.Tensor  # [I, R, B] clauses of each reading with 0, 1, ..., B-1 (or more) noun phrases
     reading_group: torch.Tensor  # [I, Q] per parser reading, its merged structure (index into R); -1 padded
     task_token: torch.Tensor  # [I, J] token id of L
     task_index: torch.Tensor  # [I, J] index of L among the vocabulary's lifted tasks
@@ -219,7 +222,10 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
             ent_types[types.setdefault(key, len(types))] += 1
         frame_key = tuple(sorted((col[vocab.word_id(w)], c) for w, c in frame.items() if c > 0))
         verb_key = tuple(sorted((col[vocab.word_id(w)], c) for w, c in verbs.items() if c > 0))
-        signature = (tuple(sorted(ent_types.items())), frame_key, verb_key)
+        named = Counter(e.clause for e in reading.logical_form.entities if e.modifiers or e.head)
+        clause_key = tuple(sorted(Counter(min(named.get(c, 0), CLAUSE_ARITY_BINS - 1)
+                                          for c in range(len(reading.logical_form.clauses))).items()))
+        signature = (tuple(sorted(ent_types.items())), frame_key, verb_key, clause_key)
         merged[signature] = merged.get(signature, 0.0) + reading.probability
         groups.append(order.setdefault(signature, len(order)))
     return types, merged, groups
@@ -336,6 +342,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     reading_types = torch.zeros(I, R, K)
     frame_counts = torch.zeros(I, R, U)
     verb_counts = torch.zeros(I, R, U)
+    clause_arity = torch.zeros(I, R, CLAUSE_ARITY_BINS)
     reading_group = _pad([groups for _, _, groups in structures], -1, torch.long)
     for i, (types, merged, _) in enumerate(structures):
         for (prep, mods, head), k in types.items():
@@ -345,7 +352,9 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
                 type_counts[i, k, u] += 1.0
             for u in head:
                 type_head_counts[i, k, u] += 1.0
-        for r, ((ent_types, frame_key, verb_key), prob) in enumerate(merged.items()):
+        for r, ((ent_types, frame_key, verb_key, clause_key), prob) in enumerate(merged.items()):
+            for b, c in clause_key:
+                clause_arity[i, r, b] = c
             for u, c in verb_key:
                 verb_counts[i, r, u] = c
             reading_logp[i, r] = math.log(max(prob, 1e-12))
@@ -360,7 +369,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
         bow_mix_no_null=bow_mix_no_null, uniq=uniq, word_counts=word_counts, words=words, word_mask=word_mask,
         machine=machine, machine_mask=machine_mask, reading_logp=reading_logp, type_counts=type_counts,
         type_head_counts=type_head_counts, type_prep=type_prep, type_mask=type_mask, reading_types=reading_types,
-        frame_counts=frame_counts, verb_counts=verb_counts, reading_group=reading_group, task_token=task_token,
+        frame_counts=frame_counts, verb_counts=verb_counts, clause_arity=clause_arity, reading_group=reading_group, task_token=task_token,
         task_index=task_index, align_context=align_context,
         cover_slot=cover_slot, cover_mask=cover_mask, role=role, role_mask=role_mask, role_logw=role_logw,
         role_mix=role_mix, role_head_mix=role_head_mix,

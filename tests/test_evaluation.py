@@ -91,7 +91,7 @@ def test_cli_evaluate_writes_the_documented_json(tmp_path, capsys):
 @pytest.mark.slow
 @pytest.mark.parametrize(
     "folder, published_ibm2, measured",
-    [("allTurkTrainLimitedCommand", 0.8125, 226), ("allTurkTrain", 0.7416, 218)],
+    [("allTurkTrainLimitedCommand", 0.8125, 227), ("allTurkTrain", 0.7416, 219)],
 )
 def test_leave_one_out_beats_the_published_ibm_model_2(shared_corpus, folder, published_ibm2, measured):
     corpus = read_corpus(shared_corpus / folder, "sokoban")

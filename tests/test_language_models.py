@@ -191,3 +191,23 @@ def test_each_lifted_task_reads_prepositions_with_its_own_alignment_table(settin
     shared = ParseAligned(align_by_task=False)
     with pyro.poutine.block():
         assert shared.sample_globals(**global_sizes(vocab))["align"].shape[0] == len(vocab.preps)
+
+
+def test_arity_counts_the_noun_phrases_of_each_clause(setting):
+    """P(arity | L) is per clause: batch.clause_arity[i, r, b] is how many clauses of reading
+    structure r have b noun phrases with words (the last bin: b or more)."""
+    from groundlang.model.encoding import CLAUSE_ARITY_BINS
+
+    learner, observations, batch, _ = setting
+    for i, obs in enumerate(observations):
+        for q, reading in enumerate(obs.readings):
+            lf = reading.logical_form
+            r = int(batch.reading_group[i, q])
+            named = [sum(1 for e in lf.entities if e.clause == c and (e.modifiers or e.head))
+                     for c in range(len(lf.clauses))]
+            expected = torch.zeros(CLAUSE_ARITY_BINS)
+            for n in named:
+                expected[min(n, CLAUSE_ARITY_BINS - 1)] += 1
+            assert torch.equal(batch.clause_arity[i, r], expected), (obs.words, named)
+    two = [o for o in observations if len(o.readings[0].logical_form.clauses) > 1]
+    assert two, "the commands include one of two clauses"
