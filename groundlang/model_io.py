@@ -114,6 +114,9 @@ def load_learner(directory: str | Path):
             settings=TaskSettings(**meta["planning"]),
         )
         learner.vocab = Vocabulary.from_json(meta["vocabulary"])
+        missing = {t.name for t in learner.library.tasks} - set(learner.vocab.tasks)
+        if missing:
+            raise ValueError(f"the vocabulary lacks the lifted tasks {sorted(missing)} of the saved task library")
     except (KeyError, TypeError, AttributeError, ValueError, EOFError, zipfile.BadZipFile, OSError) as exc:
         raise ModelFormatError(f"{directory}: model files are incomplete or corrupt ({exc!r})") from None
     learner.globals = _checked_globals(learner, values, tensor_path)

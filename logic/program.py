@@ -219,6 +219,13 @@ class Program:
     def names(self) -> str:
         return ", ".join(s.name for s in self.sources)
 
+    @property
+    def user_names(self) -> str:
+        """The sources a user gave (files, texts), leaving out groundlang's own; all of them when
+        every source is groundlang's: where an error in a user's library is to be looked for."""
+        mine = [s.name for s in self.sources if not s.name.startswith("groundlang.")]
+        return ", ".join(mine) if mine else self.names
+
     def control(
         self, facts: str = "", *, time_limit: float | None = DEFAULT_TIME_LIMIT,
         arguments: Sequence[str] = (),

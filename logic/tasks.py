@@ -189,7 +189,7 @@ def _declare_restricted_families(program: Program, restrictions: dict[str, list[
     probe = "".join(f"palette_colour({x}). palette_shape({x}).\n" for x in values)
     models = program.solve(probe, models=1, time_limit=time_limit)
     if not models:
-        raise AspError(f"{program.names}: the task library has no answer set once the palette values its "
+        raise AspError(f"{program.user_names}: the task library has no answer set once the palette values its "
                        f"restrict/3 PFs name ({', '.join(values)}) are added, so they cannot be checked")
     for a in models[0]:
         if a.name == "pf" and len(a.arguments) == 3 and a.arguments[1] in missing:
@@ -226,7 +226,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     one argument of its variable's class."""
     models = program.solve("", models=1, time_limit=time_limit)
     if not models:
-        raise AspError(f"{program.names}: the task library has no answer set (a constraint always fails)")
+        raise AspError(f"{program.user_names}: the task library has no answer set (a constraint always fails)")
     by_signature: dict[tuple[str, int], list] = {}
     for sym in models[0]:
         by_signature.setdefault((sym.name, len(sym.arguments)), []).append(sym)
@@ -247,19 +247,19 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     for a in by_signature.get(("var", 3), []):
         t, v, c = (_text(x) for x in a.arguments)
         if t not in variables:
-            raise AspError(f"{program.names}: var({t}, \"{v}\", {c}) names no task({t})")
+            raise AspError(f"{program.user_names}: var({t}, \"{v}\", {c}) names no task({t})")
         variables[t].append(Variable(v, c))
     for a in by_signature.get(("goal", 3), []):
         t, p, args = a.arguments
         t = _text(t)
         if t not in goals:
-            raise AspError(f"{program.names}: goal({t}, ...) names no task({t})")
+            raise AspError(f"{program.user_names}: goal({t}, ...) names no task({t})")
         goals[t].append((pf_name(p), tuple(_text(x) for x in _tuple_args(args))))
     for a in by_signature.get(("restrict", 3), []):
         t, v, p = a.arguments
         t, v = _text(t), _text(v)
         if t not in restrictions:
-            raise AspError(f"{program.names}: restrict({t}, ...) names no task({t})")
+            raise AspError(f"{program.user_names}: restrict({t}, ...) names no task({t})")
         restrictions[t].append((v, p))
     _declare_restricted_families(program, restrictions, declared, time_limit)
     tasks = []
@@ -267,29 +267,29 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     for n in names:
         vs = sorted(set(variables[n]), key=lambda v: (rank.get(v.cls, len(rank)), v.cls, v.name))
         if len({v.name for v in vs}) != len(vs):
-            raise AspError(f"{program.names}: task {n} declares a variable with two classes")
+            raise AspError(f"{program.user_names}: task {n} declares a variable with two classes")
         if not goals[n]:
-            raise AspError(f"{program.names}: task {n} has no goal/3 atom")
+            raise AspError(f"{program.user_names}: task {n} has no goal/3 atom")
         by_name = {v.name: v.cls for v in vs}
         for pred, args in goals[n]:
             if not 1 <= len(args) <= MAX_GOAL_ARITY:
-                raise AspError(f"{program.names}: task {n}: goal {pred} has {len(args)} arguments "
+                raise AspError(f"{program.user_names}: task {n}: goal {pred} has {len(args)} arguments "
                                f"(1..{MAX_GOAL_ARITY} supported)")
             for arg in args:
                 if arg not in by_name:
-                    raise AspError(f"{program.names}: task {n}: goal {pred} uses variable "
+                    raise AspError(f"{program.user_names}: task {n}: goal {pred} uses variable "
                                    f"{arg!r} that has no var({n}, \"{arg}\", Class)")
             sig = signatures.get(pred)
             if sig is not None and tuple(by_name[a] for a in args) != sig:
-                raise AspError(f"{program.names}: task {n}: goal {pred}({', '.join(args)}) "
+                raise AspError(f"{program.user_names}: task {n}: goal {pred}({', '.join(args)}) "
                                f"needs arguments of classes {sig}")
         for v, term in restrictions[n]:
             if v not in by_name:
-                raise AspError(f"{program.names}: task {n}: restrict uses variable {v!r} "
+                raise AspError(f"{program.user_names}: task {n}: restrict uses variable {v!r} "
                                f"that has no var({n}, \"{v}\", Class)")
             problem = _restriction_problem(term, v, by_name[v], declared.get(term, ()))
             if problem:
-                raise AspError(f"{program.names}: task {n}: restrict({n}, \"{v}\", {term}): {problem}")
+                raise AspError(f"{program.user_names}: task {n}: restrict({n}, \"{v}\", {term}): {problem}")
         kept = {(v, str(term)) for v, term in restrictions[n]}
         tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n]))), tuple(sorted(kept))))
     return tuple(tasks), tuple(sorted(spatial))

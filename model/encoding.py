@@ -194,9 +194,10 @@ class _Mixtures:
 def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int]):
     """Distinct noun-phrase types and, per distinct reading structure, their counts.
 
-    Readings that give the same multiset of (preposition key, words) and the
-    same frame words are indistinguishable to the language model; their
-    probabilities are summed.
+    Readings that give the same multiset of (preposition key, words), the
+    same frame words and verbs, and the same number of noun phrases per
+    clause (``clause_arity``) are indistinguishable to the language model;
+    their probabilities are summed.
     """
     types: dict[tuple, int] = {}
     merged: dict[tuple, float] = {}
@@ -280,7 +281,8 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
             bow_mix[i, j] = mix([lid, null] + said)
             bow_mix_no_null[i, j] = mix([lid] + said)
             task_token[i, j] = lid
-            # A vocabulary without lifted tasks serves the models that have no per-task tables.
+            # Learner vocabularies always list the lifted tasks; one built by hand for the bag of
+            # words or IBM Model 2 (no per-task tables) need not.
             task_index[i, j] = vocab.task_id(interp.lifted) if vocab.tasks else 0
             machines[i][j] = [null] + [vocab.token_id(t) for t in machine_string(interp)]
             role_mask[i, j, 0] = True  # aligned with nothing
@@ -369,8 +371,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
         bow_mix_no_null=bow_mix_no_null, uniq=uniq, word_counts=word_counts, words=words, word_mask=word_mask,
         machine=machine, machine_mask=machine_mask, reading_logp=reading_logp, type_counts=type_counts,
         type_head_counts=type_head_counts, type_prep=type_prep, type_mask=type_mask, reading_types=reading_types,
-        frame_counts=frame_counts, verb_counts=verb_counts, clause_arity=clause_arity, reading_group=reading_group, task_token=task_token,
-        task_index=task_index, align_context=align_context,
-        cover_slot=cover_slot, cover_mask=cover_mask, role=role, role_mask=role_mask, role_logw=role_logw,
+        frame_counts=frame_counts, verb_counts=verb_counts, clause_arity=clause_arity, reading_group=reading_group,
+        task_token=task_token, task_index=task_index, align_context=align_context, cover_slot=cover_slot, cover_mask=cover_mask, role=role, role_mask=role_mask, role_logw=role_logw,
         role_mix=role_mix, role_head_mix=role_head_mix,
     )

@@ -31,7 +31,10 @@ table, and the interpretation itself is enumerated by the model in
   corpus, leave-one-out 226 and 219 of 240 against 226 and 218 per command,
   in novel layouts 647 and 626 of 720 against 644 and 623; 227 and 650 for
   the simplified commands once the mention factor is summed in double
-  precision). The prior over
+  precision). The number of clauses is not modelled: a reading that splits
+  a command into more clauses pays one more arity factor, as it pays for
+  more phrase-free words; the parser's reading probabilities weigh in too.
+  The prior over
   alignments favours the task's own roles (``argument_bonus``), which is what
   decides for prepositions training never saw: "go *with* the star to green".
 """
@@ -265,7 +268,6 @@ class ParseAligned(LanguageModel):
             # which says little about the task (see ``arity_concentration``).
             per_reading = per_reading + torch.einsum("ijb,irb->ijr", arity[batch.task_index], batch.clause_arity)
         return torch.logsumexp(per_reading, dim=-1), per_reading, joint
-
 
     @staticmethod
     def _mentions(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.Tensor) -> torch.Tensor:

@@ -39,7 +39,12 @@ def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]
     included) the temporary file is removed and ``path`` is left untouched.
     The temporary file is named before it is created and created inside the
     guarded region, so an interrupt arriving at any point, even right after
-    the file appears, cannot leave it behind.
+    the file appears, cannot leave it behind (one interrupt landing between
+    the system call's return and the assignment of its descriptor leaks that
+    descriptor until the process ends; Python gives no way to close it).
+    The caller writes the yielded path by name: whoever can write to the
+    folder could swap it for a symlink before that (the file's own mode is
+    set through its descriptor, never by name).
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -56,9 +61,9 @@ def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]
             break
         else:
             raise FileExistsError(f"{path.parent}: no free temporary name for {path.name} in {_ATTEMPTS} tries")
+        os.fchmod(fd, 0o666 & ~_UMASK)  # what a plain open() gives, set on the file itself, not by name
         opened, fd = fd, None  # forgotten before closing: never closed twice (the number may be reused)
         os.close(opened)
-        os.chmod(tmp, 0o666 & ~_UMASK)
         yield tmp
         os.replace(tmp, path)
     except BaseException:

@@ -80,6 +80,12 @@ def _set_version(d: Path) -> None:
     (d / "model.json").write_text(json.dumps(meta))
 
 
+def _drop_vocabulary_tasks(d: Path) -> None:
+    meta = json.loads((d / "model.json").read_text())
+    del meta["vocabulary"]["tasks"]
+    (d / "model.json").write_text(json.dumps(meta))
+
+
 def _globals(d: Path) -> dict:
     with np.load(d / "globals.npz", allow_pickle=False) as z:
         return {k: z[k] for k in z.files}
@@ -116,6 +122,9 @@ MODEL_DIRS: dict[str, tuple[Callable[[Path], None], list[str]]] = {
                                      ["model.json: not valid JSON", "can't decode byte 0x89"]),
     "model.json of another program": (lambda d: (d / "model.json").write_text('{"format": "keras"}'),
                                       ["model.json: not a groundlang model (format field is not 'groundlang-model')"]),
+    "vocabulary without its lifted tasks": (_drop_vocabulary_tasks,
+                                            ["model files are incomplete or corrupt",
+                                             "the vocabulary lacks the lifted tasks ['agentToRoom'"]),
     "tensor of the wrong shape": (lambda d: _with(d, phi=np.ones((3, 4), np.float32)),
                                   ["globals.npz: phi is torch.float32 (3, 4); expected finite floats of shape"]),
     "tensor with NaN": (lambda d: _with(d, phi=np.full(_phi_shape(d), np.nan, np.float32)),

@@ -211,3 +211,24 @@ def test_arity_counts_the_noun_phrases_of_each_clause(setting):
             assert torch.equal(batch.clause_arity[i, r], expected), (obs.words, named)
     two = [o for o in observations if len(o.readings[0].logical_form.clauses) > 1]
     assert two, "the commands include one of two clauses"
+
+
+def test_each_lifted_task_has_its_own_arity_per_clause(setting):
+    """Changing P(arity | agentToRoom) changes only agentToRoom's interpretations, and for
+    "walk to the red room" (one clause, one noun phrase) by exactly log a'[1] - log a[1]."""
+    learner, observations, batch, g = setting
+    t = learner.vocab.task_id("agentToRoom")
+    arity = g["arity"].clone()
+    arity[t] = torch.roll(arity[t], 1)
+    _, before, _ = learner.lm.reading_table(g, batch)
+    _, after, _ = learner.lm.reading_table({**g, "arity": arity}, batch)
+    walk = COMMANDS.index("walk to the red room")
+    assert all(len(r.logical_form.clauses) == 1 for r in observations[walk].readings)
+    for i, obs in enumerate(observations):
+        R = len(set(batch.reading_group[i, : len(obs.readings)].tolist()))
+        for j, interp in enumerate(obs.interpretations):
+            changed = not torch.allclose(before[i, j, :R], after[i, j, :R])
+            assert changed == (interp.lifted == "agentToRoom"), (i, interp.lifted)
+            if i == walk and interp.lifted == "agentToRoom":
+                expected = float(arity[t, 1].log() - g["arity"][t, 1].log())
+                assert torch.allclose(after[i, j, :R] - before[i, j, :R], torch.full((R,), expected), atol=1e-5)

@@ -314,7 +314,8 @@ def test_restriction_by_a_pf_that_is_not_a_colour_or_shape_pf_of_its_variable_is
         TaskLibrary.load([path])
     message = str(caught.value)
     assert "\n" not in message
-    for piece in (str(path), "task toyToRoom", *pieces):
+    assert message.startswith(f"{path}: task toyToRoom: ")  # the user's file, not groundlang's own sources
+    for piece in pieces:
         assert piece in message
 
 
@@ -416,3 +417,21 @@ def test_cli_output_cut_short_by_its_reader_is_no_error():
     proc.stdout.close()  # 12 kB of output will not fit the closed pipe
     err = proc.stderr.read().decode()
     assert proc.wait() == 1 and err == ""
+
+
+@pytest.mark.parametrize("term, what", [("toyIs(strar)", "colours and shapes"), ("roomIs(star)", "colours")])
+def test_a_restriction_to_a_value_the_palette_lacks_is_refused_where_the_palette_is_known(tmp_path, term, what):
+    """clingo cannot tell a palette value from a typo (the palette comes with the environment);
+    the model refuses it with the state's palette rather than binding nothing."""
+    from groundlang.model.tasks import candidate_tasks
+
+    var = "R" if term.startswith("room") else "T"
+    path = tmp_path / "mine.lp"
+    path.write_text('task(t). var(t, "T", toy). var(t, "R", room). goal(t, toyInRoom, ("T", "R")). '
+                    f'restrict(t, "{var}", {term}).\n')
+    library = TaskLibrary.load([path])
+    with pytest.raises(ValueError) as caught:
+        candidate_tasks(two_toy_state(), library)
+    message = str(caught.value)
+    assert message.startswith(f"{path}: task t: restrict(t, \"{var}\", {term}): ")
+    assert f"is not one of the {what} of palette sokoban" in message

@@ -50,7 +50,7 @@ def test_interrupt_in_the_block_keeps_the_previous_target(tmp_path):
     _assert_untouched(tmp_path, target)
 
 
-@pytest.mark.parametrize("where", ["open", "close", "chmod"])
+@pytest.mark.parametrize("where", ["open", "fchmod", "close"])
 def test_interrupt_right_after_the_temporary_file_appears_leaves_nothing(tmp_path, monkeypatch, where):
     """Ctrl-C just after the temporary file is created (even before its name reaches atomic_path) is cleaned up."""
     target = _previous(tmp_path)
@@ -114,3 +114,12 @@ def test_cache_entries_are_not_fsynced(tmp_path, monkeypatch):
     likelihoods._write_entry(path, "abcd", -1.5, ["in(box, red)"])
     assert calls == []
     assert likelihoods._read_entry(path, "abcd") == -1.5
+
+
+def test_the_temporary_file_mode_is_set_through_its_descriptor_not_its_name(tmp_path, monkeypatch):
+    """A name-based chmod would follow a symlink swapped in for the temporary file."""
+    called = []
+    monkeypatch.setattr(os, "chmod", lambda *a, **k: called.append(a))
+    write_atomically(tmp_path / "out.txt", "x")
+    assert not called
+    assert (tmp_path / "out.txt").read_text() == "x"

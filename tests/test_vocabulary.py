@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from collections import Counter
 
+import pytest
+
 from groundlang.model.vocabulary import UNK, Vocabulary
 
 WORDS = ["orange", "white", "through", "room", "peach", "reach", "right", "light", "star"]
@@ -80,8 +82,6 @@ def test_a_saved_learner_keeps_its_aliases_and_its_lexicon_leaves_them_out(tmp_p
 
 
 def test_lifted_tasks_are_indexed_apart_from_tokens_and_survive_json():
-    import pytest
-
     vocab = Vocabulary()
     vocab.add_tokens(["roomIsRed"])
     vocab.add_tasks(["agentToRoom", "toyToRoom"])
