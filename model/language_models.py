@@ -303,16 +303,23 @@ class ParseAligned(LanguageModel):
         all_roles = mass.sum(2)  # [I, J, K]
         slot_mass = torch.gather(mass, 2, batch.cover_slot[..., None].expand(-1, -1, -1, K))
         slot_mass = slot_mass * batch.cover_mask[..., None]  # [I, J, G, K]
-        # Every subset U of the slots at once: chosen[u, g] says whether slot g is in subset u.
-        chosen = torch.tensor(list(itertools.product((False, True), repeat=G)), dtype=torch.bool)  # [2^G, G]
-        weight = torch.where(chosen, unnamed_minus_named[:, :, None, :], named[:, :, None, :]).prod(-1)  # [I, J, 2^G]
-        avoided = torch.einsum("ijgk,ug->ijuk", slot_mass, chosen.to(slot_mass.dtype))  # [I, J, 2^G, K]
-        share = ((all_roles[:, :, None, :] - avoided) / all_roles[:, :, None, :]).clamp_min(1e-30).log()
-        share = torch.einsum("ijuk,irk->ijur", share * batch.type_mask[:, None, None, :], batch.reading_types.double())
-        total = (weight[..., None] * share.exp()).sum(2)  # [I, J, R]
+        # Subsets U of the slots, a block at a time: chosen[u, g] says whether slot g is in subset u.
+        # One block holds them all for the few slots of the Cleanup World (2^4 here); blocks bound
+        # the memory of [I, J, subsets, K] when a layout has many toys.
+        subsets = torch.tensor(list(itertools.product((False, True), repeat=G)), dtype=torch.bool)  # [2^G, G]
+        types = batch.type_mask[:, None, None, :]
+        readings = batch.reading_types.double()
+        total = torch.zeros(entities.shape, dtype=torch.float64)
+        for chosen in subsets.split(MENTION_SUBSETS_PER_BLOCK):
+            weight = torch.where(chosen, unnamed_minus_named[:, :, None, :], named[:, :, None, :]).prod(-1)  # [I, J, U]
+            avoided = torch.einsum("ijgk,ug->ijuk", slot_mass, chosen.to(slot_mass.dtype))  # [I, J, U, K]
+            share = ((all_roles[:, :, None, :] - avoided) / all_roles[:, :, None, :]).clamp_min(1e-30).log()
+            share = torch.einsum("ijuk,irk->ijur", share * types, readings)
+            total = total + (weight[..., None] * share.exp()).sum(2)  # [I, J, R]
         return total.clamp_min(1e-30).log().to(entities.dtype)
 
 
+MENTION_SUBSETS_PER_BLOCK = 64  # parse: subsets of mentionable objects summed at once by the mention factor
 POSITION_BINS = 4  # IBM Model 2: word positions coarsened to quarters of the command
 MAX_MACHINE = 24  # IBM Model 2: longest machine string (NULL included)
 

@@ -232,3 +232,13 @@ def test_each_lifted_task_has_its_own_arity_per_clause(setting):
             if i == walk and interp.lifted == "agentToRoom":
                 expected = float(arity[t, 1].log() - g["arity"][t, 1].log())
                 assert torch.allclose(after[i, j, :R] - before[i, j, :R], torch.full((R,), expected), atol=1e-5)
+
+
+def test_mention_factor_is_the_same_summed_one_subset_at_a_time(setting, monkeypatch):
+    """The blocks that bound the mention factor's memory change nothing but the memory."""
+    from groundlang.model import language_models
+
+    learner, _, batch, g = setting
+    whole = learner.lm.reading_table(g, batch)[1]
+    monkeypatch.setattr(language_models, "MENTION_SUBSETS_PER_BLOCK", 1)
+    assert torch.allclose(learner.lm.reading_table(g, batch)[1], whole, atol=1e-6)
