@@ -226,6 +226,7 @@ def test_cli_tasks_json(tmp_path, capsys):
                                     "constraints": [["roomIsBlue(room1)"], []]}
     assert len(out["groundings"]) == 6
     # the agent at (1,1), the door at (4,2)
+    assert list(out["descriptions"]) == ["room0", "room1", "door0", "block0", "block1"]  # the layout's order
     assert out["descriptions"] == {
         "room0": {"colour": ["roomIsGreen"]},
         "room1": {"colour": ["roomIsBlue"]},

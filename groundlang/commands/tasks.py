@@ -33,7 +33,10 @@ def run(args: argparse.Namespace) -> int:
     state = read_initial_state(args.file, args.palette)
     library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
     candidates = candidate_tasks(state, library)
-    described = object_descriptions(state, library)
+    layout = state.layout
+    order = {o: k for k, o in enumerate(["agent0"] + layout.room_names + layout.door_names + layout.toy_names)}
+    # The layout's order (rooms, doors, toys), as the corpus writes a state, not the names' alphabetical order.
+    described = dict(sorted(object_descriptions(state, library).items(), key=lambda item: order.get(item[0], len(order))))
     if args.json:
         out = {
             "lifted_tasks": library.names,
