@@ -46,7 +46,6 @@ __all__ = [
     "format_lifted_task",
     "binding_constraints",
     "enumerate_groundings",
-    "describe_objects",
     "ground_environment",
     "DOMAIN_FILES",
     "CLASS_ORDER",
@@ -367,15 +366,6 @@ def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
 # Object -> PF class -> names of the unary PFs of that class true of the object, e.g.
 # {"room0": {"colour": ("roomIsGreen",)}, "door1": {"spatial": ("doorWestOfAgent",)}}.
 Descriptions = dict[str, dict[str, tuple[str, ...]]]
-
-
-def describe_objects(
-    library: TaskLibrary, facts: str, *, time_limit: float | None = None
-) -> Descriptions:
-    """The unary PFs (every class but position) true of each object of one environment, by PF
-    class, names sorted: the second part of :func:`ground_environment` (call that when the
-    groundings are wanted too: one solve gives both)."""
-    return ground_environment(library, facts, time_limit=time_limit)[1]
 
 
 def enumerate_groundings(

@@ -372,6 +372,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
         machine=machine, machine_mask=machine_mask, reading_logp=reading_logp, type_counts=type_counts,
         type_head_counts=type_head_counts, type_prep=type_prep, type_mask=type_mask, reading_types=reading_types,
         frame_counts=frame_counts, verb_counts=verb_counts, clause_arity=clause_arity, reading_group=reading_group,
-        task_token=task_token, task_index=task_index, align_context=align_context, cover_slot=cover_slot, cover_mask=cover_mask, role=role, role_mask=role_mask, role_logw=role_logw,
-        role_mix=role_mix, role_head_mix=role_head_mix,
+        task_token=task_token, task_index=task_index, align_context=align_context, cover_slot=cover_slot,
+        cover_mask=cover_mask, role=role, role_mask=role_mask, role_logw=role_logw, role_mix=role_mix,
+        role_head_mix=role_head_mix,
     )

@@ -46,6 +46,7 @@ __all__ = [
     "Interpretation",
     "RoleBinding",
     "interpretations",
+    "object_names",
     "class_of",
     "OTHER_ROLES",
 ]
@@ -94,9 +95,9 @@ def class_of(obj: str) -> str:
     raise ValueError(f"cannot tell the class of object {obj!r}")
 
 
-def _objects(state: State) -> list[str]:
-    names = ["agent0"] + state.layout.room_names + state.layout.door_names + state.layout.toy_names
-    return names
+def object_names(state: State) -> list[str]:
+    """Every object of ``state`` in the layout's order: the agent, rooms, doors, toys."""
+    return ["agent0"] + state.layout.room_names + state.layout.door_names + state.layout.toy_names
 
 
 def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary,
@@ -117,7 +118,7 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())
         bindings.append(RoleBinding(role, obj, var.cls, said, about.get("shape", ())))
     bound = set(binding.values())
-    for obj in _objects(state):
+    for obj in object_names(state):
         if obj not in bound:
             cls = class_of(obj)
             about = described.get(obj, {})

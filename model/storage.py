@@ -3,8 +3,8 @@
 A writer gets a temporary path next to the target and the temporary file is
 renamed onto the target only when writing succeeded, so an interruption or
 a crash leaves the previous file (or none), never half of one. Temporary
-files get the permissions a plain ``open`` would give (``mkstemp`` alone
-would make them private to the owner).
+files are created private to the owner and then get the permissions a
+plain ``open`` would give.
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ from .geometry import state_facts
 from .world import Palette, State
 
 __all__ = [
-    "Candidate", "candidate_tasks", "check_restrictions", "object_descriptions", "spatial_descriptions",
+    "Candidate", "candidate_tasks", "object_descriptions", "spatial_descriptions",
     "narrow_by_known", "NarrowedCandidate",
 ]
 
@@ -38,11 +38,12 @@ Candidate = tuple[GroundedTask, list[BindingConstraint]]
 _PALETTE_TERM = re.compile(r"^(roomIs|toyIs)\((\w+)\)$")
 
 
-def check_restrictions(library: TaskLibrary, palette: Palette) -> None:
+@lru_cache(maxsize=64)
+def _check_restrictions(library: TaskLibrary, palette: Palette) -> None:
     """Refuse a ``restrict/3`` of the palette families that names a value ``palette`` lacks
     (``toyIs(strar)``, ``roomIs(star)``): such a task would quietly bind nothing. Raises ValueError
     naming the task, the restriction and the palette's values. A PF family a user's library
-    defines is left to that library."""
+    defines is left to that library. Once per (library, palette), not per state."""
     for task in library.tasks:
         for var, term in task.restrictions:
             found = _PALETTE_TERM.match(term)
@@ -61,11 +62,10 @@ def check_restrictions(library: TaskLibrary, palette: Palette) -> None:
 
 @lru_cache(maxsize=64)
 def _environment(state: State, library: TaskLibrary) -> tuple:
-    check_restrictions(library, state.layout.palette)
+    _check_restrictions(library, state.layout.palette)
     found, described = ground_environment(library, state_facts(state))
     frozen = MappingProxyType({obj: MappingProxyType(by_class) for obj, by_class in described.items()})
-    spatial = MappingProxyType({obj: d["spatial"] for obj, d in described.items() if "spatial" in d})
-    return tuple((g, tuple(c)) for g, c in found), frozen, spatial
+    return tuple((g, tuple(c)) for g, c in found), frozen
 
 
 def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
@@ -92,7 +92,8 @@ def object_descriptions(state: State, library: TaskLibrary) -> Mapping[str, Mapp
 def spatial_descriptions(state: State, library: TaskLibrary) -> Mapping[str, tuple[str, ...]]:
     """The spatial PFs (``pfs.lp``) true of each object where the agent stands in ``state``:
     the ``spatial`` class of :func:`object_descriptions`; objects none holds of are absent."""
-    return _environment(state, library)[2]
+    described = object_descriptions(state, library)
+    return MappingProxyType({obj: d["spatial"] for obj, d in described.items() if "spatial" in d})
 
 
 @dataclass(frozen=True)

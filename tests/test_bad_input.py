@@ -55,11 +55,16 @@ def trained_model(tmp_path_factory) -> Path:
 
 
 # ----------------------------------------------------------------- model directories made bad
+def _edit_meta(d: Path, change: Callable[[dict], None]) -> None:
+    """Rewrite model.json with ``change`` applied to its contents."""
+    meta = json.loads((d / "model.json").read_text())
+    change(meta)
+    (d / "model.json").write_text(json.dumps(meta))
+
+
 def _rehash(d: Path) -> None:
     """Record the current globals.npz hash in model.json: a hostile file, not an accident."""
-    meta = json.loads((d / "model.json").read_text())
-    meta["globals_sha256"] = hashlib.sha256((d / "globals.npz").read_bytes()).hexdigest()
-    (d / "model.json").write_text(json.dumps(meta))
+    _edit_meta(d, lambda meta: meta.update(globals_sha256=hashlib.sha256((d / "globals.npz").read_bytes()).hexdigest()))
 
 
 def _npz(d: Path, **arrays) -> None:
@@ -75,15 +80,11 @@ def _truncate(d: Path) -> None:
 
 
 def _set_version(d: Path) -> None:
-    meta = json.loads((d / "model.json").read_text())
-    meta["version"] = 99
-    (d / "model.json").write_text(json.dumps(meta))
+    _edit_meta(d, lambda meta: meta.update(version=99))
 
 
 def _drop_vocabulary_tasks(d: Path) -> None:
-    meta = json.loads((d / "model.json").read_text())
-    del meta["vocabulary"]["tasks"]
-    (d / "model.json").write_text(json.dumps(meta))
+    _edit_meta(d, lambda meta: meta["vocabulary"].pop("tasks"))
 
 
 def _globals(d: Path) -> dict:

@@ -159,12 +159,11 @@ def test_preposition_keys_tell_transitive_clauses_apart(command, keys):
 
 
 def test_doors_are_described_by_their_side_of_the_agent(setting):
-    from groundlang.logic.tasks import describe_objects
-    from groundlang.model.geometry import state_facts
+    from groundlang.model.tasks import spatial_descriptions
 
     learner, observations, _, _ = setting
     state = read_state_file(TWO_TOYS, "sokoban2")
-    sides = {o: d["spatial"] for o, d in describe_objects(learner.library, state_facts(state)).items() if "spatial" in d}
+    sides = spatial_descriptions(state, learner.library)
     assert sides and all(o.startswith("door") for o in sides)
     for interp in observations[0].interpretations:
         for rb in interp.roles:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import pytest
 
@@ -17,6 +19,7 @@ from groundlang.logic.tasks import (
     binding_constraints,
     enumerate_groundings,
     format_lifted_task,
+    ground_environment,
 )
 
 # Two rooms (green room0 west, blue room1 east) joined by a door at (4,2); two toys:
@@ -334,18 +337,26 @@ def test_restriction_by_a_colour_or_shape_pf_of_the_library_or_its_variable_clas
     assert [g.goal_text for g, _ in enumerate_groundings(shiny, TWO_TOYS)] == ["toyInRoom(block0, room1)"]
 
 
+_AGENT_TO_ROOM = 'task(agentToRoom). var(agentToRoom, "A", agent). var(agentToRoom, "R", room). goal(agentToRoom, agentInRoom, ("A", "R")).\n'
+# A PF class of the user's own, true of yellow toys.
+_SHINY_TOYS = "pf(material, toyIsShiny, (toy,)). holds(toyIsShiny, (T,)) :- toy(T), colour(T, yellow).\n"
+
+
+def _descriptions(library, facts):
+    """What groundings.lp says words may say of each object (the second part of ground_environment)."""
+    return ground_environment(library, facts)[1]
+
+
 def test_spatial_pfs_describe_objects_but_never_bind_them(library):
     """Spatial PFs (pfs.lp) are read per environment for the language model and stay out of C."""
-    from groundlang.logic.tasks import describe_objects
-
     assert library.spatial_pfs == ("doorEastOfAgent", "doorNorthOfAgent", "doorSouthOfAgent", "doorWestOfAgent")
     # agent at (1,1), door0 at (4,2): east and north of the agent
-    described = describe_objects(library, TWO_TOYS)
+    described = _descriptions(library, TWO_TOYS)
     assert described["door0"] == {"spatial": ("doorEastOfAgent", "doorNorthOfAgent")}
     assert described["block1"] == {"colour": ("toyIsRed",), "shape": ("toyIsMoon",)}
     assert described["room0"] == {"colour": ("roomIsGreen",)}
     assert "agent0" not in described
-    assert "door0" not in describe_objects(library, NO_TOYS)  # the agent stands in the door
+    assert "door0" not in _descriptions(library, NO_TOYS)  # the agent stands in the door
     doors = TaskLibrary.from_text(
         'task(agentToDoor). var(agentToDoor, "A", agent). var(agentToDoor, "D", door).'
         ' goal(agentToDoor, agentInDoor, ("A", "D")).'
@@ -356,29 +367,20 @@ def test_spatial_pfs_describe_objects_but_never_bind_them(library):
 
 
 def test_descriptions_ignore_what_a_user_library_shows_and_non_unary_spatial_pfs():
-    from groundlang.logic.tasks import describe_objects
-
     mine = TaskLibrary.from_text(
-        'task(agentToRoom). var(agentToRoom, "A", agent). var(agentToRoom, "R", room).'
-        ' goal(agentToRoom, agentInRoom, ("A", "R")). #show var/3.'
+        _AGENT_TO_ROOM + ' #show var/3.'
         ' pf(spatial, near, (agent, door)). holds(near, (A, D)) :- agent(A), door(D).'
     )
     assert mine.spatial_pfs == ("doorEastOfAgent", "doorNorthOfAgent", "doorSouthOfAgent", "doorWestOfAgent")
-    assert describe_objects(mine, TWO_TOYS)["door0"] == {"spatial": ("doorEastOfAgent", "doorNorthOfAgent")}
-    assert not any("near" in names for d in describe_objects(mine, TWO_TOYS).values() for names in d.values())
+    assert _descriptions(mine, TWO_TOYS)["door0"] == {"spatial": ("doorEastOfAgent", "doorNorthOfAgent")}
+    assert not any("near" in names for d in _descriptions(mine, TWO_TOYS).values() for names in d.values())
 
 
 def test_a_pf_class_a_user_library_declares_describes_bystanders_too():
     """What words may say of an object comes from clingo: a user's PF class describes every object it
     holds of, bound or not (bound objects also through the binding constraints)."""
-    from groundlang.logic.tasks import describe_objects
-
-    shiny = TaskLibrary.from_text(
-        'task(agentToRoom). var(agentToRoom, "A", agent). var(agentToRoom, "R", room).'
-        ' goal(agentToRoom, agentInRoom, ("A", "R")).'
-        ' pf(material, toyIsShiny, (toy,)). holds(toyIsShiny, (T,)) :- toy(T), colour(T, yellow).'
-    )
-    described = describe_objects(shiny, TWO_TOYS)
+    shiny = TaskLibrary.from_text(_AGENT_TO_ROOM + _SHINY_TOYS)
+    described = _descriptions(shiny, TWO_TOYS)
     assert described["block0"] == {"colour": ("toyIsYellow",), "material": ("toyIsShiny",), "shape": ("toyIsStar",)}
     assert "material" not in described["block1"]
 
@@ -394,11 +396,7 @@ def test_a_pf_that_only_describes_bystanders_gets_a_token_of_its_own():
     from groundlang.corpus import example_corpus_path, read_corpus
     from groundlang.learner import Learner
 
-    shiny = TaskLibrary.from_text(
-        'task(agentToRoom). var(agentToRoom, "A", agent). var(agentToRoom, "R", room).'
-        ' goal(agentToRoom, agentInRoom, ("A", "R")).'
-        ' pf(material, toyIsShiny, (toy,)). holds(toyIsShiny, (T,)) :- toy(T), colour(T, yellow).'
-    )
+    shiny = TaskLibrary.from_text(_AGENT_TO_ROOM + _SHINY_TOYS)
     corpus = read_corpus(example_corpus_path(), "sokoban")
     toys = [i for i in corpus.instances if i.initial_state.toys and i.name.startswith("agent")]
     assert toys, "the example corpus has agent commands with a toy in the room"
@@ -406,13 +404,9 @@ def test_a_pf_that_only_describes_bystanders_gets_a_token_of_its_own():
     assert learner.vocab.has_token("toyIsShiny")  # not read as NULL: words may learn it
 
 
-def test_cli_output_cut_short_by_its_reader_is_no_error():
+def test_cli_output_cut_short_by_its_reader_is_no_error(fixtures):
     """`groundlang tasks ... | head`: the reader leaves early; no error message, no traceback."""
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    state = Path(__file__).parent / "fixtures" / "sokoban2_corpus" / "L1_novel.state"
+    state = fixtures / "sokoban2_corpus" / "L1_novel.state"
     proc = subprocess.Popen([sys.executable, "-m", "groundlang.cli", "tasks", str(state), "--palette", "sokoban2"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     proc.stdout.close()  # 12 kB of output will not fit the closed pipe

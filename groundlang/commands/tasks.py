@@ -28,15 +28,15 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.interpretations import object_names
     from groundlang.model.tasks import candidate_tasks, object_descriptions
 
     state = read_initial_state(args.file, args.palette)
     library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
     candidates = candidate_tasks(state, library)
-    layout = state.layout
-    order = {o: k for k, o in enumerate(["agent0"] + layout.room_names + layout.door_names + layout.toy_names)}
+    by_name = object_descriptions(state, library)
     # The layout's order (rooms, doors, toys), as the corpus writes a state, not the names' alphabetical order.
-    described = dict(sorted(object_descriptions(state, library).items(), key=lambda item: order.get(item[0], len(order))))
+    described = {obj: by_name[obj] for obj in object_names(state) if obj in by_name}
     if args.json:
         out = {
             "lifted_tasks": library.names,
