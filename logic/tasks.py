@@ -177,9 +177,10 @@ def _declare_restricted_families(program: Program, restrictions: dict[str, list[
 
     Colour and shape PFs are families over the environment's palette (``pf(colour, roomIs(C), (room,))
     :- palette_colour(C)``), so the library solved alone declares none of them. One more solve, with
-    the values the restrictions name added as palette colours and shapes, declares those that exist.
-    (Whether a value is in a given environment's palette is that environment's business: where it is
-    not, the restricted variable binds no object.)
+    the values the restrictions name added as palette colours and shapes, declares those that exist,
+    so that a family of the wrong class (``roomIs(red)`` on a toy) is refused at load time. Whether a
+    value is in a given environment's palette is that environment's business: :func:`ground_environment`
+    refuses a restriction the environment cannot honour.
     """
     missing = {p for rs in restrictions.values() for _, p in rs if p not in declared}
     values = sorted({str(x) for p in missing if p.type is clingo.SymbolType.Function for x in p.arguments})
@@ -197,10 +198,8 @@ def _declare_restricted_families(program: Program, restrictions: dict[str, list[
 
 def _restriction_problem(term: clingo.Symbol, var: str, cls: str,
                          declarations: Sequence[tuple[str, tuple[str, ...]]]) -> str | None:
-    """What is wrong with restricting variable ``var`` of class ``cls`` by PF ``term``; None: nothing."""
-    if not declarations:
-        return (f"PF {term} is declared by no pf(Class, {term}, Signature); restrict needs a colour or "
-                "shape PF written as pf/3 declares it, e.g. toyIs(star) or roomIs(green)")
+    """What is wrong with restricting variable ``var`` of class ``cls`` by PF ``term``, declared as
+    ``declarations`` (not empty); None: nothing."""
     usable = [(c, sig) for c, sig in declarations if c in _RESTRICTION_CLASSES]
     if not usable:
         found = {c for c, _ in declarations}
@@ -221,8 +220,10 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     restrict/3) and the names of the unary spatial PFs (pf/3 of class spatial), sorted.
 
     Checked here, each a one-line AspError naming the sources and the task: variables, goal PFs
-    and their argument classes, and that every restrict/3 names a declared colour or shape PF of
-    one argument of its variable's class."""
+    and their argument classes, and that every restrict/3 whose PF the library declares (alone or
+    with the palette values restrictions name) names a colour or shape PF of one argument of its
+    variable's class. A PF no pf/3 declares here may be declared by an environment (a family over
+    its facts): :func:`ground_environment` refuses it where none is."""
     models = program.solve("", models=1, time_limit=time_limit)
     if not models:
         raise AspError(f"{program.user_names}: the task library has no answer set (a constraint always fails)")
@@ -286,7 +287,9 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
             if v not in by_name:
                 raise AspError(f"{program.user_names}: task {n}: restrict uses variable {v!r} "
                                f"that has no var({n}, \"{v}\", Class)")
-            problem = _restriction_problem(term, v, by_name[v], declared.get(term, ()))
+            if term not in declared:
+                continue  # only an environment declares it (or nothing does): ground_environment checks
+            problem = _restriction_problem(term, v, by_name[v], declared[term])
             if problem:
                 raise AspError(f"{program.user_names}: task {n}: restrict({n}, \"{v}\", {term}): {problem}")
         kept = {(v, str(term)) for v, term in restrictions[n]}
@@ -377,7 +380,7 @@ def enumerate_groundings(
 
 
 def ground_environment(
-    library: TaskLibrary, facts: str, *, time_limit: float | None = None
+    library: TaskLibrary, facts: str, *, time_limit: float | None = None, environment: str = "the environment"
 ) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions]:
     """Every permissible grounding not true initially, with its binding constraints, and the
     unary PFs of every class but position true of each object, by class
@@ -385,9 +388,13 @@ def ground_environment(
 
     ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
     ``time_limit``: seconds, default the library's. One Control, one grounding, one solve
-    enumerating all answer sets; the descriptions are the same in every answer set (an
-    environment where nothing can be asked has none, and no descriptions). Order: library
-    order of tasks, then bound objects in variable order (``room2`` before ``room10``).
+    enumerating all answer sets; the descriptions are the same in every answer set, one of
+    which chooses no task (so an environment where nothing can be asked is still described).
+    Order: library order of tasks, then bound objects in variable order (``room2`` before ``room10``).
+
+    A ``restrict/3`` that names no colour or shape PF of one object of its variable's class in
+    these facts (a palette value they lack, a typo) would bind nothing; it raises AspError naming
+    the library's files, the task, ``environment`` (e.g. "palette sokoban") and what it does offer.
     """
     tasks = {t.name: t for t in library.tasks}
     order = {t.name: i for i, t in enumerate(library.tasks)}
@@ -404,11 +411,17 @@ def ground_environment(
             return kind, (_text(args[0]), _text(args[1]))
         if kind == "described" and len(args) == 3:
             return kind, (_text(args[0]), pf_name(args[1]), _text(args[2]))
+        if kind == "unusable_restriction" and len(args) == 3:
+            return kind, (_text(args[0]), _text(args[1]), args[2])
+        if kind == "restrictable" and len(args) == 2:
+            return kind, (_text(args[0]), args[1])
         if kind in ("goal_atom", "constraint_atom") and len(args) == 2:
             return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
         return "other", None  # atoms a user library shows for its own purposes
 
     limit = library.time_limit if time_limit is None else time_limit
+    unusable: set[tuple[str, str, clingo.Symbol]] = set()
+    restrictable: dict[str, set[clingo.Symbol]] = {}
     for model in library.grounding_program.solve(facts, models=0, time_limit=limit):
         chosen, bind, goal, extra = None, {}, [], []
         for sym in model:
@@ -426,6 +439,12 @@ def ground_environment(
             elif kind == "described":
                 cls, name, obj = value
                 described.setdefault(obj, {}).setdefault(cls, set()).add(name)
+            elif kind == "unusable_restriction":
+                unusable.add(value)
+            elif kind == "restrictable":
+                restrictable.setdefault(value[0], set()).add(value[1])
+        if chosen is None:
+            continue  # the answer set of no task: descriptions and diagnostics only
         lifted = tasks[chosen]
         binding = tuple((v.name, bind[v.name]) for v in lifted.variables)
         # Goal atoms sorted (one text per goal, whatever the binding), constraint atoms in variable order.
@@ -435,9 +454,28 @@ def ground_environment(
         grounded = GroundedTask(chosen, binding, tuple(goal))
         key = (order[chosen], tuple(_natural_key(o) for _, o in binding))
         found.append((key, grounded, binding_constraints(extra)))
+    if unusable:
+        raise AspError(_unusable_restriction_message(library, min(unusable, key=str), restrictable, environment))
     found.sort(key=lambda item: item[0])
     descriptions = {
         o: {cls: tuple(sorted(names)) for cls, names in sorted(described[o].items())}
         for o in sorted(described, key=_natural_key)
     }
     return [(g, c) for _, g, c in found], descriptions
+
+
+def _unusable_restriction_message(library: TaskLibrary, restriction: tuple[str, str, clingo.Symbol],
+                                  restrictable: dict[str, set[clingo.Symbol]], environment: str) -> str:
+    """One line: which restrict/3 ``environment`` cannot honour, and the PFs it could name instead."""
+    task, var, term = restriction
+    cls = next(v.cls for v in library.task(task).variables if v.name == var)
+    offered = sorted(restrictable.get(cls, ()), key=str)
+    same_name = [p for p in offered if pf_name(p) == pf_name(term)] if term.type is clingo.SymbolType.Function else []
+    if same_name:  # groundlang's name for a family term, e.g. toyIsStar for toyIs(star)
+        hint = f"; write {same_name[0]}, the term pf/3 declares"
+    elif offered:
+        hint = f"; its colour and shape PFs of a {cls} are {', '.join(map(str, offered))}"
+    else:
+        hint = f"; it has no colour or shape PF of a {cls}"
+    return (f'{library.grounding_program.user_names}: task {task}: restrict({task}, "{var}", {term}): '
+            f"{environment} has no colour or shape PF {term} of a {cls}, so the task would bind nothing{hint}")

@@ -9,7 +9,6 @@ and narrows them by predicates a logical form already knows.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from functools import lru_cache
 from types import MappingProxyType
@@ -24,7 +23,7 @@ from groundlang.logic.tasks import (
 )
 
 from .geometry import state_facts
-from .world import Palette, State
+from .world import State
 
 __all__ = [
     "Candidate", "candidate_tasks", "object_descriptions", "spatial_descriptions",
@@ -34,36 +33,10 @@ __all__ = [
 Candidate = tuple[GroundedTask, list[BindingConstraint]]
 
 
-# The palette families of pfs.lp: roomIs(C) takes a colour, toyIs(V) a colour or a shape.
-_PALETTE_TERM = re.compile(r"^(roomIs|toyIs)\((\w+)\)$")
-
-
-@lru_cache(maxsize=64)
-def _check_restrictions(library: TaskLibrary, palette: Palette) -> None:
-    """Refuse a ``restrict/3`` of the palette families that names a value ``palette`` lacks
-    (``toyIs(strar)``, ``roomIs(star)``): such a task would quietly bind nothing. Raises ValueError
-    naming the task, the restriction and the palette's values. A PF family a user's library
-    defines is left to that library. Once per (library, palette), not per state."""
-    for task in library.tasks:
-        for var, term in task.restrictions:
-            found = _PALETTE_TERM.match(term)
-            if not found:
-                continue
-            family, value = found.groups()
-            allowed = palette.colours if family == "roomIs" else palette.colours + palette.shapes
-            if value not in allowed:
-                kinds = "colours" if family == "roomIs" else "colours and shapes"
-                raise ValueError(
-                    f"{library.grounding_program.user_names}: "
-                    f'task {task.name}: restrict({task.name}, "{var}", {term}): {value!r} is not one of the '
-                    f"{kinds} of palette {palette.name} ({', '.join(allowed)})"
-                )
-
-
 @lru_cache(maxsize=64)
 def _environment(state: State, library: TaskLibrary) -> tuple:
-    _check_restrictions(library, state.layout.palette)
-    found, described = ground_environment(library, state_facts(state))
+    palette = state.layout.palette.name
+    found, described = ground_environment(library, state_facts(state), environment=f"palette {palette}")
     frozen = MappingProxyType({obj: MappingProxyType(by_class) for obj, by_class in described.items()})
     return tuple((g, tuple(c)) for g, c in found), frozen
 

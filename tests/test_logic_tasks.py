@@ -21,6 +21,7 @@ from groundlang.logic.tasks import (
     format_lifted_task,
     ground_environment,
 )
+from groundlang.model.world import get_palette
 
 # Two rooms (green room0 west, blue room1 east) joined by a door at (4,2); two toys:
 # block0 a yellow star in room0, block1 a red moon in room1; the agent in room0.
@@ -298,11 +299,6 @@ _TOY_TO_ROOM = 'task(toyToRoom). var(toyToRoom, "T", toy). var(toyToRoom, "R", r
     # a spatial PF: where an object lies seen from the agent is no property it keeps
     ('restrict(toyToRoom, "T", doorWestOfAgent).',
      ('restrict(toyToRoom, "T", doorWestOfAgent)', "doorWestOfAgent is a spatial PF")),
-    # undeclared: groundlang's name instead of the family term pfs.lp declares
-    ('restrict(toyToRoom, "T", toyIsStar).',
-     ('restrict(toyToRoom, "T", toyIsStar)', "toyIsStar is declared by no pf(", "toyIs(star)")),
-    ('restrict(toyToRoom, "T", toyIz(star)).',
-     ('restrict(toyToRoom, "T", toyIz(star))', "toyIz(star) is declared by no pf(")),
     # a colour PF of rooms on a toy variable
     ('restrict(toyToRoom, "T", roomIs(red)).',
      ('restrict(toyToRoom, "T", roomIs(red))', "roomIs(red) is a colour PF of arguments (room,)",
@@ -324,7 +320,7 @@ def test_restriction_by_a_pf_that_is_not_a_colour_or_shape_pf_of_its_variable_is
 
 
 def test_restriction_by_a_colour_or_shape_pf_of_the_library_or_its_variable_class_loads():
-    # Palette values need not be known at load time (roomIs(mauve) binds no room where there is none);
+    # Palette values need not be known at load time (grounding refuses roomIs(mauve) where the palette lacks it);
     # a user's own colour PF, declared beside the tasks, restricts like pfs.lp's.
     library = TaskLibrary.from_text(
         _TOY_TO_ROOM + 'restrict(toyToRoom, "R", roomIs(mauve)). restrict(toyToRoom, "T", toyIs(star)).\n'
@@ -414,19 +410,61 @@ def test_cli_output_cut_short_by_its_reader_is_no_error(fixtures):
     assert proc.wait() == 1 and err == ""
 
 
-@pytest.mark.parametrize("term, what", [("toyIs(strar)", "colours and shapes"), ("roomIs(star)", "colours")])
-def test_a_restriction_to_a_value_the_palette_lacks_is_refused_where_the_palette_is_known(tmp_path, term, what):
-    """clingo cannot tell a palette value from a typo (the palette comes with the environment);
-    the model refuses it with the state's palette rather than binding nothing."""
+def _sokoban_pfs(family: str, values) -> str:
+    return ", ".join(sorted(f"{family}({v})" for v in values))
+
+
+_SOKOBAN = get_palette("sokoban")
+
+
+@pytest.mark.parametrize("term, tail", [
+    # a palette value the palette lacks: no more a typo than a colour of another palette, until the palette is known
+    ("toyIs(strar)", "its colour and shape PFs of a toy are "
+                     + _sokoban_pfs("toyIs", _SOKOBAN.colours + _SOKOBAN.shapes)),
+    ("roomIs(star)", "its colour and shape PFs of a room are " + _sokoban_pfs("roomIs", _SOKOBAN.colours)),
+    # groundlang's name instead of the family term pfs.lp declares
+    ("toyIsStar", "write toyIs(star), the term pf/3 declares"),
+    # a family no pf/3 declares, here or anywhere
+    ("toyIz(star)", "its colour and shape PFs of a toy are toyIs(black), toyIs(blue), "),
+])
+def test_a_restriction_the_environment_cannot_honour_is_refused_where_it_is_known(tmp_path, term, tail):
+    """clingo cannot tell a palette value from a typo before the environment declares its PFs; grounding
+    refuses such a task, naming the palette and what it offers, rather than binding nothing."""
     from groundlang.model.tasks import candidate_tasks
 
     var = "R" if term.startswith("room") else "T"
     path = tmp_path / "mine.lp"
     path.write_text('task(t). var(t, "T", toy). var(t, "R", room). goal(t, toyInRoom, ("T", "R")). '
                     f'restrict(t, "{var}", {term}).\n')
-    library = TaskLibrary.load([path])
-    with pytest.raises(ValueError) as caught:
+    library = TaskLibrary.load([path])  # loads: only an environment declares the palette's PFs
+    with pytest.raises(AspError) as caught:
         candidate_tasks(two_toy_state(), library)
     message = str(caught.value)
-    assert message.startswith(f"{path}: task t: restrict(t, \"{var}\", {term}): ")
-    assert f"is not one of the {what} of palette sokoban" in message
+    assert "\n" not in message
+    cls = "room" if var == "R" else "toy"
+    assert message.startswith(f'{path}: task t: restrict(t, "{var}", {term}): palette sokoban has no colour or '
+                              f"shape PF {term} of a {cls}, so the task would bind nothing; ")
+    assert tail in message
+
+
+def test_a_users_colour_family_over_environment_facts_restricts_a_task():
+    """A family declared from the objects' own colours (not the palette's) is known only once an
+    environment is: the library loads, and grounding binds only the toys of that hue."""
+    hue = ('pf(colour, toyHue(C), (toy,)) :- toy(T), colour(T, C).\n'
+           'holds(toyHue(C), (T,)) :- toy(T), colour(T, C).\n')
+    library = TaskLibrary.from_text(_TOY_TO_ROOM + 'restrict(toyToRoom, "T", toyHue(red)).\n' + hue, "hue.lp")
+    assert library.tasks[0].restrictions == (("T", "toyHue(red)"),)
+    assert [g.goal_text for g, _ in enumerate_groundings(library, TWO_TOYS)] == ["toyInRoom(block1, room0)"]
+    purple = TaskLibrary.from_text(_TOY_TO_ROOM + 'restrict(toyToRoom, "T", toyHue(purple)).\n' + hue, "hue.lp")
+    with pytest.raises(AspError, match=r"hue.lp: task toyToRoom: .*the environment has no colour or shape PF "
+                                       r"toyHue\(purple\) of a toy.* toyHue\(red\), toyHue\(yellow\)"):
+        enumerate_groundings(purple, TWO_TOYS)
+
+
+def test_an_environment_where_nothing_can_be_asked_is_still_described():
+    """The answer set that chooses no task carries the descriptions: here the only task is already done."""
+    done = TaskLibrary.from_text(_AGENT_TO_ROOM + 'restrict(agentToRoom, "R", roomIs(green)).\n')
+    found, described = ground_environment(done, TWO_TOYS)
+    assert found == []
+    assert described["room0"] == {"colour": ("roomIsGreen",)}
+    assert described["block1"] == {"colour": ("toyIsRed",), "shape": ("toyIsMoon",)}
