@@ -27,7 +27,7 @@ from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
 from groundlang.model.geometry import cell_tables
-from groundlang.model.interpretations import OTHER_ROLES, Interpretation, interpretations
+from groundlang.model.interpretations import OTHER_ROLES, Interpretation, interpretations, alignable_roles
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
 from groundlang.model.statespace import enumerate_states
 from groundlang.model.vocabulary import Vocabulary, class_token
@@ -167,7 +167,8 @@ class Learner:
     # ----------------------------------------------------------------- training
     def _build_vocabulary(self, observations: Iterable[Observation], palettes: set) -> Vocabulary:
         vocab = Vocabulary()
-        vocab.add_tasks(task.name for task in self.library.tasks)
+        vocab.add_tasks((task.name for task in self.library.tasks),
+                        roles={task.name: alignable_roles(task) for task in self.library.tasks})
         tokens: list[str] = []
         roles: list[str] = []
         preps: list[str] = []

@@ -20,7 +20,7 @@ from dataclasses import dataclass, fields
 import torch
 
 from groundlang.grammar.logical_form import LogicalForm, Reading
-from groundlang.model.interpretations import Interpretation, RoleBinding, class_of
+from groundlang.model.interpretations import UNALIGNED_CLASSES, Interpretation, RoleBinding, class_of
 from groundlang.model.vocabulary import NULL, Vocabulary, class_token, is_task_role
 
 __all__ = ["Observation", "Batch", "encode", "entity_words", "is_mentionable", "machine_string", "PAD_LOGIT"]
@@ -152,7 +152,7 @@ def is_mentionable(rb: RoleBinding) -> bool:
     crowd corpus, rooms added to toys: leave-one-out 218 against 212 of 240 original commands
     (223 against 224 simplified), in novel layouts 571 against 585 of 720 (629 against 622), both with
     the same behaviour cache."""
-    return rb.cls == "toy" or (rb.cls != "agent" and is_task_role(rb.role))
+    return rb.cls == "toy" or (rb.cls not in UNALIGNED_CLASSES and is_task_role(rb.role))
 
 
 def machine_string(interp: Interpretation) -> list[str]:
@@ -293,7 +293,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
                     cover_slot[i, j, slots] = v
                     cover_mask[i, j, slots] = True
                     slots += 1
-                if rb.cls == "agent":
+                if rb.cls in UNALIGNED_CLASSES:
                     # The addressee is "you", which the parser leaves without
                     # words. Alignable, its class token had no words of its own
                     # to learn and took the toy's noun: trained on three "take

@@ -36,10 +36,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from groundlang.logic.atoms import Atom
-from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
+from groundlang.logic.tasks import BindingConstraint, GroundedTask, LiftedTask, TaskLibrary
 from groundlang.model.features import atoms_hold
 from groundlang.model.geometry import cell_tables
 from groundlang.model.tasks import candidate_tasks, object_descriptions
+from groundlang.model.vocabulary import NO_ROLE
 from groundlang.model.world import State
 
 __all__ = [
@@ -48,10 +49,16 @@ __all__ = [
     "interpretations",
     "object_names",
     "class_of",
+    "task_roles",
+    "alignable_roles",
     "OTHER_ROLES",
+    "UNALIGNED_CLASSES",
 ]
 
 OTHER_ROLES = tuple(f"other:{cls}" for cls in ("agent", "room", "door", "toy"))
+# The addressee is "you", which the parser leaves without words: no noun phrase aligns with the
+# agent (model.encoding), whatever its role.
+UNALIGNED_CLASSES = frozenset({"agent"})
 
 
 @dataclass(frozen=True)
@@ -87,6 +94,25 @@ class Interpretation:
         return tuple(a.predicate for a in self.constraint.atoms)
 
 
+def task_roles(lifted: LiftedTask) -> tuple[str, ...]:
+    """The roles of a lifted task's variables, in variable order: each variable's first goal
+    atom and its place there (``toyInRoom.0`` for the toy of toyToRoom, ``toyInRoom.1`` for the room).
+    Tasks with the same goal predicates share roles, and so what their words say of them."""
+    return tuple(
+        next(f"{pred}.{args.index(var.name)}" for pred, args in lifted.goal if var.name in args)
+        for var in lifted.variables
+    )
+
+
+def alignable_roles(lifted: LiftedTask) -> tuple[str, ...]:
+    """Every role a noun phrase may align with in an interpretation of ``lifted``: nothing, the
+    roles of its own variables and those of bystanders, but never the agent's (UNALIGNED_CLASSES)
+    nor another task's variables. What the parse model's per-task alignment tables span."""
+    own = (role for var, role in zip(lifted.variables, task_roles(lifted)) if var.cls not in UNALIGNED_CLASSES)
+    others = (role for role in OTHER_ROLES if role.removeprefix("other:") not in UNALIGNED_CLASSES)
+    return (NO_ROLE, *dict.fromkeys(own), *others)
+
+
 def class_of(obj: str) -> str:
     """Object class from the corpus naming convention (block0 is a toy)."""
     for prefix, cls in (("agent", "agent"), ("room", "room"), ("door", "door"), ("block", "toy")):
@@ -109,10 +135,7 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
     lifted = library.task(task.task)
     binding = dict(task.binding)
     bindings = []
-    for var in lifted.variables:
-        role = next(
-            f"{pred}.{args.index(var.name)}" for pred, args in lifted.goal if var.name in args
-        )
+    for var, role in zip(lifted.variables, task_roles(lifted)):
         obj = binding[var.name]
         about = described.get(obj, {})
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())

@@ -37,6 +37,12 @@ table, and the interpretation itself is enumerated by the model in
   The prior over
   alignments favours the task's own roles (``argument_bonus``), which is what
   decides for prepositions training never saw: "go *with* the star to green".
+  Each task's table spans only the roles its interpretations can offer
+  (``Vocabulary.task_roles``): with every task's roles in every table, "go
+  somewhere" kept a third of its mass for the toy's roles, and in a layout
+  with a toy an agent command read cheaper as moving it (measured: novel
+  layouts 626 -> 635 of 720 original commands, 650 -> 653 simplified;
+  leave-one-out 219 and 227 -> 226, a coin flip on "cyan").
 """
 
 from __future__ import annotations
@@ -70,7 +76,7 @@ class LanguageModel:
 
     def sample_globals(
         self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),
-        num_tasks: int = 0,
+        num_tasks: int = 0, offered: tuple[tuple[bool, ...], ...] = (),
     ) -> dict:
         with pyro.plate("tokens", num_tokens, dim=-1):
             phi = pyro.sample(
@@ -124,7 +130,7 @@ class IBMModel2(LanguageModel):
     # colour/shape PF of the bound objects and alignment picks what was said.
     enumerates_constraints = False
 
-    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0):
+    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
         contexts = POSITION_BINS * (MAX_MACHINE + 1)
         with pyro.plate("distortion_contexts", contexts, dim=-1):
@@ -189,7 +195,7 @@ class ParseAligned(LanguageModel):
             "align_by_task": self.align_by_task,
         }
 
-    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0):
+    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
         if num_tasks < 1:
             raise ValueError("the parse model needs the lifted tasks of the vocabulary (Vocabulary.add_tasks)")
@@ -202,7 +208,16 @@ class ParseAligned(LanguageModel):
         g["verb_source"] = pyro.sample("verb_source", dist.Dirichlet(share))
         # One table per (lifted task, preposition) when aligning by task, kept flat
         # (one plate); reading_table views it as [tasks, preps, roles].
-        contexts = num_tasks * num_preps if self.align_by_task else num_preps
+        if self.align_by_task:
+            # A task's table spans only the roles its interpretations can offer: the roles of another
+            # task's variables get concentration 1, a flat prior that adds no pseudo-count, so the MAP
+            # gives them exactly nothing (they never have counts). With the bonus of every task's
+            # roles in every table, a "go somewhere" table kept a third of its mass for the toy's
+            # roles, and in a layout with a toy an agent command read cheaper as moving it.
+            own = torch.tensor(offered, dtype=torch.bool) if offered else torch.ones(num_tasks, num_roles, dtype=torch.bool)
+            per_task = torch.where(own, concentration, torch.ones(()))  # [tasks, roles]
+            concentration = per_task[:, None, :].expand(num_tasks, num_preps, num_roles).reshape(-1, num_roles)
+        contexts = concentration.shape[0] if self.align_by_task else num_preps
         with pyro.plate("align_contexts", contexts, dim=-1):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
         if self.mention_concentration is not None:

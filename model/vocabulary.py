@@ -81,6 +81,10 @@ class Vocabulary:
     aliases: dict[str, str] = field(default_factory=dict)
     # The lifted tasks, in library order: what the parse model's per-task tables are indexed by.
     tasks: list[str] = field(default_factory=list)
+    # The roles a noun phrase may align with in each lifted task's interpretations
+    # (model.interpretations.alignable_roles); a task missing here (a vocabulary built by
+    # hand) is taken to offer every role.
+    task_roles: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self._word_index = {w: i for i, w in enumerate(self.words)}
@@ -112,11 +116,22 @@ class Vocabulary:
     def add_preps(self, preps: Iterable[str]) -> None:
         self._intern(self.preps, self._prep_index, preps)
 
-    def add_tasks(self, tasks: Iterable[str]) -> None:
-        """Lifted task names; each is also a semantic token (its words)."""
+    def add_tasks(self, tasks: Iterable[str], roles: Mapping[str, Iterable[str]] | None = None) -> None:
+        """Lifted task names; each is also a semantic token (its words). ``roles``: per task, the
+        roles a noun phrase may align with in its interpretations (also added as roles)."""
         tasks = list(tasks)
         self._intern(self.tasks, self._task_index, tasks)
         self.add_tokens(tasks)
+        for task, own in (roles or {}).items():
+            self.task_roles[task] = tuple(own)
+            self.add_roles(own)
+
+    def offers_role(self, task: str, role: str) -> bool:
+        """Whether an interpretation of lifted ``task`` can offer ``role`` to a noun phrase (a "go
+        somewhere" command has no toy to move). True for every role of a task :attr:`task_roles`
+        does not list."""
+        offered = self.task_roles.get(task)
+        return offered is None or role in offered
 
     def task_id(self, task: str) -> int:
         """Index of a lifted task among :attr:`tasks`; a task the vocabulary never saw is an error."""
@@ -178,9 +193,11 @@ class Vocabulary:
             "preps": list(self.preps),
             "aliases": dict(sorted(self.aliases.items())),
             "tasks": list(self.tasks),
+            "task_roles": {task: list(roles) for task, roles in self.task_roles.items()},
         }
 
     @classmethod
     def from_json(cls, data: dict) -> "Vocabulary":
         return cls(list(data["words"]), list(data["tokens"]), list(data["roles"]), list(data["preps"]),
-                   dict(data.get("aliases", {})), list(data.get("tasks", [])))
+                   dict(data.get("aliases", {})), list(data.get("tasks", [])),
+                   {task: tuple(roles) for task, roles in data.get("task_roles", {}).items()})

@@ -122,15 +122,45 @@ def test_prior_favours_the_tasks_own_roles_and_unnamed_bystanders(setting):
         fn = getattr(fn, "base_dist", fn)
         return fn.concentration.reshape(-1, fn.concentration.shape[-1])
 
-    align_c = concentration("align")[0]
+    align_c = concentration("align").reshape(len(vocab.tasks), len(vocab.preps), -1)
     mention_c = concentration("mention")
+    for t, task in enumerate(vocab.tasks):
+        assert torch.equal(align_c[t], align_c[t, :1].expand_as(align_c[t]))  # the same prior for every preposition
+        for r, name in enumerate(vocab.roles):
+            if name not in vocab.task_roles[task]:  # another task's variable, or the agent: never offered
+                assert float(align_c[t, 0, r]) == 1.0  # no pseudo-count, so the MAP gives it nothing
+            elif is_task_role(name):
+                assert float(align_c[t, 0, r]) == pytest.approx(lm.align_concentration + lm.argument_bonus)
+            else:
+                assert float(align_c[t, 0, r]) == pytest.approx(lm.align_concentration)
     for r, name in enumerate(vocab.roles):
         if is_task_role(name):
-            assert float(align_c[r]) == pytest.approx(lm.align_concentration + lm.argument_bonus)
             assert float(mention_c[r, 0]) > float(mention_c[r, 1])
         else:
-            assert float(align_c[r]) == pytest.approx(lm.align_concentration)
             assert float(mention_c[r, 1]) > float(mention_c[r, 0])
+
+
+def test_each_tasks_alignment_table_spans_only_the_roles_its_interpretations_offer(setting):
+    """"Go somewhere" has no toy to move and no phrase names the agent ("you"): fitted, agentToRoom's
+    tables give the toy's roles and the agent's nothing, and so keep all their mass for what its
+    interpretations can offer (with every task's roles in every table, a third of it was lost)."""
+    learner, observations, batch, _ = setting
+    vocab = learner.vocab
+    assert vocab.task_roles["agentToRoom"] == ("none", "agentInRoom.1", "other:room", "other:door", "other:toy")
+    assert vocab.task_roles["toyToRoom"] == ("none", "toyInRoom.0", "toyInRoom.1", "other:room", "other:door",
+                                             "other:toy")
+    for obs in observations:
+        for interp in obs.interpretations:
+            offered = {rb.role for rb in interp.roles if rb.cls != "agent"}
+            assert offered <= set(vocab.task_roles[interp.lifted])
+    from groundlang.inference.joint import fit_globals
+
+    g = fit_globals(batch, learner.lm, vocab, steps=50).globals
+    tables = g["align"].reshape(len(vocab.tasks), len(vocab.preps), -1)
+    for t, task in enumerate(vocab.tasks):
+        never = [r for r, name in enumerate(vocab.roles) if name not in vocab.task_roles[task]]
+        assert float(tables[t][:, never].sum(-1).max()) < 1e-9
+        assert torch.allclose(tables[t].sum(-1), torch.ones(len(vocab.preps)))
 
 
 def test_switching_the_parts_off_removes_their_globals(setting):
