@@ -388,8 +388,9 @@ def ground_environment(
 
     ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
     ``time_limit``: seconds, default the library's. One Control, one grounding, one solve
-    enumerating all answer sets; the descriptions are the same in every answer set, one of
-    which chooses no task (so an environment where nothing can be asked is still described).
+    enumerating all answer sets; the descriptions come from the one answer set that chooses no
+    task (so an environment where nothing can be asked is still described), the groundings from
+    the others.
     Order: library order of tasks, then bound objects in variable order (``room2`` before ``room10``).
 
     A ``restrict/3`` that names no colour or shape PF of one object of its variable's class in
