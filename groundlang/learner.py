@@ -27,7 +27,7 @@ from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
 from groundlang.model.geometry import cell_tables
-from groundlang.model.interpretations import OTHER_ROLES, Interpretation, interpretations, alignable_roles
+from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
 from groundlang.model.statespace import enumerate_states
 from groundlang.model.vocabulary import Vocabulary, class_token
