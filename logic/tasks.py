@@ -456,7 +456,10 @@ def ground_environment(
         key = (order[chosen], tuple(_natural_key(o) for _, o in binding))
         found.append((key, grounded, binding_constraints(extra)))
     if unusable:
-        raise AspError(_unusable_restriction_message(library, min(unusable, key=str), restrictable, environment))
+        first = min(unusable, key=lambda u: (u[0], u[1], str(u[2])))
+        more = len(unusable) - 1
+        raise AspError(_unusable_restriction_message(library, first, restrictable, environment)
+                       + (f" ({more} more restrict/3 fact{'s' if more > 1 else ''} cannot be honoured here)" if more else ""))
     found.sort(key=lambda item: item[0])
     descriptions = {
         o: {cls: tuple(sorted(names)) for cls, names in sorted(described[o].items())}

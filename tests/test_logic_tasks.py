@@ -461,6 +461,16 @@ def test_a_users_colour_family_over_environment_facts_restricts_a_task():
         enumerate_groundings(purple, TWO_TOYS)
 
 
+def test_every_restriction_the_environment_cannot_honour_is_counted():
+    library = TaskLibrary.from_text(_TOY_TO_ROOM + 'restrict(toyToRoom, "R", roomIs(mauve)).\n'
+                                    'restrict(toyToRoom, "T", toyIs(strar)).\n', "two.lp")
+    with pytest.raises(AspError) as caught:
+        enumerate_groundings(library, TWO_TOYS)
+    message = str(caught.value)
+    assert message.startswith('two.lp: task toyToRoom: restrict(toyToRoom, "R", roomIs(mauve)): ')
+    assert message.endswith("(1 more restrict/3 fact cannot be honoured here)")
+
+
 def test_an_environment_where_nothing_can_be_asked_is_still_described():
     """The answer set that chooses no task carries the descriptions: here the only task is already done."""
     done = TaskLibrary.from_text(_AGENT_TO_ROOM + 'restrict(agentToRoom, "R", roomIs(green)).\n')
