@@ -238,8 +238,13 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     spatial = set()
     declared: _Declarations = {}
     for a in by_signature.get(("pf", 3), []):
-        _declare(declared, a)
         cls_, name, sig = a.arguments
+        if sig.type is not clingo.SymbolType.Function or sig.name:
+            # clingo reads "(toy)" as the constant toy: groundings.lp would neither describe objects
+            # by such a PF nor let restrict/3 name it.
+            raise AspError(f"{program.user_names}: {a}: the signature of PF {name} must be a tuple of classes, "
+                           f"written ({sig},) for one argument (the comma makes it a tuple)")
+        _declare(declared, a)
         if cls_.name == "position":
             signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
         elif cls_.name == "spatial" and len(_tuple_args(sig)) == 1:
@@ -283,6 +288,12 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
             if sig is not None and tuple(by_name[a] for a in args) != sig:
                 raise AspError(f"{program.user_names}: task {n}: goal {pred}({', '.join(args)}) "
                                f"needs arguments of classes {sig}")
+        in_goal = {a for _, args in goals[n] for a in args}
+        for v in vs:
+            if v.name not in in_goal:
+                # It would multiply the groundings by objects the goal never mentions (and it has no role).
+                raise AspError(f"{program.user_names}: task {n}: variable {v.name!r} appears in no goal/3 atom; "
+                               "every variable of a task must be an argument of its goal")
         for v, term in restrictions[n]:
             if v not in by_name:
                 raise AspError(f"{program.user_names}: task {n}: restrict uses variable {v!r} "
@@ -380,7 +391,7 @@ def enumerate_groundings(
 
 
 def ground_environment(
-    library: TaskLibrary, facts: str, *, time_limit: float | None = None, environment: str = "the environment"
+    library: TaskLibrary, facts: str, *, time_limit: float | None = None, environment: str | None = None
 ) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions]:
     """Every permissible grounding not true initially, with its binding constraints, and the
     unary PFs of every class but position true of each object, by class
@@ -388,14 +399,15 @@ def ground_environment(
 
     ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
     ``time_limit``: seconds, default the library's. One Control, one grounding, one solve
-    enumerating all answer sets; the descriptions come from the one answer set that chooses no
-    task (so an environment where nothing can be asked is still described), the groundings from
-    the others.
+    enumerating all answer sets; the descriptions are the same in every answer set, one of
+    which chooses no task (so an environment where nothing can be asked is still described).
     Order: library order of tasks, then bound objects in variable order (``room2`` before ``room10``).
 
-    A ``restrict/3`` that names no colour or shape PF of one object of its variable's class in
-    these facts (a palette value they lack, a typo) would bind nothing; it raises AspError naming
-    the library's files, the task, ``environment`` (e.g. "palette sokoban") and what it does offer.
+    A ``restrict/3`` that names no colour or shape PF of one object of its variable's class that
+    pf/3 declares with these facts (a palette value they lack, a typo) would bind nothing; it raises
+    AspError naming the library's files, the task, ``environment`` (e.g. "palette sokoban") and
+    what it does declare. (So declare a family of PFs for every palette value, as pfs.lp does, not
+    only for the values the objects of a state have.)
     """
     tasks = {t.name: t for t in library.tasks}
     order = {t.name: i for i, t in enumerate(library.tasks)}
@@ -478,8 +490,9 @@ def _unusable_restriction_message(library: TaskLibrary, restriction: tuple[str, 
     if same_name:  # groundlang's name for a family term, e.g. toyIsStar for toyIs(star)
         hint = f"; write {same_name[0]}, the term pf/3 declares"
     elif offered:
-        hint = f"; its colour and shape PFs of a {cls} are {', '.join(map(str, offered))}"
+        hint = f"; it declares these of a {cls}: {', '.join(map(str, offered))}"
     else:
-        hint = f"; it has no colour or shape PF of a {cls}"
+        hint = f"; it declares none of a {cls}"
+    where = f"the environment ({environment})" if environment else "the environment"
     return (f'{library.grounding_program.user_names}: task {task}: restrict({task}, "{var}", {term}): '
-            f"{environment} has no colour or shape PF {term} of a {cls}, so the task would bind nothing{hint}")
+            f"{where} declares no colour or shape PF {term} of a {cls}, so the task would bind nothing{hint}")

@@ -34,6 +34,14 @@ toy(block0). colour(block0, yellow). shape(block0, star). at(block0, 2, 2).
 toy(block1). colour(block1, red). shape(block1, moon). at(block1, 6, 2).
 agent(agent0). at(agent0, 1, 1).
 """
+ONE_TOY = """
+palette_colour(blue; green; red; yellow). palette_shape(star; moon).
+room(room0). rect(room0, 0, 4, 4, 0). colour(room0, green).
+room(room1). rect(room1, 4, 4, 8, 0). colour(room1, blue).
+door(door0). rect(door0, 4, 2, 4, 2).
+toy(block0). colour(block0, yellow). shape(block0, star). at(block0, 2, 2).
+agent(agent0). at(agent0, 1, 1).
+"""
 NO_TOYS = """
 palette_colour(blue; green). palette_shape(star).
 room(room0). rect(room0, 0, 4, 4, 0). colour(room0, green).
@@ -419,13 +427,12 @@ _SOKOBAN = get_palette("sokoban")
 
 @pytest.mark.parametrize("term, tail", [
     # a palette value the palette lacks: no more a typo than a colour of another palette, until the palette is known
-    ("toyIs(strar)", "its colour and shape PFs of a toy are "
-                     + _sokoban_pfs("toyIs", _SOKOBAN.colours + _SOKOBAN.shapes)),
-    ("roomIs(star)", "its colour and shape PFs of a room are " + _sokoban_pfs("roomIs", _SOKOBAN.colours)),
+    ("toyIs(strar)", "it declares these of a toy: " + _sokoban_pfs("toyIs", _SOKOBAN.colours + _SOKOBAN.shapes)),
+    ("roomIs(star)", "it declares these of a room: " + _sokoban_pfs("roomIs", _SOKOBAN.colours)),
     # groundlang's name instead of the family term pfs.lp declares
     ("toyIsStar", "write toyIs(star), the term pf/3 declares"),
     # a family no pf/3 declares, here or anywhere
-    ("toyIz(star)", "its colour and shape PFs of a toy are toyIs(black), toyIs(blue), "),
+    ("toyIz(star)", "it declares these of a toy: toyIs(black), toyIs(blue), "),
 ])
 def test_a_restriction_the_environment_cannot_honour_is_refused_where_it_is_known(tmp_path, term, tail):
     """clingo cannot tell a palette value from a typo before the environment declares its PFs; grounding
@@ -442,23 +449,53 @@ def test_a_restriction_the_environment_cannot_honour_is_refused_where_it_is_know
     message = str(caught.value)
     assert "\n" not in message
     cls = "room" if var == "R" else "toy"
-    assert message.startswith(f'{path}: task t: restrict(t, "{var}", {term}): palette sokoban has no colour or '
-                              f"shape PF {term} of a {cls}, so the task would bind nothing; ")
+    assert message.startswith(f'{path}: task t: restrict(t, "{var}", {term}): the environment (palette sokoban) '
+                              f"declares no colour or shape PF {term} of a {cls}, so the task would bind nothing; ")
     assert tail in message
 
 
-def test_a_users_colour_family_over_environment_facts_restricts_a_task():
-    """A family declared from the objects' own colours (not the palette's) is known only once an
-    environment is: the library loads, and grounding binds only the toys of that hue."""
-    hue = ('pf(colour, toyHue(C), (toy,)) :- toy(T), colour(T, C).\n'
+def test_a_users_colour_family_restricts_a_task_and_its_values_are_checked_where_the_palette_is_known():
+    """A family of the user's own, declared like pfs.lp's for every palette colour: the library loads,
+    grounding binds only the toys of that hue, and a value the palette lacks is refused there (before,
+    only pfs.lp's roomIs/toyIs families were checked, so toyHue(purple) quietly bound nothing)."""
+    hue = ('pf(colour, toyHue(C), (toy,)) :- palette_colour(C).\n'
            'holds(toyHue(C), (T,)) :- toy(T), colour(T, C).\n')
     library = TaskLibrary.from_text(_TOY_TO_ROOM + 'restrict(toyToRoom, "T", toyHue(red)).\n' + hue, "hue.lp")
     assert library.tasks[0].restrictions == (("T", "toyHue(red)"),)
     assert [g.goal_text for g, _ in enumerate_groundings(library, TWO_TOYS)] == ["toyInRoom(block1, room0)"]
     purple = TaskLibrary.from_text(_TOY_TO_ROOM + 'restrict(toyToRoom, "T", toyHue(purple)).\n' + hue, "hue.lp")
-    with pytest.raises(AspError, match=r"hue.lp: task toyToRoom: .*the environment has no colour or shape PF "
-                                       r"toyHue\(purple\) of a toy.* toyHue\(red\), toyHue\(yellow\)"):
+    with pytest.raises(AspError, match=r"hue.lp: task toyToRoom: .*the environment declares no colour or shape PF "
+                                       r"toyHue\(purple\) of a toy.* toyHue\(blue\), toyHue\(green\), "
+                                       r"toyHue\(red\), toyHue\(yellow\)"):
         enumerate_groundings(purple, TWO_TOYS)
+
+
+def test_descriptions_survive_a_user_constraint_that_rules_out_the_answer_set_of_no_task():
+    """":- toy(O), not bind(_, O)." (every command moves a toy) leaves no answer set without a task;
+    the descriptions and the restriction check come with every answer set all the same."""
+    every_toy_moves = ":- toy(O), not bind(_, O).\n"
+    library = TaskLibrary.from_text(_TOY_TO_ROOM + _AGENT_TO_ROOM + every_toy_moves, "moves.lp")
+    found, described = ground_environment(library, ONE_TOY)
+    assert found and all(g.task == "toyToRoom" for g, _ in found)
+    assert described["block0"] == {"colour": ("toyIsYellow",), "shape": ("toyIsStar",)}
+    mauve = TaskLibrary.from_text(_TOY_TO_ROOM + _AGENT_TO_ROOM + every_toy_moves
+                                  + 'restrict(agentToRoom, "R", roomIs(mauve)).\n', "moves.lp")
+    with pytest.raises(AspError, match=r'restrict\(agentToRoom, "R", roomIs\(mauve\)\)'):
+        ground_environment(mauve, ONE_TOY)
+
+
+def test_a_variable_outside_the_goal_is_refused_at_load_time():
+    with pytest.raises(AspError, match=r"^x.lp: task toyToRoom: variable 'D' appears in no goal/3 atom; "):
+        TaskLibrary.from_text(_TOY_TO_ROOM + 'var(toyToRoom, "D", door).\n', "x.lp")
+
+
+def test_a_pf_signature_that_is_no_tuple_is_refused_at_load_time(tmp_path):
+    path = tmp_path / "glow.lp"
+    path.write_text(_TOY_TO_ROOM + "pf(colour, toyGlows, (toy)). holds(toyGlows, (T,)) :- toy(T).\n")
+    with pytest.raises(AspError) as caught:
+        TaskLibrary.load([path])
+    assert str(caught.value) == (f"{path}: pf(colour,toyGlows,toy): the signature of PF toyGlows must be a tuple of "
+                                 "classes, written (toy,) for one argument (the comma makes it a tuple)")
 
 
 def test_every_restriction_the_environment_cannot_honour_is_counted():
