@@ -42,6 +42,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.evaluation import evaluate
     from groundlang.labels import read_labels
     from groundlang.model.storage import write_atomically
+    from groundlang.published import comparison, format_comparison
 
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)
@@ -52,7 +53,14 @@ def run(args: argparse.Namespace) -> int:
         progress=args.progress, limit=args.limit, warm_start=not args.cold_folds,
     )
     print(result.summary())
+    # A run of a whole RSS 2015 folder is set beside the published accuracies and the project's goals.
+    rows = comparison(Path(args.corpus).resolve().name, result) if args.limit is None else []
+    if rows:
+        print(format_comparison(rows))
     if args.json:
-        write_atomically(Path(args.json), json.dumps(result.to_json(), indent=1).encode("utf-8"))
+        data = result.to_json()
+        if rows:
+            data["published"] = rows
+        write_atomically(Path(args.json), json.dumps(data, indent=1).encode("utf-8"))
         print(f"result written to {args.json}")
     return 0 if not result.failed_folds else 1

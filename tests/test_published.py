@@ -1,0 +1,61 @@
+"""The published RSS 2015 accuracies and the project's goals beside a measured result (groundlang.published)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+from types import SimpleNamespace
+
+from groundlang.cli import main
+from groundlang.corpus import example_corpus_path
+from groundlang.published import REFERENCES, comparison, format_comparison
+
+
+def _result(protocol="loo", correct=219, n=240, novel_correct=635, novel_n=720):
+    return SimpleNamespace(protocol=protocol, accuracy=correct / n, correct=correct, n=n,
+                           novel_accuracy=novel_correct / novel_n if novel_n else None,
+                           novel_correct=novel_correct, novel_n=novel_n)
+
+
+def test_the_original_commands_are_set_against_both_published_rows_and_goals():
+    rows = comparison("allTurkTrain", _result())
+    assert [(r["setting"], r["best_model"], r["best"], r["goal"], r["goal_correct"], r["reached"]) for r in rows] == [
+        ("loo", "IBM Model 2", 0.7416, 0.90, 216, True),
+        ("novel environments", "IBM Model 2", 0.7333, 0.90, 648, False),
+    ]
+    text = format_comparison(rows)
+    assert "loo                 91.25% (219/240); published best 74.16% (IBM Model 2); goal 90%: reached" in text
+    assert "88.19% (635/720); published best 73.33% (IBM Model 2); goal 90%: not reached (648/720 needed)" in text
+
+
+def test_the_goal_counts_are_the_smallest_that_reach_it():
+    assert comparison("allTurkTrainLimitedCommand", _result(correct=227))[0]["goal_correct"] == 228  # 95% of 240
+    assert comparison("allTurkTrainLimitedCommand", _result(correct=228))[0]["reached"]
+    assert not comparison("allTurkTrainLimitedCommand", _result(correct=227))[0]["reached"]
+    assert REFERENCES["allTurkTrainLimitedCommand"][0].best == ("bag of words", 0.8375)
+
+
+def test_nothing_is_compared_for_other_corpora_protocols_or_runs_without_novel_layouts():
+    assert comparison("examples", _result()) == []
+    assert comparison("allTurkTrain", _result(protocol="train")) == []
+    assert [r["setting"] for r in comparison("allTurkTrain", _result(novel_n=0))] == ["loo"]
+    assert format_comparison([]) == ""
+
+
+def test_cli_evaluate_prints_and_writes_the_comparison_for_a_folder_of_the_rss_corpus(tmp_path, capsys):
+    # The shipped example corpus under the simplified folder's name (the comparison keys on the name).
+    folder = tmp_path / "allTurkTrainLimitedCommand"
+    shutil.copytree(example_corpus_path(), folder)
+    out = tmp_path / "r.json"
+    code = main(["--quiet", "evaluate", "--corpus", str(folder), "--palette", "sokoban",
+                 "--labels", str(Path(example_corpus_path()) / "labels.csv"), "--workers", "2", "--json", str(out)])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "against RSS 2015 (Table I) and the project's goals:" in printed
+    assert "loo                 100.00% (24/24); published best 83.75% (bag of words); goal 95%: reached" in printed
+    published = json.loads(out.read_text())["published"]
+    assert published == [{"setting": "loo", "accuracy": 1.0, "correct": 24, "n": 24,
+                          "published": {"bag of words": 0.8375, "IBM Model 2": 0.8125},
+                          "best_model": "bag of words", "best": 0.8375, "goal": 0.95, "goal_correct": 23,
+                          "reached": True}]
