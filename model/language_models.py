@@ -24,8 +24,9 @@ table, and the interpretation itself is enumerated by the model in
   toy and every object the task binds, see ``encoding.is_mentionable``: a
   command that never mentions a toy speaks against "take the toy somewhere",
   one that names a bystander toy speaks against the tasks that leave it alone,
-  and one whose only unknown phrase is "the skin coloured room" names its goal)
-  and how many noun phrases each of its clauses has (``P(arity | L)``, per
+  and one whose only unknown phrase is "the skin coloured room" names its goal;
+  only a referring phrase names what it aligns with, ``encoding.is_referring``:
+  "on right" does not name the star) and how many noun phrases each of its clauses has (``P(arity | L)``, per
   clause: counted per command, a long command of several clauses read as
   "move the toy", since toy commands are longer; measured on the crowd
   corpus, leave-one-out 226 and 219 of 240 against 226 and 218 per command,
@@ -169,6 +170,7 @@ class ParseAligned(LanguageModel):
         mention_concentration: float | None = 1.05,
         arity_concentration: float | None = 1.05,
         align_by_task: bool = True,
+        mention_phrases: str = "referring",
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -177,13 +179,18 @@ class ParseAligned(LanguageModel):
         ``arity_concentration`` the number of noun phrases of a clause given L (None: off);
         both are Dirichlet concentrations, so EM stays exact. ``align_by_task``:
         one alignment table ``P(role | preposition, L)`` per lifted task (False:
-        one ``P(role | preposition)`` shared by all tasks)."""
+        one ``P(role | preposition)`` shared by all tasks). ``mention_phrases``: which phrases name
+        the object they align with for the mention model, ``"referring"`` (a head noun, a colour
+        word or an open-class word, see ``encoding.is_referring``) or ``"any"``."""
+        if mention_phrases not in ("referring", "any"):
+            raise ValueError(f"mention_phrases must be 'referring' or 'any', not {mention_phrases!r}")
         super().__init__(word_concentration)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus
         self.mention_concentration = mention_concentration
         self.arity_concentration = arity_concentration
         self.align_by_task = align_by_task
+        self.mention_phrases = mention_phrases
 
     def settings(self) -> dict:
         return {
@@ -193,6 +200,7 @@ class ParseAligned(LanguageModel):
             "mention_concentration": self.mention_concentration,
             "arity_concentration": self.arity_concentration,
             "align_by_task": self.align_by_task,
+            "mention_phrases": self.mention_phrases,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
@@ -264,7 +272,7 @@ class ParseAligned(LanguageModel):
         per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]
         entities = torch.einsum("ijk,irk->ijr", per_type, batch.reading_types)
         if "mention" in g:
-            entities = entities + self._mentions(g, batch, joint, entities)
+            entities = entities + self._mentions(g, batch, joint, entities, self.mention_phrases == "referring")
         # Words outside noun phrases come from the lifted task's token or NULL
         # with learned shares, one pair for verbs and one for the other words:
         # a verb says more about the task than "to" or "the" does.
@@ -285,12 +293,15 @@ class ParseAligned(LanguageModel):
         return torch.logsumexp(per_reading, dim=-1), per_reading, joint
 
     @staticmethod
-    def _mentions(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.Tensor) -> torch.Tensor:
+    def _mentions(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.Tensor,
+                  referring_only: bool = True) -> torch.Tensor:
         """``log`` of the mention model's factor per ``[I, J, R]``.
 
         Each mentionable object g of the interpretation (every toy, every object
         the task binds but the agent) is named by some phrase ("covered")
         with probability ``mention[role_g, 0]`` and not with ``mention[role_g, 1]``.
+        With ``referring_only``, only a referring phrase (``batch.type_refers``)
+        aligned with g names it; the others align as freely but name nothing.
         The alignments in which exactly the objects W go unnamed carry the mass
         ``E(W)``; with ``P(U)`` the mass of alignments avoiding the objects U
         (phrases choose roles independently, so it is a product over phrases),
@@ -322,7 +333,8 @@ class ParseAligned(LanguageModel):
         # One block holds them all for the few slots of the Cleanup World (2^4 here); blocks bound
         # the memory of [I, J, subsets, K] when a layout has many toys.
         subsets = torch.tensor(list(itertools.product((False, True), repeat=G)), dtype=torch.bool)  # [2^G, G]
-        types = batch.type_mask[:, None, None, :]
+        naming = batch.type_mask & batch.type_refers if referring_only else batch.type_mask
+        types = naming[:, None, None, :]
         readings = batch.reading_types.double()
         total = torch.zeros(entities.shape, dtype=torch.float64)
         for chosen in subsets.split(MENTION_SUBSETS_PER_BLOCK):

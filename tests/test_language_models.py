@@ -28,6 +28,7 @@ COMMANDS = [
     "take the red chair to the green room",
     "go with the bag into the blue room and push the chair there",
     "walk to the red room",
+    "push the bag to the right into the blue room",  # "the right": a phrase that names nothing
 ]
 
 
@@ -68,7 +69,9 @@ def _alignments(batch, joint, g, i, j, r):
     slots = batch.cover_slot[i, j][batch.cover_mask[i, j]].tolist()
     for choice in itertools.product(options, repeat=len(phrases)):
         p = math.exp(sum(float(joint[i, j, v, k]) for v, k in zip(choice, phrases)))
-        states = [(int(batch.role[i, j, slot]), 0 if slot in choice else 1) for slot in slots]
+        # Only a referring phrase ("the bag", not "the right") names the object it aligns with.
+        named = {v for v, k in zip(choice, phrases) if batch.type_refers[i, k]}
+        states = [(int(batch.role[i, j, slot]), 0 if slot in named else 1) for slot in slots]
         weight = math.prod(float(g["mention"][role, named]) for role, named in states)
         yield states, p, weight
 
@@ -90,6 +93,36 @@ def test_mention_model_equals_summing_over_every_alignment(setting):
                 assert got == pytest.approx(math.log(total / plain_total), abs=1e-4)
                 checked += 1
     assert checked > 50
+    assert not bool(batch.type_refers[3][batch.type_mask[3]].all())  # "the right" was among them
+
+
+def test_only_a_head_noun_a_colour_or_an_open_class_word_names_an_object(setting):
+    from groundlang.model.encoding import is_referring
+
+    assert is_referring([], ["door"]) and is_referring(["left"], ["door"])
+    assert is_referring(["orange"], []) and is_referring(["salmon"], [])  # "to orange": a colour word
+    assert is_referring(["periwinkle"], []) and is_referring(["<unk>"], [])  # open class: maybe a name
+    assert not is_referring(["right"], []) and not is_referring(["straight"], [])
+    assert not is_referring(["a", "little"], [])
+    _, observations, batch, _ = setting
+    vocab_words = setting[0].vocab.words
+    refers = {}
+    for k in range(int(batch.type_mask[3].sum())):
+        words = [vocab_words[int(batch.uniq[3, u])] for u in range(batch.uniq.shape[1])
+                 if batch.type_counts[3, k, u] > 0 or batch.type_head_counts[3, k, u] > 0]
+        refers[" ".join(sorted(words))] = bool(batch.type_refers[3, k])
+    assert refers == {"bag": True, "right": False, "blue room": True}
+
+
+def test_any_phrase_names_what_it_aligns_with_when_asked(setting):
+    """``mention_phrases="any"`` (the ablation): "the right" aligned with the bag names it too."""
+    learner, _, batch, g = setting
+    referring = learner.lm.reading_table(g, batch)[1]
+    anything = ParseAligned(mention_phrases="any").reading_table(g, batch)[1]
+    assert torch.allclose(referring[:3], anything[:3])  # every phrase of the first commands refers
+    assert not torch.allclose(referring[3], anything[3])
+    with pytest.raises(ValueError, match="mention_phrases must be 'referring' or 'any'"):
+        ParseAligned(mention_phrases="all")
 
 
 def test_gradient_times_mention_parameters_gives_the_expected_counts(setting):
