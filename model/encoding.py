@@ -368,7 +368,8 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
         for (prep, mods, head), k in types.items():
             type_prep[i, k] = prep
             type_mask[i, k] = True
-            type_refers[i, k] = is_referring([vocab.words[uniq_rows[i][u]] for u in mods], head)
+            type_refers[i, k] = is_referring([vocab.words[uniq_rows[i][u]] for u in mods],
+                                             [vocab.words[uniq_rows[i][u]] for u in head])
             for u in mods:
                 type_counts[i, k, u] += 1.0
             for u in head:

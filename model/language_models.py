@@ -26,9 +26,10 @@ table, and the interpretation itself is enumerated by the model in
   one that names a bystander toy speaks against the tasks that leave it alone,
   and one whose only unknown phrase is "the skin coloured room" names its goal;
   only a referring phrase names what it aligns with, ``encoding.is_referring``:
-  "on right" does not name the star) and how many noun phrases each of its clauses has (``P(arity | L)``, per
-  clause: counted per command, a long command of several clauses read as
-  "move the toy", since toy commands are longer; measured on the crowd
+  "on right" does not name the star) and how many noun phrases each of its
+  clauses has (``P(arity | L)``, per clause: counted per command, a long
+  command of several clauses read as "move the toy", since toy commands are
+  longer; measured on the crowd
   corpus, leave-one-out 226 and 219 of 240 against 226 and 218 per command,
   in novel layouts 647 and 626 of 720 against 644 and 623; 227 and 650 for
   the simplified commands once the mention factor is summed in double
