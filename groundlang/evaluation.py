@@ -28,6 +28,7 @@ from groundlang.corpus import Corpus, Instance
 from groundlang.labels import goal_holds, label_for
 from groundlang.learner import Learner
 from groundlang.model.encoding import encode
+from groundlang.model.language_models import get_language_model
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.world import State
 
@@ -117,6 +118,7 @@ class EvaluationResult:
     confusion: dict
     skipped: int = 0
     slowest_step: dict = field(default_factory=dict)
+    language_model_settings: dict = field(default_factory=dict)  # the settings given (the rest are defaults)
     novel_accuracy: float | None = None
     novel_n: int = 0
     novel_correct: int = 0
@@ -128,7 +130,8 @@ class EvaluationResult:
 
     def summary(self) -> str:
         lines = [
-            f"protocol {self.protocol}, language model {self.language_model}",
+            f"protocol {self.protocol}, language model {self.language_model}"
+            + "".join(f", {k}={v!r}" for k, v in self.language_model_settings.items()),
             f"accuracy {self.accuracy:.2%} ({self.correct}/{self.n}), 95% CI [{self.ci_low:.2%}, {self.ci_high:.2%}]",
         ]
         if self.novel_n:
@@ -260,8 +263,12 @@ def evaluate(
     learner_options: dict | None = None,
     train_indices: Sequence[int] | None = None,
     warm_start: bool = True,
+    language_model_settings: dict | None = None,
 ) -> EvaluationResult:
     """Run ``loo`` or ``train`` on a corpus; ``limit`` scores only the first N held-out instances.
+
+    ``language_model_settings``: keywords of the language model (``{"mention_phrases": "any"}``),
+    see :func:`groundlang.model.language_models.get_language_model`; the result records them.
 
     ``train_indices`` (default: all) trains one model on those instances only
     (learning curves): ``loo`` then scores the held-out remainder, each
@@ -293,7 +300,8 @@ def evaluate(
             raise ValueError(f"{corpus.directory}: train_indices covers every instance; nothing is held out")
 
     timings = {}
-    learner = Learner(language_model=language_model, **(learner_options or {}))
+    lm = get_language_model(language_model, **(language_model_settings or {}))
+    learner = Learner(language_model=lm, **(learner_options or {}))
     t = time.perf_counter()
     observations = learner.observe([instances[k] for k in training], progress=progress)
     timings["behaviour likelihoods"] = time.perf_counter() - t
@@ -341,6 +349,7 @@ def evaluate(
     return EvaluationResult(
         protocol=protocol,
         language_model=language_model,
+        language_model_settings=dict(language_model_settings or {}),
         accuracy=correct / n if n else 0.0,
         n=n,
         correct=correct,

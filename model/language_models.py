@@ -49,7 +49,9 @@ table, and the interpretation itself is enumerated by the model in
 
 from __future__ import annotations
 
+import inspect
 import itertools
+import math
 
 import pyro
 import pyro.distributions as dist
@@ -70,6 +72,7 @@ class LanguageModel:
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True):
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
+        _require_positive("word_concentration", word_concentration)
         self.word_concentration = word_concentration
         self.null_token = null_token
 
@@ -88,6 +91,11 @@ class LanguageModel:
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
         raise NotImplementedError
+
+
+def _require_positive(name: str, value: float) -> None:
+    if not value > 0:  # also refuses NaN
+        raise ValueError(f"{name} must be > 0 (a Dirichlet concentration), not {value!r}")
 
 
 NULL_MIXTURE = 0  # encode() interns the {NULL} mixture first
@@ -185,6 +193,13 @@ class ParseAligned(LanguageModel):
         word or an open-class word, see ``encoding.is_referring``) or ``"any"``."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"mention_phrases must be 'referring' or 'any', not {mention_phrases!r}")
+        _require_positive("align_concentration", align_concentration)
+        for name, value in (("mention_concentration", mention_concentration),
+                            ("arity_concentration", arity_concentration)):
+            if value is not None:
+                _require_positive(name, value)
+        if not argument_bonus >= 0:
+            raise ValueError(f"argument_bonus must be >= 0, not {argument_bonus!r}")
         super().__init__(word_concentration)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus
@@ -354,10 +369,33 @@ MAX_MACHINE = 24  # IBM Model 2: longest machine string (NULL included)
 LANGUAGE_MODELS = {"bow": BagOfWords, "ibm2": IBMModel2, "parse": ParseAligned}
 
 
-def get_language_model(name: str, **kwargs) -> LanguageModel:
-    try:
-        return LANGUAGE_MODELS[name](**kwargs)
-    except KeyError:
-        raise ValueError(
-            f"unknown language model {name!r}; expected one of {', '.join(LANGUAGE_MODELS)}"
-        ) from None
+def get_language_model(name: str, **settings) -> LanguageModel:
+    """The language model ``name`` with ``settings`` (its constructor's keywords, e.g.
+    ``get_language_model("parse", mention_phrases="any")``). Raises ValueError naming the model
+    and what it takes for an unknown name, an unknown setting or a value of the wrong kind."""
+    if name not in LANGUAGE_MODELS:
+        raise ValueError(f"unknown language model {name!r}; expected one of {', '.join(LANGUAGE_MODELS)}")
+    cls = LANGUAGE_MODELS[name]
+    params = {k: p for k, p in inspect.signature(cls.__init__).parameters.items() if k != "self"}
+    for key, value in settings.items():
+        if key not in params:
+            raise ValueError(f"language model {name} has no setting {key!r}; its settings: {', '.join(params)}")
+        problem = _setting_problem(params[key], value)
+        if problem:
+            raise ValueError(f"language model {name}, setting {key}: {problem}")
+    return cls(**settings)
+
+
+def _setting_problem(param: inspect.Parameter, value) -> str | None:
+    """What is wrong with ``value`` for a constructor keyword, judged by its default and annotation."""
+    default, optional = param.default, "None" in str(param.annotation)
+    if value is None:
+        return None if optional or default is None else "None is not allowed here"
+    if isinstance(default, bool):
+        return None if isinstance(value, bool) else f"expected true or false, not {value!r}"
+    if isinstance(default, (int, float)) or default is None:
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+        return None if ok else f"expected a number, not {value!r}"
+    if isinstance(default, str):
+        return None if isinstance(value, str) else f"expected a string, not {value!r}"
+    return None

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.commands import LANGUAGE_MODEL_NAMES
+from groundlang.commands import LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings
 from groundlang.model.world import PALETTES
 
 
@@ -18,6 +18,7 @@ def register(subparsers) -> None:
     p.add_argument("--protocol", default="loo", choices=["loo", "train"])
     p.add_argument("--novel-envs", metavar="DIR", help="folder of *.state files to execute each command in too")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
+    add_language_model_settings(p)
     p.add_argument("--workers", type=int, default=1, help="folds in parallel (processes)")
     p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
     p.add_argument("--skip-inconsistent", action="store_true")
@@ -51,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
         corpus, labels, protocol=args.protocol, language_model=args.language_model,
         novel_states=novel, workers=args.workers, ray_address=args.ray,
         progress=args.progress, limit=args.limit, warm_start=not args.cold_folds,
+        language_model_settings=language_model_settings(args.lm_settings),
     )
     print(result.summary())
     # A run of a whole RSS 2015 folder is set beside the published accuracies and the project's goals.

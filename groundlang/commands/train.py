@@ -6,7 +6,7 @@ import argparse
 import time
 
 from groundlang.corpus import read_corpus
-from groundlang.commands import LANGUAGE_MODEL_NAMES
+from groundlang.commands import LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings
 from groundlang.model.world import PALETTES
 
 
@@ -16,6 +16,7 @@ def register(subparsers) -> None:
     p.add_argument("--palette", required=True, choices=sorted(PALETTES))
     p.add_argument("-o", "--output", required=True, metavar="MODEL_DIR", help="folder to write the model to")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
+    add_language_model_settings(p)
     p.add_argument("--library", metavar="LP", action="append", help="task library .lp file(s) instead of the default")
     p.add_argument("--skip-inconsistent", action="store_true")
     p.add_argument("--seed", type=int, default=0)
@@ -25,13 +26,15 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
     from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.language_models import get_language_model
 
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     if corpus.skipped:
         print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
     library = TaskLibrary.load(args.library) if args.library else None
     started = time.perf_counter()
-    learner = Learner(args.language_model, library=library, seed=args.seed)
+    lm = get_language_model(args.language_model, **language_model_settings(args.lm_settings))
+    learner = Learner(lm, library=library, seed=args.seed)
     learner.fit(corpus.instances, progress=args.progress)
     learner.save(args.output)
     fit = learner.fit_result

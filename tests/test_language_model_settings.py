@@ -1,0 +1,73 @@
+"""Language model settings from the API and the CLI (``--lm-setting KEY=VALUE``), for ablations."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from groundlang.cli import main
+from groundlang.commands import language_model_settings
+from groundlang.corpus import example_corpus_path
+from groundlang.learner import Learner
+from groundlang.model.language_models import ParseAligned, get_language_model
+
+EXAMPLES = example_corpus_path()
+
+
+def test_settings_make_the_model_they_name():
+    lm = get_language_model("parse", mention_phrases="any", argument_bonus=0, mention_concentration=None)
+    assert isinstance(lm, ParseAligned)
+    assert (lm.mention_phrases, lm.argument_bonus, lm.mention_concentration) == ("any", 0, None)
+    assert get_language_model("bow", null_token=False).settings() == {"word_concentration": 1.05, "null_token": False}
+
+
+@pytest.mark.parametrize("name, settings, message", [
+    ("parse", {"foo": 1}, "language model parse has no setting 'foo'; its settings: word_concentration, "),
+    ("bow", {"mention_phrases": "any"}, "language model bow has no setting 'mention_phrases'"),
+    ("parse", {"argument_bonus": "x"}, "language model parse, setting argument_bonus: expected a number, not 'x'"),
+    ("parse", {"argument_bonus": None}, "setting argument_bonus: None is not allowed here"),
+    ("parse", {"align_by_task": 1}, "setting align_by_task: expected true or false, not 1"),
+    ("parse", {"mention_phrases": 3}, "setting mention_phrases: expected a string, not 3"),
+    ("parse", {"mention_phrases": "all"}, "mention_phrases must be 'referring' or 'any', not 'all'"),
+    ("parse", {"word_concentration": -1}, "word_concentration must be > 0 (a Dirichlet concentration), not -1"),
+    ("parse", {"align_concentration": float("nan")}, "setting align_concentration: expected a number, not nan"),
+    ("parse", {"argument_bonus": -0.5}, "argument_bonus must be >= 0, not -0.5"),
+    ("lstm", {}, "unknown language model 'lstm'; expected one of bow, ibm2, parse"),
+])
+def test_a_bad_setting_is_refused_with_the_model_and_the_setting_named(name, settings, message):
+    with pytest.raises(ValueError) as caught:
+        get_language_model(name, **settings)
+    assert message in str(caught.value)
+
+
+def test_cli_values_are_read_as_json_else_as_text():
+    assert language_model_settings(["argument_bonus=0", "mention_phrases=any", "mention_concentration=null",
+                                    "align_by_task=false", "word_concentration=1.2"]) == {
+        "argument_bonus": 0, "mention_phrases": "any", "mention_concentration": None, "align_by_task": False,
+        "word_concentration": 1.2}
+    with pytest.raises(ValueError, match="--lm-setting 'mention_phrases': expected KEY=VALUE"):
+        language_model_settings(["mention_phrases"])
+
+
+def test_cli_evaluate_runs_and_records_the_settings(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    code = main(["--quiet", "evaluate", "--corpus", str(EXAMPLES), "--palette", "sokoban",
+                 "--labels", str(EXAMPLES / "labels.csv"), "--limit", "3", "--json", str(out),
+                 "--lm-setting", "mention_phrases=any", "--lm-setting", "argument_bonus=0"])
+    assert code == 0
+    assert "language model parse, mention_phrases='any', argument_bonus=0" in capsys.readouterr().out
+    data = json.loads(out.read_text())
+    assert data["language_model_settings"] == {"mention_phrases": "any", "argument_bonus": 0}
+    assert data["n"] == 3
+
+
+def test_cli_train_saves_the_settings_with_the_model(tmp_path, capsys):
+    model = tmp_path / "model"
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(model),
+                 "--lm-setting", "mention_phrases=any"]) == 0
+    assert Learner.load(model).lm.mention_phrases == "any"
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "bad"),
+                 "--lm-setting", "mention_phrase=any"]) == 2
+    err = capsys.readouterr().err
+    assert "language model parse has no setting 'mention_phrase'" in err and not (tmp_path / "bad").exists()
