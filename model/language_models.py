@@ -72,7 +72,7 @@ class LanguageModel:
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True):
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
-        _require_positive("word_concentration", word_concentration)
+        _require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
         self.null_token = null_token
 
@@ -93,9 +93,9 @@ class LanguageModel:
         raise NotImplementedError
 
 
-def _require_positive(name: str, value: float) -> None:
+def _require_positive(model: str, name: str, value: float) -> None:
     if not value > 0:  # also refuses NaN
-        raise ValueError(f"{name} must be > 0 (a Dirichlet concentration), not {value!r}")
+        raise ValueError(f"language model {model}: {name} must be > 0 (a Dirichlet concentration), not {value!r}")
 
 
 NULL_MIXTURE = 0  # encode() interns the {NULL} mixture first
@@ -192,14 +192,15 @@ class ParseAligned(LanguageModel):
         the object they align with for the mention model, ``"referring"`` (a head noun, a colour
         word or an open-class word, see ``encoding.is_referring``) or ``"any"``."""
         if mention_phrases not in ("referring", "any"):
-            raise ValueError(f"mention_phrases must be 'referring' or 'any', not {mention_phrases!r}")
-        _require_positive("align_concentration", align_concentration)
+            raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
+                             f"not {mention_phrases!r}")
+        _require_positive(self.name, "align_concentration", align_concentration)
         for name, value in (("mention_concentration", mention_concentration),
                             ("arity_concentration", arity_concentration)):
             if value is not None:
-                _require_positive(name, value)
+                _require_positive(self.name, name, value)
         if not argument_bonus >= 0:
-            raise ValueError(f"argument_bonus must be >= 0, not {argument_bonus!r}")
+            raise ValueError(f"language model {self.name}: argument_bonus must be >= 0, not {argument_bonus!r}")
         super().__init__(word_concentration)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus

@@ -29,10 +29,13 @@ def test_settings_make_the_model_they_name():
     ("parse", {"argument_bonus": None}, "setting argument_bonus: None is not allowed here"),
     ("parse", {"align_by_task": 1}, "setting align_by_task: expected true or false, not 1"),
     ("parse", {"mention_phrases": 3}, "setting mention_phrases: expected a string, not 3"),
-    ("parse", {"mention_phrases": "all"}, "mention_phrases must be 'referring' or 'any', not 'all'"),
-    ("parse", {"word_concentration": -1}, "word_concentration must be > 0 (a Dirichlet concentration), not -1"),
+    ("parse", {"mention_phrases": "all"}, "language model parse: mention_phrases must be 'referring' or 'any', "
+                                          "not 'all'"),
+    ("parse", {"word_concentration": -1}, "language model parse: word_concentration must be > 0 (a Dirichlet "
+                                          "concentration), not -1"),
+    ("bow", {"word_concentration": 0}, "language model bow: word_concentration must be > 0"),
     ("parse", {"align_concentration": float("nan")}, "setting align_concentration: expected a number, not nan"),
-    ("parse", {"argument_bonus": -0.5}, "argument_bonus must be >= 0, not -0.5"),
+    ("parse", {"argument_bonus": -0.5}, "language model parse: argument_bonus must be >= 0, not -0.5"),
     ("lstm", {}, "unknown language model 'lstm'; expected one of bow, ibm2, parse"),
 ])
 def test_a_bad_setting_is_refused_with_the_model_and_the_setting_named(name, settings, message):
@@ -43,7 +46,7 @@ def test_a_bad_setting_is_refused_with_the_model_and_the_setting_named(name, set
 
 def test_cli_values_are_read_as_json_else_as_text():
     assert language_model_settings(["argument_bonus=0", "mention_phrases=any", "mention_concentration=null",
-                                    "align_by_task=false", "word_concentration=1.2"]) == {
+                                    "align_by_task=false", "word_concentration= 1.2"]) == {
         "argument_bonus": 0, "mention_phrases": "any", "mention_concentration": None, "align_by_task": False,
         "word_concentration": 1.2}
     with pytest.raises(ValueError, match="--lm-setting 'mention_phrases': expected KEY=VALUE"):

@@ -55,6 +55,10 @@ def test_cli_evaluate_prints_and_writes_the_comparison_for_a_folder_of_the_rss_c
     assert "against RSS 2015 (Table I) and the project's goals:" in printed
     assert "loo                 100.00% (24/24); published best 83.75% (bag of words); goal 95%: reached" in printed
     published = json.loads(out.read_text())["published"]
+    # A partial run (--limit) is not set beside whole-corpus figures.
+    main(["--quiet", "evaluate", "--corpus", str(folder), "--palette", "sokoban",
+          "--labels", str(Path(example_corpus_path()) / "labels.csv"), "--limit", "5"])
+    assert "against RSS 2015" not in capsys.readouterr().out
     assert published == [{"setting": "loo", "accuracy": 1.0, "correct": 24, "n": 24,
                           "published": {"bag of words": 0.8375, "IBM Model 2": 0.8125},
                           "best_model": "bag of words", "best": 0.8375, "goal": 0.95, "goal_correct": 23,

@@ -25,6 +25,7 @@ def language_model_settings(pairs: list[str]) -> dict:
     settings = {}
     for pair in pairs:
         key, sep, text = pair.partition("=")
+        text = text.strip()
         if not sep or not key.strip():
             raise ValueError(f"--lm-setting {pair!r}: expected KEY=VALUE, e.g. mention_phrases=any")
         try:

@@ -56,7 +56,9 @@ def run(args: argparse.Namespace) -> int:
     )
     print(result.summary())
     # A run of a whole RSS 2015 folder is set beside the published accuracies and the project's goals.
-    rows = comparison(Path(args.corpus).resolve().name, result) if args.limit is None else []
+    # Only a whole run compares: no instance left out by --limit, --skip-inconsistent or a failed fold.
+    whole = result.n == len(corpus.instances) and not corpus.skipped
+    rows = comparison(Path(args.corpus).resolve().name, result) if whole else []
     if rows:
         print(format_comparison(rows))
     if args.json:
