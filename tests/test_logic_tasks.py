@@ -34,14 +34,8 @@ toy(block0). colour(block0, yellow). shape(block0, star). at(block0, 2, 2).
 toy(block1). colour(block1, red). shape(block1, moon). at(block1, 6, 2).
 agent(agent0). at(agent0, 1, 1).
 """
-ONE_TOY = """
-palette_colour(blue; green; red; yellow). palette_shape(star; moon).
-room(room0). rect(room0, 0, 4, 4, 0). colour(room0, green).
-room(room1). rect(room1, 4, 4, 8, 0). colour(room1, blue).
-door(door0). rect(door0, 4, 2, 4, 2).
-toy(block0). colour(block0, yellow). shape(block0, star). at(block0, 2, 2).
-agent(agent0). at(agent0, 1, 1).
-"""
+# The same without block1.
+ONE_TOY = "\n".join(line for line in TWO_TOYS.splitlines() if "block1" not in line) + "\n"
 NO_TOYS = """
 palette_colour(blue; green). palette_shape(star).
 room(room0). rect(room0, 0, 4, 4, 0). colour(room0, green).
