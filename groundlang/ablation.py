@@ -35,7 +35,7 @@ import numpy as np
 from groundlang.corpus import Corpus
 from groundlang.evaluation import evaluate
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.language_models import LANGUAGE_MODELS
+from groundlang.model.language_models import LANGUAGE_MODELS, get_language_model, setting_names
 
 __all__ = ["LIBRARIES", "AblationRow", "AblationResult", "stratified_order", "training_subset", "run_ablation",
            "format_table", "plot_ablation"]
@@ -72,15 +72,18 @@ class AblationResult:
     seed: int
     rows: list[AblationRow]
     seconds: float
+    language_model_settings: dict = field(default_factory=dict)  # per language model, the settings given
 
     def to_json(self) -> dict:
         return {"corpus": self.corpus, "corpus_size": self.corpus_size, "protocol": self.protocol,
-                "seed": self.seed, "seconds": self.seconds, "rows": [asdict(r) for r in self.rows]}
+                "seed": self.seed, "seconds": self.seconds, "rows": [asdict(r) for r in self.rows],
+                "language_model_settings": self.language_model_settings}
 
     @classmethod
     def from_json(cls, data: dict) -> "AblationResult":
         return cls(data["corpus"], data["corpus_size"], data["protocol"], data["seed"],
-                   [AblationRow(**r) for r in data["rows"]], data["seconds"])
+                   [AblationRow(**r) for r in data["rows"]], data["seconds"],
+                   dict(data.get("language_model_settings", {})))
 
     def table(self) -> str:
         return format_table(self.rows)
@@ -154,7 +157,7 @@ def _run_cell(index: int) -> dict:
         result = evaluate(
             corpus, ctx["labels"], protocol=ctx["protocol"], language_model=lm,
             workers=ctx["workers"], progress=ctx["progress"], limit=ctx["limit"], learner_options=options,
-            train_indices=None if full else ctx["subsets"][size],
+            train_indices=None if full else ctx["subsets"][size], language_model_settings=ctx["settings"][lm],
         )
     except (ValueError, RuntimeError) as exc:
         row.error = f"{type(exc).__name__}: {exc}"
@@ -166,6 +169,18 @@ def _run_cell(index: int) -> dict:
     row.seconds = ctx["library_seconds"].get((library_name, size), 0.0) + result.seconds
     row.tasks = ctx["task_names"][(library_name, size)]
     return asdict(row)
+
+
+def _settings_by_model(language_models: Sequence[str], settings: dict) -> dict[str, dict]:
+    """Per language model, the settings it takes; each is checked once by building the model."""
+    by_model = {lm: {k: v for k, v in settings.items() if k in setting_names(lm)} for lm in language_models}
+    unused = [k for k in settings if not any(k in taken for taken in by_model.values())]
+    if unused:
+        raise ValueError(f"no language model of the grid ({', '.join(language_models)}) has the setting "
+                         f"{unused[0]!r}")
+    for lm, taken in by_model.items():
+        get_language_model(lm, **taken)  # raises ValueError for a bad value
+    return by_model
 
 
 def _library_for(name: str, instances: Sequence, cache_dir, progress: bool):
@@ -189,10 +204,13 @@ def run_ablation(
     progress: bool = False,
     limit: int | None = None,
     learner_options: dict | None = None,
+    language_model_settings: dict | None = None,
 ) -> AblationResult:
     """Evaluate every (language model, library, size) cell; ``sizes`` default to the whole corpus.
 
-    Raises ValueError for unknown names, bad sizes or protocol. A cell that
+    ``language_model_settings`` apply to each language model of the grid that takes them
+    (``{"mention_phrases": "any"}`` changes ``parse`` only). Raises ValueError for unknown names,
+    a setting no model of the grid takes or a bad value, bad sizes or protocol. A cell that
     fails is kept as a row with ``error`` set.
     """
     from groundlang.inference.likelihoods import cache_directory
@@ -206,6 +224,7 @@ def run_ablation(
         raise ValueError(f"unknown task librar(y/ies) {unknown}; expected some of {', '.join(LIBRARIES)}")
     if protocol not in ("loo", "train"):
         raise ValueError(f"unknown protocol {protocol!r}; expected loo or train")
+    settings = _settings_by_model(language_models, language_model_settings or {})
     sizes = sorted(set(sizes)) if sizes else [len(corpus)]
     subsets = {s: training_subset(corpus, s, seed) for s in sizes}  # raises on a bad size
     options = dict(learner_options or {})
@@ -235,6 +254,7 @@ def run_ablation(
         "corpus": corpus, "labels": labels, "cells": cells, "protocol": protocol, "subsets": subsets,
         "libraries": {k: v for k, v in built.items() if not isinstance(v, ValueError)},
         "task_names": task_names, "library_seconds": library_seconds, "learner_options": options,
+        "settings": settings,
         "limit": limit, "progress": progress and ray_address is None,
         "workers": workers if ray_address is None else 1,
     }
@@ -260,7 +280,8 @@ def run_ablation(
                                     error=record.get("error", "unknown error")))
         else:
             rows.append(AblationRow(**record))
-    return AblationResult(str(corpus.directory), len(corpus), protocol, seed, rows, time.perf_counter() - started)
+    return AblationResult(str(corpus.directory), len(corpus), protocol, seed, rows, time.perf_counter() - started,
+                          {lm: taken for lm, taken in settings.items() if taken})
 
 
 # ---------------------------------------------------------------- presenting

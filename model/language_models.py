@@ -60,7 +60,8 @@ import torch
 from groundlang.model.encoding import CLAUSE_ARITY_BINS, PAD_LOGIT, Batch
 from groundlang.model.vocabulary import is_task_role
 
-__all__ = ["LanguageModel", "BagOfWords", "IBMModel2", "ParseAligned", "LANGUAGE_MODELS", "get_language_model"]
+__all__ = ["LanguageModel", "BagOfWords", "IBMModel2", "ParseAligned", "LANGUAGE_MODELS", "get_language_model",
+           "setting_names"]
 
 
 class LanguageModel:
@@ -374,10 +375,9 @@ def get_language_model(name: str, **settings) -> LanguageModel:
     """The language model ``name`` with ``settings`` (its constructor's keywords, e.g.
     ``get_language_model("parse", mention_phrases="any")``). Raises ValueError naming the model
     and what it takes for an unknown name, an unknown setting or a value of the wrong kind."""
-    if name not in LANGUAGE_MODELS:
-        raise ValueError(f"unknown language model {name!r}; expected one of {', '.join(LANGUAGE_MODELS)}")
+    names = setting_names(name)
     cls = LANGUAGE_MODELS[name]
-    params = {k: p for k, p in inspect.signature(cls.__init__).parameters.items() if k != "self"}
+    params = {k: p for k, p in inspect.signature(cls.__init__).parameters.items() if k in names}
     for key, value in settings.items():
         if key not in params:
             raise ValueError(f"language model {name} has no setting {key!r}; its settings: {', '.join(params)}")
@@ -385,6 +385,13 @@ def get_language_model(name: str, **settings) -> LanguageModel:
         if problem:
             raise ValueError(f"language model {name}, setting {key}: {problem}")
     return cls(**settings)
+
+
+def setting_names(name: str) -> tuple[str, ...]:
+    """The settings (constructor keywords) language model ``name`` takes."""
+    if name not in LANGUAGE_MODELS:
+        raise ValueError(f"unknown language model {name!r}; expected one of {', '.join(LANGUAGE_MODELS)}")
+    return tuple(k for k in inspect.signature(LANGUAGE_MODELS[name].__init__).parameters if k != "self")
 
 
 def _setting_problem(param: inspect.Parameter, value) -> str | None:

@@ -74,3 +74,22 @@ def test_cli_train_saves_the_settings_with_the_model(tmp_path, capsys):
                  "--lm-setting", "mention_phrase=any"]) == 2
     err = capsys.readouterr().err
     assert "language model parse has no setting 'mention_phrase'" in err and not (tmp_path / "bad").exists()
+
+
+def test_an_ablation_applies_each_setting_to_the_models_that_take_it():
+    from groundlang.ablation import AblationResult, run_ablation
+    from groundlang.corpus import read_corpus
+    from groundlang.labels import read_labels
+
+    corpus = read_corpus(EXAMPLES, "sokoban")
+    labels = read_labels(EXAMPLES / "labels.csv")
+    result = run_ablation(corpus, labels, language_models=("bow", "parse"), libraries=("authored",), limit=2,
+                          language_model_settings={"mention_phrases": "any", "word_concentration": 1.1})
+    assert [(r.language_model, r.n, r.error) for r in result.rows] == [("bow", 2, None), ("parse", 2, None)]
+    assert result.language_model_settings == {"bow": {"word_concentration": 1.1},
+                                              "parse": {"mention_phrases": "any", "word_concentration": 1.1}}
+    assert AblationResult.from_json(result.to_json()).language_model_settings == result.language_model_settings
+    with pytest.raises(ValueError, match=r"no language model of the grid \(bow, ibm2\) has the setting 'mention_phrases'"):
+        run_ablation(corpus, labels, language_models=("bow", "ibm2"), language_model_settings={"mention_phrases": "any"})
+    with pytest.raises(ValueError, match="language model parse, setting argument_bonus: expected a number"):
+        run_ablation(corpus, labels, language_models=("parse",), language_model_settings={"argument_bonus": "x"})

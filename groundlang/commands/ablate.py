@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from groundlang.commands import add_language_model_settings, language_model_settings
 from groundlang.model.world import PALETTES
 
 
@@ -42,6 +43,7 @@ def register(subparsers) -> None:
     p.add_argument("--ray", metavar="ADDRESS", help="run cells on Ray ('local', 'auto' or host:port)")
     p.add_argument("--skip-inconsistent", action="store_true")
     p.add_argument("--limit", type=int, help="score only the first N instances of each cell")
+    add_language_model_settings(p)
     p.add_argument("--json", metavar="OUT", help="write the rows as JSON here")
     p.add_argument("--plot", metavar="PNG", help="write a plot of accuracy by cell here")
     p.set_defaults(func=run)
@@ -79,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     result = run_ablation(
         corpus, labels, language_models=args.language_models, libraries=args.libraries, sizes=args.sizes,
         protocol=args.protocol, seed=args.seed, workers=args.workers, ray_address=args.ray,
-        progress=args.progress, limit=args.limit,
+        progress=args.progress, limit=args.limit, language_model_settings=language_model_settings(args.lm_settings),
     )
     print(result.table())
     print(f"wall time {result.seconds:.1f} s")
