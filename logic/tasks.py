@@ -160,7 +160,8 @@ def format_lifted_task(task: LiftedTask) -> str:
 _LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #show goal/3. #show pf/3. #show restrict/3.")
 
 
-# PF classes (pfs.lp) a restrict/3 atom may name: what an object is, not where it lies.
+# PF classes (pfs.lp) a restrict/3 atom may name: what an object is, not where it lies. The load-time
+# check; groundings.lp's restrictable/2 states the same two classes for the check per environment.
 _RESTRICTION_CLASSES = ("colour", "shape")
 # PF term -> its declarations: (PF class, classes of its arguments), one per pf/3 atom.
 _Declarations = dict[clingo.Symbol, list[tuple[str, tuple[str, ...]]]]

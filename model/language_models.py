@@ -375,23 +375,26 @@ def get_language_model(name: str, **settings) -> LanguageModel:
     """The language model ``name`` with ``settings`` (its constructor's keywords, e.g.
     ``get_language_model("parse", mention_phrases="any")``). Raises ValueError naming the model
     and what it takes for an unknown name, an unknown setting or a value of the wrong kind."""
-    names = setting_names(name)
-    cls = LANGUAGE_MODELS[name]
-    params = {k: p for k, p in inspect.signature(cls.__init__).parameters.items() if k in names}
+    params = _parameters(name)
     for key, value in settings.items():
         if key not in params:
             raise ValueError(f"language model {name} has no setting {key!r}; its settings: {', '.join(params)}")
         problem = _setting_problem(params[key], value)
         if problem:
             raise ValueError(f"language model {name}, setting {key}: {problem}")
-    return cls(**settings)
+    return LANGUAGE_MODELS[name](**settings)
 
 
 def setting_names(name: str) -> tuple[str, ...]:
     """The settings (constructor keywords) language model ``name`` takes."""
+    return tuple(_parameters(name))
+
+
+def _parameters(name: str) -> dict[str, inspect.Parameter]:
+    """Constructor keyword -> its parameter, for language model ``name``; ValueError for an unknown name."""
     if name not in LANGUAGE_MODELS:
         raise ValueError(f"unknown language model {name!r}; expected one of {', '.join(LANGUAGE_MODELS)}")
-    return tuple(k for k in inspect.signature(LANGUAGE_MODELS[name].__init__).parameters if k != "self")
+    return {k: p for k, p in inspect.signature(LANGUAGE_MODELS[name].__init__).parameters.items() if k != "self"}
 
 
 def _setting_problem(param: inspect.Parameter, value) -> str | None:
