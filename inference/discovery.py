@@ -325,12 +325,16 @@ def _score_table(demos: list[_Demo], library: TaskLibrary, settings: DiscoverySe
 
 
 def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoverySettings(),
-                   cache_dir: str | os.PathLike | None | bool = None, progress: bool = False) -> Discovery:
+                   cache_dir: str | os.PathLike | None | bool = None, progress: bool = False,
+                   pfs: TaskLibrary | None = None) -> Discovery:
     """Discover a task library from demonstrations alone (no labels, no words, no library).
 
     ``instances``: objects with ``initial_state``, ``states``, ``actions`` and optionally ``name``
     (e.g. ``groundlang.corpus.Instance``); identical (initial state, actions) pairs count once.
     ``cache_dir``: behaviour-likelihood cache root (False: none), see inference.likelihoods.
+    ``pfs``: a library whose colour and shape PFs (pfs.lp's and its own families, as clingo describes
+    each initial state) tell objects apart in the reports and the restrictions; default pfs.lp's.
+    Its tasks play no part (goals are always lifted from the position PFs).
     Returns a :class:`Discovery`; its library is loaded back from the commented ASP text.
     Raises ValueError when there are no instances, no candidate goal, or no library of at most
     ``max_tasks`` tasks covers every demonstration that has one.
@@ -353,6 +357,7 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
         raise ValueError(f"no library of at most {settings.max_tasks} candidate tasks explains every "
                          "demonstration that has a candidate goal")
     chosen, score = ranked[0]
+    attributes = [_attributes(demo.instance.initial_state, pfs) for demo in demos]
     reports = []
     for i, demo in enumerate(demos):
         report = DemonstrationReport(demo.names, demo.num_states, demo.weights, demo.top, demo.mlirl_ll,
@@ -364,13 +369,13 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
             layout = demo.instance.initial_state.layout
             classes = _object_classes(layout)
             peers = {o: [p for p, c in classes.items() if c == classes[o] and p != o] for _, o in g.binding}
-            picked = tuple((v, singling_out(layout, o, peers[o])) for v, o in g.binding)
+            picked = tuple((v, singling_out(layout, o, peers[o], attributes[i])) for v, o in g.binding)
             report = replace(report, task=candidates.tasks[j].name, grounding=g, log_likelihood=ll,
                              singled_out=picked)
         reports.append(report)
     tasks = tuple(candidates.tasks[j] for j in chosen)
     if settings.restrict:
-        tasks = tuple(_restricted(t, reports, demos) for t in tasks)
+        tasks = tuple(_restricted(t, reports, demos, attributes) for t in tasks)
     text = _library_text(tasks, reports, score, settings, len(instances))
     library = TaskLibrary.from_text(text, "<discovered tasks>")
     logger.info("discovery: library %s (score %.3f)", ", ".join(t.name for t in tasks), score)
@@ -378,28 +383,52 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
     return Discovery(library, library.tasks, candidates.tasks, tuple(reports), score, text, alternatives)
 
 
-def _restricted(task: LiftedTask, reports, demos) -> LiftedTask:
-    """``task`` restricted, per variable, by the PFs that single out its object in every demonstration it explains.
+def _attributes(state, pfs: TaskLibrary | None):
+    """Object -> its ``(colour/shape PF name, term)`` pairs in ``state``: pfs.lp's families, or every
+    family ``pfs`` declares (clingo's ``described/3``)."""
+    if pfs is None:
+        return colour_shape_pfs(state.layout)
+    from groundlang.model.tasks import attribute_pfs
 
+    return attribute_pfs(state, pfs)
+
+
+def _restricted(task: LiftedTask, reports, demos, attributes) -> LiftedTask:
+    """``task`` restricted, per variable, by what singles out its object in every demonstration it explains.
+
+    In each demonstration, what singles the object out is every PF of it that no peer has, or, when
+    no single PF does, the smallest conjunction that does (the report's ``singled_out``); the
+    restriction is what all of them share (a yellow star beside a moon and a red star beside a moon:
+    ``toyIs(star)``). When several single PFs are shared, the first (colour before shape) is enough.
     A variable whose object had no peers in some demonstration, or could not be told apart from them,
-    is left free; so is one whose demonstrations single it out by different PFs (the room of
-    toy-to-room, reached in rooms of every colour): only what all of them share restricts it.
+    is left free; so is one whose demonstrations share nothing (the room of toy-to-room, reached in
+    rooms of every colour).
     """
-    by_name = {d.names: d for d in demos}
+    index = {d.names: i for i, d in enumerate(demos)}
     explained = [r for r in reports if r.task == task.name]
     restrictions = []
     for var in task.variables:
-        common = None
+        common: list[str] | None = None  # terms, in the first demonstration's order
+        alone_everywhere = True
         for r in explained:
             picked = dict(r.singled_out).get(var.name)
             if not picked:  # () no peers, None no distinguishing PFs
-                common = set()
+                common = []
                 break
-            layout = by_name[r.instances].instance.initial_state.layout
-            terms = dict(colour_shape_pfs(layout).get(r.grounding.object_of(var.name), ()))
-            names = {terms[a.predicate] for a in picked if a.predicate in terms}
-            common = names if common is None else common & names
-        restrictions += [(var.name, term) for term in sorted(common or ())]
+            i = index[r.instances]
+            obj = r.grounding.object_of(var.name)
+            pairs = attributes[i].get(obj, ())
+            classes = _object_classes(demos[i].instance.initial_state.layout)
+            peers = [p for p, c in classes.items() if c == classes[obj] and p != obj]
+            taken = [{name for name, _ in attributes[i].get(p, ())} for p in peers]
+            marks = [term for name, term in pairs if not any(name in t for t in taken)]  # each alone suffices
+            if not marks:  # only a conjunction tells it apart: all of it
+                alone_everywhere = False
+                terms = dict(pairs)
+                marks = [terms[a.predicate] for a in picked if a.predicate in terms]
+            common = marks if common is None else [t for t in common if t in marks]
+        chosen = (common or [])[:1] if alone_everywhere else (common or [])
+        restrictions += [(var.name, term) for term in sorted(chosen)]
     return replace(task, restrictions=tuple(restrictions)) if restrictions else task
 
 

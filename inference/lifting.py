@@ -10,7 +10,7 @@ peers is what a restriction of the lifted task would say.
 from __future__ import annotations
 
 from itertools import combinations, permutations
-from typing import Sequence
+from typing import Mapping, Sequence
 
 from groundlang.logic.atoms import Atom, attribute_pf
 from groundlang.logic.tasks import CLASS_ORDER, LiftedTask, Variable
@@ -119,14 +119,17 @@ def _pf(stem: str, value: str) -> tuple[str, str]:
     return attribute_pf(stem, value), f"{stem}({value})"
 
 
-def singling_out(layout, obj: str, peers: Sequence[str]) -> tuple[Atom, ...] | None:
+def singling_out(layout, obj: str, peers: Sequence[str],
+                 attributes: Mapping[str, Sequence[tuple[str, str]]] | None = None) -> tuple[Atom, ...] | None:
     """Smallest colour/shape conjunction true of ``obj`` and of none of ``peers`` (same class).
 
+    ``attributes``: object -> its ``(PF name, term)`` pairs, as :func:`colour_shape_pfs` gives them
+    (its default) or ``model.tasks.attribute_pfs`` for a library's own families.
     ``()`` when there are no peers; None when no conjunction of its PFs tells it apart.
     """
     if not peers:
         return ()
-    pfs = colour_shape_pfs(layout)
+    pfs = colour_shape_pfs(layout) if attributes is None else attributes
     own = tuple(Atom(name, (obj,)) for name, _ in pfs.get(obj, ()))
     others = [{name for name, _ in pfs.get(p, ())} for p in peers]
     for k in range(1, len(own) + 1):

@@ -47,6 +47,7 @@ __all__ = [
     "binding_constraints",
     "enumerate_groundings",
     "ground_environment",
+    "PFTerms",
     "DOMAIN_FILES",
     "CLASS_ORDER",
 ]
@@ -381,6 +382,9 @@ def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
 # Object -> PF class -> names of the unary PFs of that class true of the object, e.g.
 # {"room0": {"colour": ("roomIsGreen",)}, "door1": {"spatial": ("doorWestOfAgent",)}}.
 Descriptions = dict[str, dict[str, tuple[str, ...]]]
+# A described PF's name -> its term as the library writes it (restrict/3 takes the term):
+# {"roomIsGreen": "roomIs(green)", "doorWestOfAgent": "doorWestOfAgent"}.
+PFTerms = dict[str, str]
 
 
 def enumerate_groundings(
@@ -393,10 +397,11 @@ def enumerate_groundings(
 
 def ground_environment(
     library: TaskLibrary, facts: str, *, time_limit: float | None = None, environment: str | None = None
-) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions]:
-    """Every permissible grounding not true initially, with its binding constraints, and the
+) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions, PFTerms]:
+    """Every permissible grounding not true initially, with its binding constraints; the
     unary PFs of every class but position true of each object, by class
-    (``{"door1": {"spatial": ("doorWestOfAgent",)}}``; objects none holds of are left out).
+    (``{"door1": {"spatial": ("doorWestOfAgent",)}}``; objects none holds of are left out); and
+    the term of each of those PFs as a library writes it (``{"roomIsGreen": "roomIs(green)"}``).
 
     ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
     ``time_limit``: seconds, default the library's. One Control, one grounding, one solve
@@ -414,6 +419,7 @@ def ground_environment(
     order = {t.name: i for i, t in enumerate(library.tasks)}
     found = []
     described: dict[str, dict[str, set[str]]] = {}
+    terms: PFTerms = {}
     # The same atoms recur in many answer sets; decoding clingo symbols is the costly part.
     decoded: dict[clingo.Symbol, tuple[str, object]] = {}
 
@@ -424,7 +430,7 @@ def ground_environment(
         if kind == "bind" and len(args) == 2:
             return kind, (_text(args[0]), _text(args[1]))
         if kind == "described" and len(args) == 3:
-            return kind, (_text(args[0]), pf_name(args[1]), _text(args[2]))
+            return kind, (_text(args[0]), pf_name(args[1]), _text(args[2]), str(args[1]))
         if kind == "unusable_restriction" and len(args) == 3:
             return kind, (_text(args[0]), _text(args[1]), args[2])
         if kind == "restrictable" and len(args) == 2:
@@ -451,8 +457,9 @@ def ground_environment(
             elif kind == "constraint_atom":
                 extra.append(value)
             elif kind == "described":
-                cls, name, obj = value
+                cls, name, obj, term = value
                 described.setdefault(obj, {}).setdefault(cls, set()).add(name)
+                terms[name] = term
             elif kind == "unusable_restriction":
                 unusable.add(value)
             elif kind == "restrictable":
@@ -478,7 +485,7 @@ def ground_environment(
         o: {cls: tuple(sorted(names)) for cls, names in sorted(described[o].items())}
         for o in sorted(described, key=_natural_key)
     }
-    return [(g, c) for _, g, c in found], descriptions
+    return [(g, c) for _, g, c in found], descriptions, dict(sorted(terms.items()))
 
 
 def _unusable_restriction_message(library: TaskLibrary, restriction: tuple[str, str, clingo.Symbol],

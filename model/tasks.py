@@ -26,7 +26,7 @@ from .geometry import state_facts
 from .world import State
 
 __all__ = [
-    "Candidate", "candidate_tasks", "object_descriptions", "spatial_descriptions",
+    "Candidate", "candidate_tasks", "object_descriptions", "attribute_pfs", "spatial_descriptions",
     "narrow_by_known", "NarrowedCandidate",
 ]
 
@@ -36,9 +36,9 @@ Candidate = tuple[GroundedTask, list[BindingConstraint]]
 @lru_cache(maxsize=64)
 def _environment(state: State, library: TaskLibrary) -> tuple:
     palette = state.layout.palette.name
-    found, described = ground_environment(library, state_facts(state), environment=f"palette {palette}")
+    found, described, terms = ground_environment(library, state_facts(state), environment=f"palette {palette}")
     frozen = MappingProxyType({obj: MappingProxyType(by_class) for obj, by_class in described.items()})
-    return tuple((g, tuple(c)) for g, c in found), frozen
+    return tuple((g, tuple(c)) for g, c in found), frozen, MappingProxyType(terms)
 
 
 def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
@@ -60,6 +60,20 @@ def object_descriptions(state: State, library: TaskLibrary) -> Mapping[str, Mapp
     objects no such PF holds of are absent. Raises AspError.
     """
     return _environment(state, library)[1]
+
+
+def attribute_pfs(state: State, library: TaskLibrary) -> Mapping[str, tuple[tuple[str, str], ...]]:
+    """Object -> its colour and shape PFs in ``state`` (the PFs ``restrict/3`` may name), colour first:
+    ``((name, term), ...)`` with the name as groundlang writes it and the term as a library does,
+    ``{"room0": (("roomIsGreen", "roomIs(green)"),)}``. Every family the library declares counts,
+    pfs.lp's and a user's own (``toyHue(purple)``); objects with none are absent. From the same
+    cached solve as :func:`candidate_tasks`. Raises AspError."""
+    described = object_descriptions(state, library)
+    terms = _environment(state, library)[2]
+    return MappingProxyType({
+        obj: pairs for obj, by_class in described.items()
+        if (pairs := tuple((name, terms[name]) for cls in ("colour", "shape") for name in by_class.get(cls, ())))
+    })
 
 
 def spatial_descriptions(state: State, library: TaskLibrary) -> Mapping[str, tuple[str, ...]]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -222,3 +223,91 @@ def test_cli_discover_on_an_empty_folder_is_exit_code_2(tmp_path, capsys):
     assert main(["discover", str(tmp_path), "--palette", "sokoban", "-o", str(tmp_path / "t.lp")]) == 2
     assert "groundlang discover: error" in capsys.readouterr().err
     assert not (tmp_path / "t.lp").exists()
+
+
+# ---------------------------------------------------------------- restrictions: what every demonstration shares
+
+# room,COLOUR,LEFT,TOP,RIGHT,BOTTOM (green=5, red=10, blue=1); block,COLOUR,SHAPE,X,Y; the first toy goes to room0.
+_ROOMS = "room,5,0,7,8,4 room,10,0,4,4,0 room,1,4,4,8,0 door,2,4,2,4 door,6,4,6,4 door,4,2,4,2 "
+# A library's own colour family: a toy's tone, warm (red, orange, yellow) or cool.
+_TONE = """tone(warm). tone(cool).
+pf(colour, toyTone(V), (toy,)) :- tone(V).
+holds(toyTone(warm), (T,)) :- toy(T), colour(T, C), warm(C).
+holds(toyTone(cool), (T,)) :- toy(T), colour(T, C), not warm(C).
+warm(red). warm(orange). warm(yellow).
+"""
+
+
+def _push_first_toy(name: str, toys: str):
+    from groundlang.corpus import Instance, parse_state
+    from groundlang.examples.build import shortest_demonstration
+    from groundlang.model.world import replay
+
+    start = parse_state(_ROOMS + toys + " agent,5,6", "sokoban")
+    actions = shortest_demonstration(start, parse_goal("toyInRoom(block0, room0)"))
+    return Instance(Path(f"{name}.txt"), "push it into the green room", actions, replay(start, actions))
+
+
+def _toy_restrictions(found) -> list[str]:
+    task = next(t for t in found.tasks if t.name == "toyToRoom")
+    return [term for var, term in task.restrictions if var == "T"]
+
+
+def test_a_restriction_is_what_singles_the_object_out_in_every_demonstration():
+    """A yellow star beside a magenta moon, a red star beside a blue moon: the star is what both share
+    (the smallest conjunction of each, its colour, differs)."""
+    demos = [_push_first_toy("yellow_star", "block,12,0,4,2 block,7,1,7,6"),
+             _push_first_toy("red_star", "block,10,0,4,2 block,1,1,7,6")]
+    found = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False)
+    assert [t.name for t in found.tasks] == ["toyToRoom"]
+    assert [dict(r.singled_out)["T"] for r in found.demonstrations] == [
+        (parse_atom("toyIsYellow(block0)"),), (parse_atom("toyIsRed(block0)"),)]
+    assert found.tasks[0].restrictions == (("R", "roomIs(green)"), ("T", "toyIs(star)"))
+    # Two stars each time (only the colour tells them apart) and different colours: nothing is shared.
+    stars = [_push_first_toy("red_star", "block,10,0,4,2 block,1,0,7,6"),
+             _push_first_toy("yellow_star", "block,12,0,4,2 block,5,0,7,6")]
+    assert _toy_restrictions(discover_tasks(stars, DiscoverySettings(restrict=True), cache_dir=False)) == []
+
+
+def test_restrictions_may_use_a_colour_family_of_the_users_own(tmp_path):
+    """Red star beside a blue star, yellow star beside a green star: pfs.lp's colours share nothing,
+    the user's toyTone(warm) is what both moved toys have and their peers lack."""
+    tone = tmp_path / "tone.lp"
+    tone.write_text(_TONE)
+    stars = [_push_first_toy("red_star", "block,10,0,4,2 block,1,0,7,6"),
+             _push_first_toy("yellow_star", "block,12,0,4,2 block,5,0,7,6")]
+    found = discover_tasks(stars, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([tone]))
+    assert _toy_restrictions(found) == ["toyTone(warm)"]
+    assert dict(found.demonstrations[0].singled_out)["T"] == (parse_atom("toyIsRed(block0)"),)
+    path = write_library(found, tmp_path / "discovered.lp")
+    assert 'restrict(toyToRoom, "T", toyTone(warm)).' in path.read_text()
+    # Loaded with the family's file, the task binds only a warm toy: an orange moon, not a cyan star.
+    library = TaskLibrary.load([path, tone])
+    from groundlang.corpus import parse_state
+
+    state = parse_state(_ROOMS + "block,2,0,6,2 block,8,1,1,2 agent,5,6", "sokoban")
+    toys = {dict(g.binding)["T"] for g, _ in candidate_tasks(state, library) if g.task == "toyToRoom"}
+    assert toys == {"block1"}
+
+
+def test_cli_discover_restrict_reads_the_users_pfs(tmp_path, capsys):
+    from groundlang.corpus import write_instance
+
+    corpus = tmp_path / "corpus"
+    for instance in (_push_first_toy("red_star_0", "block,10,0,4,2 block,1,0,7,6"),
+                     _push_first_toy("yellow_star_0", "block,12,0,4,2 block,5,0,7,6")):
+        write_instance(corpus / instance.path.name, instance)
+    tone = tmp_path / "tone.lp"
+    tone.write_text(_TONE)
+    out = tmp_path / "tasks.lp"
+    argv = ["discover", str(corpus), "--palette", "sokoban", "-o", str(out), "--no-cache", "--restrict"]
+    assert main(argv + ["--pfs", str(tone), "--json"]) == 0
+    assert 'restrict(toyToRoom, "T", toyTone(warm)).' in out.read_text()
+    capsys.readouterr()
+    # A broken PF file is reported with its name, before any work, and nothing is written.
+    broken = tmp_path / "broken.lp"
+    broken.write_text("pf(colour, toyTone(V), (toy,)) :- \n")
+    out.unlink()
+    assert main(argv + ["--pfs", str(broken)]) == 2
+    assert "broken.lp" in capsys.readouterr().err
+    assert not out.exists()

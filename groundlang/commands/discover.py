@@ -1,4 +1,4 @@
-"""``groundlang discover DIR --palette NAME -o tasks.lp [--json]``: discover a task library from a corpus.
+"""``groundlang discover DIR --palette NAME -o tasks.lp [--restrict [--pfs LP]] [--json]``: discover a task library.
 
 No task library, no labels, no words: MLIRL over every position PF of each
 distinct demonstration, the top-weighted PFs lifted to typed variables, and
@@ -36,6 +36,10 @@ def register(subparsers) -> None:
     p.add_argument("--restrict", action="store_true",
                    help="restrict each task variable by the colour/shape PFs that single out its object "
                         "in every demonstration the task explains (restrict/3 facts)")
+    p.add_argument("--pfs", metavar="LP", action="append",
+                   help="an .lp file of your own PFs (pf/3, holds/2): its colour and shape families tell "
+                        "objects apart in the report and for --restrict, besides pfs.lp's (repeatable; "
+                        "load it beside the written library)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=run)
 
@@ -44,7 +48,10 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import read_corpus
     from groundlang.inference.discovery import DiscoverySettings, discover_tasks, write_library
 
+    from groundlang.logic.tasks import TaskLibrary
+
     start = time.perf_counter()
+    pfs = TaskLibrary.load(args.pfs) if args.pfs else None  # a bad file is refused before any work
     corpus = read_corpus(args.directory, args.palette)
     if not corpus.instances:
         raise ValueError(f"{args.directory}: no corpus files (*.txt) found")
@@ -52,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
                                  max_tasks=args.max_tasks, restrict=args.restrict)
     cache = False if args.no_cache else args.cache_dir
     quiet = args.json or getattr(args, "quiet", False)
-    discovery = discover_tasks(corpus.instances, settings, cache_dir=cache, progress=not quiet)
+    discovery = discover_tasks(corpus.instances, settings, cache_dir=cache, progress=not quiet, pfs=pfs)
     path = write_library(discovery, args.output)
     seconds = time.perf_counter() - start
     if args.json:
