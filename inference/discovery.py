@@ -65,6 +65,7 @@ from groundlang.inference.lifting import (  # noqa: F401
     structure_key,
     task_name,
 )
+from groundlang.logic.program import Source
 from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary, format_lifted_task
 from groundlang.model.storage import write_atomically
 
@@ -341,8 +342,13 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
     """
     if not instances:
         raise ValueError("discover_tasks needs at least one instance")
+    if pfs is not None and pfs.tasks:
+        raise ValueError(f"{pfs.program.user_names}: declares tasks ({', '.join(pfs.names)}); discovery takes "
+                         "PFs from it, not tasks")
     demos = _group(instances)
     logger.info("discovery: %d instances, %d distinct demonstrations", len(instances), len(demos))
+    # Before any MLIRL work: a PF file that fails on an environment is reported at once.
+    attributes = [_attributes(demo, pfs) for demo in demos]
     for demo in demos:
         _fit_top_features(demo, settings)
     lifted = _candidate_tasks(demos)
@@ -357,7 +363,6 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
         raise ValueError(f"no library of at most {settings.max_tasks} candidate tasks explains every "
                          "demonstration that has a candidate goal")
     chosen, score = ranked[0]
-    attributes = [_attributes(demo.instance.initial_state, pfs) for demo in demos]
     reports = []
     for i, demo in enumerate(demos):
         report = DemonstrationReport(demo.names, demo.num_states, demo.weights, demo.top, demo.mlirl_ll,
@@ -376,63 +381,70 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
     tasks = tuple(candidates.tasks[j] for j in chosen)
     if settings.restrict:
         tasks = tuple(_restricted(t, reports, demos, attributes) for t in tasks)
-    text = _library_text(tasks, reports, score, settings, len(instances))
-    library = TaskLibrary.from_text(text, "<discovered tasks>")
+    text = _library_text(tasks, reports, score, settings, len(instances), pfs)
+    # Loaded back beside the PF files its restrictions may name, so that they are checked now.
+    library = TaskLibrary([Source("<discovered tasks>", text), *(pfs.sources if pfs else ())])
     logger.info("discovery: library %s (score %.3f)", ", ".join(t.name for t in tasks), score)
     alternatives = tuple((tuple(candidates.tasks[j].name for j in subset), s) for subset, s in ranked)
     return Discovery(library, library.tasks, candidates.tasks, tuple(reports), score, text, alternatives)
 
 
-def _attributes(state, pfs: TaskLibrary | None):
-    """Object -> its ``(colour/shape PF name, term)`` pairs in ``state``: pfs.lp's families, or every
-    family ``pfs`` declares (clingo's ``described/3``)."""
+def _attributes(demo: _Demo, pfs: TaskLibrary | None):
+    """Object -> its ``(colour/shape PF name, term)`` pairs in the demonstration's initial state:
+    pfs.lp's families, or every family ``pfs`` declares (clingo's ``described/3``)."""
+    state = demo.instance.initial_state
     if pfs is None:
         return colour_shape_pfs(state.layout)
-    from groundlang.model.tasks import attribute_pfs
+    from groundlang.model.tasks import attribute_pfs, object_descriptions
 
+    if not object_descriptions(state, pfs):  # pfs.lp alone describes every room by its colour
+        raise ValueError(f"{pfs.program.user_names}: describes no object of the initial state of {demo.names[0]} "
+                         "(does a constraint leave that environment without an answer set?)")
     return attribute_pfs(state, pfs)
 
 
 def _restricted(task: LiftedTask, reports, demos, attributes) -> LiftedTask:
     """``task`` restricted, per variable, by what singles out its object in every demonstration it explains.
 
-    In each demonstration, what singles the object out is every PF of it that no peer has, or, when
-    no single PF does, the smallest conjunction that does (the report's ``singled_out``); the
-    restriction is what all of them share (a yellow star beside a moon and a red star beside a moon:
-    ``toyIs(star)``). When several single PFs are shared, the first (colour before shape) is enough.
-    A variable whose object had no peers in some demonstration, or could not be told apart from them,
-    is left free; so is one whose demonstrations share nothing (the room of toy-to-room, reached in
-    rooms of every colour).
+    The restriction is the smallest conjunction of colour/shape PFs true of the object in every one
+    of them and of none of its peers (same class) in any: a yellow star beside a moon and a red star
+    beside a moon give ``toyIs(star)``, though each alone is told apart by its colour first. Among
+    conjunctions of one size the first wins, in the order of the first demonstration's PFs (colour
+    PFs, then shape PFs, each by name). A variable whose object had no peers in some demonstration,
+    or cannot be told apart from them in all by PFs it always has, is left free (the room of
+    toy-to-room, reached in rooms of every colour).
     """
     index = {d.names: i for i, d in enumerate(demos)}
     explained = [r for r in reports if r.task == task.name]
     restrictions = []
     for var in task.variables:
-        common: list[str] | None = None  # terms, in the first demonstration's order
-        alone_everywhere = True
+        cases = []  # per demonstration: the object's PFs (name -> term) and its peers' PF-name sets
         for r in explained:
-            picked = dict(r.singled_out).get(var.name)
-            if not picked:  # () no peers, None no distinguishing PFs
-                common = []
+            if not dict(r.singled_out).get(var.name):  # () no peers, None no distinguishing PFs
+                cases = []
                 break
             i = index[r.instances]
             obj = r.grounding.object_of(var.name)
-            pairs = attributes[i].get(obj, ())
             classes = _object_classes(demos[i].instance.initial_state.layout)
-            peers = [p for p, c in classes.items() if c == classes[obj] and p != obj]
-            taken = [{name for name, _ in attributes[i].get(p, ())} for p in peers]
-            marks = [term for name, term in pairs if not any(name in t for t in taken)]  # each alone suffices
-            if not marks:  # only a conjunction tells it apart: all of it
-                alone_everywhere = False
-                terms = dict(pairs)
-                marks = [terms[a.predicate] for a in picked if a.predicate in terms]
-            common = marks if common is None else [t for t in common if t in marks]
-        chosen = (common or [])[:1] if alone_everywhere else (common or [])
-        restrictions += [(var.name, term) for term in sorted(chosen)]
+            peers = [{name for name, _ in attributes[i].get(p, ())}
+                     for p, c in classes.items() if c == classes[obj] and p != obj]
+            cases.append((dict(attributes[i].get(obj, ())), peers))
+        shared = [name for name in (cases[0][0] if cases else ()) if all(name in own for own, _ in cases)]
+        restrictions += [(var.name, cases[0][0][name]) for name in _smallest_exclusion(shared, cases)]
     return replace(task, restrictions=tuple(restrictions)) if restrictions else task
 
 
-def _library_text(tasks, reports, score, settings: DiscoverySettings, num_instances: int) -> str:
+def _smallest_exclusion(names: Sequence[str], cases) -> tuple[str, ...]:
+    """The first smallest subset of ``names`` that no peer of any case has all of; () if none."""
+    for k in range(1, len(names) + 1):
+        for subset in combinations(names, k):
+            if not any(set(subset) <= peer for _, peers in cases for peer in peers):
+                return subset
+    return ()
+
+
+def _library_text(tasks, reports, score, settings: DiscoverySettings, num_instances: int,
+                  pfs: TaskLibrary | None = None) -> str:
     """The discovered tasks as ASP facts (tasks.lp's format) with a comment header and per-task evidence."""
     lines = [
         "% Lifted tasks discovered from demonstrations by groundlang (inference/discovery.py).",
@@ -443,7 +455,9 @@ def _library_text(tasks, reports, score, settings: DiscoverySettings, num_instan
         f"% shortens the description of the demonstrations (score J = {score:.3f} nats; weight margin",
         f"% {settings.weight_margin}, up to {settings.max_conjuncts} atoms per goal, "
         f"{settings.atom_cost:.3f} nats per atom).",
-        "% Edit freely: this file loads with TaskLibrary.load([path]).",
+        ("% Edit freely: this file loads with TaskLibrary.load([path])." if pfs is None else
+         f"% Edit freely: this file loads with TaskLibrary.load([path, ...]) beside the PFs it names: "
+         f"{pfs.program.user_names}."),
         "",
     ]
     for task in tasks:

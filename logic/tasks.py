@@ -459,7 +459,9 @@ def ground_environment(
             elif kind == "described":
                 cls, name, obj, term = value
                 described.setdefault(obj, {}).setdefault(cls, set()).add(name)
-                terms[name] = term
+                if terms.setdefault(name, term) != term:
+                    raise AspError(f"{library.program.user_names}: PFs {terms[name]} and {term} are both called "
+                                   f"{name} in groundlang; rename one of them")
             elif kind == "unusable_restriction":
                 unusable.add(value)
             elif kind == "restrictable":

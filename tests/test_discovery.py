@@ -24,7 +24,7 @@ from groundlang.inference.discovery import (
     write_library,
 )
 from groundlang.logic.atoms import Atom, parse_atom, parse_goal
-from groundlang.logic.tasks import TaskLibrary, Variable
+from groundlang.logic.tasks import AspError, TaskLibrary, Variable
 from groundlang.model.tasks import candidate_tasks
 
 CLASSES = {"agent0": "agent", "block0": "toy", "block1": "toy", "room0": "room", "room1": "room",
@@ -311,3 +311,60 @@ def test_cli_discover_restrict_reads_the_users_pfs(tmp_path, capsys):
     assert main(argv + ["--pfs", str(broken)]) == 2
     assert "broken.lp" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_restriction_may_need_a_conjunction_shared_by_every_demonstration(tmp_path):
+    """Red star beside a red moon and a blue star; yellow star beside a yellow moon and a blue star:
+    neither toyTone(warm) nor toyIs(star) alone excludes every peer, both together do."""
+    tone = tmp_path / "tone.lp"
+    tone.write_text(_TONE)
+    demos = [_push_first_toy("red_star", "block,10,0,4,2 block,10,1,7,6 block,1,0,1,2"),
+             _push_first_toy("yellow_star", "block,12,0,4,2 block,12,1,7,6 block,1,0,1,2")]
+    found = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([tone]))
+    assert sorted(_toy_restrictions(found)) == ["toyIs(star)", "toyTone(warm)"]
+    # The report's smallest conjunction (the first found, colour PFs before shape PFs).
+    assert dict(found.demonstrations[0].singled_out)["T"] == (parse_atom("toyIsRed(block0)"),
+                                                             parse_atom("toyIsStar(block0)"))
+    blue_moon = [_push_first_toy("red_star", "block,10,0,4,2 block,1,1,7,6")]
+    single = discover_tasks(blue_moon, DiscoverySettings(restrict=True), cache_dir=False,
+                            pfs=TaskLibrary.load([tone]))
+    # Several single PFs tell it apart (toyIsRed, toyIsStar, toyToneWarm): the first colour PF by name.
+    assert _toy_restrictions(single) == ["toyIs(red)"]
+    assert "beside the PFs it names" in single.text and "tone.lp" in single.text
+
+
+def test_pfs_for_discovery_are_checked(tmp_path):
+    demos = [_push_first_toy("red_star", "block,10,0,4,2 block,1,0,7,6")]
+    # A family declared for toys but written true of rooms too describes only toys.
+    loose = tmp_path / "loose.lp"
+    loose.write_text("pf(colour, anyTone(warm), (toy,)).\nholds(anyTone(warm), (O,)) :- colour(O, red).\n")
+    found = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([loose]))
+    assert ("R", "anyTone(warm)") not in found.tasks[0].restrictions
+    # Two PFs groundlang would name alike.
+    clash = tmp_path / "clash.lp"
+    clash.write_text("pf(colour, toyIsRed, (toy,)).\nholds(toyIsRed, (T,)) :- toy(T).\n")
+    with pytest.raises(AspError, match="toyIs\\(red\\) and toyIsRed are both called toyIsRed"):
+        discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([clash]))
+    # A file whose constraint leaves the environment no answer set is reported, not read as "no PFs".
+    unsat = tmp_path / "unsat.lp"
+    unsat.write_text(":- room(R).\n")
+    with pytest.raises(ValueError, match="unsat.lp: describes no object of the initial state of red_star"):
+        discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([unsat]))
+    # Tasks belong in a task library, not here.
+    with pytest.raises(ValueError, match="declares tasks"):
+        discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load())
+
+
+def test_a_users_family_singles_out_what_pfs_lp_cannot(tmp_path):
+    """Two red stars: no colour or shape PF tells them apart, a user's family of sides does."""
+    side = tmp_path / "side.lp"
+    side.write_text("side(west). side(east).\npf(shape, toySide(S), (toy,)) :- side(S).\n"
+                    "holds(toySide(west), (T,)) :- toy(T), at(T, X, _), X < 5.\n"
+                    "holds(toySide(east), (T,)) :- toy(T), at(T, X, _), X >= 5.\n")
+    demos = [_push_first_toy("west_star", "block,10,0,4,2 block,10,0,7,6")]
+    plain = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False)
+    assert dict(plain.demonstrations[0].singled_out)["T"] is None and _toy_restrictions(plain) == []
+    found = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([side]))
+    assert dict(found.demonstrations[0].singled_out)["T"] == (parse_atom("toySideWest(block0)"),)
+    assert _toy_restrictions(found) == ["toySide(west)"]
+    assert [t.name for t in found.library.tasks] == ["toyToRoom"]  # loaded back with side.lp: checked
