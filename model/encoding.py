@@ -23,7 +23,7 @@ import torch
 from groundlang.grammar.lexicon import COLOURS, listed_categories
 from groundlang.grammar.logical_form import LogicalForm, Reading
 from groundlang.model.interpretations import UNALIGNED_CLASSES, Interpretation, RoleBinding, class_of
-from groundlang.model.vocabulary import NULL, Vocabulary, class_token, is_task_role
+from groundlang.model.vocabulary import DIRECT_OBJECT, NULL, Vocabulary, class_token, is_task_role
 
 __all__ = ["Observation", "Batch", "encode", "entity_words", "is_mentionable", "is_referring", "machine_string",
            "PAD_LOGIT"]
@@ -90,6 +90,7 @@ class Batch:
     # the PFs the phrase may express of the role's object, and NULL ("left", "far")
     role_head_mix: torch.Tensor  # [I, J, V] mixture the head noun comes from: the object's class
     type_refers: torch.Tensor  # [I, K] bool: a phrase of the type can name an object (is_referring)
+    type_base_prep: torch.Tensor  # [I, K] the preposition key the type's key backs off to (backoff_key)
 
     @property
     def num_instances(self) -> int:
@@ -147,6 +148,14 @@ def entity_words(lf: LogicalForm) -> list[tuple[str | None, tuple[str, ...]]]:
             result[n] = (f"{key or 'dobj'}|last", modifiers, head)
             break
     return result
+
+
+def backoff_key(key: str) -> str:
+    """The key a preposition key backs off to: the same preposition without the marks of a clause
+    with a direct object and of the last phrase (``from+obj|last`` -> ``from``, ``dobj|last`` ->
+    ``<dobj>``); a negated or noun-attached phrase keeps its mark (``not:to``, ``to@np``)."""
+    base = key.removesuffix("|last").replace("+obj", "")
+    return DIRECT_OBJECT if base == "dobj" else base
 
 
 def is_referring(modifiers: Sequence[str], head: Sequence[str]) -> bool:
@@ -367,9 +376,13 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     clause_arity = torch.zeros(I, R, CLAUSE_ARITY_BINS)
     reading_group = _pad([groups for _, _, groups in structures], -1, torch.long)
     type_refers = torch.zeros(I, K, dtype=torch.bool)
+    type_base_prep = torch.zeros(I, K, dtype=torch.long)
+    # A key whose base training never saw backs off to itself.
+    base_of = [vocab.preps.index(b) if (b := backoff_key(p)) in vocab.preps else n for n, p in enumerate(vocab.preps)]
     for i, (types, merged, _) in enumerate(structures):
         for (prep, mods, head, refers), k in types.items():
             type_prep[i, k] = prep
+            type_base_prep[i, k] = base_of[prep]
             type_mask[i, k] = True
             type_refers[i, k] = refers
             for u in mods:
@@ -396,5 +409,5 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
         frame_counts=frame_counts, verb_counts=verb_counts, clause_arity=clause_arity, reading_group=reading_group,
         task_token=task_token, task_index=task_index, align_context=align_context, cover_slot=cover_slot,
         cover_mask=cover_mask, role=role, role_mask=role_mask, role_logw=role_logw, role_mix=role_mix,
-        role_head_mix=role_head_mix, type_refers=type_refers,
+        role_head_mix=role_head_mix, type_refers=type_refers, type_base_prep=type_base_prep,
     )

@@ -181,6 +181,7 @@ class ParseAligned(LanguageModel):
         arity_concentration: float | None = 1.05,
         align_by_task: bool = True,
         mention_phrases: str = "referring",
+        align_backoff: bool = False,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -191,7 +192,14 @@ class ParseAligned(LanguageModel):
         one alignment table ``P(role | preposition, L)`` per lifted task (False:
         one ``P(role | preposition)`` shared by all tasks). ``mention_phrases``: which phrases name
         the object they align with for the mention model, ``"referring"`` (a head noun, a colour
-        word or an open-class word, see ``encoding.is_referring``) or ``"any"``."""
+        word or an open-class word, see ``encoding.is_referring``) or ``"any"``. ``align_backoff``: each
+        alignment context reads roles from a mixture of its own table and that of the key it backs off to
+        (``encoding.backoff_key``: ``from+obj|last`` -> ``from``), weights learned per context, so a rare
+        key ("from ..." as the last phrase) is no longer read by its prior alone. Off by default:
+        measured on the crowd corpus it is the better model by 10-fold held-out likelihood of words and
+        demonstrations (-13456 against -13494 nats, original commands; -9296 against -9305, simplified),
+        but leave-one-out gives 221 and 225 of 240 against 220 and 228, novel layouts 640 and 655 of 720
+        against 633 and 659 (original and simplified commands)."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")
@@ -209,6 +217,7 @@ class ParseAligned(LanguageModel):
         self.arity_concentration = arity_concentration
         self.align_by_task = align_by_task
         self.mention_phrases = mention_phrases
+        self.align_backoff = align_backoff
 
     def settings(self) -> dict:
         return {
@@ -219,6 +228,7 @@ class ParseAligned(LanguageModel):
             "arity_concentration": self.arity_concentration,
             "align_by_task": self.align_by_task,
             "mention_phrases": self.mention_phrases,
+            "align_backoff": self.align_backoff,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
@@ -246,6 +256,9 @@ class ParseAligned(LanguageModel):
         contexts = concentration.shape[0] if self.align_by_task else num_preps
         with pyro.plate("align_contexts", contexts, dim=-1):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
+            if self.align_backoff:
+                # Per context: the share of its own table and of its back-off key's (encoding.backoff_key).
+                g["backoff"] = pyro.sample("backoff", dist.Dirichlet(share))
         if self.mention_concentration is not None:
             # Per role: P(an object in this role is named by some phrase), P(it is not).
             # A priori a task's object is named and a bystander is not, by as many
@@ -280,11 +293,22 @@ class ParseAligned(LanguageModel):
         type_ll = torch.einsum("ijvu,iku->ijvk", modifiers, batch.type_counts) + torch.einsum(
             "ijvu,iku->ijvk", heads, batch.type_head_counts
         )  # [I, J, V, K]
-        log_table = g["align"].clamp_min(1e-30).log()
         if self.align_by_task:
-            log_align = log_table[batch.align_context[:, :, None, :], batch.role[:, :, :, None]]  # [I, J, V, K]
+            context = batch.align_context  # [I, J, K]
+            base = batch.align_context - batch.type_prep[:, None, :] + batch.type_base_prep[:, None, :]
         else:
-            log_align = log_table[batch.type_prep[:, None, None, :], batch.role[:, :, :, None]]  # [I, J, V, K]
+            context = batch.type_prep[:, None, :].expand(-1, batch.role.shape[1], -1)
+            base = batch.type_base_prep[:, None, :].expand_as(context)
+        roles = batch.role[:, :, :, None]
+        if "backoff" in g:
+            own = g["align"][context[:, :, None, :], roles]  # [I, J, V, K]
+            backed = g["align"][base[:, :, None, :], roles]
+            # A mixture of the key's own table and its back-off key's, with learned weights per context:
+            # one more latent choice, so EM stays exact (weights * gradient = expected counts).
+            weights = g["backoff"][context][:, :, None, :, :]  # [I, J, 1, K, 2]
+            log_align = (weights[..., 0] * own + weights[..., 1] * backed).clamp_min(1e-30).log()
+        else:
+            log_align = g["align"].clamp_min(1e-30).log()[context[:, :, None, :], roles]  # [I, J, V, K]
         log_align = (log_align + batch.role_logw[..., None]).masked_fill(~batch.role_mask[..., None], PAD_LOGIT)
         joint = type_ll + log_align
         per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]

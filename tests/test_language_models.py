@@ -318,3 +318,47 @@ def test_mention_factor_is_the_same_summed_one_subset_at_a_time(setting, monkeyp
     whole = learner.lm.reading_table(g, batch)[1]
     monkeypatch.setattr(language_models, "MENTION_SUBSETS_PER_BLOCK", 1)
     assert torch.allclose(learner.lm.reading_table(g, batch)[1], whole, atol=1e-6)
+
+
+@pytest.mark.parametrize("key, base", [
+    ("from+obj|last", "from"), ("to+obj", "to"), ("to|last", "to"), ("dobj|last", "<dobj>"), ("<dobj>", "<dobj>"),
+    ("not:dobj|last", "not:dobj"), ("to@np|last", "to@np"), ("into", "into"),
+])
+def test_a_key_backs_off_to_its_preposition(key, base):
+    from groundlang.model.encoding import backoff_key
+
+    assert backoff_key(key) == base
+
+
+def test_with_back_off_each_context_mixes_its_table_with_its_base_keys(setting):
+    """Weights (1, 0) read every key by its own table; (0, 1) by its base key's table."""
+    learner, _, batch, g = setting
+    vocab = learner.vocab
+    plain = learner.lm.log_likelihood(g, batch)
+    backing = ParseAligned(align_backoff=True)
+    C = g["align"].shape[0]
+    own_only = {**g, "backoff": torch.tensor([1.0, 0.0]).expand(C, 2)}
+    assert torch.allclose(backing.log_likelihood(own_only, batch), plain)
+    # The same as the plain model with every key's rows replaced by its base key's.
+    from groundlang.model.encoding import backoff_key
+
+    base_of = [vocab.preps.index(b) if (b := backoff_key(p)) in vocab.preps else n for n, p in enumerate(vocab.preps)]
+    assert base_of != list(range(len(vocab.preps)))  # some key here does back off
+    tables = g["align"].reshape(len(vocab.tasks), len(vocab.preps), -1)
+    based = {**g, "align": tables[:, base_of].reshape(C, -1)}
+    base_only = {**g, "backoff": torch.tensor([0.0, 1.0]).expand(C, 2)}
+    assert torch.allclose(backing.log_likelihood(base_only, batch), learner.lm.log_likelihood(based, batch))
+    with pyro.poutine.block():
+        assert backing.sample_globals(**global_sizes(vocab))["backoff"].shape == (C, 2)
+
+
+def test_em_with_back_off_never_lowers_the_objective():
+    """EM's M step (weights * gradient = expected counts) holds for the mixture: every step climbs."""
+    from groundlang.corpus import example_corpus_path, read_corpus
+
+    corpus = read_corpus(example_corpus_path(), "sokoban")
+    learner = Learner(ParseAligned(align_backoff=True)).fit(corpus.instances[:12])
+    losses = learner.fit_result.losses
+    assert len(losses) > 3 and all(b <= a + 1e-3 * abs(a) * 1e-3 for a, b in zip(losses, losses[1:]))
+    assert learner.fit_result.converged
+    assert "backoff" in learner.globals and torch.allclose(learner.globals["backoff"].sum(-1), torch.ones(1))
