@@ -317,7 +317,8 @@ class ParseAligned(LanguageModel):
             entities = entities + self._mentions(g, batch, joint, entities, self.mention_phrases == "referring")
         # Words outside noun phrases come from the lifted task's token or NULL
         # with learned shares, one pair for verbs and one for the other words:
-        # a verb says more about the task than "to" or "the" does.
+        # a verb says more about the task than "to" or "the" does. A negated clause's verb
+        # ("do not enter it") is one of the other words (see encoding._reading_structure).
         phi = g["phi"]
         task_words = phi[batch.task_token[:, :, None], batch.uniq[:, None, :]].clamp_min(1e-30).log()  # [I, J, U]
         null_words = log_emit[NULL_MIXTURE][:, None, :].expand_as(task_words)  # [I, J, U]

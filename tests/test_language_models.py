@@ -362,3 +362,17 @@ def test_em_with_back_off_never_lowers_the_objective():
     assert len(losses) > 3 and all(b <= a + 1e-3 * abs(a) * 1e-3 for a, b in zip(losses, losses[1:]))
     assert learner.fit_result.converged
     assert "backoff" in learner.globals and torch.allclose(learner.globals["backoff"].sum(-1), torch.ones(1))
+
+
+def test_the_verb_of_a_negated_clause_is_a_frame_word_not_the_tasks(setting):
+    """"do not *walk* into the red room" says what not to do: "walk" is generated as a frame word."""
+    learner, _, _, _ = setting
+    state = read_state_file(TWO_TOYS, "sokoban2")
+    obs = learner._command_observation("push the bag into the blue room and do not walk into the red room", state)
+    assert any(c.negated and c.verb == "walk" for c in obs.readings[0].logical_form.clauses)
+    batch = encode([obs], learner.vocab)
+    words = [learner.vocab.words[w] for w in batch.uniq[0].tolist()]
+    for r in range(int((batch.reading_logp[0] > -1e3).sum())):
+        verbs = {w for u, w in enumerate(words) if batch.verb_counts[0, r, u] > 0}
+        frame = {w for u, w in enumerate(words) if batch.frame_counts[0, r, u] > 0}
+        assert verbs == {"push"} and "walk" in frame, r
