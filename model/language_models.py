@@ -197,9 +197,10 @@ class ParseAligned(LanguageModel):
         (``encoding.backoff_key``: ``from+obj|last`` -> ``from``), weights learned per context, so a rare
         key ("from ..." as the last phrase) is no longer read by its prior alone. Off by default:
         measured on the crowd corpus it is the better model by 10-fold held-out likelihood of words and
-        demonstrations (-13456 against -13494 nats, original commands; -9296 against -9305, simplified),
-        but leave-one-out gives 221 and 225 of 240 against 220 and 228, novel layouts 640 and 655 of 720
-        against 633 and 659 (original and simplified commands)."""
+        demonstrations (-13538 against -13577 nats, original commands; -9364 against -9373, simplified),
+        but leave-one-out gives 221 and 225 of 240 against 220 and 228, novel layouts 643 and 658 of 720
+        against 635 and 662 (original and simplified commands): "|last" says where things go, and a
+        rare "with ...|last" backed off to "with" reads "to one with orange floor" as a room passed."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")
