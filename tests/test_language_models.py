@@ -193,9 +193,10 @@ def test_each_tasks_alignment_table_spans_only_the_roles_its_interpretations_off
     interpretations can offer (with every task's roles in every table, a third of it was lost)."""
     learner, observations, batch, _ = setting
     vocab = learner.vocab
-    assert vocab.task_roles["agentToRoom"] == ("none", "agentInRoom.1", "other:room", "other:door", "other:toy")
+    assert vocab.task_roles["agentToRoom"] == ("none", "agentInRoom.1", "other:room", "other:door", "other:toy",
+                                              "other:start")
     assert vocab.task_roles["toyToRoom"] == ("none", "toyInRoom.0", "toyInRoom.1", "other:room", "other:door",
-                                             "other:toy")
+                                             "other:toy", "other:start")
     for obs in observations:
         for interp in obs.interpretations:
             offered = {rb.role for rb in interp.roles if rb.cls != "agent"}
@@ -376,3 +377,28 @@ def test_the_verb_of_a_negated_clause_is_a_frame_word_not_the_tasks(setting):
         verbs = {w for u, w in enumerate(words) if batch.verb_counts[0, r, u] > 0}
         frame = {w for u, w in enumerate(words) if batch.frame_counts[0, r, u] > 0}
         assert verbs == {"push"} and "walk" in frame, r
+
+
+def test_the_room_the_agent_starts_in_has_a_role_of_its_own():
+    """Inside a room: that room is the start room and nothing else. On a door cell (the novel layouts):
+    every room not bound may be the start room or another room."""
+    from groundlang.corpus import example_corpus_path, read_corpus
+    from groundlang.model.interpretations import START_ROLE, interpretations, start_rooms
+
+    library = Learner("parse").library
+    inside = read_corpus(example_corpus_path(), "sokoban").instances[0].initial_state
+    (room,), known = start_rooms(inside)
+    assert known and room in inside.layout.room_names
+    for interp in interpretations(inside, library, enumerate_constraints=False):
+        roles = {(rb.role, rb.obj) for rb in interp.roles if rb.cls == "room"}
+        bound = {rb.obj for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:")}
+        assert ((START_ROLE, room) in roles) == (room not in bound)
+        assert ("other:room", room) not in roles
+    door = read_state_file(Path(__file__).parent / "fixtures" / "novel_envs" / "novel_a.state", "sokoban")
+    starts, known = start_rooms(door)
+    assert not known and starts == set(door.layout.room_names)
+    for interp in interpretations(door, library, enumerate_constraints=False):
+        bound = {rb.obj for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:")}
+        free = set(door.layout.room_names) - bound
+        assert {rb.obj for rb in interp.roles if rb.role == START_ROLE} == free
+        assert {rb.obj for rb in interp.roles if rb.role == "other:room"} == free
