@@ -196,11 +196,13 @@ class ParseAligned(LanguageModel):
         alignment context reads roles from a mixture of its own table and that of the key it backs off to
         (``encoding.backoff_key``: ``from+obj|last`` -> ``from``), weights learned per context, so a rare
         key ("from ..." as the last phrase) is no longer read by its prior alone. Off by default:
-        measured on the crowd corpus it is the better model by 10-fold held-out likelihood of words and
-        demonstrations (-13538 against -13577 nats, original commands; -9364 against -9373, simplified),
-        but leave-one-out gives 221 and 225 of 240 against 220 and 228, novel layouts 643 and 658 of 720
-        against 635 and 662 (original and simplified commands): "|last" says where things go, and a
-        rare "with ...|last" backed off to "with" reads "to one with orange floor" as a room passed."""
+        measured on the crowd corpus before the start room's role (``interpretations.START_ROLE``), it was
+        the better model by 10-fold held-out likelihood of words and demonstrations (-13538 against -13577
+        nats, original commands; -9364 against -9373, simplified), but leave-one-out gave 221 and 225 of
+        240 against 220 and 228, novel layouts 643 and 658 of 720 against 635 and 662 (original and
+        simplified commands): "|last" says where things go, and a rare "with ...|last" backed off to
+        "with" read "to one with orange floor" as a room passed. With the start room's role it gives 226
+        and 228 of 240, 637 and 659 of 720: what it fixed, that role fixes too."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")
