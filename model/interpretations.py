@@ -25,8 +25,8 @@ The room the agent starts in has a bystander role of its own, ``other:start``
 commands say of where they start is learned apart from the rooms they pass or
 find the star in, and teaches the colours with a known referent. On a door cell
 the agent is in no room; a command may then presuppose any room as its start,
-so every room is offered both as the start room and as another room
-(:func:`start_rooms`). Measured on the crowd corpus: leave-one-out 229 and 226
+so every room the task does not bind is offered both as the start room and as
+another room (:func:`start_rooms`). Measured on the crowd corpus: leave-one-out 229 and 226
 of 240 against 228 and 220 (simplified and original commands), in novel
 layouts 659 and 637 of 720 against 662 and 635; 10-fold held-out likelihood
 of words and demonstrations -13448 against -13577 nats (original; the
@@ -101,7 +101,7 @@ class Interpretation:
     task: GroundedTask
     constraint: BindingConstraint
     log_prior: float
-    roles: tuple[RoleBinding, ...]  # goal variables first, then every other object
+    roles: tuple[RoleBinding, ...]  # goal variables first, then every other object (a room twice on a door cell)
 
     @property
     def lifted(self) -> str:
@@ -180,9 +180,10 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
 def start_rooms(state: State) -> tuple[frozenset[str], bool]:
     """The rooms that may be the one a command presupposes the agent starts in, and whether it is known.
 
-    The room the agent stands in (known: it is offered as the start room only). On a door cell the agent
-    is in no room, and a command written for it may say it starts in any: every room is offered both
-    as the start room and as another room."""
+    The room the agent stands in (known: it is offered as the start room only). Outside every room's
+    interior (on a door cell, the only other walkable cells) the agent is in no room, and a command
+    written for it may say it starts in any: every room the task does not bind is offered both as the
+    start room and as another room."""
     room_of = cell_tables(state.layout).room_of
     names = state.layout.room_names
     inside = int(room_of[state.agent.x, state.agent.y])

@@ -285,10 +285,12 @@ class ParseAligned(LanguageModel):
         """``(log P(words | j) [I, J], per reading [I, J, R], per type and role [I, J, V, K])``.
 
         A noun phrase of type k aligns with role v with probability
-        ``align[prep_k, role_v]``; a role that interpretation j does not offer
-        cannot be chosen, so its share of the probability is lost (the model
-        stays a product of categoricals, which keeps EM exact). The phrase's
-        words then come from that role's mixture.
+        ``align[prep_k, role_v]`` (with ``align_backoff``, a mixture of that and
+        the back-off key's row, the component one more latent choice); a role
+        that interpretation j does not offer cannot be chosen, so its share of
+        the probability is lost (the model stays a sum of products of
+        categoricals, which keeps EM exact). The phrase's words then come from
+        that role's mixture.
         """
         log_emit = mixture_log_emissions(g, batch)  # [X, I, U]
         modifiers = _gather_mixtures(log_emit, batch.role_mix)  # [I, J, V, U]
