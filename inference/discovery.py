@@ -238,6 +238,12 @@ def _object_classes(layout) -> dict[str, str]:
     return classes
 
 
+def _peers(layout, obj: str) -> list[str]:
+    """The other objects of ``obj``'s class in ``layout``."""
+    classes = _object_classes(layout)
+    return [p for p, c in classes.items() if c == classes[obj] and p != obj]
+
+
 def _group(instances: Sequence) -> list[_Demo]:
     """Instances sharing (initial state, actions), first-seen order."""
     groups: dict[tuple, _Demo] = {}
@@ -372,9 +378,7 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
             j = max(applicable, key=lambda j: scores[i, j])
             ll, g = best[i][j]
             layout = demo.instance.initial_state.layout
-            classes = _object_classes(layout)
-            peers = {o: [p for p, c in classes.items() if c == classes[o] and p != o] for _, o in g.binding}
-            picked = tuple((v, singling_out(layout, o, peers[o], attributes[i])) for v, o in g.binding)
+            picked = tuple((v, singling_out(layout, o, _peers(layout, o), attributes[i])) for v, o in g.binding)
             report = replace(report, task=candidates.tasks[j].name, grounding=g, log_likelihood=ll,
                              singled_out=picked)
         reports.append(report)
@@ -425,9 +429,8 @@ def _restricted(task: LiftedTask, reports, demos, attributes) -> LiftedTask:
                 break
             i = index[r.instances]
             obj = r.grounding.object_of(var.name)
-            classes = _object_classes(demos[i].instance.initial_state.layout)
             peers = [{name for name, _ in attributes[i].get(p, ())}
-                     for p, c in classes.items() if c == classes[obj] and p != obj]
+                     for p in _peers(demos[i].instance.initial_state.layout, obj)]
             cases.append((dict(attributes[i].get(obj, ())), peers))
         shared = [name for name in (cases[0][0] if cases else ()) if all(name in own for own, _ in cases)]
         restrictions += [(var.name, cases[0][0][name]) for name in _smallest_exclusion(shared, cases)]

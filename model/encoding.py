@@ -26,7 +26,7 @@ from groundlang.model.interpretations import UNALIGNED_CLASSES, Interpretation, 
 from groundlang.model.vocabulary import DIRECT_OBJECT, NULL, Vocabulary, class_token, is_task_role
 
 __all__ = ["Observation", "Batch", "encode", "entity_words", "is_mentionable", "is_referring", "machine_string",
-           "PAD_LOGIT"]
+           "backoff_key", "backoff_prep_ids", "PAD_LOGIT"]
 
 CLAUSE_ARITY_BINS = 5  # clauses with 4 or more noun phrases share the last bin
 
@@ -156,6 +156,12 @@ def backoff_key(key: str) -> str:
     ``<dobj>``); a negated or noun-attached phrase keeps its mark (``not:to``, ``to@np``)."""
     base = key.removesuffix("|last").replace("+obj", "")
     return DIRECT_OBJECT if base == "dobj" else base
+
+
+def backoff_prep_ids(vocab: Vocabulary) -> list[int]:
+    """Per preposition key of ``vocab`` (by index), the index of the key it backs off to
+    (:func:`backoff_key`); a key whose back-off key the vocabulary lacks backs off to itself."""
+    return [vocab.prep_id(base) if (base := backoff_key(p)) in vocab.preps else n for n, p in enumerate(vocab.preps)]
 
 
 def is_referring(modifiers: Sequence[str], head: Sequence[str]) -> bool:
@@ -386,8 +392,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     reading_group = _pad([groups for _, _, groups in structures], -1, torch.long)
     type_refers = torch.zeros(I, K, dtype=torch.bool)
     type_base_prep = torch.zeros(I, K, dtype=torch.long)
-    # A key whose base training never saw backs off to itself.
-    base_of = [vocab.preps.index(b) if (b := backoff_key(p)) in vocab.preps else n for n, p in enumerate(vocab.preps)]
+    base_of = backoff_prep_ids(vocab)
     for i, (types, merged, _) in enumerate(structures):
         for (prep, mods, head, refers), k in types.items():
             type_prep[i, k] = prep

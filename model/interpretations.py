@@ -149,11 +149,12 @@ def object_names(state: State) -> list[str]:
 
 
 def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary,
-           described: Mapping[str, Mapping[str, tuple[str, ...]]]) -> tuple[RoleBinding, ...]:
+           described: Mapping[str, Mapping[str, tuple[str, ...]]],
+           starts: tuple[frozenset[str], bool]) -> tuple[RoleBinding, ...]:
     """The roles of an interpretation: the task's variables (what words may say of a bound object:
     its PFs in C, then its spatial PFs), then every other object (all its unary PFs, as clingo
     describes it: colours, shapes, spatial PFs, any class a user's library adds). A head noun may
-    also say an object's shape PF."""
+    also say an object's shape PF. ``starts``: :func:`start_rooms` of ``state``."""
     lifted = library.task(task.task)
     binding = dict(task.binding)
     bindings = []
@@ -163,7 +164,7 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())
         bindings.append(RoleBinding(role, obj, var.cls, said, about.get("shape", ())))
     bound = set(binding.values())
-    starts, known = start_rooms(state)
+    starts, known = starts
     for obj in object_names(state):
         if obj not in bound:
             cls = class_of(obj)
@@ -221,7 +222,9 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
             "no task of the library can be carried out from this state "
             "(every grounding is impossible or already true)"
         )
-    described = object_descriptions(state, library)  # once per state, shared by every interpretation
+    # Once per state, shared by every interpretation.
+    described = object_descriptions(state, library)
+    starts = start_rooms(state)
     per_lifted = Counter(task.task for task, _ in candidates)
     n_lifted = len(per_lifted)
     result = []
@@ -229,7 +232,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
         log_prior_t = -math.log(n_lifted) - math.log(per_lifted[task.task])
         if not enumerate_constraints:
             largest = max(constraints, key=lambda c: len(c.atoms))
-            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, described)))
+            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, described, starts)))
             continue
         for constraint in constraints:
             result.append(
@@ -237,7 +240,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
                     task,
                     constraint,
                     log_prior_t - math.log(len(constraints)),
-                    _roles(task, constraint, state, library, described),
+                    _roles(task, constraint, state, library, described, starts),
                 )
             )
     return result

@@ -298,14 +298,14 @@ class ParseAligned(LanguageModel):
         type_ll = torch.einsum("ijvu,iku->ijvk", modifiers, batch.type_counts) + torch.einsum(
             "ijvu,iku->ijvk", heads, batch.type_head_counts
         )  # [I, J, V, K]
+        # Row of the alignment table per phrase type: (task, key) when aligning by task, else the key.
         if self.align_by_task:
             context = batch.align_context  # [I, J, K]
-            base = batch.align_context - batch.type_prep[:, None, :] + batch.type_base_prep[:, None, :]
         else:
             context = batch.type_prep[:, None, :].expand(-1, batch.role.shape[1], -1)
-            base = batch.type_base_prep[:, None, :].expand_as(context)
         roles = batch.role[:, :, :, None]
         if "backoff" in g:
+            base = context - batch.type_prep[:, None, :] + batch.type_base_prep[:, None, :]  # same task, back-off key
             own = g["align"][context[:, :, None, :], roles]  # [I, J, V, K]
             backed = g["align"][base[:, :, None, :], roles]
             # A mixture of the key's own table and its back-off key's, with learned weights per context:

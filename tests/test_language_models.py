@@ -341,9 +341,9 @@ def test_with_back_off_each_context_mixes_its_table_with_its_base_keys(setting):
     own_only = {**g, "backoff": torch.tensor([1.0, 0.0]).expand(C, 2)}
     assert torch.allclose(backing.log_likelihood(own_only, batch), plain)
     # The same as the plain model with every key's rows replaced by its base key's.
-    from groundlang.model.encoding import backoff_key
+    from groundlang.model.encoding import backoff_prep_ids
 
-    base_of = [vocab.preps.index(b) if (b := backoff_key(p)) in vocab.preps else n for n, p in enumerate(vocab.preps)]
+    base_of = backoff_prep_ids(vocab)
     assert base_of != list(range(len(vocab.preps)))  # some key here does back off
     tables = g["align"].reshape(len(vocab.tasks), len(vocab.preps), -1)
     based = {**g, "align": tables[:, base_of].reshape(C, -1)}

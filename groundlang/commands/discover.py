@@ -47,7 +47,6 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import read_corpus
     from groundlang.inference.discovery import DiscoverySettings, discover_tasks, write_library
-
     from groundlang.logic.tasks import TaskLibrary
 
     start = time.perf_counter()
