@@ -29,7 +29,7 @@ from lark.lexer import Lexer
 
 from .chunker import chunk
 from .composition import compose, instantiate
-from .lexicon import CONJUNCTIONS, SemanticLexicon, guess_categories
+from .lexicon import CONJUNCTIONS, SemanticLexicon, guess_categories, split_compound_colour
 from .logical_form import LogicalForm, Reading
 from .earley import install as install_fast_earley
 from .kbest import ForestKBest, RuleSymbolNode, log_weights
@@ -67,7 +67,8 @@ Word = tuple[str, frozenset[str]]
 
 
 def tokenise(command: str) -> list[str]:
-    """Lowercase tokens: words (hyphenated words split, clitics like 're split off) and punctuation."""
+    """Lowercase tokens: words (hyphenated words and solid colour compounds like "bluegreen" split,
+    clitics like 're split off) and punctuation."""
     text = command.lower().replace("\u2019", "'").replace("\u2018", "'")
     text = re.sub(r"(?<=\w)-(?=\w)", " ", text)
     out: list[str] = []
@@ -78,7 +79,7 @@ def tokenise(command: str) -> list[str]:
         elif re.fullmatch(r"\.{2,}", tok):
             out.append(".")
         else:
-            out.append(tok)
+            out.extend(split_compound_colour(tok))
     return out
 
 

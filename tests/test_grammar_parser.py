@@ -105,6 +105,17 @@ def test_tokeniser_keeps_every_word_and_splits_hyphens_and_clitics():
     assert "zorblax" in lf.words and lf.tags[lf.words.index("zorblax")] == "ADJ|NOUN"
 
 
+def test_tokeniser_splits_colour_compounds_written_solid_as_it_does_hyphenated_ones():
+    # "bluegreen" was <unk> to a model trained without it; split, its hues name the blue room. Measured on
+    # the crowd corpus (original commands): leave-one-out 227 against 226 of 240, novel layouts 639 against 637.
+    assert tokenise("walk into the bluegreen room") == tokenise("walk into the blue-green room") == [
+        "walk", "into", "the", "blue", "green", "room"]
+    # Only hue + hue: a word that merely starts with a hue, or a hue with a suffix, stays whole.
+    assert tokenise("tangerine redo greenish orangey tan") == ["tangerine", "redo", "greenish", "orangey", "tan"]
+    lf = parse("go to the greyblue room")[0].logical_form
+    assert {"grey", "blue"} <= set(lf.entities[0].modifiers)
+
+
 def test_lexicon_guesses():
     assert guess_categories("quickly") == frozenset({"ADV"})
     assert "VERB" in guess_categories("zorp", first=True) and "VERB" not in guess_categories("zorp")
