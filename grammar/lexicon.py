@@ -69,7 +69,7 @@ NOUNS = frozenset(
     "enclosure background chair bag backpack basket moon circle smiley thing direction way front end "
     "body foot line point shape star bit step steps times time gap".split()
 )
-MEASURES = frozenset("way steps step times time bit".split())
+MEASURES = frozenset("way steps step times time bit direction".split())
 ADJECTIVES = frozenset(
     "big large small little long longer short shorter lower upper next other far near opposite same "
     "open center middle left right top bottom straight shortest least possible big gold happy "
