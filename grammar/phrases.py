@@ -14,7 +14,7 @@ from typing import Any, Union
 
 from lark import Token
 
-from .lexicon import NEGATING_PREPOSITIONS, NEGATIONS
+from .lexicon import CONJUNCTIONS, NEGATING_PREPOSITIONS, NEGATIONS
 
 # Default rule weights (a PCFG-like score; a reading's weight is the product of the weights of its
 # choice rules, then readings are normalised). Only rules that compete with each other matter:
@@ -28,10 +28,15 @@ from .lexicon import NEGATING_PREPOSITIONS, NEGATIONS
 # - np_headless 0.5: an ambiguous word ("ornge") is likelier the head noun than a bare modifier.
 # - np_coord, c_measure 0.5 / 0.3: coordination and measure phrases ("all way") are rarer than
 #   the alternatives they compete with (clause coordination, a direct object).
+# - nmods_coord 0.5: coordinated modifiers of one noun ("a room with white / cream floor") against
+#   coordinated noun phrases ("white" and "cream floor"); both readings stay. Crowd corpus: 10-fold
+#   held-out likelihood -13434.0 against -13435.0 nats (original commands), -9365.6 against -9368.4
+#   (simplified); leave-one-out unchanged (227, 229 of 240); novel layouts 642 against 637 of 720
+#   (original; the command itself unchanged, near-ties of other commands moved), 659 simplified.
 DEFAULT_WEIGHTS: dict[str, float] = {
     "c_pp": 0.65, "np_pp": 0.35, "c_part": 0.65, "np_part": 0.35,
     "frag": 0.2, "frag_np": 0.2, "subj_clause": 0.5, "np_headless": 0.5, "np_coord": 0.5,
-    "c_measure": 0.3, "c_adv": 1.0, "c_inf": 1.0, "c_sub": 1.0, "c_ger": 1.0, "sub_clause": 1.0,
+    "nmods_coord": 0.5, "c_measure": 0.3, "c_adv": 1.0, "c_inf": 1.0, "c_sub": 1.0, "c_ger": 1.0, "sub_clause": 1.0,
     "np_rel": 1.0, "np_head": 1.0, "np_pron": 1.0, "pp": 1.0, "pp_coord": 1.0, "vp": 1.0, "gvp": 1.0,
 }
 
@@ -165,6 +170,7 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "obj": lambda vs: ("obj", vs[0]),
     "determiner": lambda vs: ("det", str(vs[0])),
     "nmods": lambda vs: ("mods", tuple(str(v) for v in vs)),
+    "nmods_coord": lambda vs: ("mods", tuple(str(v) for v in vs if str(v).lower() not in CONJUNCTIONS)),
     "comps": lambda vs: _complements(vs),
     "vp": _verb_phrase,
     "gvp": lambda vs: _verb_phrase([("verb", str(vs[0]))] + list(vs[1:])),

@@ -129,6 +129,17 @@ def test_a_direction_said_as_a_noun_phrase_is_adverbial_not_the_object():
     assert any(e.head == "direction" for e in lf.entities)  # still a noun where a preposition takes it
 
 
+def test_coordinated_modifiers_may_describe_one_object():
+    # "a room with white / cream floor" names one room; read only as two noun phrases ("white" and
+    # "cream floor") it was aligned twice. Both readings stay, weighted like noun-phrase coordination.
+    readings = parse("enter room with white / cream floor")
+    mods = [[e.modifiers for e in r.logical_form.entities if e.head == "floor"] for r in readings]
+    assert [("white", "cream")] in mods
+    assert any(any(e.modifiers == ("white",) and e.head is None for e in r.logical_form.entities) for r in readings)
+    best = parse("go to the red or blue room")[0].logical_form
+    assert [e.modifiers for e in best.entities] == [("red", "blue")]
+
+
 def test_lexicon_guesses():
     assert guess_categories("quickly") == frozenset({"ADV"})
     assert "VERB" in guess_categories("zorp", first=True) and "VERB" not in guess_categories("zorp")
