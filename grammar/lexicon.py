@@ -121,8 +121,17 @@ def _inflections(lemma: str) -> dict[str, str]:
     forms = {lemma: lemma}
     stem = lemma[:-1] if lemma.endswith("e") and not lemma.endswith("ee") else lemma
     forms[stem + "ing"] = lemma
-    forms[stem + "ed" if stem != lemma else lemma + "d"] = lemma
-    forms[lemma + ("es" if lemma.endswith(("s", "sh", "ch", "x")) else "s")] = lemma
+    consonant_y = len(lemma) >= 2 and lemma[-1] == "y" and lemma[-2] not in "aeiou"
+    if lemma.endswith("e"):
+        forms[lemma + "d"] = lemma  # move -> moved
+    elif consonant_y:
+        forms[lemma[:-1] + "ied"] = lemma  # carry -> carried
+    else:
+        forms[lemma + "ed"] = lemma  # push -> pushed
+    if consonant_y:
+        forms[lemma[:-1] + "ies"] = lemma
+    else:
+        forms[lemma + ("es" if lemma.endswith(("s", "sh", "ch", "x")) else "s")] = lemma
     if len(lemma) >= 3 and lemma[-1] in "pgtbm" and lemma[-2] in "aeiou" and lemma[-3] not in "aeiou":
         forms[lemma + lemma[-1] + "ing"] = lemma  # stop -> stopping
         forms[lemma + lemma[-1] + "ed"] = lemma

@@ -140,6 +140,17 @@ def test_coordinated_modifiers_may_describe_one_object():
     assert [e.modifiers for e in best.entities] == [("red", "blue")]
 
 
+def test_regular_past_forms_are_verbs():
+    # The -ed rule once gave "pushd" for "push": "once you have pushed star into it" read "pushed" as an
+    # adjective of the star.
+    for form, base in (("pushed", "push"), ("moved", "move"), ("carried", "carry"), ("carries", "carry"),
+                       ("stopped", "stop"), ("pushes", "push"), ("stayed", "stay")):
+        assert lemma(form) == base and "VERB" in guess_categories(form), form
+    assert lemma("pushd") == "pushd"
+    lf = parse("stop once you have pushed the star into it")[0].logical_form
+    assert "push" in [lemma(c.verb) for c in lf.clauses if c.verb]
+
+
 def test_lexicon_guesses():
     assert guess_categories("quickly") == frozenset({"ADV"})
     assert "VERB" in guess_categories("zorp", first=True) and "VERB" not in guess_categories("zorp")
