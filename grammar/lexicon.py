@@ -56,10 +56,13 @@ ADVERBS = frozenset(
     "there here around over immediately first completely fully actually quickly slowly carefully "
     "inside outside all very much far closer further farther now finally afterwards later".split()
 )
-COLOURS = frozenset(
+# Hue names: they compound when written solid, as they do hyphenated ("blue-green", "bluegreen").
+HUES = frozenset(
     "green orange red blue tan teal beige brown yellow turquoise cyan pink peach white cream creme "
-    "grey gray olive salmon gold golden black magenta purple violet maroon navy aqua lime khaki "
-    "tangerine greenish bluish reddish orangey orangish yellowish brownish pinkish whitish "
+    "grey gray olive salmon gold black magenta purple violet maroon navy aqua lime khaki".split()
+)
+COLOURS = HUES | frozenset(
+    "golden tangerine greenish bluish reddish orangey orangish yellowish brownish pinkish whitish "
     "flesh skin sand sandy light dark deep pale bright".split()
 )
 NOUNS = frozenset(
@@ -98,18 +101,11 @@ IRREGULAR = {
 AUX_VERBS = frozenset("is are am was were be been 're 's 'm have has had do does did".split())
 
 
-# Hue names that compound when written solid, as they do hyphenated ("blue-green", "bluegreen").
-HUES = frozenset(
-    "green orange red blue tan teal beige brown yellow turquoise cyan pink peach white cream creme "
-    "grey gray olive salmon gold black magenta purple violet maroon navy aqua lime khaki".split()
-)
-
-
 def split_compound_colour(word: str) -> tuple[str, ...]:
     """A colour compound written solid split into its hues ("bluegreen" -> ("blue", "green")), as the
     tokeniser splits a hyphenated one; any other word is itself. Both parts must be hues, so words
     that merely start with one ("tangerine", "redo") are left whole."""
-    if word not in HUES and word not in COLOURS:
+    if word not in COLOURS:
         for cut in range(3, len(word) - 2):
             if word[:cut] in HUES and word[cut:] in HUES:
                 return word[:cut], word[cut:]

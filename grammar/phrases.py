@@ -14,7 +14,7 @@ from typing import Any, Union
 
 from lark import Token
 
-from .lexicon import CONJUNCTIONS, NEGATING_PREPOSITIONS, NEGATIONS
+from .lexicon import NEGATING_PREPOSITIONS, NEGATIONS
 
 # Default rule weights (a PCFG-like score; a reading's weight is the product of the weights of its
 # choice rules, then readings are normalised). Only rules that compete with each other matter:
@@ -170,7 +170,7 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "obj": lambda vs: ("obj", vs[0]),
     "determiner": lambda vs: ("det", str(vs[0])),
     "nmods": lambda vs: ("mods", tuple(str(v) for v in vs)),
-    "nmods_coord": lambda vs: ("mods", tuple(str(v) for v in vs if str(v).lower() not in CONJUNCTIONS)),
+    "nmods_coord": lambda vs: ("mods", tuple(str(v) for v in vs if v.type != "CONJ")),
     "comps": lambda vs: _complements(vs),
     "vp": _verb_phrase,
     "gvp": lambda vs: _verb_phrase([("verb", str(vs[0]))] + list(vs[1:])),
