@@ -45,6 +45,9 @@ AUXILIARIES = frozenset("would will should can could must may might do does did 
 NEGATIONS = frozenset("not don't dont never doesn't didn't can't cant won't wont shouldn't n't no".split())
 # Prepositions that negate the gerund clause they introduce: "without going into the tan room".
 NEGATING_PREPOSITIONS = frozenset({"without"})
+# Prepositions whose verb-attached phrase says where a motion starts or what goes along with the mover
+# ("go from the blue room ...", "... and go to the beige room with the star"), never where it ends.
+SOURCE_AND_COMITATIVE_PREPOSITIONS = frozenset({"from", "with"})
 NUMBERS = frozenset(
     "one two three four five six seven eight nine ten first second third fourth fifth last couple few "
     "several many next half".split()

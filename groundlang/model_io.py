@@ -25,7 +25,7 @@ from groundlang.model import storage
 __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner"]
 
 FORMAT = "groundlang-model"
-FORMAT_VERSION = 11  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start)
+FORMAT_VERSION = 12  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases
 MODEL_JSON = "model.json"
 GLOBALS = "globals.npz"
 

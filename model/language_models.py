@@ -204,7 +204,9 @@ class ParseAligned(LanguageModel):
         "with" read "to one with orange floor" as a room passed. With the start room's role it gives 226
         and 228 of 240, 637 and 659 of 720: what it fixed, that role fixes too (after the grammar and
         lexicon fixes of the seventh session: 227 and 228 of 240, 639 and 658 of 720, against 227 and 229,
-        643 and 659 without it)."""
+        643 and 659 without it; since "|last" passes over "from" and "with" phrases
+        (``encoding.entity_words``): 227 and 228 of 240, 645 and 657 of 720, against 227 and 230, 648 and
+        662)."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")

@@ -228,12 +228,26 @@ def test_switching_the_parts_off_removes_their_globals(setting):
     ("take the star to the red room with you", [None, "to+obj|last", "with+obj"]),  # "you" has no words
     ("push the star", ["dobj|last"]),
     ("do not enter the green room", ["not:dobj|last"]),
+    # where a motion starts or what goes along is never where it ends: |last passes over it
+    ("go to the beige room with the star", ["to|last", "with"]),
+    ("walk to the white room from the orange room", ["to|last", "from"]),
+    ("push the star into the red room from the blue room", [None, "into+obj|last", "from+obj"]),
 ])
 def test_preposition_keys_tell_transitive_clauses_apart(command, keys):
     from groundlang.grammar.parser import parse
     from groundlang.model.encoding import entity_words
 
     assert [key for key, _, _ in entity_words(parse(command)[0].logical_form)] == keys
+
+
+def test_a_noun_attached_with_phrase_may_say_where_things_end():
+    """Only a verb-attached "with" is comitative; in "the room with the green floor" it names the room."""
+    from groundlang.grammar.parser import parse
+    from groundlang.model.encoding import entity_words
+
+    readings = {tuple(key for key, _, _ in entity_words(r.logical_form)) for r in parse("enter the room with the green floor")}
+    assert (None, "with@np|last") in readings  # the floor is the room's
+    assert ("dobj|last", "with+obj") in readings  # "with" attached to the verb: passed over
 
 
 def test_doors_are_described_by_their_side_of_the_agent(setting):
