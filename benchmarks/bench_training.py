@@ -1,7 +1,8 @@
 """Training time of the joint model once behaviour likelihoods are cached (issue 6).
 
 Prints, for each language model, the seconds to fit on the example corpus
-and, where ../shared is present, on the 240 simplified crowd commands, next
+and, where the crowd corpus is present (../shared/data/commands-to-tasks or
+$GROUNDLANG_CORPUS), on its 240 simplified commands, next
 to the seconds the behaviour likelihoods took (first run) and take from the
 cache, measured in the same run.
 
@@ -18,8 +19,9 @@ from pathlib import Path
 
 from groundlang.corpus import example_corpus_path, read_corpus
 from groundlang.learner import Learner
+from groundlang.published import crowd_corpus_path
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "commands-to-tasks" / "allTurkTrainLimitedCommand"
+SHARED = crowd_corpus_path(Path(__file__).resolve().parents[1]) / "allTurkTrainLimitedCommand"
 
 
 def measure(name: str, corpus, language_models: list[str], cache: str) -> None:

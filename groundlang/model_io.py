@@ -22,7 +22,7 @@ import torch
 from groundlang.interrupt import deferred_interrupts
 from groundlang.model import storage
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "save_learner", "load_learner"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "save_learner", "load_learner"]
 
 FORMAT = "groundlang-model"
 FORMAT_VERSION = 12  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases
@@ -34,13 +34,41 @@ class ModelFormatError(ValueError):
     """A model directory that is missing, corrupt, foreign or from another format version."""
 
 
+def check_model_destination(directory: str | Path) -> Path:
+    """``directory`` as a place to write a model, refused if writing there would mix the model with other
+    files or overwrite a file that is not a groundlang model's: it must be new, empty, or hold only a model
+    (of any format version: saving replaces it). ``train -o model`` run at the repository root would
+    otherwise have written into the ``model/`` source package. ``groundlang train`` asks before it trains."""
+    directory = Path(directory)
+    if directory.exists() and not directory.is_dir():
+        raise ModelFormatError(f"{directory}: exists and is not a folder; a model is written to a folder")
+    if not directory.is_dir():
+        return directory
+    others = sorted(p.name for p in directory.iterdir() if p.name not in (MODEL_JSON, GLOBALS)
+                    and not p.name.startswith("."))
+    if others:
+        shown = ", ".join(others[:3]) + (", ..." if len(others) > 3 else "")
+        raise ModelFormatError(f"{directory}: holds other files ({shown}); write the model to a new or empty "
+                               "folder, or over a model")
+    path = directory / MODEL_JSON
+    if path.exists():
+        try:
+            meta = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+            meta = None
+        if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+            raise ModelFormatError(f"{path}: not a groundlang model; saving would overwrite it")
+    return directory
+
+
 def save_learner(learner, directory: str | Path) -> Path:
-    """Write a fitted learner to ``directory`` (created if needed); returns the directory."""
+    """Write a fitted learner to ``directory`` (created if needed; see :func:`check_model_destination`);
+    returns the directory."""
     from groundlang.learner import NotFittedError
 
     if learner.globals is None or learner.vocab is None:
         raise NotFittedError("cannot save a learner that has not been trained")
-    directory = Path(directory)
+    directory = check_model_destination(directory)
     buffer = io.BytesIO()
     np.savez(buffer, **{k: v.detach().cpu().numpy() for k, v in learner.globals.items()})
     tensors = buffer.getvalue()

@@ -9,9 +9,22 @@ on either folder prints how it stands without a trip to the paper.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
+from pathlib import Path
 
-__all__ = ["Reference", "REFERENCES", "comparison", "format_comparison"]
+__all__ = ["Reference", "REFERENCES", "CORPUS_VARIABLE", "crowd_corpus_path", "comparison", "format_comparison"]
+
+# The corpus is not part of the repository: tests and benchmarks look for it beside the clone
+# (../shared/data/commands-to-tasks) unless this environment variable names its folder.
+CORPUS_VARIABLE = "GROUNDLANG_CORPUS"
+
+
+def crowd_corpus_path(repository: Path) -> Path:
+    """Where the commands-to-tasks corpus (the folder holding ``allTurkTrain``) is looked for: the folder
+    ``$GROUNDLANG_CORPUS`` names, else ``../shared/data/commands-to-tasks`` beside ``repository``."""
+    named = os.environ.get(CORPUS_VARIABLE)
+    return Path(named) if named else repository.resolve().parent / "shared" / "data" / "commands-to-tasks"
 
 
 @dataclass(frozen=True)

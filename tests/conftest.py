@@ -6,9 +6,11 @@ from pathlib import Path
 
 import pytest
 
+from groundlang.published import CORPUS_VARIABLE, crowd_corpus_path
+
 TESTS = Path(__file__).parent
 FIXTURES = TESTS / "fixtures"
-SHARED_CORPUS = TESTS.parent.parent / "shared" / "data" / "commands-to-tasks"
+SHARED_CORPUS = crowd_corpus_path(TESTS.parent)
 
 
 @pytest.fixture
@@ -18,9 +20,10 @@ def fixtures() -> Path:
 
 @pytest.fixture
 def shared_corpus() -> Path:
-    """The crowd-sourced corpus in ../shared; tests using it skip where it is absent."""
+    """The crowd-sourced corpus in ../shared (or $GROUNDLANG_CORPUS); tests using it skip where it is absent."""
     if not (SHARED_CORPUS / "allTurkTrain").is_dir():
-        pytest.skip(f"commands-to-tasks corpus not found at {SHARED_CORPUS} (it is not part of the repository)")
+        pytest.skip(f"commands-to-tasks corpus not found at {SHARED_CORPUS} (it is not part of the repository; "
+                    f"set {CORPUS_VARIABLE} to its folder)")
     return SHARED_CORPUS
 
 

@@ -102,6 +102,45 @@ def test_foreign_and_corrupt_model_directories_are_refused(learner, tmp_path):
         Learner.load(tmp_path / "m")
 
 
+def test_a_model_is_saved_only_where_it_overwrites_nothing_else(learner, tmp_path):
+    """A new or empty folder, or one holding a model; never a folder of other files (``train -o model`` at the
+    repository root would have written into the ``model/`` package) nor over another program's model.json."""
+    learner.save(tmp_path / "m")
+    learner.save(tmp_path / "m")  # over a model: replaced
+    assert sorted(p.name for p in (tmp_path / "m").iterdir()) == ["globals.npz", "model.json"]
+    (tmp_path / "empty").mkdir()
+    learner.save(tmp_path / "empty")
+    source = tmp_path / "src"
+    source.mkdir()
+    (source / "__init__.py").write_text("")
+    (source / "encoding.py").write_text("x = 1\n")
+    with pytest.raises(ModelFormatError, match=r"src: holds other files \(__init__.py, encoding.py\); write the"):
+        learner.save(source)
+    assert sorted(p.name for p in source.iterdir()) == ["__init__.py", "encoding.py"]  # nothing written
+    foreign = tmp_path / "keras"
+    foreign.mkdir()
+    (foreign / "model.json").write_text('{"format": "keras"}')
+    with pytest.raises(ModelFormatError, match="model.json: not a groundlang model; saving would overwrite it"):
+        learner.save(foreign)
+    assert (foreign / "model.json").read_text() == '{"format": "keras"}'
+    (tmp_path / "file").write_text("notes")
+    with pytest.raises(ModelFormatError, match="file: exists and is not a folder"):
+        learner.save(tmp_path / "file")
+
+
+def test_cli_train_refuses_a_folder_of_other_files_before_training(tmp_path, capsys, monkeypatch):
+    from groundlang.learner import Learner as L
+
+    source = tmp_path / "model"
+    source.mkdir()
+    (source / "__init__.py").write_text("")
+    monkeypatch.setattr(L, "fit", lambda *a, **k: pytest.fail("trained before checking where to write"))
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(source)]) != 0
+    err = capsys.readouterr().err
+    assert f"{source}: holds other files (__init__.py)" in err and "Traceback" not in err
+    assert [p.name for p in source.iterdir()] == ["__init__.py"]
+
+
 def test_an_untrained_learner_says_so(corpus):
     with pytest.raises(NotFittedError, match="not been trained"):
         Learner().posterior("go to the red room", corpus.instances[0].initial_state)

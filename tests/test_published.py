@@ -63,3 +63,25 @@ def test_cli_evaluate_prints_and_writes_the_comparison_for_a_folder_of_the_rss_c
                           "published": {"bag of words": 0.8375, "IBM Model 2": 0.8125},
                           "best_model": "bag of words", "best": 0.8375, "goal": 0.95, "goal_correct": 23,
                           "reached": True}]
+
+
+def test_the_crowd_corpus_is_looked_for_beside_the_clone_or_where_the_variable_says(tmp_path, monkeypatch):
+    from groundlang.published import CORPUS_VARIABLE, crowd_corpus_path
+
+    monkeypatch.delenv(CORPUS_VARIABLE, raising=False)
+    repo = tmp_path / "groundlang"
+    repo.mkdir()
+    assert crowd_corpus_path(repo) == tmp_path / "shared" / "data" / "commands-to-tasks"
+    monkeypatch.setenv(CORPUS_VARIABLE, str(tmp_path / "elsewhere"))
+    assert crowd_corpus_path(repo) == tmp_path / "elsewhere"
+
+
+def test_the_parse_benchmark_skips_without_the_corpus_so_make_bench_runs_the_others(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    bench = Path(__file__).parents[1] / "benchmarks" / "bench_parse.py"
+    run = subprocess.run([sys.executable, str(bench), str(tmp_path / "missing")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert f"crowd corpus not found under {tmp_path / 'missing'}: skipped" in run.stdout
