@@ -229,7 +229,8 @@ def format_state(state: State) -> str:
 
 
 def _read_lines(path: Path) -> list[str]:
-    """Decode a file as UTF-8 and split it into lines (CRLF accepted, trailing blank lines dropped)."""
+    """Decode a file as UTF-8 and split it into lines (CRLF and a leading byte-order mark accepted, trailing
+    blank lines dropped)."""
     data = Path(path).read_bytes()
     try:
         text = data.decode("utf-8")
@@ -239,6 +240,7 @@ def _read_lines(path: Path) -> list[str]:
             f"{path}, line {line}: byte 0x{data[exc.start]:02x} at offset {exc.start} is not UTF-8; "
             "expected a UTF-8 text file"
         ) from None
+    text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
     lines = [ln[:-1] if ln.endswith("\r") else ln for ln in text.split("\n")]
     while lines and not lines[-1].strip():
         lines.pop()
@@ -296,6 +298,8 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
     if len(lines) < 2:
         raise CorpusError(f"{path}, line 2: missing; expected the actions (comma separated) after the command")
     command = lines[0].strip()
+    if not command:
+        raise CorpusError(f"{path}, line 1: the command is empty; expected the command's words")
     actions = _parse_actions(lines[1], path)
     state_lines = lines[2:]
     needed = len(actions) + 1
@@ -351,7 +355,11 @@ def read_corpus(directory: str | Path, palette: str | Palette, skip_inconsistent
     palette = get_palette(palette)
     if not directory.is_dir():
         raise CorpusError(f"{directory}: not a directory; expected a folder of corpus files (*.txt)")
-    paths = sorted((p for p in directory.glob("*.txt") if p.is_file()), key=_file_order)
+    paths = sorted(directory.glob("*.txt"), key=_file_order)
+    for path in paths:
+        if not path.is_file():  # reported, not skipped: the corpus would silently shrink
+            kind = "a folder" if path.is_dir() else "a broken link" if path.is_symlink() else "not a regular file"
+            raise CorpusError(f"{path}: {kind}, not a corpus file; a corpus folder's *.txt are corpus files")
     if not paths:
         raise CorpusError(f"{directory}: no corpus files; expected files like agent2red_0.txt")
     corpus = Corpus(directory, palette, [])

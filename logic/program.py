@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import os
 import re
 import subprocess
@@ -173,6 +174,15 @@ def _parse(source: Source, allow_scripts: bool) -> list:
     return statements
 
 
+def _checked_time_limit(time_limit: float | None) -> float | None:
+    """``time_limit`` itself, refused unless None or a finite number of seconds above 0 (an infinite one
+    overflowed the thread wait deep inside; 0 blamed the program for grounding infinitely many atoms)."""
+    if time_limit is not None and not (isinstance(time_limit, (int, float)) and math.isfinite(time_limit)
+                                       and time_limit > 0):
+        raise ValueError(f"time_limit must be a finite number of seconds above 0 (or None), not {time_limit!r}")
+    return time_limit
+
+
 def _run_with_limit(work, time_limit: float | None, what: str) -> None:
     """Run ``work()`` in a daemon thread (clingo releases the GIL), wait at most ``time_limit`` s."""
     box: dict[str, BaseException] = {}
@@ -231,6 +241,7 @@ class Program:
         arguments: Sequence[str] = (),
     ) -> clingo.Control:
         """A Control with the program and ``facts`` (trusted, generated text), grounded once."""
+        _checked_time_limit(time_limit)
         messages: list[str] = []
 
         def logger(code: clingo.MessageCode, msg: str) -> None:
@@ -271,6 +282,7 @@ class Program:
         With ``isolated=True`` this runs in a child process (killed at the time limit);
         errors are re-raised here as the same AspError subclasses.
         """
+        _checked_time_limit(time_limit)
         if self.isolated:
             return _solve_in_child(self, facts, models, time_limit)
         ctl = self.control(facts, time_limit=time_limit, arguments=[f"--models={models}"])

@@ -15,6 +15,7 @@ import ast
 import hashlib
 import io
 import json
+import math
 import shutil
 import sys
 from collections.abc import Callable
@@ -484,3 +485,44 @@ def test_fuzz_model_json_fields(trained_model, tmp_path_factory, key, value, dro
         meta[key] = value
     (d / "model.json").write_text(json.dumps(meta))
     _loads_or_refuses(d)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (("tasks", str(NOVEL), "--palette", "sokoban", "--time-limit", "inf"),
+     "argument --time-limit: expected seconds above 0 and at most 1000000, not 'inf'"),
+    (("tasks", str(NOVEL), "--palette", "sokoban", "--time-limit", "0"),
+     "argument --time-limit: expected seconds above 0 and at most 1000000, not '0'"),
+    (("evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban", "--labels", "x.csv", "--workers", "0"),
+     "argument --workers: expected a whole number of 1 or more, not '0'"),
+    (("evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban", "--labels", "x.csv", "--limit", "-1"),
+     "argument --limit: expected a whole number of 1 or more, not '-1'"),
+    (("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "m", "--seed", "-1"),
+     "argument --seed: expected a seed from 0 to 4294967295, not '-1'"),
+    (("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "m", "--seed", "99999999999999999999"),
+     "argument --seed: expected a seed from 0 to 4294967295, not '99999999999999999999'"),
+    (("follow", "go", "--env", str(NOVEL), "--palette", "sokoban", "--model", "m", "--top", "0"),
+     "argument --top: expected a whole number of 1 or more, not '0'"),
+    (("follow", "go", "--env", str(NOVEL), "--palette", "sokoban", "--model", "m", "--max-steps", "-1"),
+     "argument --max-steps: expected a whole number of 1 or more, not '-1'"),
+    (("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "x.lp", "--weight-margin", "2"),
+     "argument --weight-margin: expected a number from 0 to 1, not '2'"),
+])
+def test_numeric_options_out_of_range_are_refused_by_name(argv, message, capsys):
+    """Before, --time-limit inf crashed clingo (exit 134), --limit -1 scored all but one instance and --top 0
+    printed every word as unknown."""
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--quiet", *argv])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert err.splitlines()[-1] == f"groundlang {argv[0]}: error: {message}"
+
+
+@pytest.mark.parametrize("limit", [math.inf, math.nan, 0, -1.0])
+def test_a_time_limit_that_is_no_number_of_seconds_is_refused(limit):
+    from groundlang.logic.program import Program, Source
+
+    program = Program((Source("t.lp", "a."),))
+    for run in (program.solve, program.control):
+        with pytest.raises(ValueError, match="time_limit must be a finite number of seconds above 0"):
+            run(time_limit=limit)

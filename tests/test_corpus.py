@@ -28,6 +28,7 @@ MALFORMED = {
     "empty.txt": (None, ["the file is empty", "expected a command line"]),
     "blank.txt": (None, ["the file is empty"]),
     "only_command.txt": (2, ["missing", "expected the actions"]),
+    "empty_command.txt": (1, ["the command is empty", "expected the command's words"]),
     "truncated.txt": (5, ["3 actions need 4 state lines", "found 2", "truncated"]),
     "truncated_midline.txt": (4, ["'room,10,4' has 3 comma-separated fields", "expected 6 (room,COLOUR,LEFT,TOP,RIGHT,BOTTOM)"]),
     "extra_state.txt": (5, ["extra state line", "need exactly 2 state lines"]),
@@ -272,3 +273,25 @@ def test_fuzz_reader_only_raises_corpus_errors(tmp_path, data):
         assert "\n" not in str(exc)
     else:
         assert len(inst.states) == len(inst.actions) + 1
+
+
+def test_a_corpus_folder_entry_that_is_not_a_file_is_reported_not_skipped(fixtures, tmp_path):
+    import shutil
+
+    corpus = tmp_path / "corpus"
+    shutil.copytree(fixtures / "sokoban", corpus)
+    assert len(read_corpus(corpus, "sokoban")) == 4
+    (corpus / "agent2red_7.txt").mkdir()
+    with pytest.raises(CorpusError, match=r"agent2red_7.txt: a folder, not a corpus file"):
+        read_corpus(corpus, "sokoban")
+    (corpus / "agent2red_7.txt").rmdir()
+    (corpus / "star2green_5.txt").symlink_to(tmp_path / "gone.txt")
+    with pytest.raises(CorpusError, match=r"star2green_5.txt: a broken link, not a corpus file"):
+        read_corpus(corpus, "sokoban")
+
+
+def test_a_byte_order_mark_is_read_as_nothing(fixtures, tmp_path):
+    line = (fixtures / "novel_envs" / "novel_a.state").read_text(encoding="utf-8")
+    path = tmp_path / "bom.state"
+    path.write_bytes(b"\xef\xbb\xbf" + line.encode("utf-8"))
+    assert read_state_file(path, "sokoban") == read_state_file(fixtures / "novel_envs" / "novel_a.state", "sokoban")

@@ -5,7 +5,55 @@ parser (``groundlang --help``) imports nothing heavy; a test checks that they
 match the library's.
 """
 
+import argparse
+import math
+
 LANGUAGE_MODEL_NAMES = ("bow", "ibm2", "parse")  # == tuple(groundlang.model.language_models.LANGUAGE_MODELS)
+
+
+def _whole(text: str, least: int, what: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}") from None
+    if value < least:
+        raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """An argparse type: a whole number of 1 or more (workers, steps, counts)."""
+    return _whole(text, 1, "a whole number of 1 or more")
+
+
+def seed(text: str) -> int:
+    """An argparse type: a random seed, 0 to 2**32 - 1 (what numpy and torch accept)."""
+    value = _whole(text, 0, "a seed from 0 to 4294967295")
+    if value > 2**32 - 1:
+        raise argparse.ArgumentTypeError(f"expected a seed from 0 to 4294967295, not {text!r}")
+    return value
+
+
+def positive_seconds(text: str) -> float:
+    """An argparse type: a finite number of seconds above 0 (clingo's time limits)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0 < value <= 10**6):
+        raise argparse.ArgumentTypeError(f"expected seconds above 0 and at most 1000000, not {text!r}")
+    return value
+
+
+def fraction(text: str) -> float:
+    """An argparse type: a number from 0 to 1."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0 <= value <= 1:
+        raise argparse.ArgumentTypeError(f"expected a number from 0 to 1, not {text!r}")
+    return value
 
 
 def add_language_model_settings(parser) -> None:

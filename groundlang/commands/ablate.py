@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.commands import add_language_model_settings, language_model_settings
+from groundlang.commands import add_language_model_settings, language_model_settings, positive_int, seed
 from groundlang.model.world import PALETTES
 
 
@@ -38,11 +38,11 @@ def register(subparsers) -> None:
                    help="training sizes, e.g. 24,60,120,240 (default: the whole corpus)")
     p.add_argument("--protocol", default="loo", choices=["loo", "train"],
                    help="loo: unseen commands (held-out remainder below the full size); train: training commands")
-    p.add_argument("--seed", type=int, default=0, help="seed of the training subsets")
-    p.add_argument("--workers", type=int, default=1, help="folds in parallel (processes)")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the training subsets")
+    p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes)")
     p.add_argument("--ray", metavar="ADDRESS", help="run cells on Ray ('local', 'auto' or host:port)")
     p.add_argument("--skip-inconsistent", action="store_true")
-    p.add_argument("--limit", type=int, help="score only the first N instances of each cell")
+    p.add_argument("--limit", type=positive_int, help="score only the first N instances of each cell")
     add_language_model_settings(p)
     p.add_argument("--json", metavar="OUT", help="write the rows as JSON here")
     p.add_argument("--plot", metavar="PNG", help="write a plot of accuracy by cell here")

@@ -17,6 +17,7 @@ import argparse
 import json
 import time
 
+from groundlang.commands import fraction, positive_int
 from groundlang.model.world import PALETTES
 
 
@@ -25,11 +26,11 @@ def register(subparsers) -> None:
     p.add_argument("directory", metavar="DIR", help="a corpus folder (one instance per *.txt file)")
     p.add_argument("--palette", required=True, choices=sorted(PALETTES), help="colour/shape palette of the files")
     p.add_argument("-o", "--output", required=True, metavar="LP", help="where to write the discovered library (.lp)")
-    p.add_argument("--weight-margin", type=float, default=0.5, metavar="FRACTION",
+    p.add_argument("--weight-margin", type=fraction, default=0.5, metavar="FRACTION",
                    help="top features: MLIRL weight at least this fraction of the largest (default 0.5)")
-    p.add_argument("--max-conjuncts", type=int, default=2, metavar="N",
+    p.add_argument("--max-conjuncts", type=positive_int, default=2, metavar="N",
                    help="candidate goals: conjunctions of up to N top features (default 2)")
-    p.add_argument("--max-tasks", type=int, default=4, metavar="N", help="largest library considered (default 4)")
+    p.add_argument("--max-tasks", type=positive_int, default=4, metavar="N", help="largest library considered (default 4)")
     p.add_argument("--cache-dir", metavar="DIR",
                    help="behaviour-likelihood cache (default $GROUNDLANG_CACHE or ./.groundlang-cache)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the behaviour-likelihood cache")

@@ -6,7 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.commands import LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings
+from groundlang.commands import (LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings,
+                                 positive_int)
 from groundlang.model.world import PALETTES
 
 
@@ -19,10 +20,10 @@ def register(subparsers) -> None:
     p.add_argument("--novel-envs", metavar="DIR", help="folder of *.state files to execute each command in too")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
     add_language_model_settings(p)
-    p.add_argument("--workers", type=int, default=1, help="folds in parallel (processes)")
+    p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes)")
     p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
     p.add_argument("--skip-inconsistent", action="store_true")
-    p.add_argument("--limit", type=int, help="score only the first N held-out instances")
+    p.add_argument("--limit", type=positive_int, help="score only the first N held-out instances")
     p.add_argument("--cold-folds", action="store_true",
                    help="fit every leave-one-out fold from scratch instead of from the full model "
                         "(about 6x slower: 123 s against 21 s on the simplified crowd commands)")

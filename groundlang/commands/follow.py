@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from groundlang.commands import positive_int
 from groundlang.model.world import PALETTES
 
 
@@ -16,8 +17,8 @@ def register(subparsers) -> None:
     p.add_argument("--palette", required=True, choices=sorted(PALETTES))
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
     p.add_argument("--out", metavar="PNG", help="draw the executed trajectory here")
-    p.add_argument("--top", type=int, default=5, help="interpretations to print")
-    p.add_argument("--max-steps", type=int, default=200)
+    p.add_argument("--top", type=positive_int, default=5, help="interpretations to print")
+    p.add_argument("--max-steps", type=positive_int, default=200)
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=run)
 

@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 
+from groundlang.commands import positive_int
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("lexicon", help="print the learned meanings of words")
     p.add_argument("model", metavar="MODEL_DIR")
-    p.add_argument("--top", type=int, default=3, help="meanings per word")
+    p.add_argument("--top", type=positive_int, default=3, help="meanings per word")
     p.add_argument("--words", nargs="*", help="only these words")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=run)

@@ -14,6 +14,7 @@ import json
 import sys
 from pathlib import Path
 
+from groundlang.commands import positive_int
 from groundlang.grammar.parser import parse
 
 
@@ -24,7 +25,7 @@ def register(subparsers) -> None:
     p.add_argument("text", nargs="?", metavar="COMMAND", help="the command to parse (quote it)")
     p.add_argument("--file", type=Path, help="a text file (one command per line) or a corpus folder")
     p.add_argument("--json", action="store_true", help="one JSON object per command")
-    p.add_argument("--max-readings", type=int, default=8, help="readings kept per command (default 8)")
+    p.add_argument("--max-readings", type=positive_int, default=8, help="readings kept per command (default 8)")
     p.set_defaults(func=run)
 
 

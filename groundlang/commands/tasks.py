@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from groundlang.commands import positive_seconds
 from groundlang.corpus import read_initial_state
 from groundlang.model.world import PALETTES
 
@@ -20,7 +21,7 @@ def register(subparsers) -> None:
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp)")
     p.add_argument("--allow-scripts", action="store_true",
                    help="let library files run #script blocks (only for files you trust)")
-    p.add_argument("--time-limit", type=float, default=10.0, metavar="SECONDS",
+    p.add_argument("--time-limit", type=positive_seconds, default=10.0, metavar="SECONDS",
                    help="stop grounding/solving the library after this long (default 10)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     p.set_defaults(func=run)

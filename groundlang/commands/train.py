@@ -6,7 +6,7 @@ import argparse
 import time
 
 from groundlang.corpus import read_corpus
-from groundlang.commands import LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings
+from groundlang.commands import LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings, seed
 from groundlang.model.world import PALETTES
 
 
@@ -19,7 +19,7 @@ def register(subparsers) -> None:
     add_language_model_settings(p)
     p.add_argument("--library", metavar="LP", action="append", help="task library .lp file(s) instead of the default")
     p.add_argument("--skip-inconsistent", action="store_true")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=seed, default=0)
     p.set_defaults(func=run)
 
 
