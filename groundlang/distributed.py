@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import socket
 import time
 from collections.abc import Callable, Iterator, Sequence
 
@@ -58,6 +59,24 @@ def _register_serializers(ray) -> None:
     )
 
 
+CONNECT_TIMEOUT = 10.0  # seconds to reach a "host:port" address before ray.init, which may wait for minutes
+
+
+def _check_reachable(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
+    """Refuse a ``host:port`` (or ``ray://host:port``) address nothing answers at, within ``timeout`` s:
+    given an unreachable address, ``ray.init`` retried for more than ten minutes, printing only its own
+    warnings."""
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not host or not port.isdigit():
+        return  # "auto", or a form Ray itself judges
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
+            pass
+    except OSError as exc:
+        raise ValueError(f"--ray {address}: no Ray cluster answers there ({exc.strerror or exc}); start one "
+                         "with `ray start --head` (it prints its address), or give `auto` or `local`") from None
+
+
 @contextlib.contextmanager
 def ray_session(address: str, num_cpus: int | None = None, **init_options) -> Iterator[object]:
     """Connect to Ray for the duration of a block; yields the ``ray`` module.
@@ -75,6 +94,7 @@ def ray_session(address: str, num_cpus: int | None = None, **init_options) -> It
         if address == "local":
             ray.init(num_cpus=num_cpus or os.cpu_count() or 1, **options)
         else:
+            _check_reachable(address)
             ray.init(address=address, **options)
         started = True
         log.info("ray: connected (%s), %s CPUs", address, ray.cluster_resources().get("CPU", "?"))

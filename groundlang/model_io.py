@@ -42,6 +42,11 @@ def check_model_destination(directory: str | Path) -> Path:
     directory = Path(directory)
     if directory.exists() and not directory.is_dir():
         raise ModelFormatError(f"{directory}: exists and is not a folder; a model is written to a folder")
+    for parent in directory.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise ModelFormatError(f"{directory}: {parent} is a file, not a folder")
+            break
     if not directory.is_dir():
         return directory
     others = sorted(p.name for p in directory.iterdir() if p.name not in (MODEL_JSON, GLOBALS)

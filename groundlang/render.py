@@ -12,7 +12,7 @@ import numpy as np
 
 from groundlang.model.world import State
 
-__all__ = ["SHAPE_GLYPHS", "COLOUR_VALUES", "draw_state", "save_picture", "ascii_state", "trajectory_positions"]
+__all__ = ["SHAPE_GLYPHS", "COLOUR_VALUES", "draw_state", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
 
 # Text glyphs present in DejaVu Sans (matplotlib's bundled font), one per palette shape.
 SHAPE_GLYPHS = {
@@ -118,15 +118,31 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None)
     return ax
 
 
+def picture_format(path: str | Path) -> str:
+    """The image format of a picture's path, from its suffix ("png" without one); ValueError unless png,
+    svg or pdf. Commands ask before their work, :func:`save_picture` again when it writes."""
+    path = Path(path)
+    fmt = path.suffix.lstrip(".").lower() or "png"
+    if fmt not in ("png", "svg", "pdf"):
+        raise ValueError(f"{path}: picture format {fmt!r} is not supported; expected .png, .svg or .pdf")
+    return fmt
+
+
+def check_picture_destination(path: str | Path, option: str = "--out") -> Path:
+    """A picture's path, refused before any work if its format is unsupported or it cannot be written."""
+    from groundlang.model.storage import check_destination
+
+    picture_format(path)
+    return check_destination(path, option)
+
+
 def save_picture(path: str | Path, state: State, trajectory=None, title: str | None = None) -> Path:
     """Draw a state (and trajectory) and write the image atomically; format from the suffix (png, svg, pdf)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
     path = Path(path)
-    fmt = path.suffix.lstrip(".").lower() or "png"
-    if fmt not in ("png", "svg", "pdf"):
-        raise ValueError(f"{path}: picture format {fmt!r} is not supported; expected .png, .svg or .pdf")
+    fmt = picture_format(path)
     lay = state.layout
     fig = Figure(figsize=(0.5 * lay.width + 1.5, 0.5 * lay.height + 1.5))
     FigureCanvasAgg(fig)

@@ -15,7 +15,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_atomically"]
+__all__ = ["atomic_path", "check_destination", "write_atomically"]
 
 
 def _read_umask() -> int:
@@ -95,4 +95,19 @@ def write_atomically(path: str | os.PathLike, data: bytes | str, *, durable: boo
             if durable:
                 handle.flush()
                 os.fsync(handle.fileno())
+    return path
+
+
+def check_destination(path: str | os.PathLike, option: str) -> Path:
+    """``path`` as a file to write later, refused now (naming ``option``) if it cannot be: an existing
+    folder, or a path through a file. Commands check their outputs before the work, so a long run is
+    not lost to a typo at the end."""
+    path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{option} {path}: is a folder; expected the path of a file to write")
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise ValueError(f"{option} {path}: {parent} is a file, not a folder")
+            break
     return path

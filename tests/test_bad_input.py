@@ -282,6 +282,35 @@ ROWS += [
         pieces=("never_grounds.lp", "did not finish within 1 s", "grounds infinitely many atoms")),
 ]
 
+# Output paths: refused before the work, naming the option (before, a folder given to --json lost a whole
+# evaluation at the end, naming a temporary file; demo trained and planned before refusing a .txt picture).
+_SMALL = FIXTURES / "small.state"  # a file, so nothing can be written below it
+ROWS += [
+    Row("output/evaluate --json a folder",
+        ("evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban",
+         "--labels", str(FIXTURES / "sokoban" / "labels.csv"), "--json", "{tmp}"),
+        pieces=("--json {tmp}: is a folder; expected the path of a file to write",)),
+    Row("output/evaluate --json below a file",
+        ("evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban",
+         "--labels", str(FIXTURES / "sokoban" / "labels.csv"), "--json", f"{_SMALL}/r.json"),
+        pieces=(f"--json {_SMALL}/r.json: {_SMALL} is a file, not a folder",)),
+    Row("output/demo picture format", ("demo", "--out", "{tmp}/demo.txt"),
+        pieces=("{tmp}/demo.txt: picture format 'txt' is not supported; expected .png, .svg or .pdf",),
+        absent=("{tmp}/demo.txt",)),
+    Row("output/show picture in a folder", ("show", str(_SMALL), "--palette", "sokoban", "--out", "{tmp}"),
+        pieces=("--out {tmp}: is a folder",)),
+    Row("output/ablate plot not a PNG",
+        ("ablate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban",
+         "--labels", str(FIXTURES / "sokoban" / "labels.csv"), "--plot", "{tmp}/p.txt"),
+        pieces=("--plot {tmp}/p.txt: the plot is a PNG; expected a path ending in .png",), absent=("{tmp}/p.txt",)),
+    Row("output/discover library below a file",
+        ("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", f"{_SMALL}/x.lp"),
+        pieces=(f"-o {_SMALL}/x.lp: {_SMALL} is a file, not a folder",)),
+    Row("output/train model below a file",
+        ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", f"{_SMALL}/m"),
+        pieces=(f"{_SMALL}/m: {_SMALL} is a file, not a folder",)),
+]
+
 # Model directories, through follow and lexicon.
 for _case, (_make, _pieces) in MODEL_DIRS.items():
     ROWS += [
@@ -526,3 +555,13 @@ def test_a_time_limit_that_is_no_number_of_seconds_is_refused(limit):
     for run in (program.solve, program.control):
         with pytest.raises(ValueError, match="time_limit must be a finite number of seconds above 0"):
             run(time_limit=limit)
+
+
+def test_an_unwritable_result_path_is_refused_before_the_evaluation_runs(tmp_path, capsys, monkeypatch):
+    import groundlang.evaluation
+
+    monkeypatch.setattr(groundlang.evaluation, "evaluate", lambda *a, **k: pytest.fail("evaluated first"))
+    code = main(["--quiet", "evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban",
+                 "--labels", str(FIXTURES / "sokoban" / "labels.csv"), "--json", str(tmp_path)])
+    assert code == 2
+    assert f"--json {tmp_path}: is a folder" in capsys.readouterr().err

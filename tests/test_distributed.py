@@ -106,3 +106,23 @@ def test_ablation_cells_on_ray_match_the_serial_run(ray_local, example):
         ("parse", 12, "train", 12), ("bow", 12, "train", 12)]
     assert [r.error for r in on_ray.rows] == [None, None]
     assert [(r.correct, r.accuracy) for r in on_ray.rows] == [(r.correct, r.accuracy) for r in serial.rows]
+
+
+def test_an_address_nothing_answers_at_is_refused_at_once(monkeypatch):
+    """Before, ``ray.init`` retried an unreachable address for more than ten minutes."""
+    import socket
+    import time
+
+    from groundlang.distributed import ray_session
+
+    ray = pytest.importorskip("ray")
+    monkeypatch.setattr(ray, "is_initialized", lambda: False)  # as in a fresh process (another test's may run)
+    monkeypatch.setattr(ray, "init", lambda *a, **k: pytest.fail("ray.init called with an unreachable address"))
+    with socket.socket() as s:  # a port nothing listens at: bound, never listening
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+        started = time.monotonic()
+        with pytest.raises(ValueError, match=rf"--ray 127.0.0.1:{port}: no Ray cluster answers there"):
+            with ray_session(f"127.0.0.1:{port}"):
+                pass
+    assert time.monotonic() - started < 10

@@ -74,8 +74,14 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.ablation import run_ablation
     from groundlang.corpus import read_corpus
     from groundlang.labels import read_labels
-    from groundlang.model.storage import write_atomically
+    from groundlang.model.storage import check_destination, write_atomically
 
+    if args.json:
+        check_destination(args.json, "--json")
+    if args.plot:
+        if Path(args.plot).suffix.lower() != ".png":
+            raise ValueError(f"--plot {args.plot}: the plot is a PNG; expected a path ending in .png")
+        check_destination(args.plot, "--plot")
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)
     result = run_ablation(

@@ -27,8 +27,9 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.labels import label_coverage, read_labels
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
-    from groundlang.render import ascii_state, save_picture
+    from groundlang.render import ascii_state, check_picture_destination, save_picture
 
+    check_picture_destination(args.out)
     folder = example_corpus_path()
     corpus = read_corpus(folder, "sokoban")
     coverage = label_coverage(corpus, read_labels(folder / "labels.csv"))

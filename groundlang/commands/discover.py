@@ -49,8 +49,10 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import read_corpus
     from groundlang.inference.discovery import DiscoverySettings, discover_tasks, write_library
     from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.storage import check_destination
 
     start = time.perf_counter()
+    check_destination(args.output, "-o")
     pfs = TaskLibrary.load(args.pfs) if args.pfs else None  # a bad file is refused before any work
     corpus = read_corpus(args.directory, args.palette)
     if not corpus.instances:

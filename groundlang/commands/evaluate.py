@@ -44,9 +44,11 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import read_corpus
     from groundlang.evaluation import evaluate
     from groundlang.labels import read_labels
-    from groundlang.model.storage import write_atomically
+    from groundlang.model.storage import check_destination, write_atomically
     from groundlang.published import comparison, format_comparison
 
+    if args.json:
+        check_destination(args.json, "--json")
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)
     novel = read_novel_states(args.novel_envs, args.palette) if args.novel_envs else []

@@ -28,6 +28,10 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
 
+    if args.out:
+        from groundlang.render import check_picture_destination
+
+        check_picture_destination(args.out)
     state = read_initial_state(args.env, args.palette)
     learner = Learner.load(args.model)
     result = learner.follow(args.command_text, state, max_steps=args.max_steps)

@@ -18,8 +18,10 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundlang.render import ascii_state, save_picture
+    from groundlang.render import ascii_state, check_picture_destination, save_picture
 
+    if args.out:
+        check_picture_destination(args.out)
     path = Path(args.file)
     if path.suffix == ".state":
         state = read_state_file(path, args.palette)
