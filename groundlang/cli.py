@@ -48,8 +48,9 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=level, format="%(message)s")
     started = time.time()
     caching = args.command in CACHING_COMMANDS
-    cache_entries_before = cache_entry_count(args) if caching else 0
+    cache_entries_before = 0
     try:
+        cache_entries_before = cache_entry_count(args) if caching else 0  # a bad cache folder is an error line
         # SIGTERM (a scheduler, `kill`) stops a run the way Ctrl-C does.
         with terminate_as_interrupt():
             return int(args.func(args) or 0)

@@ -120,6 +120,9 @@ class Learner:
     ):
         self.lm = get_language_model(language_model) if isinstance(language_model, str) else language_model
         self.library = library if library is not None else TaskLibrary.load()
+        if not self.library.tasks:  # a file of PFs only (discover --pfs) is a library of none
+            raise ValueError(f"{self.library.program.user_names}: the task library declares no task/1; a learner "
+                             "needs at least one task to read commands as")
         self.steps = steps
         self.lr = lr
         self.seed = seed

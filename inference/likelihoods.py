@@ -50,11 +50,20 @@ CACHE_VERSION = 1
 
 
 def cache_directory(cache_dir: str | os.PathLike | None = None) -> Path:
-    """The cache root: ``cache_dir``, else ``$GROUNDLANG_CACHE``, else ``./.groundlang-cache``."""
+    """The cache root: ``cache_dir``, else ``$GROUNDLANG_CACHE``, else ``./.groundlang-cache``; ValueError
+    when it, or a folder above it, is a file."""
     if cache_dir is not None:
-        return Path(cache_dir)
-    env = os.environ.get("GROUNDLANG_CACHE")
-    return Path(env) if env else Path.cwd() / ".groundlang-cache"
+        root, what = Path(cache_dir), "the cache folder"
+    elif env := os.environ.get("GROUNDLANG_CACHE"):
+        root, what = Path(env), "GROUNDLANG_CACHE"
+    else:
+        root, what = Path.cwd() / ".groundlang-cache", "the cache folder"
+    for path in (root, *root.parents):
+        if path.exists():
+            if not path.is_dir():  # else every entry read would be "unreadable", then the first write fails
+                raise ValueError(f"{what} {root}: {path} is a file, not a folder")
+            break
+    return root
 
 
 def _layout_description(layout) -> dict:

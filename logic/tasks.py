@@ -238,6 +238,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     restrictions: dict[str, list[tuple[str, clingo.Symbol]]] = {n: [] for n in names}
     signatures: dict[str, tuple[str, ...]] = {}
     spatial = set()
+    movable = set()  # PFs the agent's moves change: what a goal may be
     declared: _Declarations = {}
     for a in by_signature.get(("pf", 3), []):
         cls_, name, sig = a.arguments
@@ -251,6 +252,8 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
             signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
         elif cls_.name == "spatial" and len(_tuple_args(sig)) == 1:
             spatial.add(pf_name(name))  # groundings.lp describes objects by unary spatial PFs only
+        if cls_.name in ("position", "spatial"):
+            movable.add(pf_name(name))
     for a in by_signature.get(("var", 3), []):
         t, v, c = (_text(x) for x in a.arguments)
         if t not in variables:
@@ -286,6 +289,9 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
                 if arg not in by_name:
                     raise AspError(f"{program.user_names}: task {n}: goal {pred} uses variable "
                                    f"{arg!r} that has no var({n}, \"{arg}\", Class)")
+            if pred not in movable:
+                raise AspError(f"{program.user_names}: task {n}: goal {pred} is not a declared position PF, so no "
+                               f"plan can make it true (position and spatial PFs: {', '.join(sorted(movable))})")
             sig = signatures.get(pred)
             if sig is not None and tuple(by_name[a] for a in args) != sig:
                 raise AspError(f"{program.user_names}: task {n}: goal {pred}({', '.join(args)}) "

@@ -231,7 +231,7 @@ class Layout:
         return [f"block{i}" for i in range(len(self.toy_attributes))]
 
     def validate(self) -> None:
-        """Raise WorldError when rooms are degenerate or overlap."""
+        """Raise WorldError when rooms are degenerate or overlap, or a door opens no wall between two rooms."""
         if not self.rooms:
             raise WorldError("a layout needs at least one room")
         for i, r in enumerate(self.rooms):
@@ -250,9 +250,20 @@ class Layout:
                     and max(a.bottom + 1, b.bottom + 1) < min(a.top, b.top)
                 ):
                     raise WorldError(f"room{i} and room{j} overlap")
+        shared = np.zeros((self.width, self.height), dtype=np.int8)  # how many rooms' walls pass each cell
+        for r in self.rooms:
+            ring = np.zeros_like(shared, dtype=bool)
+            ring[r.left : r.right + 1, [r.bottom, r.top]] = True
+            ring[[r.left, r.right], r.bottom : r.top + 1] = True
+            shared += ring
         for i, d in enumerate(self.doors):
             if d.right < d.left or d.top < d.bottom:
                 raise WorldError(f"door{i} has RIGHT < LEFT or TOP < BOTTOM")
+            where = f"door{i} ({d.left},{d.top},{d.right},{d.bottom})"
+            if min(d.left, d.bottom) < 0 or d.right >= self.width or d.top >= self.height:
+                raise WorldError(f"{where} lies outside the rooms (the grid is {self.width} x {self.height})")
+            if not (shared[d.left : d.right + 1, d.bottom : d.top + 1] >= 2).any():
+                raise WorldError(f"{where} is not in a wall between two rooms; a door opens a wall two rooms share")
 
 
 @dataclass(frozen=True)

@@ -278,6 +278,15 @@ ROWS += [
         pieces=(f"{BAD / 'non_ascii.lp'}:3:58: unexpected character 'é'", "names and operators are ASCII")),
     Row("asp/#script refused without opt-in", (*_TASKS, str(BAD / "script.lp")),
         pieces=(f"{BAD / 'script.lp'}:2: #script blocks are refused",)),
+    Row("asp/goal PF nobody declared", (*_TASKS, str(BAD / "unknown_goal_pf.lp")),
+        pieces=(f"{BAD / 'unknown_goal_pf.lp'}: task t: goal agentFliesTo is not a declared position PF",
+                "no plan can make it true", "agentInRoom")),
+    Row("asp/goal on a colour PF (never changes)", (*_TASKS, str(BAD / "colour_goal.lp")),
+        pieces=(f"{BAD / 'colour_goal.lp'}: task t: goal roomIsRed is not a declared position PF",)),
+    Row("asp/train with a library of no task",
+        ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "--library", str(BAD / "no_tasks.lp"),
+         "-o", "{tmp}/model"),
+        pieces=(f"{BAD / 'no_tasks.lp'}: the task library declares no task/1",), absent=("{tmp}/model",)),
     Row("asp/never finishes grounding", (*_TASKS, str(BAD / "never_grounds.lp"), "--time-limit", "1"),
         pieces=("never_grounds.lp", "did not finish within 1 s", "grounds infinitely many atoms")),
 ]
@@ -310,6 +319,19 @@ ROWS += [
         ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", f"{_SMALL}/m"),
         pieces=(f"{_SMALL}/m: {_SMALL} is a file, not a folder",)),
 ]
+
+ROWS.append(Row("input/discover --cache-dir a file",
+                ("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "{tmp}/x.lp",
+                 "--cache-dir", str(_SMALL)),
+                pieces=(f"the cache folder {_SMALL}: {_SMALL} is a file, not a folder",), absent=("{tmp}/x.lp",)))
+ROWS.append(Row("input/GROUNDLANG_CACHE a file",
+                ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "{tmp}/model"),
+                env={"GROUNDLANG_CACHE": str(_SMALL)},
+                pieces=(f"GROUNDLANG_CACHE {_SMALL}: {_SMALL} is a file, not a folder",), absent=("{tmp}/model",)))
+ROWS.append(Row("input/evaluate --novel-envs folder missing",
+                ("evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban",
+                 "--labels", str(FIXTURES / "sokoban" / "labels.csv"), "--novel-envs", "{tmp}/absent"),
+                pieces=("--novel-envs {tmp}/absent: not a folder (it does not exist or is a file)",)))
 
 # Model directories, through follow and lexicon.
 for _case, (_make, _pieces) in MODEL_DIRS.items():

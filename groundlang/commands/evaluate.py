@@ -34,6 +34,9 @@ def register(subparsers) -> None:
 def read_novel_states(directory: str, palette: str) -> list:
     from groundlang.corpus import read_state_file
 
+    if not Path(directory).is_dir():
+        raise ValueError(f"--novel-envs {directory}: not a folder (it does not exist or is a file); "
+                         "expected a folder of *.state files")
     paths = sorted(Path(directory).glob("*.state"))
     if not paths:
         raise ValueError(f"{directory}: no *.state files for --novel-envs")
