@@ -294,8 +294,9 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
                                f"plan can make it true (position and spatial PFs: {', '.join(sorted(movable))})")
             sig = signatures.get(pred)
             if sig is not None and tuple(by_name[a] for a in args) != sig:
+                given = ", ".join(f"{a}: {by_name[a]}" for a in args)
                 raise AspError(f"{program.user_names}: task {n}: goal {pred}({', '.join(args)}) "
-                               f"needs arguments of classes {sig}")
+                               f"needs arguments of classes {sig}; the task's var/3 give ({given})")
         in_goal = {a for _, args in goals[n] for a in args}
         for v in vs:
             if v.name not in in_goal:
