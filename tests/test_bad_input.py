@@ -284,6 +284,13 @@ ROWS += [
     Row("asp/goal over a variable of another class", (*_TASKS, str(BAD / "goal_wrong_class.lp")),
         pieces=("task t: goal agentInRoom(A, R) needs arguments of classes ('agent', 'room')",
                 "the task's var/3 give (A: robot, R: room)")),
+    Row("asp/PF over a class no object has", (*_TASKS, str(BAD / "pf_of_no_class.lp")),
+        pieces=(f"{BAD / 'pf_of_no_class.lp'} (palette sokoban): PF toyHue(", "is declared over class lamp, "
+                "which no object has")),
+    Row("asp/colour PF of two arguments, through discover --pfs",
+        ("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "--restrict",
+         "--pfs", str(BAD / "colour_pf_binary.lp"), "-o", "{tmp}/x.lp"),
+        pieces=("colour PF sameColour takes more than one argument",), absent=("{tmp}/x.lp",)),
     Row("asp/goal on a colour PF (never changes)", (*_TASKS, str(BAD / "colour_goal.lp")),
         pieces=(f"{BAD / 'colour_goal.lp'}: task t: goal roomIsRed is not a declared position PF",)),
     Row("asp/train with a library of no task",
