@@ -48,9 +48,13 @@ def timed(commands: list[str], share_forests: bool = True) -> tuple[float, int]:
 
 
 def main() -> int:
-    corpus = Path(sys.argv[1]) if len(sys.argv) > 1 else DEFAULT_CORPUS
+    given = len(sys.argv) > 1
+    corpus = Path(sys.argv[1]) if given else DEFAULT_CORPUS
     folders = [corpus / "allTurkTrain", corpus / "allTurkTrainLimitedCommand"]
     if not all(f.is_dir() for f in folders):
+        if given:  # a path the user typed: a mistake, not an absent optional corpus
+            print(f"corpus not found under {corpus}", file=sys.stderr)
+            return 1
         print(f"(crowd corpus not found under {corpus}: skipped; give its folder as the argument or in "
               f"${CORPUS_VARIABLE})")
         return 0

@@ -69,12 +69,14 @@ def _check_reachable(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
     host, sep, port = address.removeprefix("ray://").rpartition(":")
     if not sep or not host or not port.isdigit():
         return  # "auto", or a form Ray itself judges
+    if not 0 < int(port) < 65536:
+        raise ValueError(f"Ray address {address}: port {port} is not a TCP port (1 to 65535)")
     try:
         with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
             pass
     except OSError as exc:
-        raise ValueError(f"--ray {address}: no Ray cluster answers there ({exc.strerror or exc}); start one "
-                         "with `ray start --head` (it prints its address), or give `auto` or `local`") from None
+        raise ValueError(f"Ray address {address}: no Ray cluster answers there ({exc.strerror or exc}); start "
+                         "one with `ray start --head` (it prints its address), or give `auto` or `local`") from None
 
 
 @contextlib.contextmanager

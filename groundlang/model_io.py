@@ -34,26 +34,25 @@ class ModelFormatError(ValueError):
     """A model directory that is missing, corrupt, foreign or from another format version."""
 
 
-def check_model_destination(directory: str | Path) -> Path:
+def check_model_destination(directory: str | Path, option: str = "") -> Path:
     """``directory`` as a place to write a model, refused if writing there would mix the model with other
     files or overwrite a file that is not a groundlang model's: it must be new, empty, or hold only a model
     (of any format version: saving replaces it). ``train -o model`` run at the repository root would
-    otherwise have written into the ``model/`` source package. ``groundlang train`` asks before it trains."""
+    otherwise have written into the ``model/`` source package. ``groundlang train`` asks before it trains;
+    ``option`` ("-o") starts its messages."""
     directory = Path(directory)
-    if directory.exists() and not directory.is_dir():
-        raise ModelFormatError(f"{directory}: exists and is not a folder; a model is written to a folder")
-    for parent in directory.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise ModelFormatError(f"{directory}: {parent} is a file, not a folder")
-            break
+    where = f"{option} {directory}".strip()
+    try:
+        storage.check_folder(directory, where)
+    except ValueError as exc:
+        raise ModelFormatError(f"{exc}; a model is written to a folder") from None
     if not directory.is_dir():
         return directory
     others = sorted(p.name for p in directory.iterdir() if p.name not in (MODEL_JSON, GLOBALS)
                     and not p.name.startswith("."))
     if others:
         shown = ", ".join(others[:3]) + (", ..." if len(others) > 3 else "")
-        raise ModelFormatError(f"{directory}: holds other files ({shown}); write the model to a new or empty "
+        raise ModelFormatError(f"{where}: holds other files ({shown}); write the model to a new or empty "
                                "folder, or over a model")
     path = directory / MODEL_JSON
     if path.exists():

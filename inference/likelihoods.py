@@ -39,7 +39,7 @@ import numpy as np
 
 from groundlang.inference.planning import TaskSettings, as_transitions, demonstration_log_likelihood, solve_task
 from groundlang.logic.atoms import Atom, parse_atom
-from groundlang.model.storage import write_atomically
+from groundlang.model.storage import check_folder, write_atomically
 
 __all__ = ["CACHE_VERSION", "behaviour_likelihood_table", "cache_directory", "entry_key", "pad_table"]
 
@@ -58,12 +58,8 @@ def cache_directory(cache_dir: str | os.PathLike | None = None) -> Path:
         root, what = Path(env), "GROUNDLANG_CACHE"
     else:
         root, what = Path.cwd() / ".groundlang-cache", "the cache folder"
-    for path in (root, *root.parents):
-        if path.exists():
-            if not path.is_dir():  # else every entry read would be "unreadable", then the first write fails
-                raise ValueError(f"{what} {root}: {path} is a file, not a folder")
-            break
-    return root
+    # A file there made every entry read "unreadable", then the first write failed.
+    return check_folder(root, f"{what} {root}")
 
 
 def _layout_description(layout) -> dict:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import json
 import logging
-import math
+import numbers
 import os
 import re
 import subprocess
@@ -174,12 +174,17 @@ def _parse(source: Source, allow_scripts: bool) -> list:
     return statements
 
 
+MAX_TIME_LIMIT = 10**6  # seconds (11 days); longer waits overflow the platform's timeouts
+
+
 def _checked_time_limit(time_limit: float | None) -> float | None:
-    """``time_limit`` itself, refused unless None or a finite number of seconds above 0 (an infinite one
-    overflowed the thread wait deep inside; 0 blamed the program for grounding infinitely many atoms)."""
-    if time_limit is not None and not (isinstance(time_limit, (int, float)) and math.isfinite(time_limit)
-                                       and time_limit > 0):
-        raise ValueError(f"time_limit must be a finite number of seconds above 0 (or None), not {time_limit!r}")
+    """``time_limit`` itself, refused unless None or seconds above 0 and at most ``MAX_TIME_LIMIT`` (an
+    infinite or huge one overflowed the thread wait deep inside; 0 blamed the program for grounding
+    infinitely many atoms)."""
+    if time_limit is not None and not (isinstance(time_limit, numbers.Real) and not isinstance(time_limit, bool)
+                                       and 0 < time_limit <= MAX_TIME_LIMIT):
+        raise ValueError(f"time_limit must be seconds above 0 and at most {MAX_TIME_LIMIT} (or None), "
+                         f"not {time_limit!r}")
     return time_limit
 
 

@@ -290,7 +290,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
                     raise AspError(f"{program.user_names}: task {n}: goal {pred} uses variable "
                                    f"{arg!r} that has no var({n}, \"{arg}\", Class)")
             if pred not in movable:
-                raise AspError(f"{program.user_names}: task {n}: goal {pred} is not a declared position PF, so no "
+                raise AspError(f"{program.user_names}: task {n}: goal {pred} is not a declared position or spatial PF, so no "
                                f"plan can make it true (position and spatial PFs: {', '.join(sorted(movable))})")
             sig = signatures.get(pred)
             if sig is not None and tuple(by_name[a] for a in args) != sig:

@@ -162,7 +162,7 @@ def entity_words(lf: LogicalForm) -> list[tuple[str | None, tuple[str, ...]]]:
 
 def backoff_key(key: str) -> str:
     """The key a preposition key backs off to: the same preposition without the marks of a clause
-    with a direct object and of the last phrase (``from+obj|last`` -> ``from``, ``dobj|last`` ->
+    with a direct object and of the last phrase (``onto+obj|last`` -> ``onto``, ``dobj|last`` ->
     ``<dobj>``); a negated or noun-attached phrase keeps its mark (``not:to``, ``to@np``)."""
     base = key.removesuffix("|last").replace("+obj", "")
     return DIRECT_OBJECT if base == "dobj" else base

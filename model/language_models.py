@@ -194,8 +194,8 @@ class ParseAligned(LanguageModel):
         the object they align with for the mention model, ``"referring"`` (a head noun, a colour
         word or an open-class word, see ``encoding.is_referring``) or ``"any"``. ``align_backoff``: each
         alignment context reads roles from a mixture of its own table and that of the key it backs off to
-        (``encoding.backoff_key``: ``from+obj|last`` -> ``from``), weights learned per context, so a rare
-        key ("from ..." as the last phrase) is no longer read by its prior alone. Off by default:
+        (``encoding.backoff_key``: ``onto+obj|last`` -> ``onto``), weights learned per context, so a rare
+        key ("onto ..." as the last phrase) is no longer read by its prior alone. Off by default:
         measured on the crowd corpus before the start room's role (``interpretations.START_ROLE``), it was
         the better model by 10-fold held-out likelihood of words and demonstrations (-13538 against -13577
         nats, original commands; -9364 against -9373, simplified), but leave-one-out gave 221 and 225 of

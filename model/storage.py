@@ -15,7 +15,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-__all__ = ["atomic_path", "check_destination", "write_atomically"]
+__all__ = ["atomic_path", "check_destination", "check_folder", "write_atomically"]
 
 
 def _read_umask() -> int:
@@ -98,6 +98,18 @@ def write_atomically(path: str | os.PathLike, data: bytes | str, *, durable: boo
     return path
 
 
+def check_folder(path: str | os.PathLike, what: str) -> Path:
+    """``path`` as a folder to create or use, refused (ValueError starting with ``what``) if it, or the
+    nearest existing folder above it, is a file."""
+    path = Path(path)
+    for step in (path, *path.parents):
+        if step.exists():
+            if not step.is_dir():
+                raise ValueError(f"{what}: {step} is a file, not a folder")
+            break
+    return path
+
+
 def check_destination(path: str | os.PathLike, option: str) -> Path:
     """``path`` as a file to write later, refused now (naming ``option``) if it cannot be: an existing
     folder, or a path through a file. Commands check their outputs before the work, so a long run is
@@ -105,9 +117,5 @@ def check_destination(path: str | os.PathLike, option: str) -> Path:
     path = Path(path)
     if path.is_dir():
         raise ValueError(f"{option} {path}: is a folder; expected the path of a file to write")
-    for parent in path.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise ValueError(f"{option} {path}: {parent} is a file, not a folder")
-            break
+    check_folder(path.parent, f"{option} {path}")
     return path

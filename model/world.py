@@ -250,20 +250,22 @@ class Layout:
                     and max(a.bottom + 1, b.bottom + 1) < min(a.top, b.top)
                 ):
                     raise WorldError(f"room{i} and room{j} overlap")
-        shared = np.zeros((self.width, self.height), dtype=np.int8)  # how many rooms' walls pass each cell
+        rings = []  # per room, its wall cells
         for r in self.rooms:
-            ring = np.zeros_like(shared, dtype=bool)
+            ring = np.zeros((self.width, self.height), dtype=bool)
             ring[r.left : r.right + 1, [r.bottom, r.top]] = True
             ring[[r.left, r.right], r.bottom : r.top + 1] = True
-            shared += ring
+            rings.append(ring)
         for i, d in enumerate(self.doors):
             if d.right < d.left or d.top < d.bottom:
                 raise WorldError(f"door{i} has RIGHT < LEFT or TOP < BOTTOM")
             where = f"door{i} ({d.left},{d.top},{d.right},{d.bottom})"
             if min(d.left, d.bottom) < 0 or d.right >= self.width or d.top >= self.height:
-                raise WorldError(f"{where} lies outside the rooms (the grid is {self.width} x {self.height})")
-            if not (shared[d.left : d.right + 1, d.bottom : d.top + 1] >= 2).any():
-                raise WorldError(f"{where} is not in a wall between two rooms; a door opens a wall two rooms share")
+                raise WorldError(f"{where} reaches outside the rooms (the grid is {self.width} x {self.height})")
+            # A door opens the walls of two rooms: one wall they share, or the two walls side by side
+            # that a door of two cells crosses.
+            if sum(bool(ring[d.left : d.right + 1, d.bottom : d.top + 1].any()) for ring in rings) < 2:
+                raise WorldError(f"{where} is not in a wall between two rooms; a door opens the walls of two rooms")
 
 
 @dataclass(frozen=True)

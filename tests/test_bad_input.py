@@ -279,7 +279,7 @@ ROWS += [
     Row("asp/#script refused without opt-in", (*_TASKS, str(BAD / "script.lp")),
         pieces=(f"{BAD / 'script.lp'}:2: #script blocks are refused",)),
     Row("asp/goal PF nobody declared", (*_TASKS, str(BAD / "unknown_goal_pf.lp")),
-        pieces=(f"{BAD / 'unknown_goal_pf.lp'}: task t: goal agentFliesTo is not a declared position PF",
+        pieces=(f"{BAD / 'unknown_goal_pf.lp'}: task t: goal agentFliesTo is not a declared position or spatial PF",
                 "no plan can make it true", "agentInRoom")),
     Row("asp/goal over a variable of another class", (*_TASKS, str(BAD / "goal_wrong_class.lp")),
         pieces=("task t: goal agentInRoom(A, R) needs arguments of classes ('agent', 'room')",
@@ -292,7 +292,7 @@ ROWS += [
          "--pfs", str(BAD / "colour_pf_binary.lp"), "-o", "{tmp}/x.lp"),
         pieces=("colour PF sameColour takes more than one argument",), absent=("{tmp}/x.lp",)),
     Row("asp/goal on a colour PF (never changes)", (*_TASKS, str(BAD / "colour_goal.lp")),
-        pieces=(f"{BAD / 'colour_goal.lp'}: task t: goal roomIsRed is not a declared position PF",)),
+        pieces=(f"{BAD / 'colour_goal.lp'}: task t: goal roomIsRed is not a declared position or spatial PF",)),
     Row("asp/train with a library of no task",
         ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "--library", str(BAD / "no_tasks.lp"),
          "-o", "{tmp}/model"),
@@ -327,7 +327,7 @@ ROWS += [
         pieces=(f"-o {_SMALL}/x.lp: {_SMALL} is a file, not a folder",)),
     Row("output/train model below a file",
         ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", f"{_SMALL}/m"),
-        pieces=(f"{_SMALL}/m: {_SMALL} is a file, not a folder",)),
+        pieces=(f"-o {_SMALL}/m: {_SMALL} is a file, not a folder; a model is written to a folder",)),
 ]
 
 ROWS.append(Row("input/discover --cache-dir a file",
@@ -579,13 +579,13 @@ def test_numeric_options_out_of_range_are_refused_by_name(argv, message, capsys)
     assert err.splitlines()[-1] == f"groundlang {argv[0]}: error: {message}"
 
 
-@pytest.mark.parametrize("limit", [math.inf, math.nan, 0, -1.0])
+@pytest.mark.parametrize("limit", [math.inf, math.nan, 0, -1.0, 1e12, True, "5"])
 def test_a_time_limit_that_is_no_number_of_seconds_is_refused(limit):
     from groundlang.logic.program import Program, Source
 
     program = Program((Source("t.lp", "a."),))
     for run in (program.solve, program.control):
-        with pytest.raises(ValueError, match="time_limit must be a finite number of seconds above 0"):
+        with pytest.raises(ValueError, match="time_limit must be seconds above 0 and at most 1000000"):
             run(time_limit=limit)
 
 
@@ -597,3 +597,9 @@ def test_an_unwritable_result_path_is_refused_before_the_evaluation_runs(tmp_pat
                  "--labels", str(FIXTURES / "sokoban" / "labels.csv"), "--json", str(tmp_path)])
     assert code == 2
     assert f"--json {tmp_path}: is a folder" in capsys.readouterr().err
+
+
+def test_a_numpy_time_limit_is_seconds_too():
+    from groundlang.logic.program import Program, Source
+
+    assert [[str(a) for a in m] for m in Program((Source("t.lp", "a."),)).solve(time_limit=np.int64(5))] == [["a"]]

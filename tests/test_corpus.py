@@ -40,9 +40,9 @@ MALFORMED = {
     "overlapping_rooms.txt": (3, ["room0 and room1 overlap"]),
     "door_inside_room.txt": (3, ["door0 (2,7,2,7) is not in a wall between two rooms"]),
     "door_in_outer_wall.txt": (3, ["door0 (0,7,0,7) is not in a wall between two rooms",
-                                   "a door opens a wall two rooms share"]),
-    "door_outside_grid.txt": (3, ["door0 (20,2,20,2) lies outside the rooms (the grid is 11 x 11)"]),
-    "door_negative.txt": (3, ["door0 (-3,2,-1,2) lies outside the rooms"]),
+                                   "a door opens the walls of two rooms"]),
+    "door_outside_grid.txt": (3, ["door0 (20,2,20,2) reaches outside the rooms (the grid is 11 x 11)"]),
+    "door_negative.txt": (3, ["door0 (-3,2,-1,2) reaches outside the rooms"]),
     "zero_size_room.txt": (3, ["room0 (0,4,1,0) has no interior", "RIGHT-LEFT >= 2"]),
     "object_in_wall.txt": (3, ["agent0 at (4,1) is inside a wall"]),
     "shared_cell.txt": (3, ["two objects share a cell"]),
@@ -300,3 +300,14 @@ def test_a_byte_order_mark_is_read_as_nothing(fixtures, tmp_path):
     path = tmp_path / "bom.state"
     path.write_bytes(b"\xef\xbb\xbf" + line.encode("utf-8"))
     assert read_state_file(path, "sokoban") == read_state_file(fixtures / "novel_envs" / "novel_a.state", "sokoban")
+
+
+@pytest.mark.parametrize("line", [
+    # the crowd corpus's layout: one-cell doors in shared walls, one two-cell door reaching into a room
+    "room,5,0,10,6,4 room,10,6,10,10,4 room,1,0,4,10,0 door,3,4,3,3 door,8,4,8,3 door,5,6,6,6 agent,8,6",
+    # rooms side by side with walls of their own: a two-cell door crosses both walls
+    "room,5,0,4,4,0 room,10,5,4,9,0 door,4,2,5,2 agent,2,2",
+])
+def test_doors_between_two_rooms_are_accepted(line):
+    state = parse_state(line, "sokoban")
+    assert state.layout.doors and state.layout.walkable[state.layout.doors[-1].left, state.layout.doors[-1].bottom]

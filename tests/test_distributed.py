@@ -122,7 +122,17 @@ def test_an_address_nothing_answers_at_is_refused_at_once(monkeypatch):
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
         started = time.monotonic()
-        with pytest.raises(ValueError, match=rf"--ray 127.0.0.1:{port}: no Ray cluster answers there"):
+        with pytest.raises(ValueError, match=rf"Ray address 127.0.0.1:{port}: no Ray cluster answers there"):
             with ray_session(f"127.0.0.1:{port}"):
                 pass
     assert time.monotonic() - started < 10
+
+
+def test_an_address_with_no_tcp_port_is_refused(monkeypatch):
+    from groundlang.distributed import ray_session
+
+    ray = pytest.importorskip("ray")
+    monkeypatch.setattr(ray, "is_initialized", lambda: False)
+    with pytest.raises(ValueError, match="Ray address 127.0.0.1:99999: port 99999 is not a TCP port"):
+        with ray_session("127.0.0.1:99999"):
+            pass

@@ -77,11 +77,18 @@ def test_the_crowd_corpus_is_looked_for_beside_the_clone_or_where_the_variable_s
 
 
 def test_the_parse_benchmark_skips_without_the_corpus_so_make_bench_runs_the_others(tmp_path):
+    import os
     import subprocess
     import sys
     from pathlib import Path
 
+    from groundlang.published import CORPUS_VARIABLE
+
     bench = Path(__file__).parents[1] / "benchmarks" / "bench_parse.py"
-    run = subprocess.run([sys.executable, str(bench), str(tmp_path / "missing")], capture_output=True, text=True)
+    env = {**os.environ, CORPUS_VARIABLE: str(tmp_path / "missing")}
+    run = subprocess.run([sys.executable, str(bench)], capture_output=True, text=True, env=env)
     assert run.returncode == 0, run.stderr
     assert f"crowd corpus not found under {tmp_path / 'missing'}: skipped" in run.stdout
+    # a path given on the command line is the user's: missing, it is an error
+    run = subprocess.run([sys.executable, str(bench), str(tmp_path / "typo")], capture_output=True, text=True)
+    assert run.returncode == 1 and f"corpus not found under {tmp_path / 'typo'}" in run.stderr

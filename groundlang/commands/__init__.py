@@ -35,7 +35,8 @@ def seed(text: str) -> int:
 
 
 def positive_seconds(text: str) -> float:
-    """An argparse type: a finite number of seconds above 0 (clingo's time limits)."""
+    """An argparse type: seconds above 0 and at most 10**6 (clingo's time limits; the bound is
+    groundlang.logic.program.MAX_TIME_LIMIT, not imported here: building the parser stays light)."""
     try:
         value = float(text)
     except ValueError:

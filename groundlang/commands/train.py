@@ -30,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
 
     from groundlang.model_io import check_model_destination
 
-    check_model_destination(args.output)  # before training, not after it
+    check_model_destination(args.output, "-o")  # before training, not after it
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     if corpus.skipped:
         print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
