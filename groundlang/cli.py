@@ -38,6 +38,13 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _said(exc: BaseException) -> str:
+    """What an error says: an operating-system error as ``path: reason`` (not "[Errno 2] ... 'x.lp'")."""
+    if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
+        return f"{exc.filename}: {exc.strerror}" + (f" (renaming to {exc.filename2})" if exc.filename2 else "")
+    return str(exc)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -59,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1
     except (ValueError, OSError) as exc:
-        message = " ".join(str(exc).splitlines())  # one line, whatever the library said
+        message = " ".join(_said(exc).splitlines())  # one line, whatever the library said
         print(f"groundlang {args.command}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -62,8 +62,12 @@ def read_labels(csv_path: str | Path) -> Labels:
         if [h.strip() for h in header] != ["prefix", "goal"]:
             raise LabelError(f"{path}, line 1: header is {','.join(header)!r}; expected prefix,goal")
         labels = Labels(path)
+        end = rows.line_num
         for row in rows:
-            line = rows.line_num
+            line, end = end + 1, rows.line_num  # where the row starts, where it ends
+            if end > line and any("\n" in cell for cell in row):
+                raise LabelError(f"{path}, line {line}: a quote opened on this line closes only on line {end}; "
+                                 "expected the closing quote on the same line")
             if not any(cell.strip() for cell in row):
                 continue
             if len(row) != 2:

@@ -338,6 +338,10 @@ ROWS.append(Row("input/GROUNDLANG_CACHE a file",
                 ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "{tmp}/model"),
                 env={"GROUNDLANG_CACHE": str(_SMALL)},
                 pieces=(f"GROUNDLANG_CACHE {_SMALL}: {_SMALL} is a file, not a folder",), absent=("{tmp}/model",)))
+ROWS.append(Row("input/a task library that does not exist", (*_TASKS, "{tmp}/nope.lp"),
+                pieces=("groundlang tasks: error: {tmp}/nope.lp: No such file or directory",)))
+ROWS.append(Row("input/a folder where a state file is expected", ("tasks", str(FIXTURES), "--palette", "sokoban"),
+                pieces=(f"groundlang tasks: error: {FIXTURES}: Is a directory",)))
 ROWS.append(Row("input/evaluate --novel-envs folder missing",
                 ("evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban",
                  "--labels", str(FIXTURES / "sokoban" / "labels.csv"), "--novel-envs", "{tmp}/absent"),

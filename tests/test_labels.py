@@ -39,6 +39,8 @@ def test_read_labels(fixtures):
         ("bad_header.csv", ["bad_header.csv, line 1: header is 'prefix,target'; expected prefix,goal"]),
         ("bad_goal.csv", ["bad_goal.csv, line 2:", "agentInRoom(agent0 room1"]),
         ("wrong_fields.csv", ["wrong_fields.csv, line 2: 3 fields; expected 2"]),
+        # the quote left open on line 2 swallows the line break; the reader sees 3 fields ending on line 3
+        ("unclosed_quote.csv", ["unclosed_quote.csv, line 2: a quote opened on this line closes only on line 3"]),
     ],
 )
 def test_malformed_labels(fixtures, name, pieces):
