@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -231,7 +231,11 @@ class Layout:
         return [f"block{i}" for i in range(len(self.toy_attributes))]
 
     def validate(self) -> None:
-        """Raise WorldError when rooms are degenerate or overlap, or a door opens no wall between two rooms."""
+        """Raise WorldError when rooms are degenerate or overlap, or a door opens no wall between two rooms.
+        Once per distinct layout (a demonstration's states share theirs): the answer is remembered."""
+        _validate_layout(self)
+
+    def _validate(self) -> None:
         if not self.rooms:
             raise WorldError("a layout needs at least one room")
         for i, r in enumerate(self.rooms):
@@ -266,6 +270,11 @@ class Layout:
             # that a door of two cells crosses.
             if sum(bool(ring[d.left : d.right + 1, d.bottom : d.top + 1].any()) for ring in rings) < 2:
                 raise WorldError(f"{where} is not in a wall between two rooms; a door opens the walls of two rooms")
+
+
+@lru_cache(maxsize=1024)
+def _validate_layout(layout: Layout) -> None:
+    layout._validate()  # raises for a bad layout, and a raise is not remembered
 
 
 @dataclass(frozen=True)
