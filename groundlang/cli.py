@@ -41,7 +41,8 @@ def build_parser() -> argparse.ArgumentParser:
 def _said(exc: BaseException) -> str:
     """What an error says: an operating-system error as ``path: reason`` (not "[Errno 2] ... 'x.lp'")."""
     if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
-        return f"{exc.filename}: {exc.strerror}" + (f" (renaming to {exc.filename2})" if exc.filename2 else "")
+        # a failed rename names the temporary file first; the target is what the user asked for
+        return f"{exc.filename2 or exc.filename}: {exc.strerror}"
     return str(exc)
 
 

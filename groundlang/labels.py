@@ -54,7 +54,8 @@ def read_labels(csv_path: str | Path) -> Labels:
     except UnicodeDecodeError as exc:
         line = data.count(b"\n", 0, exc.start) + 1
         raise LabelError(f"{path}, line {line}: not UTF-8 text; expected a CSV file") from None
-    rows = csv.reader(io.StringIO(text))
+    rows = csv.reader(io.StringIO(text), strict=True)  # strict: a quote left open at the end is an error
+    end = 0  # the line the last row read ended on
     try:
         header = next(rows, None)
         if header is None:
@@ -84,7 +85,10 @@ def read_labels(csv_path: str | Path) -> Labels:
             except AtomError as exc:
                 raise LabelError(f"{path}, line {line}: {exc}") from None
     except csv.Error as exc:
-        raise LabelError(f"{path}, line {rows.line_num}: {exc}") from None
+        start = end + 1  # the row that failed began here
+        quote = "end of data" in str(exc) or "expected after" in str(exc)
+        hint = f"; a quote opened on line {start} is not closed there" if quote else ""
+        raise LabelError(f"{path}, line {start}: not valid CSV ({exc}, reading line {rows.line_num}){hint}") from None
     return labels
 
 

@@ -185,7 +185,7 @@ def _checked_time_limit(time_limit: float | None) -> float | None:
                                        and 0 < time_limit <= MAX_TIME_LIMIT):
         raise ValueError(f"time_limit must be seconds above 0 and at most {MAX_TIME_LIMIT} (or None), "
                          f"not {time_limit!r}")
-    return time_limit
+    return None if time_limit is None else float(time_limit)  # np.float32, Fraction: waits take floats
 
 
 def _run_with_limit(work, time_limit: float | None, what: str) -> None:
@@ -246,7 +246,7 @@ class Program:
         arguments: Sequence[str] = (),
     ) -> clingo.Control:
         """A Control with the program and ``facts`` (trusted, generated text), grounded once."""
-        _checked_time_limit(time_limit)
+        time_limit = _checked_time_limit(time_limit)
         messages: list[str] = []
 
         def logger(code: clingo.MessageCode, msg: str) -> None:
@@ -287,7 +287,7 @@ class Program:
         With ``isolated=True`` this runs in a child process (killed at the time limit);
         errors are re-raised here as the same AspError subclasses.
         """
-        _checked_time_limit(time_limit)
+        time_limit = _checked_time_limit(time_limit)
         if self.isolated:
             return _solve_in_child(self, facts, models, time_limit)
         ctl = self.control(facts, time_limit=time_limit, arguments=[f"--models={models}"])

@@ -98,14 +98,16 @@ def write_atomically(path: str | os.PathLike, data: bytes | str, *, durable: boo
     return path
 
 
-def check_folder(path: str | os.PathLike, what: str) -> Path:
+def check_folder(path: str | os.PathLike, what: str, named: str | os.PathLike | None = None) -> Path:
     """``path`` as a folder to create or use, refused (ValueError starting with ``what``) if it, or the
-    nearest existing folder above it, is a file."""
+    nearest existing folder above it, is a file. ``named``: the path ``what`` names (default ``path``),
+    called "it" in the message."""
     path = Path(path)
+    named = path if named is None else Path(named)
     for step in (path, *path.parents):
         if step.exists():
             if not step.is_dir():
-                raise ValueError(f"{what}: {step} is a file, not a folder")
+                raise ValueError(f"{what}: {'it' if step == named else step} is a file, not a folder")
             break
     return path
 
@@ -117,5 +119,5 @@ def check_destination(path: str | os.PathLike, option: str) -> Path:
     path = Path(path)
     if path.is_dir():
         raise ValueError(f"{option} {path}: is a folder; expected the path of a file to write")
-    check_folder(path.parent, f"{option} {path}")
+    check_folder(path.parent, f"{option} {path}", named=path)
     return path

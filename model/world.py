@@ -254,26 +254,52 @@ class Layout:
                     and max(a.bottom + 1, b.bottom + 1) < min(a.top, b.top)
                 ):
                     raise WorldError(f"room{i} and room{j} overlap")
-        rings = []  # per room, its wall cells
-        for r in self.rooms:
-            ring = np.zeros((self.width, self.height), dtype=bool)
-            ring[r.left : r.right + 1, [r.bottom, r.top]] = True
-            ring[[r.left, r.right], r.bottom : r.top + 1] = True
-            rings.append(ring)
         for i, d in enumerate(self.doors):
             if d.right < d.left or d.top < d.bottom:
                 raise WorldError(f"door{i} has RIGHT < LEFT or TOP < BOTTOM")
             where = f"door{i} ({d.left},{d.top},{d.right},{d.bottom})"
             if min(d.left, d.bottom) < 0 or d.right >= self.width or d.top >= self.height:
                 raise WorldError(f"{where} reaches outside the rooms (the grid is {self.width} x {self.height})")
-            # A door opens the walls of two rooms: one wall they share, or the two walls side by side
-            # that a door of two cells crosses.
-            if sum(bool(ring[d.left : d.right + 1, d.bottom : d.top + 1].any()) for ring in rings) < 2:
-                raise WorldError(f"{where} is not in a wall between two rooms; a door opens the walls of two rooms")
+            problem = _door_problem(self.rooms, d)
+            if problem:
+                raise WorldError(f"{where} {problem}")
+
+
+def _door_problem(rooms: tuple[Room, ...], d: Door) -> str | None:
+    """Why a door joins no two rooms, or None. Every door cell must lie in some room's rectangle (a cell
+    between two rooms' walls stays solid), and the door must open the walls of two rooms: a cell on a
+    room's wall next to that room's interior. Vectorised over the door's cells, one room at a time (no
+    grid per room: a layout of hundreds of rooms stays small)."""
+    xs, ys = np.meshgrid(np.arange(d.left, d.right + 1), np.arange(d.bottom, d.top + 1), indexing="ij")
+    xs, ys = xs.ravel(), ys.ravel()
+    covered = np.zeros(xs.shape, dtype=bool)
+    opened = 0
+    for r in rooms:
+        inside = (r.left <= xs) & (xs <= r.right) & (r.bottom <= ys) & (ys <= r.top)
+        covered |= inside
+        on_wall = inside & ((xs == r.left) | (xs == r.right) | (ys == r.bottom) | (ys == r.top))
+        # next to the interior: the wall cell's neighbour across the wall is strictly inside
+        beside = ((r.left < xs) & (xs < r.right) & ((ys == r.bottom) | (ys == r.top))) | (
+            (r.bottom < ys) & (ys < r.top) & ((xs == r.left) | (xs == r.right)))
+        opened += bool((on_wall & beside).any())
+    if not covered.all():
+        return "has cells outside every room; a door opens the walls of two rooms"
+    if opened < 2:
+        return "is not in a wall between two rooms; a door opens the walls of two rooms"
+    return None
+
+
+def _validate_layout(layout: Layout) -> None:
+    try:
+        hash(layout)
+    except TypeError:  # built with lists: checked every time
+        layout._validate()
+    else:
+        _validate_hashable_layout(layout)
 
 
 @lru_cache(maxsize=1024)
-def _validate_layout(layout: Layout) -> None:
+def _validate_hashable_layout(layout: Layout) -> None:
     layout._validate()  # raises for a bad layout, and a raise is not remembered
 
 

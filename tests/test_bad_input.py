@@ -333,11 +333,11 @@ ROWS += [
 ROWS.append(Row("input/discover --cache-dir a file",
                 ("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "{tmp}/x.lp",
                  "--cache-dir", str(_SMALL)),
-                pieces=(f"the cache folder {_SMALL}: {_SMALL} is a file, not a folder",), absent=("{tmp}/x.lp",)))
+                pieces=(f"the cache folder {_SMALL}: it is a file, not a folder",), absent=("{tmp}/x.lp",)))
 ROWS.append(Row("input/GROUNDLANG_CACHE a file",
                 ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "{tmp}/model"),
                 env={"GROUNDLANG_CACHE": str(_SMALL)},
-                pieces=(f"GROUNDLANG_CACHE {_SMALL}: {_SMALL} is a file, not a folder",), absent=("{tmp}/model",)))
+                pieces=(f"GROUNDLANG_CACHE {_SMALL}: it is a file, not a folder",), absent=("{tmp}/model",)))
 ROWS.append(Row("input/a task library that does not exist", (*_TASKS, "{tmp}/nope.lp"),
                 pieces=("groundlang tasks: error: {tmp}/nope.lp: No such file or directory",)))
 ROWS.append(Row("input/a folder where a state file is expected", ("tasks", str(FIXTURES), "--palette", "sokoban"),
@@ -603,7 +603,12 @@ def test_an_unwritable_result_path_is_refused_before_the_evaluation_runs(tmp_pat
     assert f"--json {tmp_path}: is a folder" in capsys.readouterr().err
 
 
-def test_a_numpy_time_limit_is_seconds_too():
+@pytest.mark.parametrize("isolated", [False, True])
+def test_numpy_and_fraction_time_limits_are_seconds_too(isolated):
+    from fractions import Fraction
+
     from groundlang.logic.program import Program, Source
 
-    assert [[str(a) for a in m] for m in Program((Source("t.lp", "a."),)).solve(time_limit=np.int64(5))] == [["a"]]
+    program = Program((Source("t.lp", "a."),), isolated=isolated)
+    for limit in (np.int64(5), np.float32(5), Fraction(5)):
+        assert [[str(a) for a in m] for m in program.solve(time_limit=limit)] == [["a"]]

@@ -43,6 +43,9 @@ MALFORMED = {
                                    "a door opens the walls of two rooms"]),
     "door_outside_grid.txt": (3, ["door0 (20,2,20,2) reaches outside the rooms (the grid is 11 x 11)"]),
     "door_negative.txt": (3, ["door0 (-3,2,-1,2) reaches outside the rooms"]),
+    # a gap between two rooms' walls stays solid; corners open no room
+    "door_across_a_gap.txt": (3, ["door0 (4,2,6,2) has cells outside every room"]),
+    "door_at_corners.txt": (3, ["door0 (4,0,5,0) is not in a wall between two rooms"]),
     "zero_size_room.txt": (3, ["room0 (0,4,1,0) has no interior", "RIGHT-LEFT >= 2"]),
     "object_in_wall.txt": (3, ["agent0 at (4,1) is inside a wall"]),
     "shared_cell.txt": (3, ["two objects share a cell"]),

@@ -39,8 +39,9 @@ def test_read_labels(fixtures):
         ("bad_header.csv", ["bad_header.csv, line 1: header is 'prefix,target'; expected prefix,goal"]),
         ("bad_goal.csv", ["bad_goal.csv, line 2:", "agentInRoom(agent0 room1"]),
         ("wrong_fields.csv", ["wrong_fields.csv, line 2: 3 fields; expected 2"]),
-        # the quote left open on line 2 swallows the line break; the reader sees 3 fields ending on line 3
-        ("unclosed_quote.csv", ["unclosed_quote.csv, line 2: a quote opened on this line closes only on line 3"]),
+        # the quote left open on line 2 swallows the line break; the reader fails on line 3
+        ("unclosed_quote.csv", ["unclosed_quote.csv, line 2: not valid CSV",
+                                "a quote opened on line 2 is not closed there"]),
     ],
 )
 def test_malformed_labels(fixtures, name, pieces):
@@ -158,3 +159,14 @@ def test_shared_labels_hold_at_the_end_only(shared_corpus):
         assert (cov.total, cov.labelled, cov.holding) == (240, 240, 240)
         for inst in corpus:
             assert not goal_holds(label_for(inst, labels), inst.initial_state), inst.name
+
+
+def test_quotes_left_open_or_closed_on_another_line_are_refused(tmp_path):
+    at_end = tmp_path / "end.csv"
+    at_end.write_text('prefix,goal\na_,"agentInRoom(agent0, room1)"\nb_,"agentInRoom(agent0, room0)\n')
+    with pytest.raises(LabelError, match=r"end.csv, line 3: not valid CSV \(unexpected end of data"):
+        read_labels(at_end)  # before, the last goal was read to the end of the file and accepted
+    spanning = tmp_path / "span.csv"
+    spanning.write_text('prefix,goal\na_,"agentInRoom(agent0,\n room1)"\n')
+    with pytest.raises(LabelError, match="span.csv, line 2: a quote opened on this line closes only on line 3"):
+        read_labels(spanning)
