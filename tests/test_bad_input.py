@@ -612,3 +612,17 @@ def test_numpy_and_fraction_time_limits_are_seconds_too(isolated):
     program = Program((Source("t.lp", "a."),), isolated=isolated)
     for limit in (np.int64(5), np.float32(5), Fraction(5)):
         assert [[str(a) for a in m] for m in program.solve(time_limit=limit)] == [["a"]]
+
+
+def test_operating_system_errors_read_path_and_reason():
+    import errno
+
+    from groundlang.cli import _said
+
+    assert _said(FileNotFoundError(errno.ENOENT, "No such file or directory", "x.lp")) == (
+        "x.lp: No such file or directory")
+    # a failed rename of a temporary file names the target the user asked for
+    assert _said(IsADirectoryError(errno.EISDIR, "Is a directory", "out/.r.json.1a2b.tmp", "out/r.json")) == (
+        "out/r.json: Is a directory")
+    assert _said(FileExistsError("out: no free temporary name for r.json in 100 tries")) == (
+        "out: no free temporary name for r.json in 100 tries")  # our own message, kept
