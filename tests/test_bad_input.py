@@ -622,7 +622,7 @@ def test_operating_system_errors_read_path_and_reason():
     assert _said(FileNotFoundError(errno.ENOENT, "No such file or directory", "x.lp")) == (
         "x.lp: No such file or directory")
     # a failed rename of a temporary file names the target the user asked for
-    assert _said(IsADirectoryError(errno.EISDIR, "Is a directory", "out/.r.json.1a2b.tmp", "out/r.json")) == (
+    assert _said(IsADirectoryError(errno.EISDIR, "Is a directory", "out/.r.json.1a2b.tmp", None, "out/r.json")) == (
         "out/r.json: Is a directory")
     assert _said(FileExistsError("out: no free temporary name for r.json in 100 tries")) == (
         "out: no free temporary name for r.json in 100 tries")  # our own message, kept
