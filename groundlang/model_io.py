@@ -54,14 +54,11 @@ def check_model_destination(directory: str | Path, option: str = "") -> Path:
         shown = ", ".join(others[:3]) + (", ..." if len(others) > 3 else "")
         raise ModelFormatError(f"{where}: holds other files ({shown}); write the model to a new or empty "
                                "folder, or over a model")
-    path = directory / MODEL_JSON
-    if path.exists():
+    if (directory / MODEL_JSON).exists():
         try:
-            meta = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
-            meta = None
-        if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-            raise ModelFormatError(f"{path}: not a groundlang model; saving would overwrite it")
+            _read_json(directory, any_version=True)
+        except ModelFormatError as exc:
+            raise ModelFormatError(f"{exc}; saving would overwrite it") from None
     return directory
 
 
@@ -94,7 +91,9 @@ def save_learner(learner, directory: str | Path) -> Path:
     return directory
 
 
-def _read_json(directory: Path) -> dict:
+def _read_json(directory: Path, any_version: bool = False) -> dict:
+    """The model's metadata; ModelFormatError unless a groundlang model of this format version
+    (``any_version``: of any, as a destination to save over)."""
     path = directory / MODEL_JSON
     if not directory.is_dir():
         raise ModelFormatError(f"{directory}: not a model directory (it does not exist or is not a folder)")
@@ -106,7 +105,7 @@ def _read_json(directory: Path) -> dict:
         raise ModelFormatError(f"{path}: not valid JSON ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise ModelFormatError(f"{path}: not a groundlang model (format field is not {FORMAT!r})")
-    if meta.get("version") != FORMAT_VERSION:
+    if not any_version and meta.get("version") != FORMAT_VERSION:
         raise ModelFormatError(
             f"{path}: model format version {meta.get('version')!r}, this groundlang reads version {FORMAT_VERSION}; "
             "train the model again with `groundlang train`"

@@ -442,12 +442,8 @@ def ground_environment(
             return kind, (_text(args[0]), _text(args[1]), args[2])
         if kind == "restrictable" and len(args) == 2:
             return kind, (_text(args[0]), args[1])
-        if kind == "pf_of_no_class" and len(args) == 2:
-            return kind, f"PF {args[0]} is declared over class {_text(args[1])}, which no object has " \
-                         f"(classes: agent, door, room, toy)"
-        if kind == "attribute_pf_not_unary" and len(args) == 2:
-            return kind, f"{_text(args[0])} PF {args[1]} takes more than one argument; colour and shape " \
-                         f"PFs describe one object, e.g. pf({_text(args[0])}, {args[1]}, (toy,))"
+        if kind in ("pf_of_no_class", "attribute_pf_not_unary") and len(args) == 2:
+            return kind, (str(args[0]), str(args[1]))
         if kind in ("goal_atom", "constraint_atom") and len(args) == 2:
             return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
         return "other", None  # atoms a user library shows for its own purposes
@@ -481,7 +477,12 @@ def ground_environment(
                 restrictable.setdefault(value[0], set()).add(value[1])
             elif kind in ("pf_of_no_class", "attribute_pf_not_unary"):
                 where = f" ({environment})" if environment else ""
-                raise AspError(f"{library.program.user_names}{where}: {value}")
+                first, second = value
+                problem = (f"PF {first} is declared over class {second}, which no object has (classes: "
+                           f"{', '.join(sorted(CLASS_ORDER))})" if kind == "pf_of_no_class" else
+                           f"{first} PF {second} takes more than one argument; colour and shape PFs describe "
+                           f"one object, e.g. pf({first}, {second}, (toy,))")
+                raise AspError(f"{library.program.user_names}{where}: {problem}")
         if chosen is None:
             continue  # the answer set of no task: descriptions and diagnostics only
         lifted = tasks[chosen]

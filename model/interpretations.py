@@ -164,15 +164,15 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())
         bindings.append(RoleBinding(role, obj, var.cls, said, about.get("shape", ())))
     bound = set(binding.values())
-    starts, known = starts
+    start_set, start_known = starts
     for obj in object_names(state):
         if obj not in bound:
             cls = class_of(obj)
             about = described.get(obj, {})
             said = tuple(name for names in about.values() for name in names)
-            if obj in starts:
+            if obj in start_set:
                 bindings.append(RoleBinding(START_ROLE, obj, cls, said, about.get("shape", ())))
-                if known:
+                if start_known:
                     continue
             bindings.append(RoleBinding(f"other:{cls}", obj, cls, said, about.get("shape", ())))
     return tuple(bindings)

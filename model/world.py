@@ -277,11 +277,10 @@ def _door_problem(rooms: tuple[Room, ...], d: Door) -> str | None:
     for r in rooms:
         inside = (r.left <= xs) & (xs <= r.right) & (r.bottom <= ys) & (ys <= r.top)
         covered |= inside
-        on_wall = inside & ((xs == r.left) | (xs == r.right) | (ys == r.bottom) | (ys == r.top))
-        # next to the interior: the wall cell's neighbour across the wall is strictly inside
+        # on the room's wall next to its interior (corners excluded): the cell across the wall is inside
         beside = ((r.left < xs) & (xs < r.right) & ((ys == r.bottom) | (ys == r.top))) | (
             (r.bottom < ys) & (ys < r.top) & ((xs == r.left) | (xs == r.right)))
-        opened += bool((on_wall & beside).any())
+        opened += bool(beside.any())
     if not covered.all():
         return "has cells outside every room; a door opens the walls of two rooms"
     if opened < 2:

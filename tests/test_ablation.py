@@ -139,8 +139,9 @@ def test_table_shows_failed_cells():
 # ------------------------------------------------------------------ the command
 
 
-def test_cli_prints_the_table_and_writes_json_and_plot(tmp_path, capsys):
-    out, png = tmp_path / "rows.json", tmp_path / "plot.png"
+@pytest.mark.parametrize("picture, magic", [("plot.png", b"\x89PNG\r\n\x1a\n"), ("plot.svg", b"<?xml ve")])
+def test_cli_prints_the_table_and_writes_json_and_plot(tmp_path, capsys, picture, magic):
+    out, png = tmp_path / "rows.json", tmp_path / picture
     code = main(["--quiet", "ablate", "--corpus", str(EXAMPLES), "--palette", "sokoban",
                  "--labels", str(EXAMPLES / "labels.csv"), "--language-models", "parse",
                  "--libraries", "authored", "--sizes", "12", "--protocol", "train",
@@ -152,8 +153,8 @@ def test_cli_prints_the_table_and_writes_json_and_plot(tmp_path, capsys):
     assert data["corpus_size"] == 24 and data["protocol"] == "train"
     (row,) = data["rows"]
     assert row["n"] == 12 and row["correct"] == round(row["accuracy"] * 12) and row["accuracy"] >= 0.75
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["plot.png", "rows.json"]  # no temporary files left
+    assert png.read_bytes()[:8] == magic  # the format of the suffix, as for pictures
+    assert sorted(p.name for p in tmp_path.iterdir()) == [picture, "rows.json"]  # no temporary files left
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -120,7 +120,7 @@ def test_a_model_is_saved_only_where_it_overwrites_nothing_else(learner, tmp_pat
     foreign = tmp_path / "keras"
     foreign.mkdir()
     (foreign / "model.json").write_text('{"format": "keras"}')
-    with pytest.raises(ModelFormatError, match="model.json: not a groundlang model; saving would overwrite it"):
+    with pytest.raises(ModelFormatError, match=r"model.json: not a groundlang model \(format field is not 'groundlang-model'\); saving would overwrite it"):
         learner.save(foreign)
     assert (foreign / "model.json").read_text() == '{"format": "keras"}'
     (tmp_path / "file").write_text("notes")

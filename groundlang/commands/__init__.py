@@ -34,27 +34,25 @@ def seed(text: str) -> int:
     return value
 
 
+def _real(text: str, low: float, high: float, low_included: bool, what: str) -> float:
+    try:
+        value = float(text)  # "nan" compares false below, "inf" exceeds high
+    except ValueError:
+        value = math.nan
+    if not ((low <= value if low_included else low < value) and value <= high):
+        raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}")
+    return value
+
+
 def positive_seconds(text: str) -> float:
     """An argparse type: seconds above 0 and at most 10**6 (clingo's time limits; the bound is
     groundlang.logic.program.MAX_TIME_LIMIT, not imported here: building the parser stays light)."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and 0 < value <= 10**6):
-        raise argparse.ArgumentTypeError(f"expected seconds above 0 and at most 1000000, not {text!r}")
-    return value
+    return _real(text, 0, 10**6, False, "seconds above 0 and at most 1000000")
 
 
 def fraction(text: str) -> float:
     """An argparse type: a number from 0 to 1."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not 0 <= value <= 1:
-        raise argparse.ArgumentTypeError(f"expected a number from 0 to 1, not {text!r}")
-    return value
+    return _real(text, 0, 1, True, "a number from 0 to 1")
 
 
 def add_language_model_settings(parser) -> None:

@@ -45,12 +45,12 @@ def register(subparsers) -> None:
     p.add_argument("--limit", type=positive_int, help="score only the first N instances of each cell")
     add_language_model_settings(p)
     p.add_argument("--json", metavar="OUT", help="write the rows as JSON here")
-    p.add_argument("--plot", metavar="PNG", help="write a plot of accuracy by cell here")
+    p.add_argument("--plot", metavar="PNG", help="write a plot of accuracy by cell here (.png, .svg or .pdf)")
     p.set_defaults(func=run)
 
 
 def write_plot(result, path: Path) -> None:
-    """Save the ablation plot as PNG, atomically."""
+    """Save the ablation plot atomically, in the format of the path's suffix (png, svg or pdf)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -60,12 +60,13 @@ def write_plot(result, path: Path) -> None:
 
     from groundlang.ablation import plot_ablation
     from groundlang.model.storage import write_atomically
+    from groundlang.render import picture_format
 
     fig, ax = plt.subplots(figsize=(7, 4.2))
     plot_ablation(result.rows, ax=ax, title=f"{Path(result.corpus).name}, {result.protocol}")
     fig.tight_layout()
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=120)
+    fig.savefig(buffer, format=picture_format(path), dpi=120)
     plt.close(fig)
     write_atomically(path, buffer.getvalue())
 
@@ -79,9 +80,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         check_destination(args.json, "--json")
     if args.plot:
-        if Path(args.plot).suffix.lower() != ".png":
-            raise ValueError(f"--plot {args.plot}: the plot is a PNG; expected a path ending in .png")
-        check_destination(args.plot, "--plot")
+        from groundlang.render import check_picture_destination
+
+        check_picture_destination(args.plot, "--plot")
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)
     result = run_ablation(
