@@ -41,7 +41,7 @@ from groundlang.inference.acting import rollout  # noqa: E402
 from groundlang.inference.mlirl import MLIRLProblem, _temperature, mlirl  # noqa: E402
 from groundlang.logic.atoms import Atom  # noqa: E402
 from groundlang.model.features import feature_matrix, goal_mask, position_atoms  # noqa: E402
-from groundlang.model.geometry import cell_tables  # noqa: E402
+from groundlang.model.pf_tables import pf_tables  # noqa: E402
 from groundlang.model.statespace import enumerate_states  # noqa: E402
 
 
@@ -101,7 +101,7 @@ def main() -> None:
     for size, (name, state) in enumerate(worlds):
         space = enumerate_states(state)
         S = space.num_states
-        tables = cell_tables(space.layout)
+        tables = pf_tables(space.layout)
         goal = goal_mask(space, [Atom("toyInRoom", ("block0", "room1"))], tables)
         columns = sweeps.transition_columns(torch.from_numpy(space.next_state))  # int32 [A, S]
         reward, stop, _ = planning.task_rewards(goal)

@@ -1,9 +1,11 @@
-"""Time task enumeration for one environment: library load, cell tables, groundings + constraints.
+"""Time task enumeration for one environment: library load, cell tables, PF tables, groundings + constraints.
 
 Prints milliseconds per call (median and minimum of repeats) for the default library on the
 commands-to-tasks layout with one toy and with two toys. Each call builds one
 clingo Control, grounds once and enumerates every grounding in one solve
-(the per-state caches of groundlang.model are bypassed to time the work itself).
+(the per-state caches of groundlang.model are bypassed to time the work itself). PF tables
+(every PF of pfs.lp over every placement of its movable arguments, one grounding per layout) are
+timed beside the cell tables they replace as what features read, also on a 16x16 layout.
 
     .venv/bin/python benchmarks/bench_tasks.py [--repeats 20]
 """
@@ -16,6 +18,7 @@ import time
 
 from groundlang.logic.tasks import TaskLibrary, enumerate_groundings
 from groundlang.model.geometry import cell_tables, state_facts
+from groundlang.model.pf_tables import pf_tables
 from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette
 
 
@@ -28,6 +31,18 @@ def corpus_state(num_toys: int) -> State:
         get_palette("sokoban"),
     )
     return State(layout, Agent(8, 6), tuple(Toy(c, s, x, y) for c, s, x, y in toys))
+
+
+def large_state() -> State:
+    """A 16x16 layout of three rooms with three toys, as the Williams et al. 2018 corpus's largest."""
+    toys = [("yellow", "star", 3, 3), ("red", "moon", 12, 3), ("blue", "circle", 4, 12)]
+    layout = Layout(
+        (Room("green", 0, 15, 8, 7), Room("red", 8, 15, 15, 0), Room("blue", 0, 7, 8, 0)),
+        (Door(8, 11, 8, 11), Door(4, 7, 4, 7), Door(8, 3, 8, 3)),
+        tuple((c, s) for c, s, _, _ in toys),
+        get_palette("sokoban"),
+    )
+    return State(layout, Agent(10, 10), tuple(Toy(c, s, x, y) for c, s, x, y in toys))
 
 
 def median_ms(fn, repeats: int) -> str:
@@ -55,14 +70,22 @@ def main() -> None:
         constraints = sum(len(c) for _, c in found)
         ms = median_ms(lambda: enumerate_groundings(library, facts), args.repeats)
         cells = median_ms(lambda: cell_tables.__wrapped__(state.layout), args.repeats)
+        tables = median_ms(lambda: pf_tables.__wrapped__(state.layout, library.tabulation_program), args.repeats)
         print(f"{num_toys} toy(s): {len(found):3d} groundings, {constraints:5d} binding constraints: "
-              f"enumeration {ms} ms; cell tables {cells} ms")
+              f"enumeration {ms} ms; cell tables {cells} ms; PF tables {tables} ms")
+    big = large_state()
+    cells = median_ms(lambda: cell_tables.__wrapped__(big.layout), max(3, args.repeats // 4))
+    tables = median_ms(lambda: pf_tables.__wrapped__(big.layout, library.tabulation_program), max(3, args.repeats // 4))
+    print(f"16x16, 3 rooms, 3 toys ({int(big.layout.walkable.sum())} walkable cells): cell tables {cells} ms; "
+          f"PF tables {tables} ms")
     # The same tasks as a user file: solved in a child process that can be killed at the time limit.
     user = TaskLibrary.from_text(library.to_lp(), "user_tasks.lp")
     facts = state_facts(corpus_state(1))
     assert enumerate_groundings(user, facts) == enumerate_groundings(library, facts)
     ms = median_ms(lambda: enumerate_groundings(user, facts), max(3, args.repeats // 4))
-    print(f"1 toy, same library from a user file (isolated child process): enumeration {ms} ms")
+    layout = corpus_state(1).layout
+    tables = median_ms(lambda: pf_tables.__wrapped__(layout, user.tabulation_program), max(3, args.repeats // 4))
+    print(f"1 toy, same library from a user file (isolated child process): enumeration {ms} ms; PF tables {tables} ms")
 
 
 if __name__ == "__main__":

@@ -60,14 +60,16 @@ def wilson_interval(correct: int, n: int, z: float = 1.96) -> tuple[float, float
 
 
 def _properties(state: State, obj: str) -> tuple:
-    if obj.startswith("room"):
-        return ("room", state.layout.rooms[int(obj[4:])].colour)
-    if obj.startswith("block"):
-        return ("toy",) + tuple(state.layout.toy_attributes[int(obj[5:])])
-    return ("agent",)
+    """What an object is, whatever its place: its class and attribute values (a room's colour; a
+    toy's colour and shape), from the layout's facts that name values rather than coordinates."""
+    for cls, name, facts in state.layout.objects:
+        if name == obj:
+            return (cls,) + tuple(v for _, args in facts for v in args if isinstance(v, str))
+    raise NovelEnvironmentError(f"{obj} is no object of the layout")
 
 
-def translate_goal(goal: tuple[Atom, ...], source: State, target: State, where: str = "novel layout") -> tuple[Atom, ...]:
+def translate_goal(goal: tuple[Atom, ...], source: State, target: State, where: str = "novel layout",
+                   library=None) -> tuple[Atom, ...]:
     """Carry a goal over by the objects' properties (room colour; toy colour and shape).
 
     Raises NovelEnvironmentError when an object has no unique counterpart in
@@ -76,18 +78,14 @@ def translate_goal(goal: tuple[Atom, ...], source: State, target: State, where: 
     names = {}
     for obj in {a for atom in goal for a in atom.args}:
         want = _properties(source, obj)
-        if want == ("agent",):
-            names[obj] = obj
-            continue
-        pool = target.layout.room_names if want[0] == "room" else target.layout.toy_names
-        matches = [o for o in pool if _properties(target, o) == want]
+        matches = [o for _, o, _ in target.layout.objects if _properties(target, o) == want]
         if len(matches) != 1:
             raise NovelEnvironmentError(
                 f"{where}: the goal's {obj} ({' '.join(want)}) has {len(matches)} counterparts; exactly one is needed"
             )
         names[obj] = matches[0]
     translated = tuple(Atom(a.predicate, tuple(names[x] for x in a.args)) for a in goal)
-    if goal_holds(translated, target):
+    if goal_holds(translated, target, library):
         raise NovelEnvironmentError(f"{where}: the goal {format_goal(translated)} already holds at the start")
     return translated
 
@@ -99,7 +97,7 @@ def describe_goal(goal: tuple[Atom, ...], state: State) -> str:
         args = []
         for a in atom.args:
             props = _properties(state, a)
-            args.append("agent" if props == ("agent",) else props[-1])
+            args.append(props[-1])  # a toy by its shape, a room by its colour, the agent by its class
         parts.append(f"{atom.predicate}({', '.join(args)})")
     return " ".join(parts)
 
@@ -169,11 +167,11 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
         "gold_task": describe_goal(gold, instance.initial_state),
         "predicted": format_goal(result.goal),
         "predicted_task": describe_goal(result.goal, instance.initial_state),
-        "correct": goal_holds(gold, result.final_state),
+        "correct": goal_holds(gold, result.final_state, learner.library),
         "novel": [],
     }
     for name, state in novel_states:
-        translated = translate_goal(gold, instance.initial_state, state, name)
+        translated = translate_goal(gold, instance.initial_state, state, name, learner.library)
         novel = learner.follow(instance.command, state)
         record["novel"].append(
             {
@@ -181,7 +179,7 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
                 "gold": format_goal(translated),
                 "predicted": format_goal(novel.goal),
                 "predicted_task": describe_goal(novel.goal, state),
-                "correct": goal_holds(translated, novel.final_state),
+                "correct": goal_holds(translated, novel.final_state, learner.library),
             }
         )
     return record

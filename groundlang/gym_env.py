@@ -339,7 +339,7 @@ def policy(learner, command: str, state) -> CommandPolicy:
     """
     from groundlang.inference.planning import solve_task
     from groundlang.model.features import goal_mask
-    from groundlang.model.geometry import cell_tables
+    from groundlang.model.pf_tables import pf_tables
     from groundlang.model.statespace import enumerate_states
 
     if isinstance(state, gymnasium.Env):
@@ -349,7 +349,7 @@ def policy(learner, command: str, state) -> CommandPolicy:
     post = learner.posterior(command, state)
     goal = post.best_goal
     space = enumerate_states(state)
-    mask = goal_mask(space, goal, cell_tables(state.layout))
+    mask = goal_mask(space, goal, pf_tables(state.layout, learner.library.tabulation_program))
     solved = solve_task(space.next_state, mask, learner.settings)
     return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask)
 

@@ -3,8 +3,8 @@
 Labels are for evaluation only: training never sees them. A goal is a
 conjunction of ground atoms (``agentInRoom(agent0, room1) blockInRoom(block0,
 room2)``), all of which must hold. :func:`goal_holds` decides one state at a
-time from the objects' coordinates; the tensorised propositional functions
-over whole state spaces live in ``groundlang.logic``/``groundlang.model``.
+time with the PF tables planning uses (``groundlang.model.pf_tables``): what a
+PF means is written once, in ASP.
 """
 
 from __future__ import annotations
@@ -15,7 +15,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from groundlang.corpus import Corpus, CorpusError, Instance, file_prefix
-from groundlang.logic.atoms import Atom, AtomError, attribute_pf, parse_goal
+from groundlang.logic.atoms import Atom, AtomError, parse_goal
+from groundlang.logic.program import AspError
+from groundlang.model.features import atoms_hold
 from groundlang.model.world import State
 
 __all__ = [
@@ -92,94 +94,34 @@ def read_labels(csv_path: str | Path) -> Labels:
     return labels
 
 
-# predicate -> (classes of its arguments); position PFs of the paper plus the corpus's spellings.
-_POSITION = {
-    "agentInRoom": ("agent", "room"),
-    "toyInRoom": ("toy", "room"),
-    "agentInDoor": ("agent", "door"),
-    "toyInDoor": ("toy", "door"),
-    "agentTouchingToy": ("agent", "toy"),
-}
+def _tables(state: State, library):
+    from groundlang.model.pf_tables import pf_tables
+
+    return pf_tables(state.layout, None if library is None else library.tabulation_program)
 
 
-def _article(word: str) -> str:
-    return "an" if word[:1] in "aeiou" else "a"
-
-
-def _attribute_predicates(state: State) -> dict[str, tuple[str, str, str]]:
-    """``roomIsGreen -> ('room', 'colour', 'green')`` etc. for the state's palette."""
-    pal = state.layout.palette
-    table: dict[str, tuple[str, str, str]] = {}
-    for colour in pal.colours:
-        table[attribute_pf("roomIs", colour)] = ("room", "colour", colour)
-        for cls in ("toy", "block"):
-            table[attribute_pf(f"{cls}Is", colour)] = ("toy", "colour", colour)
-    for shape in pal.shapes:
-        for cls in ("toy", "block"):
-            table[attribute_pf(f"{cls}Is", shape)] = ("toy", "shape", shape)
-    return table
-
-
-def _objects(state: State) -> dict[str, tuple[str, object]]:
-    """Object name -> (class, object) for the names a goal may use."""
-    objs: dict[str, tuple[str, object]] = {"agent0": ("agent", state.agent)}
-    objs.update({n: ("room", r) for n, r in zip(state.layout.room_names, state.layout.rooms)})
-    objs.update({n: ("door", d) for n, d in zip(state.layout.door_names, state.layout.doors)})
-    objs.update({n: ("toy", t) for n, t in zip(state.layout.toy_names, state.toys)})
-    return objs
-
-
-def _resolve(atom: Atom, state: State, context: str) -> tuple[str, list]:
-    """Check an atom's predicate, arity and objects against a state; return (kind, objects)."""
-    objs = _objects(state)
-    attributes = _attribute_predicates(state)
-    if atom.predicate in _POSITION:
-        classes = _POSITION[atom.predicate]
-    elif atom.predicate in attributes:
-        classes = (attributes[atom.predicate][0],)
-    else:
-        raise LabelError(
-            f"{context}: unknown predicate {atom.predicate!r} in {atom}; expected a position PF "
-            f"({', '.join(_POSITION)}) or a colour/shape PF like roomIsGreen, toyIsStar"
-        )
-    if len(atom.args) != len(classes):
-        raise LabelError(f"{context}: {atom} has {len(atom.args)} arguments; expected {len(classes)} ({', '.join(classes)})")
-    found = []
-    for name, cls in zip(atom.args, classes):
-        if name not in objs:
-            have = ", ".join(objs)
-            raise LabelError(f"{context}: {atom} names {name}, which does not exist (objects: {have})")
-        if objs[name][0] != cls:
-            raise LabelError(f"{context}: {atom}: {name} is a {objs[name][0]}; expected {_article(cls)} {cls} there")
-        found.append(objs[name][1])
-    return atom.predicate, found
-
-
-def check_goal_objects(goal: tuple[Atom, ...], state: State, context: str = "goal") -> None:
-    """Raise LabelError when a goal uses an unknown predicate or an object the state lacks."""
+def check_goal_objects(goal: tuple[Atom, ...], state: State, context: str = "goal", library=None) -> None:
+    """Raise LabelError when a goal uses a predicate the domain does not declare (``logic/pfs.lp``, or
+    ``library``'s own PF rules), the wrong number of arguments or an object the state lacks."""
+    tables = _tables(state, library)
     for atom in goal:
-        _resolve(atom, state, context)
+        try:
+            tables.check(atom)
+        except AspError as exc:
+            raise LabelError(f"{context}: {exc}") from None
 
 
-def _holds(atom: Atom, state: State) -> bool:
-    pred, objs = _resolve(atom, state, "goal")
-    if pred in ("agentInRoom", "toyInRoom", "agentInDoor", "toyInDoor"):
-        return bool(objs[1].contains(objs[0].x, objs[0].y))
-    if pred == "agentTouchingToy":
-        # Touching: the toy is on one of the agent's four neighbouring cells.
-        return abs(objs[0].x - objs[1].x) + abs(objs[0].y - objs[1].y) == 1
-    _, attribute, value = _attribute_predicates(state)[pred]
-    return getattr(objs[0], attribute) == value
-
-
-def goal_holds(goal: tuple[Atom, ...] | list[Atom], state: State) -> bool:
-    """True when every atom of the goal holds in ``state``.
-
-    Position PFs: agentInRoom/toyInRoom (blockInRoom), agentInDoor/toyInDoor,
-    agentTouchingToy; colour/shape PFs: roomIsGreen(room0), toyIsYellow(block0),
-    toyIsStar(block0), ... Raises LabelError for unknown predicates or objects.
-    """
-    return all(_holds(atom, state) for atom in goal)
+def goal_holds(goal: tuple[Atom, ...] | list[Atom], state: State, library=None) -> bool:
+    """True when every atom of the goal holds in ``state``, as the PF rules of the domain (or of
+    ``library``, a TaskLibrary with PF rules of its own) define it: the tables planning uses.
+    Raises LabelError for unknown predicates or objects."""
+    if not goal:
+        return True
+    tables = _tables(state, library)
+    try:
+        return bool(atoms_hold(state, list(goal), tables).all())
+    except AspError as exc:
+        raise LabelError(f"goal: {exc}") from None
 
 
 def label_for(instance: Instance, labels: Labels | dict) -> tuple[Atom, ...] | None:

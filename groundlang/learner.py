@@ -22,11 +22,11 @@ from groundlang.inference.acting import rollout, rollout_states
 from groundlang.inference.joint import FitResult, fit_globals, posterior
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
-from groundlang.logic.atoms import Atom, attribute_pf, format_goal
+from groundlang.logic.atoms import Atom, format_goal
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
-from groundlang.model.geometry import cell_tables
+from groundlang.model.pf_tables import pf_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
 from groundlang.model.statespace import enumerate_states
@@ -147,7 +147,7 @@ class Learner:
         interps = [self._interpretations(inst.initial_state) for inst in instances]
         goals = [sorted({i.goal for i in group}) for group in interps]
         table = behaviour_likelihood_table(
-            instances, goals, self.settings, cache_dir=self.cache_dir, progress=progress
+            instances, goals, self.settings, cache_dir=self.cache_dir, progress=progress, library=self.library
         )
         observations = []
         for inst, group, goal_list, row in zip(instances, interps, goals, table):
@@ -168,7 +168,7 @@ class Learner:
         return Observation(tuple(readings[0].logical_form.words), readings, tuple(self._interpretations(state)))
 
     # ----------------------------------------------------------------- training
-    def _build_vocabulary(self, observations: Iterable[Observation], palettes: set) -> Vocabulary:
+    def _build_vocabulary(self, observations: Iterable[Observation], layouts: Iterable) -> Vocabulary:
         vocab = Vocabulary()
         vocab.add_tasks((task.name for task in self.library.tasks),
                         roles={task.name: alignable_roles(task) for task in self.library.tasks})
@@ -187,11 +187,15 @@ class Learner:
                     roles.append(rb.role)
                     tokens.append(class_token(rb.cls))
                     tokens.extend(rb.constraint_tokens + rb.kind_tokens)  # a user's PF may describe only bystanders
-        for palette in sorted(palettes, key=lambda p: p.name):
-            tokens.extend(attribute_pf("roomIs", c) for c in palette.colours)
-            tokens.extend(attribute_pf("toyIs", c) for c in palette.colours)
-            tokens.extend(attribute_pf("toyIs", s) for s in palette.shapes)
-        tokens.extend(class_token(c) for c in ("agent", "room", "door", "toy"))
+        # Every property PF the domain declares for the palettes seen (colours, shapes, a user's
+        # sizes...) and every class: a layout of the test may have values training never saw.
+        classes: set[str] = set()
+        for layout in layouts:
+            tables = pf_tables(layout, self.library.tabulation_program)
+            tokens.extend(sorted(n for n, sig in tables.signatures.items()
+                                 if len(sig) == 1 and n not in tables.tabulated))
+            classes.update(cls for cls, _, _ in layout.objects)
+        tokens.extend(class_token(c) for c in sorted(classes))
         tokens.extend(self.library.spatial_pfs)  # a layout of the test may have sides training never saw
         vocab.add_tokens(tokens)
         vocab.add_roles(roles + list(OTHER_ROLES))
@@ -216,8 +220,9 @@ class Learner:
             if observations is None:
                 observations = self.observe(instances, progress=progress)
             if init is None or self.vocab is None:
-                palettes = {inst.initial_state.layout.palette for inst in instances}
-                self.vocab = self._build_vocabulary(observations, palettes)
+                # One layout per palette: what the domain declares depends on the palette's values.
+                layouts = {inst.initial_state.layout.palette: inst.initial_state.layout for inst in instances}
+                self.vocab = self._build_vocabulary(observations, [layouts[p] for p in sorted(layouts, key=lambda p: p.name)])
                 init = None
             batch = encode(observations, self.vocab)
         elif self.vocab is None:
@@ -270,7 +275,7 @@ class Learner:
         key = (state, goal, max_steps)
         if key not in self._plans:  # plans depend on the world only, never on the words
             space = enumerate_states(state)
-            mask = goal_mask(space, goal, cell_tables(state.layout))
+            mask = goal_mask(space, goal, pf_tables(state.layout, self.library.tabulation_program))
             solved = solve_task(space.next_state, mask, self.settings)
             trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
             states, actions = rollout_states(space, trajectory)

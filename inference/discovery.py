@@ -58,7 +58,6 @@ from groundlang.inference.planning import TaskSettings
 from groundlang.logic.atoms import Atom
 # lifted_key is part of discovery's public surface (tests and notebooks import it from here).
 from groundlang.inference.lifting import (  # noqa: F401
-    colour_shape_pfs,
     lift_goal,
     lifted_key,
     singling_out,
@@ -231,11 +230,7 @@ class _Demo:
 
 
 def _object_classes(layout) -> dict[str, str]:
-    classes = {"agent0": "agent"}
-    classes.update({r: "room" for r in layout.room_names})
-    classes.update({d: "door" for d in layout.door_names})
-    classes.update({t: "toy" for t in layout.toy_names})
-    return classes
+    return {name: cls for cls, name, _ in layout.objects}
 
 
 def _peers(layout, obj: str) -> list[str]:
@@ -260,13 +255,13 @@ def _group(instances: Sequence) -> list[_Demo]:
 def _fit_top_features(demo: _Demo, settings: DiscoverySettings) -> None:
     """MLIRL over every position PF; keep the top features true at the end as candidate goal atoms."""
     from groundlang.model.features import feature_matrix, position_atoms
-    from groundlang.model.geometry import cell_tables
+    from groundlang.model.pf_tables import pf_tables
     from groundlang.model.statespace import enumerate_states, trajectory_indices
 
     inst = demo.instance
     space = enumerate_states(inst.initial_state)
     atoms = position_atoms(space.layout)
-    features = feature_matrix(space, atoms, cell_tables(space.layout)).numpy()
+    features = feature_matrix(space, atoms, pf_tables(space.layout)).numpy()
     states = trajectory_indices(space, list(inst.states))
     actions = [int(a) for a in inst.actions]
     fit = mlirl(space.next_state, features, [(states, actions)], **settings.irl)
@@ -396,10 +391,11 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
 def _attributes(demo: _Demo, pfs: TaskLibrary | None):
     """Object -> its ``(colour/shape PF name, term)`` pairs in the demonstration's initial state:
     pfs.lp's families, or every family ``pfs`` declares (clingo's ``described/3``)."""
+    from groundlang.model.tasks import attribute_pfs, object_descriptions
+
     state = demo.instance.initial_state
     if pfs is None:
-        return colour_shape_pfs(state.layout)
-    from groundlang.model.tasks import attribute_pfs, object_descriptions
+        return attribute_pfs(state, TaskLibrary.load())
 
     if not object_descriptions(state, pfs):  # pfs.lp alone describes every room by its colour
         raise ValueError(f"{pfs.program.user_names}: describes no object of the initial state of {demo.names[0]} "

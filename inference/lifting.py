@@ -15,10 +15,8 @@ from typing import Mapping, Sequence
 from groundlang.logic.atoms import Atom, attribute_pf
 from groundlang.logic.tasks import CLASS_ORDER, LiftedTask, Variable
 
-__all__ = ["VARIABLE_LETTER", "structure_key", "lifted_key", "task_name", "lift_goal", "colour_shape_pfs",
-           "singling_out"]
+__all__ = ["structure_key", "lifted_key", "task_name", "lift_goal", "singling_out"]
 
-VARIABLE_LETTER = {"agent": "A", "toy": "T", "room": "R", "door": "D"}
 
 
 def structure_key(goal: Sequence[tuple[str, Sequence[str]]], classes: dict[str, str]) -> tuple:
@@ -87,7 +85,7 @@ def lift_goal(goal: Sequence[Atom], classes: dict[str, str], name: str | None = 
             if slot not in names:
                 cls = slot.split("#")[0]
                 counts[cls] = counts.get(cls, 0) + 1
-                letter = VARIABLE_LETTER.get(cls, cls[:1].upper())
+                letter = cls[:1].upper()
                 names[slot] = letter if counts[cls] == 1 else f"{letter}{counts[cls]}"
     rank = {c: i for i, c in enumerate(CLASS_ORDER)}
     variables = sorted({Variable(n, s.split("#")[0]) for s, n in names.items()},
@@ -100,36 +98,17 @@ def lift_goal(goal: Sequence[Atom], classes: dict[str, str], name: str | None = 
 # ---------------------------------------------------------------- colour/shape PFs that pick an object out
 
 
-def colour_shape_pfs(layout) -> dict[str, tuple[tuple[str, str], ...]]:
-    """The colour and shape PFs true of each room and toy of ``layout`` (doors and the agent have none).
-
-    Object name -> ``((PF name, ASP term), ...)``, colour before shape: the name as pfs.lp's
-    families are written in groundlang (``roomIsGreen``, ``toyIsStar``, the predicate of an
-    :class:`Atom`) and the term a task library writes in ``restrict/3`` (``roomIs(green)``).
-    """
-    out: dict[str, tuple[tuple[str, str], ...]] = {}
-    for name, room in zip(layout.room_names, layout.rooms):
-        out[name] = (_pf("roomIs", room.colour),)
-    for name, (colour, shape) in zip(layout.toy_names, layout.toy_attributes):
-        out[name] = (_pf("toyIs", colour), _pf("toyIs", shape))
-    return out
-
-
-def _pf(stem: str, value: str) -> tuple[str, str]:
-    return attribute_pf(stem, value), f"{stem}({value})"
-
-
 def singling_out(layout, obj: str, peers: Sequence[str],
-                 attributes: Mapping[str, Sequence[tuple[str, str]]] | None = None) -> tuple[Atom, ...] | None:
+                 attributes: Mapping[str, Sequence[tuple[str, str]]]) -> tuple[Atom, ...] | None:
     """Smallest colour/shape conjunction true of ``obj`` and of none of ``peers`` (same class).
 
-    ``attributes``: object -> its ``(PF name, term)`` pairs, as :func:`colour_shape_pfs` gives them
-    (its default) or ``model.tasks.attribute_pfs`` for a library's own families.
+    ``attributes``: object -> its ``(PF name, term)`` pairs, as ``model.tasks.attribute_pfs`` gives them
+    (the families of pfs.lp and of a library's own PF rules).
     ``()`` when there are no peers; None when no conjunction of its PFs tells it apart.
     """
     if not peers:
         return ()
-    pfs = colour_shape_pfs(layout) if attributes is None else attributes
+    pfs = attributes
     own = tuple(Atom(name, (obj,)) for name, _ in pfs.get(obj, ()))
     others = [{name for name, _ in pfs.get(p, ())} for p in peers]
     for k in range(1, len(own) + 1):

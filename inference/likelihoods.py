@@ -76,8 +76,10 @@ def _goal(goal) -> tuple[Atom, ...]:
     return tuple(parse_atom(a) if isinstance(a, str) else a for a in atoms)
 
 
-def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], settings: TaskSettings) -> str:
-    """sha256 (hex) of the canonical description of one table entry."""
+def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], settings: TaskSettings,
+              pfs: str | None = None) -> str:
+    """sha256 (hex) of the canonical description of one table entry; ``pfs``: a digest of PF rules
+    other than the package's (what the goal's PFs mean)."""
     description = {
         "version": CACHE_VERSION,
         "layout": _layout_description(initial_state.layout),
@@ -87,6 +89,8 @@ def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], setti
         "actions": [int(a) for a in actions],
         "settings": settings.as_dict(),
     }
+    if pfs is not None:
+        description["pfs"] = pfs
     text = json.dumps(description, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -128,6 +132,7 @@ def behaviour_likelihood_table(
     settings: TaskSettings = TaskSettings(),
     cache_dir: str | os.PathLike | None | bool = None,
     progress: bool = False,
+    library=None,
 ) -> list[np.ndarray]:
     """Log-likelihood of each instance's demonstration under each of its candidate goals.
 
@@ -139,17 +144,21 @@ def behaviour_likelihood_table(
             tuple of Atoms (or atom strings, or a single Atom).
         settings: reward and solver settings (part of the cache key).
         cache_dir: cache root (see module docstring); False for no cache.
+        library: the TaskLibrary whose PF rules say what the goals mean (default: the package's PFs);
+            a library with PF rules of its own keys its entries by their text.
     Returns a list of float64 arrays, ``result[i][k]`` for candidate ``k`` of instance ``i``.
     Raises ValueError when the lists differ in length or a goal names an unknown object.
     """
     from groundlang.model.features import goal_mask
-    from groundlang.model.geometry import cell_tables
+    from groundlang.model.pf_tables import pf_tables, program_digest, tabulation_program
     from groundlang.model.statespace import enumerate_states, trajectory_indices
 
     if len(candidates) != len(instances):
         raise ValueError(f"{len(instances)} instances but {len(candidates)} candidate lists")
     root = None if cache_dir is False else cache_directory(cache_dir)
     goals = [[_goal(g) for g in row] for row in candidates]
+    program = library.tabulation_program if library is not None else tabulation_program(())
+    pfs = program_digest(program)
     table = [np.full(len(row), np.nan) for row in goals]
     keys: list[list[str]] = []
     # (initial state) -> {goal: [(instance, candidate)]} for the entries still to compute.
@@ -157,7 +166,7 @@ def behaviour_likelihood_table(
     hits = 0
     for i, (inst, row) in enumerate(zip(instances, goals)):
         actions = [int(a) for a in inst.actions]
-        keys.append([entry_key(inst.initial_state, g, actions, settings) for g in row])
+        keys.append([entry_key(inst.initial_state, g, actions, settings, pfs) for g in row])
         for k, (g, key) in enumerate(zip(row, keys[i])):
             value = None if root is None else _read_entry(_entry_path(root, key), key)
             if value is None:
@@ -176,7 +185,7 @@ def behaviour_likelihood_table(
     for initial, by_goal in todo.items():
         space = enumerate_states(initial)
         transitions = as_transitions(space.next_state)
-        tables = cell_tables(space.layout)
+        tables = pf_tables(space.layout, program)
         demo_indices: dict[int, np.ndarray] = {}
         for goal, entries in by_goal.items():
             mask = goal_mask(space, goal, tables)

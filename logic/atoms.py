@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["Atom", "AtomError", "PREDICATE_ALIASES", "attribute_pf", "parse_atom", "parse_goal", "format_goal"]
+__all__ = ["canonical_predicate", "Atom", "AtomError", "PREDICATE_ALIASES", "attribute_pf", "parse_atom", "parse_goal", "format_goal"]
 
 # Corpus spelling -> groundlang (paper) spelling.
 PREDICATE_ALIASES = {
@@ -19,6 +19,18 @@ PREDICATE_ALIASES = {
     "blockInDoor": "toyInDoor",
     "agentTouchingBlock": "agentTouchingToy",
 }
+
+# The commands-to-tasks corpus calls toys blocks, in object and predicate names (blockIsStar).
+_CORPUS_CLASS_SPELLING = ("block", "toy")
+
+
+def canonical_predicate(name: str) -> str:
+    """The paper's spelling of a predicate the corpus spells its own way (``blockIsStar`` -> ``toyIsStar``)."""
+    if name in PREDICATE_ALIASES:
+        return PREDICATE_ALIASES[name]
+    theirs, ours = _CORPUS_CLASS_SPELLING
+    return ours + name[len(theirs):] if name.startswith(theirs) and name[len(theirs):][:1].isupper() else name
+
 
 _ATOM = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*\(([^()]*)\)\s*")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -48,7 +60,7 @@ def parse_atom(text: str) -> Atom:
     m = _ATOM.fullmatch(text)
     if not m:
         raise AtomError(f"{text.strip()!r} is not an atom like toyInRoom(block0, room1)")
-    pred = PREDICATE_ALIASES.get(m.group(1), m.group(1))
+    pred = canonical_predicate(m.group(1))
     args = tuple(a.strip() for a in m.group(2).split(",")) if m.group(2).strip() else ()
     for a in args:
         if not _NAME.fullmatch(a):

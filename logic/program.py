@@ -241,6 +241,22 @@ class Program:
         mine = [s.name for s in self.sources if not s.name.startswith("groundlang.")]
         return ", ".join(mine) if mine else self.names
 
+    def declared_order(self, predicate: str, arity: int, position: int) -> list[str]:
+        """The terms at argument ``position`` of the rule heads ``predicate/arity`` in source order
+        (``declared_order("pf", 3, 1)``: PF names as the files declare them), each once."""
+        out: dict[str, None] = {}
+        for stm in self._statements:
+            if stm.ast_type != ast.ASTType.Rule or stm.head.ast_type != ast.ASTType.Literal:
+                continue
+            atom = stm.head.atom
+            if atom.ast_type != ast.ASTType.SymbolicAtom:
+                continue
+            term = atom.symbol
+            if (term.ast_type == ast.ASTType.Function and term.name == predicate
+                    and len(term.arguments) == arity):
+                out.setdefault(str(term.arguments[position]), None)
+        return list(out)
+
     def control(
         self, facts: str = "", *, time_limit: float | None = DEFAULT_TIME_LIMIT,
         arguments: Sequence[str] = (),

@@ -19,7 +19,8 @@ world model.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from functools import lru_cache
+from dataclasses import dataclass, field
 from itertools import combinations
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -50,12 +51,26 @@ __all__ = [
     "PFTerms",
     "DOMAIN_FILES",
     "CLASS_ORDER",
+    "class_order",
 ]
 
 # The domain rules every task program needs, in load order.
 DOMAIN_FILES = ("domain.lp", "pfs.lp")
 # Variables of a lifted task are listed in this class order, then by name.
-CLASS_ORDER = ("agent", "toy", "room", "door")
+@lru_cache(maxsize=1)
+def class_order() -> tuple[str, ...]:
+    """The classes of domain.lp (``class/1``) by ``class_rank/2``: the order of a lifted task's variables."""
+    program = Program((package_source("domain.lp"), Source("groundlang.logic.tasks", "#show class/1. #show class_rank/2.")))
+    rank, classes = {}, set()
+    for sym in program.solve(models=1)[0]:
+        if sym.name == "class_rank":
+            rank[str(sym.arguments[0])] = sym.arguments[1].number
+        else:
+            classes.add(str(sym.arguments[0]))
+    return tuple(sorted(classes, key=lambda c: (rank.get(c, len(rank) + 1), c)))
+
+
+CLASS_ORDER = class_order()
 # groundings.lp derives goal atoms for PFs of these arities.
 MAX_GOAL_ARITY = 3
 
@@ -98,6 +113,8 @@ class GroundedTask:
     task: str
     binding: tuple[tuple[str, str], ...]  # (variable, object name), in the lifted task's variable order
     goal: tuple[Atom, ...]
+    # The goal atoms that already hold in the initial state the grounding was enumerated in.
+    holding: tuple[Atom, ...] = field(default=(), compare=False)
 
     def object_of(self, variable: str) -> str:
         return dict(self.binding)[variable]
@@ -332,6 +349,10 @@ class TaskLibrary:
         self.grounding_program = Program(
             domain + self.sources + (package_source("groundings.lp"),), allow_scripts, isolated
         )
+        # Where every PF holds per placement of its movable arguments (groundlang.model.pf_tables).
+        self.tabulation_program = Program(
+            domain + self.sources + (package_source("tabulate.lp"),), allow_scripts, isolated
+        )
         self.tasks, self.spatial_pfs = _read_lifted_tasks(self.program, time_limit)
 
     @classmethod
@@ -444,7 +465,7 @@ def ground_environment(
             return kind, (_text(args[0]), args[1])
         if kind in ("pf_of_no_class", "attribute_pf_not_unary") and len(args) == 2:
             return kind, (str(args[0]), str(args[1]))
-        if kind in ("goal_atom", "constraint_atom") and len(args) == 2:
+        if kind in ("goal_atom", "constraint_atom", "goal_atom_holds") and len(args) == 2:
             return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
         return "other", None  # atoms a user library shows for its own purposes
 
@@ -452,7 +473,7 @@ def ground_environment(
     unusable: set[tuple[str, str, clingo.Symbol]] = set()
     restrictable: dict[str, set[clingo.Symbol]] = {}
     for model in library.grounding_program.solve(facts, models=0, time_limit=limit):
-        chosen, bind, goal, extra = None, {}, [], []
+        chosen, bind, goal, extra, holding = None, {}, [], [], []
         for sym in model:
             if sym not in decoded:
                 decoded[sym] = decode(sym)
@@ -463,6 +484,8 @@ def ground_environment(
                 bind[value[0]] = value[1]
             elif kind == "goal_atom":
                 goal.append(value)
+            elif kind == "goal_atom_holds":
+                holding.append(value)
             elif kind == "constraint_atom":
                 extra.append(value)
             elif kind == "described":
@@ -491,7 +514,7 @@ def ground_environment(
         goal.sort(key=lambda a: (a.predicate, tuple(_natural_key(o) for o in a.args)))
         position = {o: i for i, (_, o) in enumerate(binding)}
         extra.sort(key=lambda a: (min(position[o] for o in a.args), a.predicate, a.args))
-        grounded = GroundedTask(chosen, binding, tuple(goal))
+        grounded = GroundedTask(chosen, binding, tuple(goal), tuple(a for a in goal if a in holding))
         key = (order[chosen], tuple(_natural_key(o) for _, o in binding))
         found.append((key, grounded, binding_constraints(extra)))
     if unusable:

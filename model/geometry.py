@@ -30,19 +30,23 @@ def _constant(value: str, what: str) -> str:
     return value
 
 
-def layout_facts(layout: Layout) -> str:
-    """Facts for the static part: palette, rooms, doors, toys' attributes (see domain.lp)."""
+def fact(cls: str, name: str, facts) -> str:
+    text = f"{cls}({name})."
+    for predicate, args in facts:
+        values = ",".join(str(a) if isinstance(a, int) else _constant(a, predicate) for a in args)
+        text += f" {predicate}({name},{values})."
+    return text
+
+
+def layout_facts(layout: Layout, movable: bool = True) -> str:
+    """Facts for the static part: palette, every object's class and attributes (see domain.lp);
+    ``movable=False`` leaves out the objects that move (the agent and the toys)."""
     pal = layout.palette
     lines = [f"palette_colour({_constant(c, 'colour')})." for c in pal.colours]
     lines += [f"palette_shape({_constant(s, 'shape')})." for s in pal.shapes]
-    for name, r in zip(layout.room_names, layout.rooms):
-        lines.append(f"room({name}). rect({name},{r.left},{r.top},{r.right},{r.bottom}). "
-                     f"colour({name},{_constant(r.colour, 'colour')}).")
-    for name, d in zip(layout.door_names, layout.doors):
-        lines.append(f"door({name}). rect({name},{d.left},{d.top},{d.right},{d.bottom}).")
-    for name, (colour, shape) in zip(layout.toy_names, layout.toy_attributes):
-        lines.append(f"toy({name}). colour({name},{_constant(colour, 'colour')}). "
-                     f"shape({name},{_constant(shape, 'shape')}).")
+    moving = set(layout.movable_names)
+    lines += [fact(cls, name, facts) for cls, name, facts in layout.objects
+              if name != "agent0" and (movable or name not in moving)]
     return "\n".join(lines) + "\n"
 
 

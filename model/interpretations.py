@@ -54,7 +54,6 @@ from dataclasses import dataclass
 
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, LiftedTask, TaskLibrary
-from groundlang.model.features import atoms_hold
 from groundlang.model.geometry import cell_tables
 from groundlang.model.tasks import candidate_tasks, object_descriptions
 from groundlang.model.vocabulary import NO_ROLE
@@ -136,7 +135,8 @@ def alignable_roles(lifted: LiftedTask) -> tuple[str, ...]:
 
 
 def class_of(obj: str) -> str:
-    """Object class from the corpus naming convention (block0 is a toy)."""
+    """Object class from the corpus naming convention (block0 is a toy), for atoms read without their
+    layout; with one, ``Layout.objects`` says it."""
     for prefix, cls in (("agent", "agent"), ("room", "room"), ("door", "door"), ("block", "toy")):
         if obj.startswith(prefix):
             return cls
@@ -145,7 +145,7 @@ def class_of(obj: str) -> str:
 
 def object_names(state: State) -> list[str]:
     """Every object of ``state`` in the layout's order: the agent, rooms, doors, toys."""
-    return ["agent0"] + state.layout.room_names + state.layout.door_names + state.layout.toy_names
+    return [name for _, name, _ in state.layout.objects]
 
 
 def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary,
@@ -164,10 +164,11 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())
         bindings.append(RoleBinding(role, obj, var.cls, said, about.get("shape", ())))
     bound = set(binding.values())
+    classes = {name: cls for cls, name, _ in state.layout.objects}
     start_set, start_known = starts
     for obj in object_names(state):
         if obj not in bound:
-            cls = class_of(obj)
+            cls = classes[obj]
             about = described.get(obj, {})
             said = tuple(name for names in about.values() for name in names)
             if obj in start_set:
@@ -211,11 +212,10 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     # than the smaller task; kept, it duplicated that task in the prior and
     # its lifted-task token learned the smaller task's words ("walk into the
     # red room" became toy-and-agent whenever the toy already sat somewhere).
-    tables = cell_tables(state.layout)
     candidates = [
         (task, constraints)
         for task, constraints in candidate_tasks(state, library)
-        if len(task.goal) == 1 or not atoms_hold(state, task.goal, tables).any()
+        if len(task.goal) == 1 or not task.holding
     ]
     if not candidates:
         raise ValueError(

@@ -20,11 +20,13 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
+from groundlang.logic.palettes import read_palette
+from groundlang.logic.program import AspError
+
 __all__ = [
     "Action",
     "ACTION_DELTAS",
     "Palette",
-    "PALETTES",
     "get_palette",
     "Room",
     "Door",
@@ -36,6 +38,12 @@ __all__ = [
     "replay",
     "WorldError",
 ]
+
+
+# The classes of the objects that move (``movable/1`` of logic/domain.lp): the agent, and the toys
+# the corpora call blocks.
+AGENT_CLASS = "agent"
+TOY_CLASS = "toy"
 
 
 class WorldError(ValueError):
@@ -106,33 +114,20 @@ class Palette:
             raise WorldError(f"shape {name!r} is not in palette {self.name!r}") from None
 
 
-PALETTES: dict[str, Palette] = {
-    "sokoban": Palette(
-        "sokoban",
-        (
-            "black", "blue", "cyan", "darkGray", "gray", "green", "lightGray",
-            "magenta", "orange", "pink", "red", "white", "yellow",
-        ),
-        ("star", "moon", "circle", "smiley", "square"),
-    ),
-    "sokoban2": Palette(
-        "sokoban2",
-        ("blue", "green", "magenta", "red", "yellow"),
-        ("chair", "bag", "backpack", "basket"),
-    ),
-}
-
-
 def get_palette(name: str | Palette) -> Palette:
-    """Return the palette called ``name`` (``sokoban`` or ``sokoban2``)."""
+    """The palette ``name``: one the package ships (``logic/palettes/NAME.lp``) or the path of a
+    ``.lp`` file of ``value(Attribute, Index, Name)`` facts. Raises WorldError naming what is wrong."""
     if isinstance(name, Palette):
         return name
     try:
-        return PALETTES[name]
-    except KeyError:
-        raise WorldError(
-            f"unknown palette {name!r}; expected one of {', '.join(sorted(PALETTES))}"
-        ) from None
+        label, values = read_palette(str(name))
+    except AspError as exc:
+        raise WorldError(str(exc)) from None
+    missing = [a for a in ("colour", "shape") if a not in values]
+    if missing:
+        raise WorldError(f"palette {name}: no {' and no '.join(missing)} values; corpus files index "
+                         "the colour of rooms and toys and the shape of toys")
+    return Palette(label, values["colour"], values["shape"])
 
 
 @dataclass(frozen=True)
@@ -229,6 +224,25 @@ class Layout:
     @property
     def toy_names(self) -> list[str]:
         return [f"block{i}" for i in range(len(self.toy_attributes))]
+
+    @cached_property
+    def objects(self) -> tuple[tuple[str, str, tuple[tuple[str, tuple], ...]], ...]:
+        """Every object as ``(class, name, facts)``, the agent first: the one place where the world's
+        kinds of object meet the schema's classes (``class/1`` of ``logic/domain.lp``; a test checks
+        they agree). ``facts`` are ``(predicate, arguments)`` pairs, ``("colour", ("green",))``."""
+        out = [(AGENT_CLASS, "agent0", ())]
+        out += [("room", n, (("rect", (r.left, r.top, r.right, r.bottom)), ("colour", (r.colour,))))
+                for n, r in zip(self.room_names, self.rooms)]
+        out += [("door", n, (("rect", (d.left, d.top, d.right, d.bottom)),))
+                for n, d in zip(self.door_names, self.doors)]
+        out += [(TOY_CLASS, n, (("colour", (c,)), ("shape", (s,))))
+                for n, (c, s) in zip(self.toy_names, self.toy_attributes)]
+        return tuple(out)
+
+    @property
+    def movable_names(self) -> list[str]:
+        """The objects whose positions make up a state, in the order of ``State.positions``."""
+        return ["agent0"] + self.toy_names
 
     def validate(self) -> None:
         """Raise WorldError when rooms are degenerate or overlap, or a door opens no wall between two rooms.

@@ -324,7 +324,7 @@ fig.tight_layout()'''),
 One small world as the paper describes it: a green room along the north, red and blue rooms below, the yellow star in the red–blue doorway and a magenta moon in the green room. The demonstration is the shortest path taking the star into the green room — it passes *through* the red room."""),
     ("code", '''from groundlang.inference.mlirl import mlirl
 from groundlang.model.features import feature_matrix, position_atoms
-from groundlang.model.geometry import cell_tables
+from groundlang.model.pf_tables import pf_tables
 from groundlang.model.statespace import enumerate_states, trajectory_indices
 
 COMMAND = "Push the star into the green room"
@@ -336,7 +336,7 @@ IRL = dict(temperature=0.5, l1=0.1, nonnegative=True)
 
 def mlirl_weights(atoms):
     space = enumerate_states(demo.initial_state)
-    features = feature_matrix(space, atoms, cell_tables(space.layout))
+    features = feature_matrix(space, atoms, pf_tables(space.layout))
     states = trajectory_indices(space, list(demo.states))
     return mlirl(space.next_state, features, [(states, [int(a) for a in demo.actions])], **IRL).weights
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from groundlang.model.tasks import attribute_pfs
 from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus
 from groundlang.inference.discovery import (
@@ -72,10 +73,12 @@ def test_task_names_come_from_goal_predicates():
 
 def test_singling_out_finds_the_smallest_distinguishing_conjunction():
     corpus = read_corpus(example_corpus_path(), "sokoban")
-    layout = corpus.instances[0].initial_state.layout
-    assert singling_out(layout, "room0", ["room1", "room2"]) == (Atom("roomIsGreen", ("room0",)),)
-    assert singling_out(layout, "block0", []) == ()  # a lone toy needs no description
-    assert singling_out(layout, "door0", ["door1"]) is None  # doors have no colour or shape
+    state = corpus.instances[0].initial_state
+    layout = state.layout
+    attributes = attribute_pfs(state, TaskLibrary.load())
+    assert singling_out(layout, "room0", ["room1", "room2"], attributes) == (Atom("roomIsGreen", ("room0",)),)
+    assert singling_out(layout, "block0", [], attributes) == ()  # a lone toy needs no description
+    assert singling_out(layout, "door0", ["door1"], attributes) is None  # doors have no colour or shape
 
 
 # ---------------------------------------------------------------- library search

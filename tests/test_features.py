@@ -11,6 +11,7 @@ import torch
 from groundlang.logic.atoms import Atom, parse_atom, parse_goal
 from groundlang.model.features import FeatureError, feature_matrix, goal_mask, position_atoms
 from groundlang.model.geometry import CellTables, cell_tables
+from groundlang.model.pf_tables import pf_tables
 from groundlang.model.statespace import enumerate_states
 from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette
 
@@ -45,13 +46,13 @@ def corpus_state(agent=(8, 6), toys=((4, 8),), palette=SOKOBAN, kinds=(("yellow"
 @pytest.fixture(scope="module")
 def one_toy():
     state = corpus_state()
-    return enumerate_states(state), local_tables(state.layout)
+    return enumerate_states(state), pf_tables(state.layout)
 
 
 @pytest.fixture(scope="module")
 def two_toys():
     state = corpus_state(toys=((4, 8), (7, 2)), kinds=(("yellow", "star"), ("red", "moon")))
-    return enumerate_states(state), local_tables(state.layout)
+    return enumerate_states(state), pf_tables(state.layout)
 
 
 def test_local_tables_match_clingo():
@@ -59,6 +60,31 @@ def test_local_tables_match_clingo():
     mine, theirs = local_tables(layout), cell_tables(layout)
     np.testing.assert_array_equal(mine.room_of, theirs.room_of)
     np.testing.assert_array_equal(mine.door_of, theirs.door_of)
+
+
+def reference_column(space, atom: Atom, tables: CellTables) -> np.ndarray:
+    """The paper's position PFs computed straight from the cell tables with numpy: what the PF tables
+    clingo tabulates from pfs.lp must agree with."""
+    pos = space.positions
+    index = {"agent0": 0, **{n: 1 + i for i, n in enumerate(space.layout.toy_names)}}
+    mover = pos[:, index[atom.args[0]]]
+    if atom.predicate == "agentTouchingToy":
+        toy = pos[:, index[atom.args[1]]]
+        return np.abs(mover - toy).sum(-1) == 1
+    grid = tables.room_of if atom.predicate.endswith("InRoom") else tables.door_of
+    return grid[mover[:, 0], mover[:, 1]] == int(atom.args[1][4:])
+
+
+@pytest.mark.parametrize("fixture", ["one_toy", "two_toys"])
+def test_tabulated_pfs_agree_with_the_cell_tables_in_every_state(fixture, request):
+    space, tables = request.getfixturevalue(fixture)
+    reference = local_tables(space.layout)
+    atoms = position_atoms(space.layout)
+    assert {a.predicate for a in atoms} == {"agentInRoom", "toyInRoom", "agentInDoor", "toyInDoor", "agentTouchingToy"}
+    values = feature_matrix(space, atoms, tables).numpy().astype(bool)
+    for f, atom in enumerate(atoms):
+        np.testing.assert_array_equal(values[:, f], reference_column(space, atom, reference), err_msg=str(atom))
+    assert values.any(0).sum() >= len(atoms) - 2  # nearly every atom holds somewhere: not all False
 
 
 def test_position_atoms():
@@ -135,17 +161,17 @@ def test_constant_colour_and_shape_columns(one_toy):
     second = corpus_state(palette=get_palette("sokoban2"), kinds=(("magenta", "chair"),))
     space2 = enumerate_states(second)
     values2 = feature_matrix(space2, ["toyIsChair(block0)", "toyIsMagenta(block0)", "toyIsBag(block0)"],
-                             local_tables(second.layout))
+                             pf_tables(second.layout))
     assert values2[123].tolist() == [1, 1, 0]
     with pytest.raises(FeatureError, match="toyIsStar"):  # a shape of the other palette
-        feature_matrix(space2, ["toyIsStar(block0)"], local_tables(second.layout))
+        feature_matrix(space2, ["toyIsStar(block0)"], pf_tables(second.layout))
 
 
 @pytest.mark.parametrize(
     "atom, message",
     [
         ("agentNearRoom(agent0, room0)", r"agentNearRoom\(agent0, room0\): unknown predicate"),
-        ("toyInRoom(block0, room7)", r"toyInRoom\(block0, room7\): argument 2 'room7' is not a room"),
+        ("toyInRoom(block0, room7)", r"toyInRoom\(block0, room7\) names room7, which does not exist"),
         ("toyInRoom(block3, room0)", "'block3' is not a toy"),
         ("agentInRoom(block0, room0)", "'block0' is not an agent"),
         ("agentInRoom(agent0)", "takes 2 arguments"),
@@ -163,11 +189,11 @@ def test_bad_atoms_are_named(one_toy, atom, message):
         goal_mask(space, [atom], tables)
 
 
-def test_table_shape_is_checked(one_toy):
+def test_tables_of_another_layout_are_refused(one_toy, two_toys):
     space, _ = one_toy
-    small = CellTables(np.zeros((3, 3), np.int16), np.zeros((3, 3), np.int16))
-    with pytest.raises(FeatureError, match=r"room_of has shape \(3, 3\)"):
-        feature_matrix(space, position_atoms(space.layout), small)
+    _, other = two_toys
+    with pytest.raises(FeatureError, match="layout other than"):
+        feature_matrix(space, position_atoms(space.layout), other)
 
 
 def test_goal_mask(two_toys):
@@ -197,6 +223,6 @@ def test_corpus_goals_hold_only_at_the_end(shared_corpus):
     for prefix, goal in labels.items():
         instance = read_instance(shared_corpus / "allTurkTrain" / f"{prefix}0.txt", "sokoban")
         space = enumerate_states(instance.initial_state)
-        mask = goal_mask(space, goal, cell_tables(space.layout))
+        mask = goal_mask(space, goal, pf_tables(space.layout))
         assert mask[space.index_of(instance.final_state)], prefix
         assert not mask[0], prefix

@@ -11,14 +11,14 @@ from groundlang.inference.planning import PlanningError, solve_task
 
 
 def _world():
-    from groundlang.model.geometry import cell_tables
+    from groundlang.model.pf_tables import pf_tables
     from groundlang.model.statespace import enumerate_states
     from groundlang.model.world import Agent, Door, Layout, Room, State, get_palette
 
     rooms = (Room("green", 0, 10, 6, 4), Room("red", 6, 10, 10, 4), Room("blue", 0, 4, 10, 0))
     doors = (Door(3, 4, 3, 3), Door(8, 4, 8, 3), Door(5, 6, 6, 6))
     layout = Layout(rooms, doors, (), get_palette("sokoban"))
-    return enumerate_states(State(layout, Agent(4, 2), ())), cell_tables(layout)
+    return enumerate_states(State(layout, Agent(4, 2), ())), pf_tables(layout)
 
 
 def _demos(space, goal, starts, seed):

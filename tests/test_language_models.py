@@ -37,7 +37,7 @@ def setting():
     state = read_state_file(TWO_TOYS, "sokoban2")
     learner = Learner("parse")
     observations = [learner._command_observation(c, state) for c in COMMANDS]
-    learner.vocab = learner._build_vocabulary(observations, {state.layout.palette})
+    learner.vocab = learner._build_vocabulary(observations, [state.layout])
     # Observations made before the vocabulary existed still encode with it.
     batch = encode(observations, learner.vocab)
     pyro.set_rng_seed(3)
@@ -416,11 +416,11 @@ def test_the_room_the_agent_starts_in_has_a_role_of_its_own():
     library = Learner("parse").library
     from groundlang.logic.atoms import Atom
     from groundlang.model.features import atoms_hold
-    from groundlang.model.geometry import cell_tables
+    from groundlang.model.pf_tables import pf_tables
 
     inside = read_corpus(example_corpus_path(), "sokoban").instances[0].initial_state
     (room,), known = start_rooms(inside)
-    assert known and atoms_hold(inside, [Atom("agentInRoom", ("agent0", room))], cell_tables(inside.layout)).all()
+    assert known and atoms_hold(inside, [Atom("agentInRoom", ("agent0", room))], pf_tables(inside.layout)).all()
     for interp in interpretations(inside, library, enumerate_constraints=False):
         roles = {(rb.role, rb.obj) for rb in interp.roles if rb.cls == "room"}
         bound = {rb.obj for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:")}

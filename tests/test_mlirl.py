@@ -86,7 +86,7 @@ def test_bad_inputs_are_value_errors_naming_the_problem():
 
 
 def _one_toy_world():
-    from groundlang.model.geometry import cell_tables
+    from groundlang.model.pf_tables import pf_tables
     from groundlang.model.statespace import enumerate_states
     from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette
 
@@ -94,7 +94,7 @@ def _one_toy_world():
     doors = (Door(3, 4, 3, 3), Door(8, 4, 8, 3), Door(5, 6, 6, 6))
     layout = Layout(rooms, doors, (("yellow", "star"),), get_palette("sokoban"))
     space = enumerate_states(State(layout, Agent(6, 2), (Toy("yellow", "star", 4, 6),)))
-    return space, cell_tables(layout)
+    return space, pf_tables(layout)
 
 
 @pytest.mark.slow

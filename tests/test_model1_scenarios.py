@@ -29,7 +29,7 @@ from groundlang.inference.mlirl import mlirl
 from groundlang.logic.atoms import Atom, parse_atom, parse_goal
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.features import feature_matrix, position_atoms
-from groundlang.model.geometry import cell_tables
+from groundlang.model.pf_tables import pf_tables
 from groundlang.model.statespace import enumerate_states, trajectory_indices
 from groundlang.model.tasks import candidate_tasks, narrow_by_known
 from groundlang.model.world import replay
@@ -57,7 +57,7 @@ def library() -> TaskLibrary:
 
 def _mlirl_weights(demo: Instance, atoms) -> np.ndarray:
     space = enumerate_states(demo.initial_state)
-    features = feature_matrix(space, atoms, cell_tables(space.layout))
+    features = feature_matrix(space, atoms, pf_tables(space.layout))
     states = trajectory_indices(space, list(demo.states))
     return mlirl(space.next_state, features, [(states, [int(a) for a in demo.actions])], **IRL).weights
 

@@ -46,9 +46,10 @@ def test_ascii_colliding_shape_initials_use_digits():
 
 
 def test_every_palette_shape_has_a_glyph():
-    from groundlang.model.world import PALETTES
+    from groundlang.logic.palettes import palette_names
+    from groundlang.model.world import get_palette
 
-    shapes = [s for p in PALETTES.values() for s in p.shapes]
+    shapes = [s for name in palette_names() for s in get_palette(name).shapes]
     assert set(shapes) <= set(SHAPE_GLYPHS)
     assert len({SHAPE_GLYPHS[s] for s in shapes}) == len(shapes)
 

@@ -81,3 +81,7 @@ def language_model_settings(pairs: list[str]) -> dict:
             value = text
         settings[key.strip()] = value
     return settings
+
+
+PALETTE_HELP = ("colour and shape values of the files: a palette the package ships (sokoban, sokoban2; "
+                "groundlang/logic/palettes/) or the path of a .lp file of value(Attribute, Index, Name) facts")

@@ -6,8 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.commands import add_language_model_settings, language_model_settings, positive_int, seed
-from groundlang.model.world import PALETTES
+from groundlang.commands import PALETTE_HELP, add_language_model_settings, language_model_settings, positive_int, seed
 
 
 def _names(text: str) -> list[str]:
@@ -28,7 +27,7 @@ def _sizes(text: str) -> list[int]:
 def register(subparsers) -> None:
     p = subparsers.add_parser("ablate", help="accuracy over language models x task libraries x training sizes")
     p.add_argument("--corpus", required=True, metavar="DIR")
-    p.add_argument("--palette", required=True, choices=sorted(PALETTES))
+    p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("--labels", required=True, metavar="CSV")
     p.add_argument("--language-models", type=_names, default=["bow", "ibm2", "parse"], metavar="LIST",
                    help="comma-separated: bow,ibm2,parse (default: all three)")

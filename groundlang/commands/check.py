@@ -10,14 +10,14 @@ from __future__ import annotations
 import argparse
 import sys
 
+from groundlang.commands import PALETTE_HELP
 from groundlang.corpus import read_corpus
-from groundlang.model.world import PALETTES
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("check", help="load a corpus folder, replay every demonstration, print a summary")
     p.add_argument("directory", metavar="DIR", help="folder of corpus files (*.txt)")
-    p.add_argument("--palette", required=True, choices=sorted(PALETTES), help="colour/shape palette of the files")
+    p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("--labels", metavar="CSV", help="gold labels (prefix,goal) to check against final states")
     p.add_argument("--skip-inconsistent", action="store_true",
                    help="skip demonstrations that do not replay (counted) instead of failing")

@@ -17,14 +17,13 @@ import argparse
 import json
 import time
 
-from groundlang.commands import fraction, positive_int
-from groundlang.model.world import PALETTES
+from groundlang.commands import PALETTE_HELP, fraction, positive_int
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("discover", help="discover lifted tasks from a corpus's demonstrations")
     p.add_argument("directory", metavar="DIR", help="a corpus folder (one instance per *.txt file)")
-    p.add_argument("--palette", required=True, choices=sorted(PALETTES), help="colour/shape palette of the files")
+    p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("-o", "--output", required=True, metavar="LP", help="where to write the discovered library (.lp)")
     p.add_argument("--weight-margin", type=fraction, default=0.5, metavar="FRACTION",
                    help="top features: MLIRL weight at least this fraction of the largest (default 0.5)")

@@ -6,15 +6,14 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.commands import (LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings,
+from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings,
                                  positive_int)
-from groundlang.model.world import PALETTES
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("evaluate", help="leave-one-out or train-set accuracy against gold labels")
     p.add_argument("--corpus", required=True, metavar="DIR")
-    p.add_argument("--palette", required=True, choices=sorted(PALETTES))
+    p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("--labels", required=True, metavar="CSV")
     p.add_argument("--protocol", default="loo", choices=["loo", "train"])
     p.add_argument("--novel-envs", metavar="DIR", help="folder of *.state files to execute each command in too")

@@ -6,15 +6,14 @@ import argparse
 import json
 import sys
 
-from groundlang.commands import positive_int
-from groundlang.model.world import PALETTES
+from groundlang.commands import PALETTE_HELP, positive_int
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("follow", help="interpret a command in an environment, plan and act")
     p.add_argument("command_text", metavar="COMMAND")
     p.add_argument("--env", required=True, metavar="FILE", help="a corpus file or a one-line .state file")
-    p.add_argument("--palette", required=True, choices=sorted(PALETTES))
+    p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
     p.add_argument("--out", metavar="PNG", help="draw the executed trajectory here")
     p.add_argument("--top", type=positive_int, default=5, help="interpretations to print")

@@ -18,14 +18,15 @@ import argparse
 import json
 import time
 
-from groundlang.model.world import PALETTES
+from groundlang.commands import PALETTE_HELP
+
 
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("irl", help="fit reward weights over position PFs to one file's demonstration (MLIRL)")
     p.add_argument("file", metavar="FILE", help="one corpus file (command, actions, states)")
-    p.add_argument("--palette", required=True, choices=sorted(PALETTES), help="colour/shape palette of the file")
+    p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=run)
 
@@ -38,14 +39,14 @@ def fit_file(path, palette) -> dict:
     from groundlang.inference.discovery import DISCOVERY_IRL
     from groundlang.inference.mlirl import mlirl
     from groundlang.model.features import feature_matrix, position_atoms
-    from groundlang.model.geometry import cell_tables
+    from groundlang.model.pf_tables import pf_tables
     from groundlang.model.statespace import enumerate_states, trajectory_indices
 
     start = time.perf_counter()
     instance = read_instance(path, palette)
     space = enumerate_states(instance.initial_state)
     atoms = position_atoms(space.layout)
-    features = feature_matrix(space, atoms, cell_tables(space.layout))
+    features = feature_matrix(space, atoms, pf_tables(space.layout))
     states = trajectory_indices(space, list(instance.states))
     fit = mlirl(space.next_state, features, [(states, [int(a) for a in instance.actions])], **DISCOVERY_IRL)
     ranked = sorted(zip(atoms, fit.weights.tolist()), key=lambda aw: -aw[1])
@@ -74,13 +75,13 @@ def _break_near_ties(space, ranked, states, actions) -> list:
     """
     from groundlang.inference.planning import task_log_likelihood
     from groundlang.model.features import goal_mask
-    from groundlang.model.geometry import cell_tables
+    from groundlang.model.pf_tables import pf_tables
 
     top = ranked[0][1]
     tied = [a for a, w in ranked if top > 0 and w >= (1 - NEAR_TIE) * top]
     if len(tied) < 2:
         return [a for a, _ in ranked]
-    tables = cell_tables(space.layout)
+    tables = pf_tables(space.layout)
     moves = [int(a) for a in actions]
     score = {a: task_log_likelihood(space, goal_mask(space, (a,), tables), states, moves) for a in tied}
     return sorted(tied, key=lambda a: -score[a]) + [a for a, _ in ranked if a not in score]

@@ -5,14 +5,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from groundlang.commands import PALETTE_HELP
 from groundlang.corpus import read_instance, read_state_file
-from groundlang.model.world import PALETTES
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("show", help="draw a corpus file or a .state file (ASCII, and an image with --out)")
     p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state file")
-    p.add_argument("--palette", required=True, choices=sorted(PALETTES), help="colour/shape palette of the file")
+    p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("--out", metavar="PNG", help="also write an image (.png, .svg or .pdf) with the demonstration drawn")
     p.set_defaults(func=run)
 

@@ -6,9 +6,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from groundlang.commands import positive_seconds
+from groundlang.commands import PALETTE_HELP, positive_seconds
 from groundlang.corpus import read_initial_state
-from groundlang.model.world import PALETTES
 
 
 def register(subparsers) -> None:
@@ -16,7 +15,7 @@ def register(subparsers) -> None:
         "tasks", help="list lifted tasks and their groundings and binding constraints in a file's initial state"
     )
     p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state file")
-    p.add_argument("--palette", required=True, choices=sorted(PALETTES), help="colour/shape palette of the file")
+    p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("--library", metavar="LP", action="append",
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp)")
     p.add_argument("--allow-scripts", action="store_true",
@@ -30,6 +29,7 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
+    from groundlang.model.pf_tables import pf_tables
     from groundlang.model.tasks import candidate_tasks, object_descriptions
 
     state = read_initial_state(args.file, args.palette)
@@ -38,6 +38,10 @@ def run(args: argparse.Namespace) -> int:
     by_name = object_descriptions(state, library)
     # The layout's order (rooms, doors, toys), as the corpus writes a state, not the names' alphabetical order.
     described = {obj: by_name[obj] for obj in object_names(state) if obj in by_name}
+    # Relations (toyInRoom, a user's agentNextToToy, ...) as the PF tables planning uses say they hold.
+    holding = [a for a in pf_tables(state.layout, library.tabulation_program).holding(state.positions)
+               if len(a.args) > 1]
+    relations = {obj: atoms for obj in object_names(state) if (atoms := [a for a in holding if obj in a.args])}
     if args.json:
         out = {
             "lifted_tasks": library.names,
@@ -51,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
             ],
             "descriptions": {obj: {cls: list(pfs) for cls, pfs in by_class.items()}
                              for obj, by_class in described.items()},
+            "relations": {obj: [str(a) for a in atoms] for obj, atoms in relations.items()},
         }
         print(json.dumps(out, indent=1))
         return 0
@@ -65,4 +70,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"unary PFs of each object in the initial state, by class ({len(described)} objects):")
     for obj, by_class in described.items():
         print(f"  {obj}: " + "; ".join(f"{cls} {', '.join(pfs)}" for cls, pfs in by_class.items()))
+    print(f"PFs of two or more objects in the initial state, by object ({len(holding)} "
+          "facts):")
+    for obj, atoms in relations.items():
+        print(f"  {obj}: " + ", ".join(map(str, atoms)))
     return 0

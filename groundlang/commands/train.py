@@ -6,14 +6,13 @@ import argparse
 import time
 
 from groundlang.corpus import read_corpus
-from groundlang.commands import LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings, seed
-from groundlang.model.world import PALETTES
+from groundlang.commands import PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings, seed
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("train", help="learn word meanings from a corpus and save the model")
     p.add_argument("corpus", metavar="CORPUS", help="folder of corpus files")
-    p.add_argument("--palette", required=True, choices=sorted(PALETTES))
+    p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("-o", "--output", required=True, metavar="MODEL_DIR", help="folder to write the model to")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
     add_language_model_settings(p)

@@ -1,0 +1,86 @@
+"""Palettes as data: the attribute values a corpus file writes as indices, read from ``.lp`` facts.
+
+A palette is a file of facts ``value(Attribute, Index, Name)``
+(``logic/palettes/sokoban.lp``: ``value(colour, 10, red).``). The package ships
+one file per corpus palette; a user's own is any ``.lp`` file of such facts,
+named by its path (``--palette my_palette.lp``) and called by its stem.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from importlib.resources import files
+from pathlib import Path
+
+import clingo
+
+from .program import AspError, file_source, package_source, Program
+
+__all__ = ["PaletteError", "palette_names", "read_palette"]
+
+_PACKAGE_FOLDER = "palettes"
+
+
+class PaletteError(AspError):
+    """A palette that is not known or whose facts are not a palette."""
+
+
+def palette_names() -> list[str]:
+    """The palettes the package ships (``sokoban``, ``sokoban2``), sorted."""
+    folder = files("groundlang.logic") / _PACKAGE_FOLDER
+    return sorted(p.name[:-3] for p in folder.iterdir() if p.name.endswith(".lp"))
+
+
+def _is_path(name: str) -> bool:
+    return name.endswith(".lp") or "/" in name or "\\" in name
+
+
+@lru_cache(maxsize=64)
+def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]]]:
+    """``(palette name, {attribute: values by index})`` of a shipped palette or a palette file.
+
+    Raises PaletteError (one line, naming the file and the fact) for an unknown name, a file that is
+    not one, indices that skip or repeat, or a value that is not an ASP constant.
+    """
+    if _is_path(name):
+        path = Path(name)
+        try:
+            source = file_source(path)
+        except OSError as exc:
+            raise PaletteError(f"{path}: {exc.strerror or exc}") from None
+        label = path.stem
+    elif name in palette_names():
+        source = package_source(f"{_PACKAGE_FOLDER}/{name}.lp")
+        label = name
+    else:
+        raise PaletteError(f"unknown palette {name!r}; expected one of {', '.join(palette_names())} "
+                           "or the path of a .lp file of value(Attribute, Index, Name) facts")
+    program = Program((source,), isolated=not source.name.startswith("groundlang."))
+    found: dict[str, dict[int, str]] = {}
+    for model in program.solve("#show value/3.", models=1):
+        for sym in model:
+            attribute, index, value = sym.arguments
+            if (attribute.type is not clingo.SymbolType.Function or attribute.arguments
+                    or index.type is not clingo.SymbolType.Number
+                    or value.type is not clingo.SymbolType.Function or value.arguments):
+                raise PaletteError(f"{source.name}: {sym} is not value(Attribute, Index, Name) with a name, "
+                                   "a whole number and a lowerCamelCase constant")
+            by_index = found.setdefault(attribute.name, {})
+            if index.number in by_index and by_index[index.number] != value.name:
+                raise PaletteError(f"{source.name}: {attribute.name} index {index.number} is both "
+                                   f"{by_index[index.number]} and {value.name}")
+            by_index[index.number] = value.name
+    if not found:
+        raise PaletteError(f"{source.name}: no value(Attribute, Index, Name) facts: not a palette")
+    values = {}
+    for attribute, by_index in sorted(found.items()):
+        if sorted(by_index) != list(range(len(by_index))):
+            missing = min(set(range(len(by_index) + 1)) - set(by_index))
+            raise PaletteError(f"{source.name}: {attribute} indices must run 0, 1, 2, ... without a gap; "
+                               f"{missing} is missing")
+        names = [by_index[i] for i in range(len(by_index))]
+        if len(set(names)) != len(names):
+            raise PaletteError(f"{source.name}: {attribute} value {next(n for n in names if names.count(n) > 1)} "
+                               "has two indices")
+        values[attribute] = tuple(names)
+    return label, values

@@ -1,0 +1,64 @@
+"""Palettes as data: logic/palettes/*.lp and a user's own file, and their errors."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from groundlang import example_corpus_path, read_corpus
+from groundlang.logic.palettes import palette_names
+from groundlang.model.world import WorldError, get_palette
+
+
+def test_the_shipped_palettes_are_files():
+    assert palette_names() == ["sokoban", "sokoban2"]
+    sokoban = get_palette("sokoban")
+    assert sokoban.colours[10] == "red" and sokoban.colours[5] == "green" and len(sokoban.colours) == 13
+    assert sokoban.shapes == ("star", "moon", "circle", "smiley", "square")
+    assert get_palette("sokoban2").shapes == ("chair", "bag", "backpack", "basket")
+
+
+def test_a_copy_of_a_palette_file_reads_the_corpus_the_same(tmp_path):
+    from importlib.resources import files
+
+    mine = tmp_path / "mine.lp"
+    mine.write_text((files("groundlang.logic") / "palettes" / "sokoban.lp").read_text(), encoding="utf-8")
+    theirs = read_corpus(example_corpus_path(), "sokoban")
+    ours = read_corpus(example_corpus_path(), str(mine))
+    assert ours.palette.name == "mine" and ours.palette.colours == theirs.palette.colours
+    assert [i.command for i in ours.instances] == [i.command for i in theirs.instances]
+    assert [r.colour for r in ours.instances[0].initial_state.layout.rooms] == \
+        [r.colour for r in theirs.instances[0].initial_state.layout.rooms]
+
+
+@pytest.mark.parametrize("text, piece", [
+    ("value(colour, 0, red). value(colour, 2, blue). value(shape, 0, star).", "1 is missing"),
+    ("value(colour, 0, red). value(colour, 0, blue). value(shape, 0, star).", "index 0 is both"),
+    ("value(colour, 0, red). value(colour, 1, red). value(shape, 0, star).", "has two indices"),
+    ("value(colour, 0, red).", "no shape values"),
+    ("colour(red).", "no value(Attribute, Index, Name) facts"),
+    ("value(colour, 0, \"red\"). value(shape, 0, star).", "lowerCamelCase constant"),
+    ("value(colour, 0, red", "syntax error"),
+])
+def test_bad_palette_files_are_one_clear_error(tmp_path, text, piece):
+    path = tmp_path / "bad.lp"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(WorldError) as info:
+        get_palette(str(path))
+    assert piece in str(info.value) and "bad.lp" in str(info.value)
+
+
+def test_the_cli_takes_a_palette_name_or_file_and_names_a_bad_one(tmp_path):
+    E = example_corpus_path()
+    ok = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(E), "--palette", "sokoban"],
+                        capture_output=True, text=True)
+    assert ok.returncode == 0 and "palette sokoban" in ok.stdout
+    bad = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(E), "--palette", "sokobann"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and len(bad.stderr.splitlines()) == 1, bad.stderr
+    assert "unknown palette 'sokobann'; expected one of sokoban, sokoban2" in bad.stderr
+    missing = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(E), "--palette",
+                              str(tmp_path / "none.lp")], capture_output=True, text=True)
+    assert missing.returncode == 2 and "none.lp" in missing.stderr and "Traceback" not in missing.stderr

@@ -1,0 +1,168 @@
+"""A domain authored in data files only: a palette, PFs, tasks and words a user writes, end to end.
+
+Nothing in groundlang's Python names what these files add: a toy shape ("mug"), a PF of two objects
+used as a goal (agentNextToToy: the agent on one of the eight cells around a toy), a superlative PF
+(roomIsLargest, by area) and the words for them. The learner trains on a handful of commands with
+planner-made demonstrations and follows new commands, in a layout it never saw, whose meaning needs
+each of them.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from groundlang import Learner
+from groundlang.corpus import Instance, parse_state
+from groundlang.labels import goal_holds
+from groundlang.logic.atoms import parse_goal
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.features import goal_mask
+from groundlang.model.pf_tables import pf_tables
+from groundlang.model.world import get_palette
+
+PALETTE = """\
+% A toy shop: three colours, stars and mugs.
+value(colour, 0, red). value(colour, 1, green). value(colour, 2, blue).
+value(shape, 0, star). value(shape, 1, mug).
+"""
+
+PFS = """\
+% The agent on one of the eight cells around a toy.
+pf(position, agentNextToToy, (agent, toy)).
+holds(agentNextToToy, (A, T)) :- agent(A), toy(T), at(A, X, Y), at(T, U, V),
+                                 |X - U| <= 1, |Y - V| <= 1, |X - U| + |Y - V| > 0.
+% The room of the largest area (superlatives are PFs like any other).
+pf(size, roomIsLargest, (room,)).
+area(R, (Rt - L) * (T - B)) :- room(R), rect(R, L, T, Rt, B).
+holds(roomIsLargest, (R,)) :- area(R, A), A = #max { A2 : area(_, A2) }.
+"""
+
+TASKS = """\
+task(agentToRoom). var(agentToRoom, "A", agent). var(agentToRoom, "R", room).
+goal(agentToRoom, agentInRoom, ("A", "R")).
+task(toyToRoom). var(toyToRoom, "T", toy). var(toyToRoom, "R", room).
+goal(toyToRoom, toyInRoom, ("T", "R")).
+task(agentToToy). var(agentToToy, "A", agent). var(agentToToy, "T", toy).
+goal(agentToToy, agentNextToToy, ("A", "T")).
+"""
+
+WORDS = """\
+# The toy shop's words.
+NOUN: mug mugs
+ADJ: largest biggest
+"""
+
+# room,COLOUR,LEFT,TOP,RIGHT,BOTTOM; door,LEFT,TOP,RIGHT,BOTTOM; block,COLOUR,SHAPE,X,Y; agent,X,Y.
+# Colours: red 0, green 1, blue 2; shapes: star 0, mug 1. Three rooms in a row, one of them wide.
+LAYOUT_A = "room,0,0,4,4,0 room,1,4,4,12,0 room,2,12,4,16,0 door,4,2,4,2 door,12,2,12,2"  # green largest
+LAYOUT_B = "room,0,0,4,8,0 room,1,8,4,12,0 room,2,12,4,16,0 door,8,2,8,2 door,12,2,12,2"  # red largest
+LAYOUT_C = "room,2,0,4,8,0 room,0,8,4,12,0 room,1,12,4,16,0 door,8,2,8,2 door,12,2,12,2"  # blue largest
+
+TRAINING = [  # (layout, star, mug, agent, command, goal)
+    (LAYOUT_A, (13, 1), (6, 3), (2, 2), "go to the largest room", "agentInRoom(agent0, room1)"),
+    (LAYOUT_A, (13, 1), (6, 3), (14, 2), "go to the red room", "agentInRoom(agent0, room0)"),
+    (LAYOUT_A, (13, 1), (10, 1), (2, 2), "go next to the mug", "agentNextToToy(agent0, block1)"),
+    (LAYOUT_A, (6, 2), (13, 3), (2, 1), "take the star to the blue room", "toyInRoom(block0, room2)"),
+    (LAYOUT_B, (2, 3), (14, 1), (10, 2), "go to the largest room", "agentInRoom(agent0, room0)"),
+    (LAYOUT_B, (2, 3), (14, 1), (6, 2), "go to the green room", "agentInRoom(agent0, room1)"),
+    (LAYOUT_B, (2, 3), (14, 1), (10, 2), "go next to the star", "agentNextToToy(agent0, block0)"),
+    (LAYOUT_B, (6, 1), (10, 2), (14, 2), "take the mug to the red room", "toyInRoom(block1, room0)"),
+    (LAYOUT_B, (2, 3), (6, 1), (10, 3), "go to the blue room", "agentInRoom(agent0, room2)"),
+    (LAYOUT_A, (6, 1), (10, 2), (14, 2), "move the mug to the red room", "toyInRoom(block1, room0)"),
+]
+
+
+def state(layout: str, star, mug, agent, palette):
+    return parse_state(f"{layout} block,0,0,{star[0]},{star[1]} block,2,1,{mug[0]},{mug[1]} "
+                       f"agent,{agent[0]},{agent[1]}", palette)
+
+
+def demonstration(start, goal, library):
+    """A shortest plan to ``goal`` (soft value iteration, greedy rollout): states and actions."""
+    from groundlang.inference.acting import rollout, rollout_states
+    from groundlang.inference.planning import solve_task
+    from groundlang.model.statespace import enumerate_states
+
+    space = enumerate_states(start)
+    mask = goal_mask(space, goal, pf_tables(start.layout, library.tabulation_program))
+    trajectory = rollout(space.next_state, solve_task(space.next_state, mask), 0, goal_mask=mask)
+    assert trajectory.reason == "goal"
+    return rollout_states(space, trajectory)
+
+
+@pytest.fixture(scope="module")
+def domain(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("toyshop")
+    for name, text in (("toyshop.lp", PALETTE), ("pfs.lp", PFS), ("tasks.lp", TASKS), ("toyshop.words", WORDS)):
+        (folder / name).write_text(text, encoding="utf-8")
+    return folder
+
+
+@pytest.fixture(scope="module")
+def library(domain):
+    return TaskLibrary.load([domain / "pfs.lp", domain / "tasks.lp"])
+
+
+@pytest.fixture(scope="module")
+def trained(domain, library, tmp_path_factory):
+    palette = str(domain / "toyshop.lp")
+    instances = []
+    for n, (layout, star, mug, agent, command, goal) in enumerate(TRAINING):
+        start = state(layout, star, mug, agent, palette)
+        assert not goal_holds(parse_goal(goal), start, library), command
+        states, actions = demonstration(start, parse_goal(goal), library)
+        instances.append(Instance(Path(f"shop{n}.txt"), command, tuple(actions), tuple(states)))
+    learner = Learner(library=library, cache_dir=tmp_path_factory.mktemp("cache"), steps=200)
+    return learner.fit(instances), palette
+
+
+def test_the_palette_file_is_read(domain):
+    palette = get_palette(str(domain / "toyshop.lp"))
+    assert (palette.name, palette.colours, palette.shapes) == ("toyshop", ("red", "green", "blue"), ("star", "mug"))
+
+
+def test_user_pfs_are_tabulated_and_described(domain, library):
+    start = state(LAYOUT_C, (10, 2), (2, 3), (14, 2), str(domain / "toyshop.lp"))
+    tables = pf_tables(start.layout, library.tabulation_program)
+    assert "agentNextToToy" in tables.tabulated and tables.signatures["roomIsLargest"] == ("room",)
+    # The superlative holds of the blue room only, in every state.
+    from groundlang.logic.atoms import Atom
+
+    assert [r for r in ("room0", "room1", "room2") if tables.column(Atom("roomIsLargest", (r,)), start.positions[None])[0]] == ["room0"]
+    # Next to: the eight cells around the mug at (2, 3) that the agent can stand on.
+    movers, grid = tables.grids[Atom("agentNextToToy", ("agent0", "block1"))]
+    assert movers == (0, 2) and grid.shape == start.layout.walkable.shape * 2
+    assert {(x, y) for x, y in zip(*np.nonzero(grid[:, :, 2, 3]))} == {(1, 2), (1, 3), (2, 2), (3, 2), (3, 3)}
+
+
+def test_follows_new_commands_in_a_new_layout(trained, library):
+    learner, palette = trained
+    unseen = [  # (star, mug, agent, command, goal); layout C: blue is the largest room
+        ((10, 2), (2, 3), (14, 2), "go to the largest room", "agentInRoom(agent0, room0)"),
+        ((10, 2), (2, 3), (14, 2), "go next to the mug", "agentNextToToy(agent0, block1)"),
+        ((2, 3), (10, 2), (14, 1), "go next to the mug", "agentNextToToy(agent0, block1)"),
+        ((10, 2), (2, 3), (6, 1), "go to the green room", "agentInRoom(agent0, room2)"),
+    ]
+    for star, mug, agent, command, goal in unseen:
+        start = state(LAYOUT_C, star, mug, agent, palette)
+        result = learner.follow(command, start)
+        assert result.reached and goal_holds(parse_goal(goal), result.final_state, library), (command, result.goal)
+
+
+def test_tasks_lists_the_user_pfs_per_object(domain):
+    env = domain / "c.state"
+    env.write_text(f"{LAYOUT_C} block,0,0,10,2 block,2,1,2,3 agent,3,2\n", encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "tasks", str(env), "--palette",
+                           str(domain / "toyshop.lp"), "--library", str(domain / "pfs.lp"), "--library", str(domain / "tasks.lp")],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "room0: colour roomIsBlue; size roomIsLargest" in done.stdout
+    assert "block1: colour toyIsBlue; shape toyIsMug" in done.stdout
+    assert "agentToToy: agentNextToToy(agent0, block0)" in done.stdout  # the mug is next to it already
+    relations = done.stdout.split("PFs of two or more objects")[1]
+    assert "block1: toyInRoom(block1, room0), agentNextToToy(agent0, block1)" in relations
