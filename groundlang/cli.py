@@ -19,7 +19,7 @@ import time
 from groundlang.interrupt import cache_entry_count, close_progress_bars, terminate_as_interrupt, what_was_kept
 
 # Order is the order of ``groundlang --help``.
-COMMANDS = ["demo", "check", "show", "parse", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate", "ablate"]
+COMMANDS = ["demo", "check", "show", "parse", "domain", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate", "ablate"]
 # Commands that fill the behaviour-likelihood cache (reported after an interruption).
 CACHING_COMMANDS = {"train", "evaluate", "discover", "ablate"}
 

@@ -26,6 +26,7 @@ from groundlang.logic.atoms import Atom, format_goal
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
+from groundlang.logic.schema import domain_schema
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
@@ -189,13 +190,14 @@ class Learner:
                     tokens.extend(rb.constraint_tokens + rb.kind_tokens)  # a user's PF may describe only bystanders
         # Every property PF the domain declares for the palettes seen (colours, shapes, a user's
         # sizes...) and every class: a layout of the test may have values training never saw.
-        classes: set[str] = set()
+        classes: list[str] = []
         for layout in layouts:
-            tables = pf_tables(layout, self.library.tabulation_program)
-            tokens.extend(sorted(n for n, sig in tables.signatures.items()
-                                 if len(sig) == 1 and n not in tables.tabulated))
-            classes.update(cls for cls, _, _ in layout.objects)
-        tokens.extend(class_token(c) for c in sorted(classes))
+            p = layout.palette
+            schema = domain_schema(self.library, (p.name, (("colour", p.colours), ("shape", p.shapes))))
+            tokens.extend(d.name for d in schema.pfs.values() if len(d.signature) == 1
+                          and d.pf_class not in ("position", "spatial"))
+            classes.extend(schema.classes)
+        tokens.extend(class_token(c) for c in dict.fromkeys(classes))
         tokens.extend(self.library.spatial_pfs)  # a layout of the test may have sides training never saw
         vocab.add_tokens(tokens)
         vocab.add_roles(roles + list(OTHER_ROLES))

@@ -166,3 +166,21 @@ def test_tasks_lists_the_user_pfs_per_object(domain):
     assert "agentToToy: agentNextToToy(agent0, block0)" in done.stdout  # the mug is next to it already
     relations = done.stdout.split("PFs of two or more objects")[1]
     assert "block1: toyInRoom(block1, room0), agentNextToToy(agent0, block1)" in relations
+
+
+def test_the_schema_is_read_from_the_files(domain, library):
+    from groundlang.logic.schema import domain_schema
+
+    schema = domain_schema(library, str(domain / "toyshop.lp"))
+    assert schema.classes == ("agent", "toy", "room", "door") and schema.movable == {"agent", "toy"}
+    assert schema.values == {"colour": ("red", "green", "blue"), "shape": ("star", "mug")}
+    assert [d.name for d in schema.pfs_of_class("position")] == [
+        "agentInRoom", "toyInRoom", "agentInDoor", "toyInDoor", "agentTouchingToy", "agentNextToToy"]
+    assert [str(d) for d in schema.pfs_of_class("size")] == ["roomIsLargest(room) [size]"]
+    assert [d.name for d in schema.pfs_of_class("shape")] == ["toyIsStar", "toyIsMug"]
+    assert [t.name for t in schema.tasks] == ["agentToRoom", "agentToToy", "toyToRoom"]
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "domain", "--palette", str(domain / "toyshop.lp"),
+                           "--library", str(domain / "pfs.lp"), "--library", str(domain / "tasks.lp")],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "  size: roomIsLargest(room)" in done.stdout and "  shape: toyIsStar(toy), toyIsMug(toy)" in done.stdout

@@ -1,0 +1,41 @@
+"""``groundlang domain [--palette NAME|FILE] [--library LP ...] [--json]``: the schema a domain's ASP declares."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from groundlang.commands import PALETTE_HELP, positive_seconds
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("domain", help="print the domain's schema: classes, palette, PFs by class, tasks")
+    p.add_argument("--palette", default="sokoban", help=PALETTE_HELP + " (default: sokoban)")
+    p.add_argument("--library", metavar="LP", action="append",
+                   help="task library .lp file (repeatable; default: groundlang's tasks.lp)")
+    p.add_argument("--allow-scripts", action="store_true",
+                   help="let library files run #script blocks (only for files you trust)")
+    p.add_argument("--time-limit", type=positive_seconds, default=10.0,
+                   help="stop grounding/solving the library after this long (default 10)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from groundlang.logic.schema import domain_schema
+    from groundlang.logic.tasks import TaskLibrary
+
+    library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
+    schema = domain_schema(library, args.palette)
+    if args.json:
+        print(json.dumps({
+            "classes": list(schema.classes),
+            "movable": sorted(schema.movable),
+            "palette": {"name": schema.palette, "values": {a: list(v) for a, v in schema.values.items()}},
+            "pfs": [{"name": d.name, "class": d.pf_class, "signature": list(d.signature), "term": d.term}
+                    for d in schema.pfs.values()],
+            "tasks": [str(t) for t in schema.tasks],
+        }, indent=1))
+        return 0
+    print(schema.describe())
+    return 0
