@@ -12,33 +12,26 @@ import numpy as np
 
 from groundlang.model.world import State
 
-__all__ = ["SHAPE_GLYPHS", "COLOUR_VALUES", "draw_state", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
-
-# Text glyphs present in DejaVu Sans (matplotlib's bundled font), one per palette shape.
-SHAPE_GLYPHS = {
-    "star": "\u2605",  # ★
-    "moon": "\u263e",  # ☾
-    "circle": "\u25cf",  # ●
-    "smiley": "\u263a",  # ☺
-    "square": "\u25a0",  # ■
-    "chair": "h",
-    "bag": "\u23cf",  # ⏏
-    "backpack": "\u2302",  # ⌂
-    "basket": "\u2294",  # ⊔
-}
-
-# Palette colour names -> matplotlib colour names (the palette's camelCase greys differ).
-COLOUR_VALUES = {"darkGray": "dimgray", "lightGray": "lightgray"}
+__all__ = ["glyph", "draw_state", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
 
 _WALL = (0.18, 0.18, 0.2)
 _DOOR = (0.93, 0.89, 0.80)
 _OUTSIDE = (1.0, 1.0, 1.0)
 
 
-def _rgb(colour: str) -> np.ndarray:
+def glyph(shape: str, palette) -> str:
+    """The text that marks a toy of ``shape`` (the palette's glyph/2, else the shape's first letter)."""
+    return dict(palette.glyphs).get(shape, shape[:1].upper())
+
+
+def _rgb(colour: str, palette=None) -> np.ndarray:
     from matplotlib.colors import to_rgb
 
-    return np.array(to_rgb(COLOUR_VALUES.get(colour, colour)))
+    name = dict(palette.rgb).get(colour, colour) if palette is not None else colour
+    try:
+        return np.array(to_rgb(name))
+    except ValueError:  # a palette's own colour word matplotlib does not know ("cream"): drawn grey
+        return np.array((0.6, 0.6, 0.6))
 
 
 def trajectory_positions(trajectory) -> np.ndarray:
@@ -64,7 +57,7 @@ def _cell_colours(state: State) -> np.ndarray:
     img[wall & lay.walkable.T] = _DOOR
     for r in lay.rooms:
         # A tint keeps toys of the room's own colour visible on its floor.
-        img[r.bottom + 1 : r.top, r.left + 1 : r.right] = 0.45 * _rgb(r.colour) + 0.55
+        img[r.bottom + 1 : r.top, r.left + 1 : r.right] = 0.45 * _rgb(r.colour, state.layout.palette) + 0.55
     return img
 
 
@@ -92,18 +85,18 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None)
         ax.plot(pos[:, 0, 0], pos[:, 0, 1], "-", color="black", lw=2, alpha=0.7, zorder=3, label="agent path")
         for k, toy in enumerate(state.toys, start=1):
             if k < pos.shape[1] and (pos[:, k] != pos[0, k]).any():
-                ax.plot(pos[:, k, 0], pos[:, k, 1], "--", color=_rgb(toy.colour), lw=2.5,
+                ax.plot(pos[:, k, 0], pos[:, k, 1], "--", color=_rgb(toy.colour, state.layout.palette), lw=2.5,
                         path_effects=outline, zorder=3)
         ax.plot(pos[-1, 0, 0], pos[-1, 0, 1], "x", color="black", ms=10, mew=2, zorder=4)
         for k, toy in enumerate(state.toys, start=1):
             if k < pos.shape[1] and (pos[-1, k] != pos[0, k]).any():
                 # Where the toy ends up, faint, so start and end both show.
-                ax.text(pos[-1, k, 0], pos[-1, k, 1], SHAPE_GLYPHS.get(toy.shape, toy.shape[:1].upper()),
-                        ha="center", va="center", fontsize=16, color=_rgb(toy.colour), alpha=0.5,
+                ax.text(pos[-1, k, 0], pos[-1, k, 1], glyph(toy.shape, state.layout.palette),
+                        ha="center", va="center", fontsize=16, color=_rgb(toy.colour, state.layout.palette), alpha=0.5,
                         family="DejaVu Sans", zorder=4)
     for toy in state.toys:
-        glyph = SHAPE_GLYPHS.get(toy.shape, toy.shape[:1].upper())
-        ax.text(toy.x, toy.y, glyph, ha="center", va="center", fontsize=16, color=_rgb(toy.colour),
+        ax.text(toy.x, toy.y, glyph(toy.shape, state.layout.palette), ha="center", va="center", fontsize=16,
+                color=_rgb(toy.colour, state.layout.palette),
                 family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1.5, foreground="black")], zorder=5)
     ax.plot(state.agent.x, state.agent.y, "o", ms=13, color="white", mec="black", mew=2, zorder=6)
     ax.text(state.agent.x, state.agent.y, "A", ha="center", va="center", fontsize=9, weight="bold", zorder=7)

@@ -36,8 +36,10 @@ def _is_path(name: str) -> bool:
 
 
 @lru_cache(maxsize=64)
-def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]]]:
-    """``(palette name, {attribute: values by index})`` of a shipped palette or a palette file.
+def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, dict[str, str]]]:
+    """``(palette name, {attribute: values by index}, drawing)`` of a shipped palette or a palette file;
+    ``drawing`` holds the optional ``glyph(Value, "text")`` and ``rgb(Value, "colour")`` facts as
+    ``{"glyph": {value: text}, "rgb": {value: colour}}``.
 
     Raises PaletteError (one line, naming the file and the fact) for an unknown name, a file that is
     not one, indices that skip or repeat, or a value that is not an ASP constant.
@@ -57,8 +59,15 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]]]:
                            "or the path of a .lp file of value(Attribute, Index, Name) facts")
     program = Program((source,), isolated=not source.name.startswith("groundlang."))
     found: dict[str, dict[int, str]] = {}
-    for model in program.solve("#show value/3.", models=1):
+    drawing: dict[str, dict[str, str]] = {"glyph": {}, "rgb": {}}
+    for model in program.solve("#show value/3. #show glyph/2. #show rgb/2.", models=1):
         for sym in model:
+            if sym.name in drawing:
+                value, text = sym.arguments
+                if text.type is not clingo.SymbolType.String:
+                    raise PaletteError(f'{source.name}: {sym} is not {sym.name}(Value, "text") with a quoted text')
+                drawing[sym.name][str(value)] = text.string
+                continue
             attribute, index, value = sym.arguments
             if (attribute.type is not clingo.SymbolType.Function or attribute.arguments
                     or index.type is not clingo.SymbolType.Number
@@ -83,4 +92,4 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]]]:
             raise PaletteError(f"{source.name}: {attribute} value {next(n for n in names if names.count(n) > 1)} "
                                "has two indices")
         values[attribute] = tuple(names)
-    return label, values
+    return label, values, drawing

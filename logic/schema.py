@@ -81,7 +81,7 @@ def domain_schema(library: TaskLibrary | None = None, palette: str | tuple = "so
     a palette file, or ``(name, ((attribute, values), ...))`` as read already. Raises AspError (one
     line) for a library or palette that cannot be read."""
     library = library or TaskLibrary.load()
-    name, values = read_palette(palette) if isinstance(palette, str) else (palette[0], dict(palette[1]))
+    name, values = read_palette(palette)[:2] if isinstance(palette, str) else (palette[0], dict(palette[1]))
     program = Program(library.program.sources + (_SHOW,), library.allow_scripts, library.program.isolated)
     models = program.solve(_palette_facts(values), models=1, time_limit=library.time_limit)
     rank, classes, movable, found = {}, set(), set(), {}

@@ -84,6 +84,9 @@ class Palette:
     name: str
     colours: tuple[str, ...]
     shapes: tuple[str, ...]
+    # How pictures draw values (glyph/2, rgb/2 of the palette file); not part of what a palette means.
+    glyphs: tuple[tuple[str, str], ...] = field(default=(), compare=False)
+    rgb: tuple[tuple[str, str], ...] = field(default=(), compare=False)
 
     def colour(self, index: int) -> str:
         if not 0 <= index < len(self.colours):
@@ -120,14 +123,15 @@ def get_palette(name: str | Palette) -> Palette:
     if isinstance(name, Palette):
         return name
     try:
-        label, values = read_palette(str(name))
+        label, values, drawing = read_palette(str(name))
     except AspError as exc:
         raise WorldError(str(exc)) from None
     missing = [a for a in ("colour", "shape") if a not in values]
     if missing:
         raise WorldError(f"palette {name}: no {' and no '.join(missing)} values; corpus files index "
                          "the colour of rooms and toys and the shape of toys")
-    return Palette(label, values["colour"], values["shape"])
+    return Palette(label, values["colour"], values["shape"], tuple(sorted(drawing["glyph"].items())),
+                   tuple(sorted(drawing["rgb"].items())))
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from groundlang.corpus import parse_state, read_instance, read_state_file
-from groundlang.render import SHAPE_GLYPHS, ascii_state, draw_state, save_picture, trajectory_positions
+from groundlang.model.world import get_palette
+from groundlang.render import ascii_state, glyph, draw_state, save_picture, trajectory_positions
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -47,11 +48,12 @@ def test_ascii_colliding_shape_initials_use_digits():
 
 def test_every_palette_shape_has_a_glyph():
     from groundlang.logic.palettes import palette_names
-    from groundlang.model.world import get_palette
 
     shapes = [s for name in palette_names() for s in get_palette(name).shapes]
-    assert set(shapes) <= set(SHAPE_GLYPHS)
-    assert len({SHAPE_GLYPHS[s] for s in shapes}) == len(shapes)
+    glyphs = {s: glyph(s, get_palette(name)) for name in palette_names() for s in get_palette(name).shapes}
+    assert set(shapes) == set(glyphs) and all(len(g) == 1 for g in glyphs.values())
+    assert len(set(glyphs.values())) == len(shapes)  # every shape drawn differently
+    assert glyph("mug", get_palette("sokoban")) == "M"  # a shape the palette draws no glyph for
 
 
 def test_trajectory_positions(fixtures):
@@ -73,7 +75,7 @@ def test_draw_state_with_trajectory(fixtures):
     assert agent_path.get_xdata().tolist() == [6, 5, 4]
     assert np.asarray(lines[1].get_xdata()).tolist() == [5, 4, 3]  # the star's path
     texts = [t.get_text() for t in ax.texts]
-    assert SHAPE_GLYPHS["star"] in texts and "A" in texts
+    assert glyph("star", get_palette("sokoban")) in texts and "A" in texts
     assert ax.get_title() == "push"
     image = ax.get_images()[0].get_array()
     assert image.shape == (5, 9, 3)
