@@ -401,12 +401,16 @@ def read_state_file(path: str | Path, palette: str | Palette) -> State:
         raise CorpusError(f"{path}: the file is empty; expected one state line")
     if len(lines) > 1:
         raise CorpusError(f"{path}, line 2: extra line; expected exactly one state line")
+    if lines[0].lstrip().startswith("{"):  # a BURLAP state string, as the Williams et al. corpus writes them
+        from groundlang.bdm import parse_bdm_state
+
+        return parse_bdm_state(lines[0], palette, where=f"{path}, line 1")[0]
     return parse_state(lines[0], palette, where=f"{path}, line 1")
 
 
 def read_initial_state(path: str | Path, palette: str | Palette) -> State:
     """The initial state of a corpus file, or the state of a one-line ``.state`` file."""
-    if Path(path).suffix == ".state":
+    if Path(path).suffix in (".state", ".bdm"):
         return read_state_file(path, palette)
     return read_instance(path, palette).initial_state
 

@@ -22,6 +22,7 @@ import re
 from functools import lru_cache
 from dataclasses import dataclass, field
 from itertools import combinations
+from importlib.resources import files
 from pathlib import Path
 from typing import Iterable, Sequence
 
@@ -334,6 +335,17 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     return tuple(tasks), tuple(sorted(spatial))
 
 
+def _source(path: str | Path) -> Source:
+    """A library file: one the package ships (``logic/domains/williams2018.lp``) is read as the package's
+    own, solved in-process; any other is a user's, solved in a child process that can be killed."""
+    own = Path(str(files("groundlang.logic"))).resolve()
+    try:
+        relative = Path(path).resolve().relative_to(own)
+    except (ValueError, OSError):
+        return file_source(path)
+    return package_source(relative.as_posix()) if Path(path).is_file() else file_source(path)
+
+
 class TaskLibrary:
     """Lifted tasks read from ASP: the default ``tasks.lp`` or user ``.lp`` files."""
 
@@ -362,7 +374,7 @@ class TaskLibrary:
         if paths is None:
             return cls((package_source("tasks.lp"),), allow_scripts=allow_scripts,
                        time_limit=time_limit)
-        return cls([file_source(p) for p in paths], allow_scripts=allow_scripts,
+        return cls([_source(p) for p in paths], allow_scripts=allow_scripts,
                    time_limit=time_limit)
 
     @classmethod

@@ -1,5 +1,9 @@
 """``groundlang check DIR --palette NAME [--labels CSV] [--skip-inconsistent]``: load, replay, summarise a corpus.
 
+A ``.bdm`` file, or a folder of them, or ``--format williams2018`` reads the Williams et al. (2018)
+corpus instead (palette williams2018 unless given; groundlang.bdm): commands, pairs, layouts, pairs
+whose end state cannot be reached from the start, and commands whose pairs show no task.
+
 Exit code 0 when every demonstration replays (or inconsistent ones are
 skipped on request) and every label's goal holds at the end; 1 otherwise;
 2 for malformed input (raised by the library, reported by the CLI).
@@ -16,8 +20,13 @@ from groundlang.corpus import read_corpus
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("check", help="load a corpus folder, replay every demonstration, print a summary")
-    p.add_argument("directory", metavar="DIR", help="folder of corpus files (*.txt)")
-    p.add_argument("--palette", required=True, help=PALETTE_HELP)
+    p.add_argument("directory", metavar="DIR", help="folder of corpus files (*.txt), or a .bdm file or folder")
+    p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
+    p.add_argument("--format", choices=("commands-to-tasks", "williams2018"),
+                   help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
+    p.add_argument("--library", metavar="LP", action="append",
+                   help="task library .lp file for the tasks .bdm pairs show (repeatable; default: "
+                        "groundlang/logic/domains/williams2018.lp)")
     p.add_argument("--labels", metavar="CSV", help="gold labels (prefix,goal) to check against final states")
     p.add_argument("--skip-inconsistent", action="store_true",
                    help="skip demonstrations that do not replay (counted) instead of failing")
@@ -25,6 +34,14 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from groundlang.bdm import bdm_files
+
+    if args.format == "williams2018" or (args.format is None and bdm_files(args.directory)):
+        from groundlang.bdm_check import check_bdm
+
+        return check_bdm(args)
+    if args.palette is None:
+        raise ValueError("--palette is required for a commands-to-tasks corpus (e.g. --palette sokoban)")
     # Always collect every inconsistent file so the report lists them all; the flag decides the exit code.
     corpus = read_corpus(args.directory, args.palette, skip_inconsistent=True)
     ok = True

@@ -1,0 +1,239 @@
+"""Read the Williams et al. (ICRA 2018) corpus format: one command, several (start, end) state pairs.
+
+A ``.bdm`` file holds blocks separated by blank lines::
+
+    the command, free text
+    start state          (a BURLAP object-oriented state string, one line)
+    end state
+    true
+    ---                  (between pairs)
+    ...                  (three pairs per command in the published corpus)
+
+A state is ``{agent0 (agent): [x: {5} y: {6} direction: {south} ] , room0 (room): [top: {4} left: {0}
+bottom: {0} right: {8} colour: {red} ] , block0 (block): [x: {6} y: {6} shape: {chair} colour: {blue} ]
+, ... , }``: objects ``NAME (CLASS): [attribute: {value} ...]``; colours and shapes are names of the
+palette (``logic/palettes/williams2018.lp`` by default), not indices. Attributes that play no part in the
+dynamics (an agent's ``direction``, a door's ``locked`` and ``canbelocked``) are read and ignored.
+Toys are renamed ``block0, block1, ...`` in the order of their names' numbers (the corpus skips numbers:
+``block0, block1, block3``); :attr:`Pair.toy_names` keeps the file's names. Every problem is a
+:class:`~groundlang.corpus.CorpusError` naming the file, the line and the object.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from groundlang.corpus import MAX_COORDINATE, CorpusError
+from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
+
+__all__ = ["Pair", "Command", "DEFAULT_PALETTE", "parse_bdm_state", "read_bdm", "is_bdm", "bdm_files",
+           "format_bdm_state"]
+
+DEFAULT_PALETTE = "williams2018"
+# A command's text is one line; a state line of the published corpus is under 1 kB.
+_MAX_LINE = 1 << 16
+
+_OBJECT = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*\(\s*([A-Za-z_]+)\s*\)\s*:\s*\[(.*?)\]\s*")
+_ATTRIBUTE = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*:\s*\{([^{}]*)\}")
+_NUMBER = re.compile(r"[0-9]+\Z")
+# class -> the attributes groundlang reads (lower case); others are allowed and ignored.
+_NEEDED = {
+    "agent": ("x", "y"),
+    "room": ("top", "left", "bottom", "right", "colour"),
+    "door": ("top", "left", "bottom", "right"),
+    "block": ("x", "y", "shape", "colour"),
+}
+
+
+@dataclass(frozen=True)
+class Pair:
+    """One (start, end) pair of a command, with where it is in the file."""
+
+    start: State
+    end: State
+    line: int  # line of the start state
+    toy_names: tuple[str, ...]  # the file's names of block0, block1, ... (e.g. block0, block1, block3)
+
+
+@dataclass(frozen=True)
+class Command:
+    """A command and the pairs it was written for, each pair in its own layout."""
+
+    path: Path
+    line: int
+    text: str
+    pairs: tuple[Pair, ...]
+
+
+def is_bdm(path: str | Path) -> bool:
+    return Path(path).suffix.lower() == ".bdm"
+
+
+def bdm_files(path: str | Path) -> list[Path]:
+    """``path`` itself if it is a ``.bdm`` file, the ``.bdm`` files of a folder (sorted), else none."""
+    path = Path(path)
+    if path.is_dir():
+        return sorted(p for p in path.iterdir() if is_bdm(p))
+    return [path] if is_bdm(path) else []
+
+
+def _int(text: str, where: str, attribute: str, name: str) -> int:
+    if not _NUMBER.match(text.strip()) or len(text.strip()) > 7:
+        raise CorpusError(f"{where}: {attribute} of {name} is {text!r}; expected a whole number")
+    value = int(text)
+    if value > MAX_COORDINATE:
+        raise CorpusError(f"{where}: {attribute} of {name} is {value}; expected at most {MAX_COORDINATE}")
+    return value
+
+
+def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
+                    where: str = "state") -> tuple[State, tuple[str, ...]]:
+    """One BURLAP state string -> ``(State, the file's toy names in block order)``; raises CorpusError."""
+    palette = get_palette(palette)
+    text = line.strip()
+    if not (text.startswith("{") and text.endswith("}")):
+        raise CorpusError(f"{where}: a state is {{object , object , ... , }}; this line does not start with {{ "
+                          "and end with }")
+    objects: dict[str, dict[str, dict[str, str]]] = {c: {} for c in _NEEDED}
+    for chunk in filter(str.strip, text[1:-1].split(" , ")):
+        chunk = chunk.strip().rstrip(",").strip()
+        if not chunk:
+            continue
+        m = _OBJECT.fullmatch(chunk)
+        if not m:
+            raise CorpusError(f"{where}: cannot read object {chunk[:60]!r}; expected NAME (CLASS): [attribute: {{value}} ...]")
+        name, cls, body = m.groups()
+        if cls not in _NEEDED:
+            raise CorpusError(f"{where}: object {name} has class {cls!r}; expected one of {', '.join(_NEEDED)}")
+        attributes = {a.lower(): v.strip() for a, v in _ATTRIBUTE.findall(body)}
+        missing = [a for a in _NEEDED[cls] if a not in attributes]
+        if missing:
+            raise CorpusError(f"{where}: {cls} {name} has no {', '.join(missing)}")
+        if name in objects[cls]:
+            raise CorpusError(f"{where}: two objects are called {name}")
+        objects[cls][name] = attributes
+    if len(objects["agent"]) != 1:
+        raise CorpusError(f"{where}: found {len(objects['agent'])} agents; expected exactly one")
+
+    def ordered(cls: str) -> list[tuple[str, dict[str, str]]]:
+        # room10 after room9: by the number a name ends with, then by name.
+        return sorted(objects[cls].items(), key=lambda kv: (int(re.sub(r"\D", "", kv[0]) or 0), kv[0]))
+
+    try:
+        rooms = tuple(Room(_value(a["colour"], palette.colours, where, name), *(
+            _int(a[k], where, k, name) for k in ("left", "top", "right", "bottom"))) for name, a in ordered("room"))
+        doors = tuple(Door(*(_int(a[k], where, k, name) for k in ("left", "top", "right", "bottom")))
+                      for name, a in ordered("door"))
+        blocks = ordered("block")
+        toys = tuple(Toy(_value(a["colour"], palette.colours, where, name), _value(a["shape"], palette.shapes, where, name),
+                         _int(a["x"], where, "x", name), _int(a["y"], where, "y", name)) for name, a in blocks)
+        (agent_name, a), = objects["agent"].items()
+        agent = Agent(_int(a["x"], where, "x", agent_name), _int(a["y"], where, "y", agent_name))
+        state = State(Layout(rooms, doors, tuple((t.colour, t.shape) for t in toys), palette), agent, toys)
+        state.validate()
+    except WorldError as exc:
+        raise CorpusError(f"{where}: {exc}") from None
+    return state, tuple(name for name, _ in blocks)
+
+
+def _value(value: str, values: tuple[str, ...], where: str, name: str) -> str:
+    if value not in values:
+        raise CorpusError(f"{where}: {name} has the value {value!r}, which the palette does not have "
+                          f"(it has {', '.join(values)})")
+    return value
+
+
+def format_bdm_state(state: State, toy_names: tuple[str, ...] | None = None) -> str:
+    """A state as a BURLAP state string (what ``parse_bdm_state`` reads back)."""
+    names = toy_names or tuple(state.layout.toy_names)
+    parts = [f"agent0 (agent): [x: {{{state.agent.x}}} y: {{{state.agent.y}}} ]"]
+    parts += [f"{n} (door): [top: {{{d.top}}} left: {{{d.left}}} bottom: {{{d.bottom}}} right: {{{d.right}}} ]"
+              for n, d in zip(state.layout.door_names, state.layout.doors)]
+    parts += [f"{n} (block): [x: {{{t.x}}} y: {{{t.y}}} shape: {{{t.shape}}} colour: {{{t.colour}}} ]"
+              for n, t in zip(names, state.toys)]
+    parts += [f"{n} (room): [top: {{{r.top}}} left: {{{r.left}}} bottom: {{{r.bottom}}} right: {{{r.right}}} "
+              f"colour: {{{r.colour}}} ]" for n, r in zip(state.layout.room_names, state.layout.rooms)]
+    return "{" + " , ".join(parts) + " , }"
+
+
+def read_bdm(path: str | Path, palette: str | Palette = DEFAULT_PALETTE) -> list[Command]:
+    """Every command of a ``.bdm`` file with its pairs; raises CorpusError naming the file and line."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise CorpusError(f"{path}: {exc.strerror or exc}") from None
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise CorpusError(f"{path}, line {line}: not UTF-8 text") from None
+    lines = text.splitlines()
+    commands: list[Command] = []
+    i = 0
+    while i < len(lines):
+        if not lines[i].strip():
+            i += 1
+            continue
+        start_line = i + 1
+        block = []
+        while i < len(lines) and lines[i].strip():
+            if len(lines[i]) > _MAX_LINE:
+                raise CorpusError(f"{path}, line {i + 1}: a line of {len(lines[i])} characters; expected at most {_MAX_LINE}")
+            block.append((i + 1, lines[i].strip()))
+            i += 1
+        commands.append(_command(path, start_line, block, palette))
+    if not commands:
+        raise CorpusError(f"{path}: no command in the file; expected blocks of a command and (start, end) pairs")
+    return commands
+
+
+def _in_layout_of(first: State, names: tuple[str, ...], last: State, end_names: tuple[str, ...]) -> State | None:
+    """``last`` in ``first``'s layout: the corpus numbers rooms and doors afresh in each state line (the
+    same rooms, listed in another order), so objects are matched by what they are; toys by name. None
+    when the two states do not share one layout."""
+    if last.layout == first.layout and end_names == names:
+        return last
+    a, b = first.layout, last.layout
+    if (sorted(map(repr, a.rooms)) != sorted(map(repr, b.rooms)) or sorted(map(repr, a.doors)) != sorted(map(repr, b.doors))
+            or sorted(names) != sorted(end_names)):
+        return None
+    toys = {n: t for n, t in zip(end_names, last.toys)}
+    moved = tuple(toys[n] for n in names)
+    if tuple((t.colour, t.shape) for t in moved) != a.toy_attributes:
+        return None
+    return State(a, last.agent, moved)
+
+
+def _command(path: Path, line: int, block: list[tuple[int, str]], palette) -> Command:
+    text = block[0][1]
+    if text.startswith("{"):
+        raise CorpusError(f"{path}, line {line}: a block starts with a state; expected the command first")
+    pairs = []
+    rest = block[1:]
+    k = 0
+    while k < len(rest):
+        chunk = rest[k:k + 3]
+        if len(chunk) < 3:
+            raise CorpusError(f"{path}, line {chunk[0][0]}: a pair needs a start state, an end state and the word "
+                              "true; the block ends first")
+        (start_no, start), (end_no, end), (true_no, true) = chunk
+        if true.lower() != "true":
+            raise CorpusError(f"{path}, line {true_no}: expected the word true after the end state, found {true[:40]!r}")
+        first, names = parse_bdm_state(start, palette, f"{path}, line {start_no}")
+        last, end_names = parse_bdm_state(end, palette, f"{path}, line {end_no}")
+        last = _in_layout_of(first, names, last, end_names)
+        if last is None:
+            raise CorpusError(f"{path}, line {end_no}: the end state's rooms, doors or blocks differ from the start "
+                              f"state's (line {start_no}); a pair shares one layout")
+        pairs.append(Pair(first, last, start_no, names))
+        k += 3
+        if k < len(rest):
+            if rest[k][1] != "---":
+                raise CorpusError(f"{path}, line {rest[k][0]}: expected --- between pairs, found {rest[k][1][:40]!r}")
+            k += 1
+    if not pairs:
+        raise CorpusError(f"{path}, line {line}: the command {text[:40]!r} has no (start, end) pair")
+    return Command(path, line, text, tuple(pairs))

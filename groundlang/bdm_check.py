@@ -1,0 +1,64 @@
+"""``groundlang check`` for the Williams et al. (2018) corpus: what is there, what is unusable, and why.
+
+Reports commands, (start, end) pairs and distinct layouts; every pair whose end state cannot be reached
+from its start state under the project's dynamics (file and line); pairs too large to check (the 16x16
+layouts with three blocks, about 10^9 states); and commands whose pairs show no task (nothing that
+changed holds in every end state: groundlang.pair_tasks). Exit 1 when a pair is unreachable, unless
+``--skip-inconsistent``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import Counter
+from importlib.resources import files
+
+from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.pair_tasks import pair_task, reachable
+
+__all__ = ["check_bdm", "default_library"]
+
+
+def default_library() -> TaskLibrary:
+    """The relations, superlatives and tasks of the corpus (``logic/domains/williams2018.lp``)."""
+    return TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
+
+
+def check_bdm(args: argparse.Namespace) -> int:
+    paths = bdm_files(args.directory)
+    if not paths:
+        raise ValueError(f"{args.directory}: no .bdm file there")
+    palette = args.palette or DEFAULT_PALETTE
+    library = TaskLibrary.load(args.library) if args.library else default_library()
+    commands = [c for path in paths for c in read_bdm(path, palette)]
+    pairs = [(c, p) for c in commands for p in c.pairs]
+    layouts = {p.start.layout for _, p in pairs}
+    sizes = Counter((p.start.layout.width - 1, p.start.layout.height - 1, len(p.start.toys)) for _, p in pairs)
+    print(f"corpus: {', '.join(map(str, paths))} (palette {palette})")
+    print(f"commands: {len(commands)} ({len({c.text for c in commands})} distinct texts)")
+    print(f"pairs: {len(pairs)}; distinct layouts: {len(layouts)}")
+    print("pairs by grid and blocks: " + ", ".join(f"{w}x{h} with {k}: {n}" for (w, h, k), n in sorted(sizes.items())))
+    unreachable, unchecked = [], 0
+    for command, pair in pairs:
+        found = reachable(pair.start, pair.end)
+        if found is None:
+            unchecked += 1
+        elif not found:
+            unreachable.append((command, pair))
+    print(f"pairs whose end state cannot be reached from the start: {len(unreachable)}")
+    for command, pair in unreachable:
+        print(f"  {command.path}, line {pair.line}: {command.text!r}")
+    print(f"pairs too large to check (state space estimate above the limit): {unchecked}")
+    empty = [c for c in commands if not pair_task([(p.start, p.end) for p in c.pairs], library)]
+    print(f"commands whose pairs show no task: {len(empty)}")
+    for c in empty[:20]:
+        print(f"  {c.path}, line {c.line}: {c.text!r}")
+    if len(empty) > 20:
+        print(f"  ... and {len(empty) - 20} more")
+    if unreachable and not args.skip_inconsistent:
+        print(f"groundlang check: {len(unreachable)} unreachable pairs (use --skip-inconsistent to skip them)",
+              file=sys.stderr)
+        return 1
+    return 0

@@ -1,0 +1,85 @@
+"""What a command's (start, end) pairs show, and whether a final state does it (Williams et al. 2018).
+
+The corpus gives no goal label. Its README judges a command by its pairs: the task is every relation
+and description that holds in all of its end states and not in all of its start states; following the
+command is correct when the final state satisfies all of them. Pairs lie in different layouts ("the
+red room" is room0 in one, room2 in the next), so facts are lifted: a position PF that holds, with
+each argument replaced by one thing said of it (its class or one of its property PFs: a colour, a
+shape, a size, "the largest room"), e.g. ``agentInRoom(agent, roomIsRed)`` or
+``agentNextToToy(agent, toyIsChair)``. What holds, and what is said of an object, are read from the
+PF tables (``model.pf_tables``): the domain's ASP, nothing written here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import product
+
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.pf_tables import PFTables, pf_tables
+from groundlang.model.statespace import StateSpaceError, enumerate_states
+from groundlang.model.world import State
+
+__all__ = ["Fact", "lifted_facts", "pair_task", "satisfies", "reachable", "REACHABILITY_MAX_STATES"]
+
+# Upper bound (the enumerator's estimate) on the states a reachability check may enumerate: the 8x8
+# layouts with three blocks estimate 2.4 million and reach about 10^4; the 16x16 ones estimate 10^9.
+REACHABILITY_MAX_STATES = 5_000_000
+
+
+@dataclass(frozen=True, order=True)
+class Fact:
+    """A position PF with each argument replaced by something said of it: ``agentInRoom(agent, roomIsRed)``."""
+
+    predicate: str
+    said: tuple[str, ...]
+
+    def __str__(self) -> str:
+        return f"{self.predicate}({', '.join(self.said)})"
+
+
+def _said(tables: PFTables) -> dict[str, tuple[str, ...]]:
+    """Object -> its class and the unary property PFs that hold of it (the same in every state)."""
+    out = {name: [cls] for name, cls in tables.objects.items()}
+    for atom in tables.static:
+        if len(atom.args) == 1:
+            out[atom.args[0]].append(atom.predicate)
+    return {name: tuple(sorted(set(said), key=said.index)) for name, said in out.items()}
+
+
+def lifted_facts(state: State, library: TaskLibrary | None = None) -> frozenset[Fact]:
+    """Every lifted fact of ``state``: each position PF that holds, with its arguments said every way."""
+    tables = pf_tables(state.layout, None if library is None else library.tabulation_program)
+    said = _said(tables)
+    facts = set()
+    for atom in tables.holding(state.positions):
+        if atom.predicate in tables.tabulated:
+            facts.update(Fact(atom.predicate, combo) for combo in product(*(said[o] for o in atom.args)))
+    return frozenset(facts)
+
+
+def pair_task(pairs, library: TaskLibrary | None = None) -> frozenset[Fact]:
+    """What ``pairs`` (``(start, end)`` States) show: the facts of every end state that do not hold of
+    every start state. Empty when the pairs agree on nothing that changed (a noisy command)."""
+    ends = frozenset.intersection(*(lifted_facts(end, library) for _, end in pairs))
+    starts = frozenset.intersection(*(lifted_facts(start, library) for start, _ in pairs))
+    return ends - starts
+
+
+def satisfies(state: State, task: frozenset[Fact], library: TaskLibrary | None = None) -> bool:
+    """True when every fact of ``task`` holds in ``state`` (in its own layout); False for an empty task."""
+    return bool(task) and task <= lifted_facts(state, library)
+
+
+def reachable(start: State, end: State, max_states: int = REACHABILITY_MAX_STATES) -> bool | None:
+    """Whether ``end`` can be reached from ``start`` under the project's dynamics; None when the state
+    space is too large to enumerate (its estimate exceeds ``max_states``)."""
+    try:
+        space = enumerate_states(start, max_states=max_states)
+    except StateSpaceError:
+        return None
+    try:
+        space.index_of(end)
+    except (KeyError, ValueError, StateSpaceError):
+        return False
+    return True

@@ -1,0 +1,120 @@
+"""The Williams et al. (2018) corpus format: reading, the tasks pairs show, checking; and its domain in ASP."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from importlib.resources import files
+from pathlib import Path
+
+import pytest
+
+from groundlang.bdm import format_bdm_state, parse_bdm_state, read_bdm
+from groundlang.corpus import CorpusError, read_initial_state
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.pair_tasks import Fact, pair_task, reachable, satisfies
+
+FIXTURE = Path(__file__).parent / "fixtures" / "williams2018"
+SHARED = Path(__file__).parent.parent.parent / "shared" / "data" / "williams2018" / "train"
+
+
+@pytest.fixture(scope="module")
+def library():
+    return TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
+
+
+@pytest.fixture(scope="module")
+def commands():
+    return read_bdm(FIXTURE / "small.bdm")
+
+
+def test_the_fixture_reads_as_two_commands_of_three_pairs(commands):
+    assert [c.text for c in commands] == ["go to the largest room", "go next to the chair"]
+    assert [len(c.pairs) for c in commands] == [3, 3] and [c.line for c in commands] == [1, 14]
+    pair = commands[1].pairs[0]
+    assert pair.toy_names == ("block0", "block3")  # the file's names; the state's are block0, block1
+    assert pair.start.layout.toy_attributes == (("blue", "chair"), ("large", "box"))
+    assert [r.colour for r in pair.start.layout.rooms] == ["red", "green", "blue"]
+    assert (pair.start.agent.x, pair.start.agent.y, pair.end.agent.x, pair.end.agent.y) == (2, 6, 5, 2)
+
+
+def test_a_state_string_round_trips(commands):
+    pair = commands[1].pairs[0]
+    again, names = parse_bdm_state(format_bdm_state(pair.start, pair.toy_names))
+    assert again == pair.start and names == pair.toy_names
+
+
+def test_a_one_line_bdm_state_file_is_a_state_file():
+    state = read_initial_state(FIXTURE / "one.state", "williams2018")
+    assert state.layout.toy_attributes == (("green", "chair"),) and (state.agent.x, state.agent.y) == (2, 2)
+
+
+def test_the_tasks_pairs_show_are_lifted_facts(commands, library):
+    largest, chair = (pair_task([(p.start, p.end) for p in c.pairs], library) for c in commands)
+    assert Fact("agentInRoom", ("agent", "roomIsLargest")) in largest
+    assert not any("Green" in f.said[1] or "Red" in f.said[1] for f in largest)  # colours differ across pairs
+    assert Fact("agentNextToToy", ("agent", "toyIsChair")) in chair
+    assert not any(f.predicate == "agentInRoom" for f in chair)  # the agent ends in different kinds of room
+    for c, task in zip(commands, (largest, chair)):
+        assert all(satisfies(p.end, task, library) and not satisfies(p.start, task, library) for p in c.pairs)
+
+
+def test_reachability(commands, tmp_path):
+    assert all(reachable(p.start, p.end) for c in commands for p in c.pairs)
+    # A block in a room's corner cannot be pushed north: the agent would have to stand in the wall.
+    pair = commands[1].pairs[1]  # green room x 0..4, y 0..8 in layout B; the red chair at (2, 2)
+    start = parse_bdm_state(format_bdm_state(pair.start).replace("x: {2} y: {2} shape", "x: {1} y: {1} shape"))[0]
+    end = parse_bdm_state(format_bdm_state(pair.start).replace("x: {2} y: {2} shape", "x: {1} y: {2} shape"))[0]
+    assert reachable(start, end) is False
+    bad = tmp_path / "bad.bdm"
+    bad.write_text(f"push the chair up\n{format_bdm_state(start)}\n{format_bdm_state(end)}\ntrue\n", encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(bad)], capture_output=True, text=True)
+    assert done.returncode == 1 and f"{bad}, line 2: 'push the chair up'" in done.stdout
+    assert "1 unreachable pairs" in done.stderr
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(bad), "--skip-inconsistent"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0
+
+
+def test_check_reports_the_fixture():
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(FIXTURE)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "commands: 2 (2 distinct texts)" in done.stdout and "pairs: 6; distinct layouts: 6" in done.stdout
+    assert "pairs whose end state cannot be reached from the start: 0" in done.stdout
+    assert "commands whose pairs show no task: 0" in done.stdout
+
+
+@pytest.mark.parametrize("text, piece", [
+    ("go\n{agent0 (agent): [x: {1} y: {1} ] , }\n", "a pair needs a start state, an end state and the word true"),
+    ("go\n{agent0 (agent): [x: {1} ] , }\n{agent0 (agent): [x: {1} ] , }\ntrue\n", "agent agent0 has no y"),
+    ("go\n{lamp0 (lamp): [x: {1} ] , }\n{}\ntrue\n", "object lamp0 has class 'lamp'"),
+    ("{agent0 (agent): [x: {1} y: {1} ] , }\n", "line 1: a block starts with a state"),
+    ("go\nSTATE\nSTATE\nfalse\n", "line 4: expected the word true"),
+    ("go\nROOMS_RED\nROOMS_PURPLE\ntrue\n", "'purple', which the palette does not have"),
+    ("go\nROOMS_RED\nROOMS_RED_MOVED\ntrue\n", "line 3: the end state's rooms, doors or blocks differ"),
+])
+def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
+    room = "room0 (room): [top: {4} left: {0} bottom: {0} right: {4} colour: {%s} ]"
+    state = "{agent0 (agent): [x: {1} y: {1} ] , " + room % "red" + " , }"
+    text = (text.replace("ROOMS_RED_MOVED", state.replace("right: {4}", "right: {5}"))
+            .replace("ROOMS_RED", state).replace("ROOMS_PURPLE", state.replace("{red}", "{purple}"))
+            .replace("STATE", state))
+    path = tmp_path / "bad.bdm"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(CorpusError) as info:
+        read_bdm(path)
+    assert piece in str(info.value) and str(path) in str(info.value)
+
+
+@pytest.mark.slow
+def test_the_shared_corpus_reads_and_every_command_shows_a_task(library):
+    if not (SHARED / "part1.bdm").is_file():
+        pytest.skip(f"Williams et al. 2018 corpus not found at {SHARED} (it is not part of the repository)")
+    part1, part2 = read_bdm(SHARED / "part1.bdm"), read_bdm(SHARED / "part2.bdm")
+    assert (len(part1), len(part2)) == (1048, 571)
+    assert all(len(c.pairs) == 3 for c in part1 + part2)
+    assert len({c.text for c in part1}) == 466 and len({c.text for c in part2}) == 295
+    large = [p for c in part2 for p in c.pairs if p.start.layout.width == 17]
+    assert len(large) == 63 and all(len(p.start.toys) == 3 for p in large)
+    sample = part2[::25]
+    assert all(pair_task([(p.start, p.end) for p in c.pairs], library) for c in sample)
