@@ -83,3 +83,41 @@ def reachable(start: State, end: State, max_states: int = REACHABILITY_MAX_STATE
     except (KeyError, ValueError, StateSpaceError):
         return False
     return True
+
+
+def shortest_actions(start: State, end: State, max_states: int = REACHABILITY_MAX_STATES):
+    """A shortest action sequence from ``start`` to exactly ``end``: breadth-first over the enumerated
+    state space, a layer at a time (vectorised over the layer's states). Of several shortest plans the
+    first found is kept: states in index order, actions tried north, south, east, west; so the result is
+    deterministic. None when ``end`` is unreachable or the space is too large (see :func:`reachable`)."""
+    import numpy as np
+
+    from groundlang.model.world import Action
+
+    try:
+        space = enumerate_states(start, max_states=max_states)
+        target = space.index_of(end)
+    except (StateSpaceError, KeyError, ValueError):
+        return None
+    next_state = np.asarray(space.next_state)[:, : len(Action)]
+    parent = np.full(space.num_states, -1, dtype=np.int64)
+    move = np.full(space.num_states, -1, dtype=np.int64)
+    parent[0] = 0
+    frontier = np.array([0], dtype=np.int64)
+    while frontier.size and parent[target] < 0:
+        reached = []
+        for action in range(next_state.shape[1]):
+            successors = next_state[frontier, action]
+            fresh = parent[successors] < 0
+            found, first = np.unique(successors[fresh], return_index=True)
+            parent[found] = frontier[fresh][first]
+            move[found] = action
+            reached.append(found)
+        frontier = np.unique(np.concatenate(reached))
+    if parent[target] < 0:
+        return None
+    actions, s = [], target
+    while s != 0:
+        actions.append(Action(int(move[s])))
+        s = int(parent[s])
+    return tuple(reversed(actions))

@@ -118,3 +118,18 @@ def test_the_shared_corpus_reads_and_every_command_shows_a_task(library):
     assert len(large) == 63 and all(len(p.start.toys) == 3 for p in large)
     sample = part2[::25]
     assert all(pair_task([(p.start, p.end) for p in c.pairs], library) for c in sample)
+
+
+def test_synthesised_demonstrations_end_in_the_end_state_by_a_shortest_path(commands):
+    from groundlang.model.world import replay
+    from groundlang.pair_tasks import shortest_actions
+
+    lengths = []
+    for c in commands:
+        for p in c.pairs:
+            actions = shortest_actions(p.start, p.end)
+            assert replay(p.start, actions)[-1] == p.end
+            lengths.append(len(actions))
+    # Manhattan distance is a lower bound, reached when no wall is in the way.
+    assert lengths == [7, 5, 5, 7, 7, 9]
+    assert shortest_actions(commands[0].pairs[0].start, commands[0].pairs[0].start) == ()
