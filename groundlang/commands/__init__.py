@@ -81,3 +81,12 @@ def language_model_settings(pairs: list[str]) -> dict:
             value = text
         settings[key.strip()] = value
     return settings
+
+
+def add_lexicon_option(parser) -> None:
+    """``--lexicon FILE`` (repeatable): a word file whose words the parser should know too."""
+    parser.add_argument(
+        "--lexicon", metavar="FILE", action="append", default=[],
+        help="a word file (`CATEGORY: word word ...` lines, see grammar/english.words) whose nouns, "
+             "adjectives, verbs and prepositions the parser should know too (repeatable)",
+    )
