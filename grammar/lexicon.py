@@ -232,8 +232,8 @@ class Lexicon:
             return frozenset({"ADV"})
         if word.endswith("ing") and len(word) > 5:
             return frozenset({"GER", "ADJ", "NOUN"})
-        if word.endswith(("ed", "ish", "ey", "ful", "ous", "ive", "al", "ic", "est", "er")) and len(word) > 4:
-            return frozenset({"ADJ", "NOUN"})
+        # Whatever its ending, an unknown word that opens a clause may be the imperative verb: a typo
+        # such as "tranfser to blue room" ends like an adjective or noun ("-er") yet commands a motion.
         return frozenset({"ADJ", "NOUN", "VERB"}) if first else frozenset({"ADJ", "NOUN"})
 
     def lemma(self, word: str) -> str:

@@ -140,6 +140,8 @@ def load_learner(directory: str | Path):
     try:
         with np.load(io.BytesIO(data), allow_pickle=False) as npz:
             values = {k: torch.from_numpy(np.array(npz[k])) for k in npz.files}
+        if not isinstance(meta["lexicon"], dict):  # never a path: loading a model reads no other file
+            raise ValueError(f"lexicon is {type(meta['lexicon']).__name__}, expected words by category")
         learner = Learner(
             get_language_model(meta["language_model"], **meta["language_model_settings"]),
             library=TaskLibrary.from_text(meta["task_library"], f"{directory / MODEL_JSON}:task_library"),

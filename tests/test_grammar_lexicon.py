@@ -50,6 +50,11 @@ def test_domain_words_are_in_the_domain_file_not_the_english_one():
     for typo in ("tranfser", "throught", "diagonaly"):
         assert not CLEANUP.listed(typo), typo
     assert CLEANUP.categories("diagonaly") == {"ADV"}  # by its -ly
+    # an unknown word opening a clause may be its verb, whatever its ending: read as when it was listed
+    assert CLEANUP.categories("tranfser", first=True) == {"ADJ", "NOUN", "VERB"}
+    assert CLEANUP.categories("tranfser") == {"ADJ", "NOUN"}
+    lf = parse("tranfser to blue retangle .", word_lexicon=CLEANUP)[0].logical_form
+    assert lf.paper_str() == "tranfser(retangle1), P1(retangle1, blue)"
 
 
 def test_lexicon_py_names_no_domain_noun_or_colour_word():
