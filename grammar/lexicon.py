@@ -138,7 +138,8 @@ class Lexicon:
         merged: dict[str, set[str]] = {}
         for category, words in (entries or {}).items():
             merged.setdefault(category, set()).update(_check(category, words, "word list"))
-        self.entries: dict[str, tuple[str, ...]] = {c: tuple(sorted(merged[c])) for c in FILE_CATEGORIES if merged.get(c)}
+        self.entries: dict[str, tuple[str, ...]] = {
+            c: tuple(sorted(merged[c])) for c in FILE_CATEGORIES if merged.get(c)}
         words = {c: frozenset(self.entries.get(c, ())) for c in FILE_CATEGORIES}
         # Verb forms: regular inflections of every lemma, in a fixed order, then the irregular ones.
         self.verb_forms: dict[str, str] = {}

@@ -226,8 +226,9 @@ def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None =
 
     ``weights`` overrides entries of DEFAULT_WEIGHTS (positive numbers); ``lexicon`` instantiates the
     predicates of the words it knows; ``word_lexicon`` gives the words' categories (default: English
-    only, :meth:`Lexicon.english`; a domain's nouns and colour words come with its word file). Raises ParseError (a ValueError) for empty or whitespace-only
-    input, ValueError for ``max_readings < 1`` or a non-positive weight, TypeError for a non-string.
+    only, :meth:`Lexicon.english`; a domain's nouns and colour words come with its word file). Raises
+    ParseError (a ValueError) for empty or whitespace-only input, ValueError for ``max_readings < 1``
+    or a non-positive weight, TypeError for a non-string.
     """
     if not isinstance(command, str):
         raise TypeError(f"parse: command must be a str, got {type(command).__name__}")

@@ -147,7 +147,8 @@ class Learner:
         """Let the parser know more words (word files or words by category, as ``Learner(lexicon=...)``),
         e.g. a multiword preposition for a trained model; they are saved with the model. Words the
         vocabulary never saw in training stay unknown to the language model."""
-        added = extra_words([self.lexicon_words, *([lexicon] if isinstance(lexicon, (str, Path, Mapping)) else lexicon)])
+        more = [lexicon] if isinstance(lexicon, (str, Path, Mapping)) else list(lexicon)
+        added = extra_words([self.lexicon_words, *more])
         self.lexicon_words = added
         self.word_lexicon = domain_lexicon(added)
         if self.vocab is not None:
