@@ -7,7 +7,6 @@ preposition before a noun phrase is kept. Never fails: any sequence gives at lea
 
 from __future__ import annotations
 
-from .lexicon import NEGATIONS
 from .phrases import NP, PP, VP
 
 _NP_CATS = frozenset({"DET", "NUM", "ADJ", "COLOR", "NOUN", "MEASURE", "GER"})
@@ -74,8 +73,8 @@ def chunk(words: list[str], cats: list[frozenset[str]]) -> tuple[VP, ...]:
             verb = word
             clause_start = False
             continue
-        if word in NEGATIONS or ("AUX" in c and not c & _NP_CATS):
-            negated = negated or word in NEGATIONS
+        if "NEG" in c or ("AUX" in c and not c & _NP_CATS):
+            negated = negated or "NEG" in c
             continue
         if "PRON" in c and not c & _NP_CATS:
             flush_np()

@@ -9,8 +9,9 @@ from __future__ import annotations
 import itertools
 import re
 from collections import Counter
+from dataclasses import replace
 
-from .lexicon import SemanticLexicon, lemma
+from .lexicon import Lexicon, SemanticLexicon
 from .logical_form import Clause, Entity, LogicalForm, Relation
 from .phrases import NP, PP, VP, Adv, ClauseValue, Measure, Sub, top_k
 
@@ -18,7 +19,8 @@ _NOT_IDENT = re.compile(r"[^0-9a-z]+")
 
 
 class _Composer:
-    def __init__(self) -> None:
+    def __init__(self, lexicon: Lexicon) -> None:
+        self.lexicon = lexicon
         self.entities: list[Entity] = []
         self.clauses: list[Clause | None] = []
         self.attachments: list[tuple[str, str, str]] = []
@@ -33,10 +35,13 @@ class _Composer:
         return f"{name}{self.counters[name]}"
 
     def add_clause(self, value: ClauseValue, connective: str | None = None, subject: str | None = None) -> None:
+        introduced_by = None
         while isinstance(value, Sub):
             connective = value.connective if connective is None else f"{connective} {value.connective}"
-            value = value.clause
+            introduced_by, value = value.connective, value.clause
         vp: VP = value
+        if introduced_by in self.lexicon.negating_prepositions:
+            vp = replace(vp, negated=True)  # "without going into the tan room": the going is not to be done
         idx = len(self.clauses)
         self.clauses.append(None)
         if vp.subject is not None:
@@ -58,7 +63,7 @@ class _Composer:
                 self.add_np(comp.np, idx, "measure")
             elif isinstance(comp, Sub):
                 pending.append(comp)
-        verb = lemma(vp.verb) if vp.verb is not None else None
+        verb = self.lexicon.lemma(vp.verb) if vp.verb is not None else None
         self.clauses[idx] = Clause(verb, tuple(args), tuple(preps), vp.negated, subject, connective, tuple(adverbs))
         queued, self.queue = self.queue, []
         for sub in pending:
@@ -109,9 +114,10 @@ class _Composer:
 
 
 def compose(clauses: tuple[ClauseValue, ...], words: tuple[str, ...], tags: tuple[str, ...],
-            fallback: bool) -> LogicalForm:
-    """The logical form of a sequence of clause values (all sentences of one command, in order)."""
-    comp = _Composer()
+            fallback: bool, lexicon: Lexicon | None = None) -> LogicalForm:
+    """The logical form of a sequence of clause values (all sentences of one command, in order); the
+    lexicon (default: English) gives verb lemmas and the prepositions that negate the clause they introduce."""
+    comp = _Composer(lexicon or Lexicon.english())
     for value in clauses:
         comp.add_clause(value)
     relations = comp.relations()

@@ -1,118 +1,108 @@
-"""Word categories for command parsing, and the semantic-model hook.
+"""The words the parser knows and their lexical categories, read from word files; the semantic model.
 
-The parser knows no meanings, only syntax: closed-class words (determiners,
-prepositions, conjunctions, pronouns, auxiliaries) and the common verbs and
-nouns of the domain are listed; every other word is guessed from its suffix
-and position. A word may carry several categories ("left" is an adverb, an
-adjective and a noun); the grammar decides which one a reading uses.
+The parser knows no meanings, only syntax. Which category a word may play (determiner, preposition,
+verb, noun, ...) is data: closed-class English ships in ``grammar/english.words``, a domain's nouns and
+adjectives sit in a word file beside its ``.lp`` files, and a caller may add words of its own
+(:meth:`Lexicon.extend`, :meth:`Lexicon.with_files`). A word no file lists is still parsed: its
+categories are guessed from its suffix and position. A word may carry several categories ("left" is
+an adverb, an adjective and a noun); the grammar decides which one a reading uses.
 
-``SemanticLexicon`` is the paper's semantic model (LWFG's Phi_i constraints):
-words mapped to domain propositional functions with probabilities, learned
-later by the joint model and handed to ``parse``.
+Word file format (documented at the top of ``english.words``): ``CATEGORY: word word ...`` lines,
+``#`` comments, blank lines skipped, ``_`` joining the words of a multiword entry (``in_front_of``),
+``form=lemma`` pairs under ``IRREGULAR``.
+
+``SemanticLexicon`` is the paper's semantic model (LWFG's Phi_i constraints): words mapped to domain
+propositional functions with probabilities, learned later by the joint model and handed to ``parse``.
 """
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Mapping
+import re
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from importlib.resources import files
+from pathlib import Path
+
+__all__ = ["CATEGORIES", "FILE_CATEGORIES", "Lexicon", "LexiconError", "SemanticLexicon", "read_word_file"]
 
 # Lexical categories (the grammar's terminals are sets of these).
 CATEGORIES = (
     "ADJ", "ADV", "AUX", "COLOR", "COMMA", "CONJ", "DET", "GER", "MEASURE",
     "NEG", "NOUN", "NUM", "PREP", "PRON", "REL", "SUB", "TO", "VERB",
 )
-
-DETERMINERS = frozenset(
-    "the a an this that these those your my his her its their our another some any each every all "
-    "no both either neither such".split()
+# Categories of a word file that tag their words with a lexical category and give them a role the
+# parser or the model reads (see english.words); VERB lists lemmas, IRREGULAR form=lemma pairs.
+_TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP"}
+FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB")) + (
+    "VERB", "IRREGULAR", *_TAGGING,
 )
-PREPOSITIONS = frozenset(
-    "to into in from through thru throught toward towards onto on at of with by inside outside near past "
-    "above below behind under over between across along around within without via beside besides beyond "
-    "underneath beneath upon against out up down off like than unto till until next".split()
-)
-# Prepositions that also stand alone as adverbial particles ("go up", "push it down", "stop just inside").
-PARTICLES = frozenset("up down out in inside outside over around back along off through across past below above behind".split())
-CONJUNCTIONS = frozenset("and n & or / but then nor plus".split())
-SUBORDINATORS = frozenset("until till when while once where if because before after so as whilst unless whereas".split())
-RELATIVES = frozenset("that which who where".split())
-PRONOUNS = frozenset(
-    "it you him her them me us i he she they yourself itself himself herself themselves myself one "
-    "there re here".split()
-)
-AUXILIARIES = frozenset("would will should can could must may might do does did shall have has had".split())
-NEGATIONS = frozenset("not don't dont never doesn't didn't can't cant won't wont shouldn't n't no".split())
-# Prepositions that negate the gerund clause they introduce: "without going into the tan room".
-NEGATING_PREPOSITIONS = frozenset({"without"})
-# Prepositions whose verb-attached phrase says where a motion starts or what goes along with the mover
-# ("go from the blue room ...", "... and go to the beige room with the star"), never where it ends.
-SOURCE_AND_COMITATIVE_PREPOSITIONS = frozenset({"from", "with"})
-NUMBERS = frozenset(
-    "one two three four five six seven eight nine ten first second third fourth fifth last couple few "
-    "several many next half".split()
-)
-ADVERBS = frozenset(
-    "up down left right forward forwards backward backwards straight diagonally diagonaly directly back "
-    "north south east west northeast northwest southeast southwest upward upwards downward downwards "
-    "just slightly then please again also still only even clockwise counterclockwise away ahead "
-    "there here around over immediately first completely fully actually quickly slowly carefully "
-    "inside outside all very much far closer further farther now finally afterwards later".split()
-)
-# Hue names: they compound when written solid, as they do hyphenated ("blue-green", "bluegreen").
-HUES = frozenset(
-    "green orange red blue tan teal beige brown yellow turquoise cyan pink peach white cream creme "
-    "grey gray olive salmon gold black magenta purple violet maroon navy aqua lime khaki".split()
-)
-COLOURS = HUES | frozenset(
-    "golden tangerine greenish bluish reddish orangey orangish yellowish brownish pinkish whitish "
-    "flesh skin sand sandy light dark deep pale bright".split()
-)
-NOUNS = frozenset(
-    "room rooms star block blocks toy object door doors doorway doorways entryway entrance exit opening "
-    "openings area areas box section space square rectangle tile spot place floor carpet color colour "
-    "wall side corner middle center centre top bottom edge path passage passageway hallway threshold "
-    "enclosure background chair bag backpack basket moon circle smiley thing direction way front end "
-    "body foot line point shape star bit step steps times time gap".split()
-)
-MEASURES = frozenset("way steps step times time bit direction".split())
-ADJECTIVES = frozenset(
-    "big large small little long longer short shorter lower upper next other far near opposite same "
-    "open center middle left right top bottom straight shortest least possible big gold happy "
-    "inner outer entire whole".split()
-)
-TO_WORDS = frozenset({"to"})
-
-# Verbs of the domain, by lemma; inflected forms are derived below.
-VERB_LEMMAS = frozenset(
-    "go move push take bring walk enter exit leave put drag carry get head cross proceed start stop stand "
-    "face approach grab pick round knock bump shift transfer tranfser reach see keep turn look use "
-    "position remain stay pass set step be have make follow navigate travel run return come lead end "
-    "forget pull slide place deliver steer drive hold cut continue stay wait arrive smile land locate "
-    "find guide escort roll kick shove nudge send steer head crosses circle bring fetch collect "
-    "relocate".split()
-)
-IRREGULAR = {
-    "went": "go", "gone": "go", "goes": "go", "took": "take", "taken": "take", "brought": "bring",
-    "left": "leave", "got": "get", "gotten": "get", "came": "come", "ran": "run", "held": "hold",
-    "led": "lead", "saw": "see", "seen": "see", "kept": "keep", "made": "make", "is": "be", "are": "be",
-    "am": "be", "was": "be", "were": "be", "been": "be", "'re": "be", "'s": "be", "'m": "be",
-    "has": "have", "had": "have", "found": "find", "stood": "stand", "put": "put", "set": "set",
-    "cut": "cut", "thru": "through",
-}
-# Forms that act as auxiliaries as well as main verbs ("are facing", "is positioned").
-AUX_VERBS = frozenset("is are am was were be been 're 's 'm have has had do does did".split())
+# A multiword entry's first word that may head or modify a noun phrase ("left" of "left of") does,
+# rather than open the preposition, after a word of these categories: "the left of the room",
+# "to left of star", "bottom left of orange room".
+_NOUN_PHRASE_OPENERS = frozenset({"DET", "PREP", "TO", "ADJ", "NUM"})
+_CATEGORY_LINE = re.compile(r"^([A-Za-z_]+)\s*:(.*)$")
+_HYPHEN = re.compile(r"(?<=\w)-(?=\w)")
 
 
-def split_compound_colour(word: str) -> tuple[str, ...]:
-    """A colour compound written solid split into its hues ("bluegreen" -> ("blue", "green")), as the
-    tokeniser splits a hyphenated one; any other word is itself. Both parts must be hues, so words
-    that merely start with one ("tangerine", "redo") are left whole."""
-    if word not in COLOURS:
-        for cut in range(3, len(word) - 2):
-            if word[:cut] in HUES and word[cut:] in HUES:
-                return word[:cut], word[cut:]
-    return (word,)
+class LexiconError(ValueError):
+    """A word file or word list that does not follow the format; the message names file and line."""
+
+
+def _entry(word: str) -> str:
+    """A word as the tokeniser produces it: lowercase, and the words of a multiword entry (written
+    with ``_``, spaces or hyphens, which the tokeniser splits at) joined with ``_``."""
+    return "_".join(_HYPHEN.sub(" ", word.strip().lower()).replace("_", " ").split())
+
+
+def _check(category: str, words: Iterable[str], where: str) -> tuple[str, ...]:
+    if category not in FILE_CATEGORIES:
+        raise LexiconError(f"{where}: unknown category {category!r}; a word file knows "
+                           f"{', '.join(FILE_CATEGORIES)}")
+    if isinstance(words, str):
+        raise LexiconError(f"{where}: the words of {category} must be a list of words, not one string")
+    out = []
+    for word in words:
+        if not isinstance(word, str) or not _entry(word):
+            raise LexiconError(f"{where}: {category} has an empty or non-text word {word!r}")
+        if category == "IRREGULAR":
+            form, sep, lemma = word.partition("=")
+            if not sep or not _entry(form) or not _entry(lemma) or "=" in lemma:
+                raise LexiconError(f"{where}: IRREGULAR entry {word!r} is not form=lemma (e.g. went=go)")
+            out.append(f"{_entry(form)}={_entry(lemma)}")
+        elif "=" in word:
+            raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR pairs form=lemma)")
+        else:
+            out.append(_entry(word))
+    return tuple(out)
+
+
+def read_word_file(path: str | Path) -> dict[str, tuple[str, ...]]:
+    """Words by category from a word file (format: see the module docstring).
+
+    Raises LexiconError naming the file and line of the first malformed line, OSError if unreadable.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise LexiconError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); a word file is "
+                           "text with `CATEGORY: word word ...` lines") from None
+    entries: dict[str, list[str]] = {}
+    for number, line in enumerate(text.splitlines(), 1):
+        content = line.split("#", 1)[0].strip()
+        if not content:
+            continue
+        where = f"{path}:{number}"
+        match = _CATEGORY_LINE.match(content)
+        if match is None:
+            raise LexiconError(f"{where}: expected `CATEGORY: word word ...`, got {content[:60]!r}")
+        category, words = match.group(1), match.group(2).split()
+        if not words:
+            raise LexiconError(f"{where}: no words after {category}:")
+        entries.setdefault(category, []).extend(_check(category, words, where))
+    return {category: tuple(words) for category, words in entries.items()}
 
 
 def _inflections(lemma: str) -> dict[str, str]:
@@ -137,68 +127,154 @@ def _inflections(lemma: str) -> dict[str, str]:
     return forms
 
 
-VERB_FORMS: dict[str, str] = {}
-for _lemma in sorted(VERB_LEMMAS):
-    VERB_FORMS.update(_inflections(_lemma))
-VERB_FORMS.update(IRREGULAR)
-VERB_FORMS.pop("thru", None)
+class Lexicon:
+    """The words the parser knows, by category; immutable (extending gives a new lexicon).
 
-
-def lemma(word: str) -> str:
-    """Lemma of a verb form ("pushing" -> "push"); other words are returned unchanged."""
-    return VERB_FORMS.get(word, word)
-
-
-def listed_categories(word: str) -> frozenset[str]:
-    """Categories the lexicon lists for ``word``; empty for a word it does not know (no guessing)."""
-    return frozenset(_closed_categories(word))
-
-
-def _closed_categories(word: str) -> set[str]:
-    cats: set[str] = set()
-    table = (
-        (DETERMINERS, "DET"), (PREPOSITIONS, "PREP"), (CONJUNCTIONS, "CONJ"), (SUBORDINATORS, "SUB"),
-        (RELATIVES, "REL"), (PRONOUNS, "PRON"), (AUXILIARIES, "AUX"), (NEGATIONS, "NEG"), (NUMBERS, "NUM"),
-        (ADVERBS, "ADV"), (COLOURS, "COLOR"), (NOUNS, "NOUN"), (MEASURES, "MEASURE"), (ADJECTIVES, "ADJ"),
-        (TO_WORDS, "TO"), (AUX_VERBS, "AUX"),
-    )
-    for words, cat in table:
-        if word in words:
-            cats.add(cat)
-    if word in PARTICLES:
-        cats.add("ADV")
-    if word in VERB_FORMS:
-        cats.add("GER" if word.endswith("ing") else "VERB")
-        if word.endswith("ed"):
-            cats.add("ADJ")  # past participles modify nouns: "orange-floored room", "colored room"
-    if word == ",":
-        cats = {"COMMA"}
-    if word == "left":
-        cats.discard("VERB")  # "left" is far more often a direction than the past of "leave"
-    return cats
-
-
-def guess_categories(word: str, first: bool = False) -> frozenset[str]:
-    """Categories of a word: listed ones if known, else an open-class guess by suffix and position.
-
-    ``first``: the word opens a clause, where an unknown word may be an imperative verb.
-    Never empty: anything not recognisable is a noun or an adjective (open class).
+    ``entries``: words by word-file category (:data:`FILE_CATEGORIES`), as read from word files or
+    given as data. Raises LexiconError for an unknown category or a malformed entry.
     """
-    known = _closed_categories(word)
-    if known:
-        return frozenset(known)
-    if not any(ch.isalpha() for ch in word):
-        return frozenset({"NUM"}) if any(ch.isdigit() for ch in word) else frozenset({"ADJ", "NOUN"})
-    if word.endswith("ly") and len(word) > 4:
-        return frozenset({"ADV"})
-    if word.endswith("ing") and len(word) > 5:
-        return frozenset({"GER", "ADJ", "NOUN"})
-    if word.endswith(("ed", "ish", "ey", "ful", "ous", "ive", "al", "ic", "est", "er")) and len(word) > 4:
-        return frozenset({"ADJ", "NOUN"})
-    guess = {"ADJ", "NOUN"}
-    if first:
-        guess.add("VERB")
-    return frozenset(guess)
+
+    def __init__(self, entries: Mapping[str, Iterable[str]] | None = None):
+        merged: dict[str, set[str]] = {}
+        for category, words in (entries or {}).items():
+            merged.setdefault(category, set()).update(_check(category, words, "word list"))
+        self.entries: dict[str, tuple[str, ...]] = {
+            c: tuple(sorted(merged[c])) for c in FILE_CATEGORIES if merged.get(c)}
+        words = {c: frozenset(self.entries.get(c, ())) for c in FILE_CATEGORIES}
+        # Verb forms: regular inflections of every lemma, in a fixed order, then the irregular ones.
+        self.verb_forms: dict[str, str] = {}
+        for lemma in sorted(words["VERB"]):
+            self.verb_forms.update(_inflections(lemma))
+        self.verb_forms.update(pair.split("=", 1) for pair in self.entries.get("IRREGULAR", ()))
+        table: dict[str, set[str]] = {}
+        for category in FILE_CATEGORIES:
+            tag = _TAGGING.get(category, category)
+            if tag in CATEGORIES and category != "VERB":
+                for word in words[category]:
+                    table.setdefault(word, set()).add(tag)
+        for form in self.verb_forms:
+            cats = table.setdefault(form, set())
+            cats.add("GER" if form.endswith("ing") else "VERB")
+            if form.endswith("ed"):
+                cats.add("ADJ")  # past participles modify nouns: "orange-floored room", "colored room"
+        self._listed = {word: frozenset(cats) for word, cats in table.items()}
+        self.hues = words["HUE"]
+        self.negating_prepositions = words["PREP_NEGATING"]
+        self.source_and_comitative_prepositions = words["PREP_SOURCE"]
+        # Multiword entries by first word, longest first (the tokeniser joins the longest that fits).
+        multiword: dict[str, list[tuple[str, ...]]] = {}
+        for word in sorted(table, key=lambda w: (-w.count("_"), w)):
+            if "_" in word.strip("_"):
+                parts = tuple(word.split("_"))
+                multiword.setdefault(parts[0], []).append(parts)
+        self._multiword = multiword
+
+    # ------------------------------------------------------------------ building
+    @classmethod
+    @functools.cache
+    def english(cls) -> "Lexicon":
+        """Closed-class English, from the shipped ``grammar/english.words`` (read once)."""
+        return cls(read_word_file(Path(str(files("groundlang.grammar").joinpath("english.words")))))
+
+    @classmethod
+    def from_files(cls, *paths: str | Path) -> "Lexicon":
+        """English extended with the words of each word file, in order (see :meth:`with_files`)."""
+        return cls.english().with_files(*paths)
+
+    def with_files(self, *paths: str | Path) -> "Lexicon":
+        """This lexicon extended with the words of each word file. Raises LexiconError naming file and
+        line for a malformed file, OSError for one that cannot be read."""
+        lexicon = self
+        for path in paths:
+            lexicon = lexicon.extend(read_word_file(path))
+        return lexicon
+
+    def extend(self, words_by_category: Mapping[str, Iterable[str]]) -> "Lexicon":
+        """This lexicon with more words: ``{"NOUN": ["mug", "shelf"], "PREP": ["left of"], "HUE": ["teal"]}``.
+
+        Categories are those of a word file (:data:`FILE_CATEGORIES`); words are lowercased and a
+        multiword entry may be written with spaces or ``_``. Raises LexiconError for anything else.
+        """
+        if not words_by_category:
+            return self
+        if not isinstance(words_by_category, Mapping):
+            raise LexiconError(f"words to add must map a category to its words, not {type(words_by_category).__name__}")
+        merged = {c: list(ws) for c, ws in self.entries.items()}
+        for category, words in words_by_category.items():
+            merged.setdefault(category, []).extend(_check(category, words, "word list"))
+        return Lexicon(merged)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Lexicon) and self.entries == other.entries
+
+    def __hash__(self) -> int:
+        return hash(tuple((c, ws) for c, ws in self.entries.items()))
+
+    def __repr__(self) -> str:
+        return f"Lexicon({sum(map(len, self.entries.values()))} entries)"
+
+    # ------------------------------------------------------------------ reading words
+    def listed(self, word: str) -> frozenset[str]:
+        """Categories the lexicon lists for ``word``; empty for a word it does not know (no guessing)."""
+        return self._listed.get(word, frozenset())
+
+    def categories(self, word: str, first: bool = False) -> frozenset[str]:
+        """Categories of a word: listed ones if known, else an open-class guess by suffix and position.
+
+        ``first``: the word opens a clause, where an unknown word may be an imperative verb.
+        Never empty: anything not recognisable is a noun or an adjective (open class).
+        """
+        known = self._listed.get(word)
+        if known:
+            return known
+        if not any(ch.isalpha() for ch in word):
+            return frozenset({"NUM"}) if any(ch.isdigit() for ch in word) else frozenset({"ADJ", "NOUN"})
+        if word.endswith("ly") and len(word) > 4:
+            return frozenset({"ADV"})
+        if word.endswith("ing") and len(word) > 5:
+            return frozenset({"GER", "ADJ", "NOUN"})
+        # Whatever its ending, an unknown word that opens a clause may be the imperative verb: a typo
+        # such as "tranfser to blue room" ends like an adjective or noun ("-er") yet commands a motion.
+        return frozenset({"ADJ", "NOUN", "VERB"}) if first else frozenset({"ADJ", "NOUN"})
+
+    def lemma(self, word: str) -> str:
+        """Lemma of a verb form ("pushing" -> "push"); other words are returned unchanged."""
+        return self.verb_forms.get(word, word)
+
+    def is_colour(self, word: str) -> bool:
+        """Whether the word is listed as a colour word (a hue or a colour modifier)."""
+        return "COLOR" in self._listed.get(word, ())
+
+    def split_compound_colour(self, word: str) -> tuple[str, ...]:
+        """A colour compound written solid split into its hues ("bluegreen" -> ("blue", "green")), as the
+        tokeniser splits a hyphenated one; any other word is itself. Both parts must be hues, so words
+        that merely start with one ("tangerine", "redo") are left whole."""
+        if not self.is_colour(word):
+            for cut in range(3, len(word) - 2):
+                if word[:cut] in self.hues and word[cut:] in self.hues:
+                    return word[:cut], word[cut:]
+        return (word,)
+
+    def join_multiword(self, tokens: list[str]) -> list[str]:
+        """Tokens with each multiword entry ("in front of") joined into one (``in_front_of``), longest
+        first, except where its first word heads a noun phrase after a determiner, preposition,
+        adjective or number ("to left of star", "bottom left of orange room" keep "left" apart)."""
+        if not self._multiword:
+            return tokens
+        out: list[str] = []
+        i = 0
+        while i < len(tokens):
+            for parts in self._multiword.get(tokens[i], ()):
+                if tuple(tokens[i:i + len(parts)]) == parts and not (
+                    out and self.listed(parts[0]) & {"ADJ", "NOUN"} and self.listed(out[-1]) & _NOUN_PHRASE_OPENERS
+                ):
+                    out.append("_".join(parts))
+                    i += len(parts)
+                    break
+            else:
+                out.append(tokens[i])
+                i += 1
+        return out
 
 
 @dataclass(frozen=True)

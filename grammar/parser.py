@@ -1,7 +1,9 @@
 """Parse commands into logical forms with probabilities (the paper's SP component).
 
-Pipeline: tokenise (lowercase, punctuation split off, hyphenated words split, every word kept), tag each
-word with its possible categories (grammar.lexicon), split into sentences, parse each sentence with
+Pipeline: tokenise (lowercase, punctuation split off, hyphenated words split, multiword entries of the
+lexicon such as "in front of" joined, every word kept), tag each word with its possible categories
+(grammar.lexicon: English from ``english.words`` unless the caller hands a lexicon with a domain's
+words), split into sentences, parse each sentence with
 Earley over the grammar in ``commands.lark``, keep the best readings of each sentence from the parse
 forest (grammar.kbest), fall back to chunks where the grammar fails (grammar.chunker), compose logical
 forms for the whole command (grammar.composition) and normalise.
@@ -29,7 +31,7 @@ from lark.lexer import Lexer
 
 from .chunker import chunk
 from .composition import compose, instantiate
-from .lexicon import CONJUNCTIONS, SemanticLexicon, guess_categories, split_compound_colour
+from .lexicon import Lexicon, SemanticLexicon
 from .logical_form import LogicalForm, Reading
 from .earley import install as install_fast_earley
 from .kbest import ForestKBest, RuleSymbolNode, log_weights
@@ -66,9 +68,11 @@ class ParseError(ValueError):
 Word = tuple[str, frozenset[str]]
 
 
-def tokenise(command: str) -> list[str]:
+def tokenise(command: str, word_lexicon: Lexicon | None = None) -> list[str]:
     """Lowercase tokens: words (hyphenated words and solid colour compounds like "bluegreen" split,
-    clitics like 're split off) and punctuation."""
+    clitics like 're split off, multiword entries such as "left of" joined into ``left_of``) and
+    punctuation. ``word_lexicon``: the words known (default: English, :meth:`Lexicon.english`)."""
+    words = word_lexicon or Lexicon.english()
     text = command.lower().replace("\u2019", "'").replace("\u2018", "'")
     text = re.sub(r"(?<=\w)-(?=\w)", " ", text)
     out: list[str] = []
@@ -79,12 +83,13 @@ def tokenise(command: str) -> list[str]:
         elif re.fullmatch(r"\.{2,}", tok):
             out.append(".")
         else:
-            out.extend(split_compound_colour(tok))
-    return out
+            out.extend(words.split_compound_colour(tok))
+    return words.join_multiword(out)
 
 
-def tag(tokens: list[str]) -> list[frozenset[str]]:
+def tag(tokens: list[str], word_lexicon: Lexicon | None = None) -> list[frozenset[str]]:
     """Possible categories of each token (empty set for punctuation the grammar skips)."""
+    words = word_lexicon or Lexicon.english()
     cats: list[frozenset[str]] = []
     first = True
     for tok in tokens:
@@ -94,10 +99,10 @@ def tag(tokens: list[str]) -> list[frozenset[str]]:
         elif tok in CLAUSE_BREAK:
             cats.append(frozenset({"COMMA"}))
             first = True
-        elif not any(ch.isalnum() for ch in tok) and tok not in CONJUNCTIONS:
-            cats.append(frozenset())  # quotes and the like: kept in words, not parsed
+        elif not any(ch.isalnum() for ch in tok) and not words.listed(tok):
+            cats.append(frozenset())  # quotes and the like: kept in words, not parsed ("&" is listed)
         else:
-            c = guess_categories(tok, first=first)
+            c = words.categories(tok, first=first)
             cats.append(c)
             first = bool(c & {"CONJ", "COMMA", "SUB"})
     return cats
@@ -216,21 +221,24 @@ def _normalise(scored: list[tuple[float, LogicalForm]]) -> list[tuple[float, Log
 
 
 def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None = None,
-          weights: Mapping[str, float] | None = None) -> list[Reading]:
+          weights: Mapping[str, float] | None = None, word_lexicon: Lexicon | None = None) -> list[Reading]:
     """Readings of a command, most probable first; probabilities sum to one; never empty.
 
     ``weights`` overrides entries of DEFAULT_WEIGHTS (positive numbers); ``lexicon`` instantiates the
-    predicates of the words it knows. Raises ParseError (a ValueError) for empty or whitespace-only
-    input, ValueError for ``max_readings < 1`` or a non-positive weight, TypeError for a non-string.
+    predicates of the words it knows; ``word_lexicon`` gives the words' categories (default: English
+    only, :meth:`Lexicon.english`; a domain's nouns and colour words come with its word file). Raises
+    ParseError (a ValueError) for empty or whitespace-only input, ValueError for ``max_readings < 1``
+    or a non-positive weight, TypeError for a non-string.
     """
     if not isinstance(command, str):
         raise TypeError(f"parse: command must be a str, got {type(command).__name__}")
     if max_readings < 1:
         raise ValueError(f"parse: max_readings must be >= 1, got {max_readings}")
-    tokens = tokenise(command)
+    words = word_lexicon or Lexicon.english()
+    tokens = tokenise(command, words)
     if not tokens:
         raise ParseError("cannot parse an empty command (the text is empty or only whitespace)")
-    cats = tag(tokens)
+    cats = tag(tokens, words)
     tags = tuple(_class_name(c).replace("_", "|") if c else "PUNCT" for c in cats)
     beam = 2 * max_readings + 4
     logw = log_weights({**DEFAULT_WEIGHTS, **(weights or {})})
@@ -241,10 +249,9 @@ def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None =
             cands, fell_back = _parse_sentence(part, logw, beam)
             fallback |= fell_back
             combined = top_k([(w1 + w2, c1 + c2) for (w1, c1), (w2, c2) in itertools.product(combined, cands)], beam)
-    words = tuple(tokens)
     if not any(c for c in cats):
         fallback = True  # punctuation only: one empty logical form that still keeps the tokens
-    scored = [(w, compose(c, words, tags, fallback)) for w, c in combined]
+    scored = [(w, compose(c, tuple(tokens), tags, fallback, words)) for w, c in combined]
     readings = _normalise(scored)
     if lexicon is not None:
         expanded = []

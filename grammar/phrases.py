@@ -14,8 +14,6 @@ from typing import Any, Union
 
 from lark import Token
 
-from .lexicon import NEGATING_PREPOSITIONS, NEGATIONS
-
 # Default rule weights (a PCFG-like score; a reading's weight is the product of the weights of its
 # choice rules, then readings are normalised). Only rules that compete with each other matter:
 # - c_pp / np_pp: a PP after "verb NP" attaches to the verb 0.65, to the noun 0.35. These are the
@@ -129,13 +127,14 @@ def _verb_phrase(values: list) -> VP:
         elif isinstance(v, tuple) and v and v[0] == "comps":
             comps.extend(v[1])
         # conjunction tokens between complements carry no structure; the words keep them
-    negated = any(w in NEGATIONS for w in pre)
-    adverbs = tuple(w for w in pre if w not in NEGATIONS)
+    # a word's token type is its lexical class ("DET_NEG" for "no"): grammar.parser tags it
+    negated = any(_is_negation(t) for t in pre)
+    adverbs = tuple(str(t) for t in pre if not _is_negation(t))
     return VP(verb=verb, negated=negated, obj=obj, comps=tuple(comps), adverbs=adverbs)
 
 
-def _negated(clause: ClauseValue) -> ClauseValue:
-    return replace(clause, negated=True) if isinstance(clause, VP) else clause
+def _is_negation(token: Token) -> bool:
+    return "NEG" in token.type.split("_")
 
 
 def _fragment(values: list) -> VP:
@@ -165,7 +164,7 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "lead": lambda vs: _SEP,
     "trail": lambda vs: _SEP,
     "sep": lambda vs: _SEP,
-    "vpre": lambda vs: ("pre", str(vs[0])),
+    "vpre": lambda vs: ("pre", vs[0]),
     "vhead": lambda vs: ("verb", str(vs[0])),
     "obj": lambda vs: ("obj", vs[0]),
     "determiner": lambda vs: ("det", str(vs[0])),
@@ -182,7 +181,8 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "c_adv": lambda vs: Adv(str(vs[0])),
     "c_inf": lambda vs: Sub("to", vs[1]),
     "c_sub": lambda vs: Sub(*_connective(vs)),
-    "c_ger": lambda vs: Sub(str(vs[0]), _negated(vs[1]) if str(vs[0]).lower() in NEGATING_PREPOSITIONS else vs[1]),
+    # "without going into ...": the lexicon's negating prepositions negate the clause (grammar.composition)
+    "c_ger": lambda vs: Sub(str(vs[0]), vs[1]),
     "c_part": lambda vs: Sub("ing", vs[0]),
     "c_measure": lambda vs: Measure(_np_head(vs)),
     "np_pp": lambda vs: _attach(vs[0], vs[1]),

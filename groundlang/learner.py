@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,6 +24,7 @@ from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
 from groundlang.logic.schema import domain_schema
@@ -107,6 +108,10 @@ class Learner:
     ``library`` is a :class:`TaskLibrary` (default: the authored one).
     ``cache_dir`` holds behaviour likelihoods (see
     :func:`groundlang.inference.likelihoods.behaviour_log_likelihoods`).
+    ``lexicon``: words the parser should know beyond English and the Cleanup World's
+    (``logic/cleanup.words``): a word file's path, words by category (``{"NOUN": ["mug"]}``), or a
+    list of them; the words are saved with the model. Raises LexiconError (a ValueError) naming file
+    and line for a malformed word file.
     """
 
     def __init__(
@@ -118,6 +123,7 @@ class Learner:
         seed: int = 0,
         settings: TaskSettings | None = None,
         cache_dir: str | Path | None = None,
+        lexicon: WordSource | Sequence[WordSource] | None = None,
     ):
         self.lm = get_language_model(language_model) if isinstance(language_model, str) else language_model
         self.library = library if library is not None else TaskLibrary.load()
@@ -129,11 +135,26 @@ class Learner:
         self.seed = seed
         self.settings = settings or TaskSettings()
         self.cache_dir = cache_dir
+        # Only the added words are kept apart: they are what a saved model must carry to parse alike.
+        self.lexicon_words: dict[str, list[str]] = extra_words(lexicon)
+        self.word_lexicon = domain_lexicon(self.lexicon_words)
         self.vocab: Vocabulary | None = None
         self.globals: dict[str, torch.Tensor] | None = None
         self.fit_result: FitResult | None = None
         self._interp_cache: dict[State, list[Interpretation]] = {}
         self._plans: dict = {}
+
+    def add_words(self, lexicon: WordSource | Sequence[WordSource]) -> "Learner":
+        """Let the parser know more words (word files or words by category, as ``Learner(lexicon=...)``),
+        e.g. a multiword preposition for a trained model; they are saved with the model. Words the
+        vocabulary never saw in training stay unknown to the language model."""
+        more = [lexicon] if isinstance(lexicon, (str, Path, Mapping)) else list(lexicon)
+        added = extra_words([self.lexicon_words, *more])
+        self.lexicon_words = added
+        self.word_lexicon = domain_lexicon(added)
+        if self.vocab is not None:
+            self.vocab.lexicon = self.word_lexicon
+        return self
 
     # ----------------------------------------------------------------- observing
     def _interpretations(self, state: State) -> list[Interpretation]:
@@ -153,7 +174,7 @@ class Learner:
         observations = []
         for inst, group, goal_list, row in zip(instances, interps, goals, table):
             by_goal = dict(zip(goal_list, row))
-            readings = tuple(parse(inst.command))
+            readings = tuple(parse(inst.command, word_lexicon=self.word_lexicon))
             observations.append(
                 Observation(
                     tuple(readings[0].logical_form.words),
@@ -165,12 +186,12 @@ class Learner:
         return observations
 
     def _command_observation(self, command: str, state: State) -> Observation:
-        readings = tuple(parse(command))
+        readings = tuple(parse(command, word_lexicon=self.word_lexicon))
         return Observation(tuple(readings[0].logical_form.words), readings, tuple(self._interpretations(state)))
 
     # ----------------------------------------------------------------- training
     def _build_vocabulary(self, observations: Iterable[Observation], layouts: Iterable) -> Vocabulary:
-        vocab = Vocabulary()
+        vocab = Vocabulary(lexicon=self.word_lexicon)
         vocab.add_tasks((task.name for task in self.library.tasks),
                         roles={task.name: alignable_roles(task) for task in self.library.tasks})
         tokens: list[str] = []
@@ -181,7 +202,7 @@ class Learner:
             vocab.add_words(obs.words)
             counts.update(obs.words)
             for reading in obs.readings:
-                preps.extend(p for p, _, _ in entity_words(reading.logical_form) if p is not None)
+                preps.extend(p for p, _, _ in entity_words(reading.logical_form, self.word_lexicon) if p is not None)
             for interp in obs.interpretations:
                 tokens.extend(machine_string(interp))
                 for rb in interp.roles:

@@ -1,8 +1,8 @@
 """Saving and loading trained learners: JSON plus an ``.npz`` of tensors, never pickle.
 
 A model directory holds ``model.json`` (format name and version, language
-model and its settings, vocabulary, the task library as ASP text, planning
-settings, the sha256 of the tensor file) and ``globals.npz``. Both are
+model and its settings, vocabulary, the words added to the lexicon, the task
+library as ASP text, planning settings, the sha256 of the tensor file) and ``globals.npz``. Both are
 written to temporary files and renamed; the JSON goes last and names the
 tensor file's hash, so a directory whose tensors were swapped or truncated
 is refused on load instead of giving silently different answers.
@@ -25,7 +25,7 @@ from groundlang.model import storage
 __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "save_learner", "load_learner"]
 
 FORMAT = "groundlang-model"
-FORMAT_VERSION = 12  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases
+FORMAT_VERSION = 13  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases; 13: the words added to the lexicon (``lexicon``), multiword prepositions joined into one token
 MODEL_JSON = "model.json"
 GLOBALS = "globals.npz"
 
@@ -79,6 +79,8 @@ def save_learner(learner, directory: str | Path) -> Path:
         "language_model": learner.lm.name,
         "language_model_settings": learner.lm.settings(),
         "vocabulary": learner.vocab.to_json(),
+        # the words themselves, not the files' paths: the model parses alike where the files are not
+        "lexicon": learner.lexicon_words,
         "task_library": learner.library.source_text(),
         "planning": learner.settings.as_dict(),
         "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed},
@@ -138,13 +140,15 @@ def load_learner(directory: str | Path):
     try:
         with np.load(io.BytesIO(data), allow_pickle=False) as npz:
             values = {k: torch.from_numpy(np.array(npz[k])) for k in npz.files}
+        if not isinstance(meta["lexicon"], dict):  # never a path: loading a model reads no other file
+            raise ValueError(f"lexicon is {type(meta['lexicon']).__name__}, expected words by category")
         learner = Learner(
             get_language_model(meta["language_model"], **meta["language_model_settings"]),
             library=TaskLibrary.from_text(meta["task_library"], f"{directory / MODEL_JSON}:task_library"),
             steps=meta["training"]["steps"], lr=meta["training"]["lr"], seed=meta["training"]["seed"],
-            settings=TaskSettings(**meta["planning"]),
+            settings=TaskSettings(**meta["planning"]), lexicon=[meta["lexicon"]],
         )
-        learner.vocab = Vocabulary.from_json(meta["vocabulary"])
+        learner.vocab = Vocabulary.from_json(meta["vocabulary"], learner.word_lexicon)
         missing = {t.name for t in learner.library.tasks} - set(learner.vocab.tasks)
         if missing:
             raise ValueError(f"the vocabulary lacks the lifted tasks {sorted(missing)} of the saved task library")

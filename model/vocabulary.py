@@ -16,7 +16,8 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
-from groundlang.grammar.lexicon import listed_categories
+from groundlang.grammar.lexicon import Lexicon
+from groundlang.model.domain_words import domain_lexicon
 
 __all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "OTHER_PREP", "DIRECT_OBJECT", "class_token", "is_task_role"]
 
@@ -52,7 +53,7 @@ def _one_edit(word: str) -> set[str]:
     return (deletes | transposes | replaces | inserts) - {word}
 
 
-def _neighbours(word: str, known: Callable[[str], bool]) -> str | None:
+def _neighbours(word: str, known: Callable[[str], bool], lexicon: Lexicon) -> str | None:
     """The one word one edit from ``word`` that ``known`` accepts, or None (none, or several)."""
     if len(word) < MIN_SPELLING_LENGTH or not word.isalpha():
         return None
@@ -63,7 +64,7 @@ def _neighbours(word: str, known: Callable[[str], bool]) -> str | None:
     meant = found.pop()
     # Two words the grammar's lexicon lists with no category in common are two words ("while" and
     # "white", "three" and "there", "block" and "black"), not a typo of one another.
-    mine, theirs = listed_categories(word), listed_categories(meant)
+    mine, theirs = lexicon.listed(word), lexicon.listed(meant)
     return None if mine and theirs and mine.isdisjoint(theirs) else meant
 
 
@@ -85,6 +86,9 @@ class Vocabulary:
     # (model.interpretations.alignable_roles); a task missing here (a vocabulary built by
     # hand) is taken to offer every role.
     task_roles: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    # The words the grammar lists (not saved with the vocabulary: the learner sets the one it parses
+    # with): two listed words with no category in common are not a misspelling of one another.
+    lexicon: Lexicon = field(default_factory=domain_lexicon, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self._word_index = {w: i for i, w in enumerate(self.words)}
@@ -161,7 +165,7 @@ class Vocabulary:
         if index is not None:
             return index
         if word not in self._spelling:
-            found = _neighbours(word, lambda w: w in self._word_index and w not in self.aliases)
+            found = _neighbours(word, lambda w: w in self._word_index and w not in self.aliases, self.lexicon)
             self._spelling[word] = self._word_index[found] if found else 0
         return self._spelling[word]
 
@@ -171,7 +175,7 @@ class Vocabulary:
         new = {}
         for word, n in counts.items():
             if n <= rare and word not in self.aliases:
-                found = _neighbours(word, lambda w: counts.get(w, 0) >= common)
+                found = _neighbours(word, lambda w: counts.get(w, 0) >= common, self.lexicon)
                 if found:
                     new[word] = found
         self.aliases.update(new)
@@ -197,7 +201,10 @@ class Vocabulary:
         }
 
     @classmethod
-    def from_json(cls, data: dict) -> "Vocabulary":
+    def from_json(cls, data: dict, lexicon: Lexicon | None = None) -> "Vocabulary":
+        """A vocabulary from :meth:`to_json`; ``lexicon``: the words the grammar lists (default:
+        :func:`domain_lexicon`), which the JSON does not hold."""
         return cls(list(data["words"]), list(data["tokens"]), list(data["roles"]), list(data["preps"]),
                    dict(data.get("aliases", {})), list(data.get("tasks", [])),
-                   {task: tuple(roles) for task, roles in data.get("task_roles", {}).items()})
+                   {task: tuple(roles) for task, roles in data.get("task_roles", {}).items()},
+                   lexicon or domain_lexicon())

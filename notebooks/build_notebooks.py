@@ -346,11 +346,12 @@ ax.figure'''),
     ("code", '''from groundlang.grammar.lexicon import SemanticLexicon
 from groundlang.grammar.parser import parse
 from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.domain_words import domain_lexicon
 from groundlang.model.tasks import candidate_tasks, narrow_by_known
 
 library = TaskLibrary.load()
 lexicon = SemanticLexicon({"push": {"toyToRoom": 1.0}, "star": {"toyIsStar": 1.0}})
-print(parse(COMMAND, lexicon=lexicon)[0].logical_form.paper_str())
+print(parse(COMMAND, lexicon=lexicon, word_lexicon=domain_lexicon())[0].logical_form.paper_str())
 narrowed = narrow_by_known(candidate_tasks(demo.initial_state, library), {"T": {"toyIsStar"}}, task="toyToRoom")
 weights = mlirl_weights([n.grounded.goal[0] for n in narrowed])
 table = behaviour_likelihood_table([demo], [[n.grounded.goal for n in narrowed]], cache_dir=False)[0]

@@ -13,9 +13,25 @@ import pytest
 from groundlang.cli import main
 from groundlang.grammar import earley as earley_module
 from groundlang.grammar import parser
-from groundlang.grammar.lexicon import SemanticLexicon, guess_categories, lemma
-from groundlang.grammar.parser import DEFAULT_WEIGHTS, ParseError, parse, tag, tokenise
+from groundlang.grammar.lexicon import SemanticLexicon
+from groundlang.grammar.parser import DEFAULT_WEIGHTS, ParseError
 from groundlang.grammar.phrases import build
+from groundlang.model.domain_words import domain_lexicon
+
+# The commands below are the Cleanup World's: parsed with its words (logic/cleanup.words), as a learner does.
+CLEANUP = domain_lexicon()
+
+
+def parse(command, **options):
+    return parser.parse(command, word_lexicon=CLEANUP, **options)
+
+
+def tokenise(command):
+    return parser.tokenise(command, CLEANUP)
+
+
+def tag(tokens):
+    return parser.tag(tokens, CLEANUP)
 
 
 def strings(readings):
@@ -145,16 +161,16 @@ def test_regular_past_forms_are_verbs():
     # adjective of the star.
     for form, base in (("pushed", "push"), ("moved", "move"), ("carried", "carry"), ("carries", "carry"),
                        ("stopped", "stop"), ("pushes", "push"), ("stayed", "stay")):
-        assert lemma(form) == base and "VERB" in guess_categories(form), form
-    assert lemma("pushd") == "pushd"
+        assert CLEANUP.lemma(form) == base and "VERB" in CLEANUP.categories(form), form
+    assert CLEANUP.lemma("pushd") == "pushd"
     lf = parse("stop once you have pushed the star into it")[0].logical_form
-    assert "push" in [lemma(c.verb) for c in lf.clauses if c.verb]
+    assert "push" in [CLEANUP.lemma(c.verb) for c in lf.clauses if c.verb]
 
 
 def test_lexicon_guesses():
-    assert guess_categories("quickly") == frozenset({"ADV"})
-    assert "VERB" in guess_categories("zorp", first=True) and "VERB" not in guess_categories("zorp")
-    assert lemma("pushing") == "push" and lemma("went") == "go" and lemma("star") == "star"
+    assert CLEANUP.categories("quickly") == frozenset({"ADV"})
+    assert "VERB" in CLEANUP.categories("zorp", first=True) and "VERB" not in CLEANUP.categories("zorp")
+    assert CLEANUP.lemma("pushing") == "push" and CLEANUP.lemma("went") == "go" and CLEANUP.lemma("star") == "star"
 
 
 def test_fallback_yields_noun_phrases_with_prepositions():
@@ -265,8 +281,10 @@ def test_fast_earley_predictor_gives_the_same_readings_as_lark():
 def test_readings_do_not_depend_on_the_hash_seed():
     script = ("import json, sys\n"
               "from groundlang.grammar import parse\n"
+              "from groundlang.model.domain_words import domain_lexicon\n"
               "for c in json.loads(sys.argv[1]):\n"
-              "    print(json.dumps([[r.logical_form.to_json(), repr(r.probability)] for r in parse(c)]))\n")
+              "    print(json.dumps([[r.logical_form.to_json(), repr(r.probability)]\n"
+              "                      for r in parse(c, word_lexicon=domain_lexicon())]))\n")
     outputs = []
     for seed in ("0", "1", "4242"):
         env = {**os.environ, "PYTHONHASHSEED": seed}
@@ -282,8 +300,8 @@ def test_grammar_package_exports():
 
     assert sorted(grammar.__all__) == sorted([
         "parse", "ParseError", "DEFAULT_WEIGHTS", "LogicalForm", "Reading", "Entity", "Clause", "Relation",
-        "SemanticLexicon", "tokenise"])
-    assert grammar.parse is parse and grammar.ParseError is ParseError
+        "SemanticLexicon", "tokenise", "Lexicon", "LexiconError"])
+    assert grammar.parse is parser.parse and grammar.ParseError is ParseError
     with pytest.raises(ValueError, match="no phrase builder"):
         build("no_such_rule", [])
 

@@ -209,3 +209,34 @@ def test_a_saved_learner_keeps_the_pfs_its_library_defines(tmp_path):
     state = next(i.initial_state for i in corpus.instances
                  if "roomWestOfAgent" in str(dict(spatial_descriptions(i.initial_state, learner.library))))
     assert spatial_descriptions(state, again.library) == spatial_descriptions(state, learner.library)
+
+
+def test_extra_words_are_saved_with_the_model_so_it_parses_alike(corpus, tmp_path, capsys):
+    words = tmp_path / "mine.words"
+    words.write_text("NOUN: gizmo\nPREP: over_by  # a preposition of two words\n", encoding="utf-8")
+    command = "take the gizmo over by the red room"
+    state = corpus.instances[0].initial_state
+    mine = Learner("parse", lexicon=words).fit(corpus.instances[:6])
+    assert mine.lexicon_words == {"NOUN": ["gizmo"], "PREP": ["over_by"]}
+    read = mine.posterior(command, state).readings[0].logical_form
+    assert read.words == ("take", "the", "gizmo", "over_by", "the", "red", "room")
+    assert [(e.head, e.prep) for e in read.entities] == [("gizmo", None), ("room", "over_by")]
+    mine.save(tmp_path / "m")
+    assert json.loads((tmp_path / "m" / "model.json").read_text())["lexicon"] == mine.lexicon_words
+    words.unlink()  # the model carries its words, not the file's path
+    loaded = Learner.load(tmp_path / "m")
+    assert loaded.posterior(command, state).readings[0].logical_form == read
+    default = Learner("parse").fit(corpus.instances[:6])
+    assert "over_by" not in default.posterior(command, state).readings[0].logical_form.words
+    # the command line: train --lexicon saves the words, follow --lexicon adds more to a loaded model
+    words.write_text("PREP: over_by\n", encoding="utf-8")
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "cli"),
+                 "--lexicon", str(words)]) == 0
+    assert json.loads((tmp_path / "cli" / "model.json").read_text())["lexicon"] == {"PREP": ["over_by"]}
+    capsys.readouterr()
+    more = tmp_path / "more.words"
+    more.write_text("NOUN gizmo\n", encoding="utf-8")
+    assert main(["follow", command, "--env", str(EXAMPLES / "novel_a.state"), "--palette", "sokoban",
+                 "--model", str(tmp_path / "cli"), "--lexicon", str(more)]) == 2
+    assert capsys.readouterr().err == (f"groundlang follow: error: {more}:1: expected `CATEGORY: word word ...`, "
+                                       "got 'NOUN gizmo'\n")

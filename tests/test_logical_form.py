@@ -8,8 +8,14 @@ import pytest
 
 from groundlang.grammar.composition import compose
 from groundlang.grammar.logical_form import Clause, Entity, LogicalForm, Reading, Relation
-from groundlang.grammar.parser import parse
+from groundlang.grammar import parser
 from groundlang.grammar.phrases import NP, PP, VP, Sub
+from groundlang.model.domain_words import domain_lexicon
+
+
+def parse(command, **options):
+    """The parser with the Cleanup World's words, as a learner reads commands."""
+    return parser.parse(command, word_lexicon=domain_lexicon(), **options)
 
 
 def test_relation_printing_and_instantiation_flag():

@@ -18,17 +18,27 @@ import pytest
 import torch
 
 from groundlang.corpus import example_corpus_path, read_corpus
-from groundlang.grammar import parse, tokenise
+from groundlang.grammar import parser
 from groundlang.inference.joint import fit_globals
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.model0 import model0_em, sentence_log_likelihood
 from groundlang.learner import Learner
 from groundlang.logic.atoms import parse_goal
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
+from groundlang.model.domain_words import domain_lexicon
 from groundlang.model.encoding import Observation, encode
 from groundlang.model.interpretations import Interpretation
 from groundlang.model.language_models import BagOfWords
 from groundlang.model.vocabulary import Vocabulary
+
+
+def parse(command):
+    """The parser with the Cleanup World's words, as a learner reads commands."""
+    return parser.parse(command, word_lexicon=domain_lexicon())
+
+
+def tokenise(command):
+    return parser.tokenise(command, domain_lexicon())
 
 TOY = ["Take the star to the green room.", "Move the star into the green room.", "Push the star to the green room."]
 AGENT = ["Go to the green room.", "Go into the green room.", "Go to green."]

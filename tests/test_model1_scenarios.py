@@ -21,18 +21,24 @@ import pytest
 
 from groundlang.corpus import Instance, parse_state
 from groundlang.examples.build import shortest_demonstration
+from groundlang.grammar import parser
 from groundlang.grammar.lexicon import SemanticLexicon
-from groundlang.grammar.parser import parse
 from groundlang.inference.discovery import discover_tasks, lifted_key, write_library
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.mlirl import mlirl
 from groundlang.logic.atoms import Atom, parse_atom, parse_goal
 from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.domain_words import domain_lexicon
 from groundlang.model.features import feature_matrix, position_atoms
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.statespace import enumerate_states, trajectory_indices
 from groundlang.model.tasks import candidate_tasks, narrow_by_known
 from groundlang.model.world import replay
+
+
+def parse(command, **options):
+    """The parser with the Cleanup World's words, as a learner reads commands."""
+    return parser.parse(command, word_lexicon=domain_lexicon(), **options)
 
 COMMAND = "Push the star into the green room"
 # room,COLOUR,LEFT,TOP,RIGHT,BOTTOM (green=5, red=10, blue=1); block,COLOUR,SHAPE,X,Y (yellow star, magenta moon).

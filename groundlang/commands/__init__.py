@@ -85,3 +85,12 @@ def language_model_settings(pairs: list[str]) -> dict:
 
 PALETTE_HELP = ("colour and shape values of the files: a palette the package ships (sokoban, sokoban2; "
                 "groundlang/logic/palettes/) or the path of a .lp file of value(Attribute, Index, Name) facts")
+
+
+def add_lexicon_option(parser) -> None:
+    """``--lexicon FILE`` (repeatable): a word file whose words the parser should know too."""
+    parser.add_argument(
+        "--lexicon", metavar="FILE", action="append", default=[],
+        help="a word file (`CATEGORY: word word ...` lines, see grammar/english.words) whose nouns, "
+             "adjectives, verbs and prepositions the parser should know too (repeatable)",
+    )

@@ -6,7 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.commands import PALETTE_HELP, add_language_model_settings, language_model_settings, positive_int, seed
+from groundlang.commands import (PALETTE_HELP, add_language_model_settings, add_lexicon_option,
+                                 language_model_settings, positive_int, seed)
 
 
 def _names(text: str) -> list[str]:
@@ -43,6 +44,7 @@ def register(subparsers) -> None:
     p.add_argument("--skip-inconsistent", action="store_true")
     p.add_argument("--limit", type=positive_int, help="score only the first N instances of each cell")
     add_language_model_settings(p)
+    add_lexicon_option(p)
     p.add_argument("--json", metavar="OUT", help="write the rows as JSON here")
     p.add_argument("--plot", metavar="PNG", help="write a plot of accuracy by cell here (.png, .svg or .pdf)")
     p.set_defaults(func=run)
@@ -74,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.ablation import run_ablation
     from groundlang.corpus import read_corpus
     from groundlang.labels import read_labels
+    from groundlang.model.domain_words import extra_words
     from groundlang.model.storage import check_destination, write_atomically
 
     if args.json:
@@ -82,12 +85,14 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.render import check_picture_destination
 
         check_picture_destination(args.plot, "--plot")
+    words = extra_words(args.lexicon)  # read once here: a bad file is one error line, workers get the words
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)
     result = run_ablation(
         corpus, labels, language_models=args.language_models, libraries=args.libraries, sizes=args.sizes,
         protocol=args.protocol, seed=args.seed, workers=args.workers, ray_address=args.ray,
         progress=args.progress, limit=args.limit, language_model_settings=language_model_settings(args.lm_settings),
+        learner_options={"lexicon": words} if words else None,
     )
     print(result.table())
     print(f"wall time {result.seconds:.1f} s")

@@ -6,8 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings,
-                                 positive_int)
+from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
+                                 add_lexicon_option, language_model_settings, positive_int)
 
 
 def register(subparsers) -> None:
@@ -19,6 +19,7 @@ def register(subparsers) -> None:
     p.add_argument("--novel-envs", metavar="DIR", help="folder of *.state files to execute each command in too")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
     add_language_model_settings(p)
+    add_lexicon_option(p)
     p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes)")
     p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
     p.add_argument("--skip-inconsistent", action="store_true")
@@ -46,11 +47,14 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import read_corpus
     from groundlang.evaluation import evaluate
     from groundlang.labels import read_labels
+    from groundlang.model.domain_words import extra_words
     from groundlang.model.storage import check_destination, write_atomically
     from groundlang.published import comparison, format_comparison
 
     if args.json:
         check_destination(args.json, "--json")
+    # read here, before any work: a malformed word file is one error line, and workers get the words
+    words = extra_words(args.lexicon)
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)
     novel = read_novel_states(args.novel_envs, args.palette) if args.novel_envs else []
@@ -59,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
         novel_states=novel, workers=args.workers, ray_address=args.ray,
         progress=args.progress, limit=args.limit, warm_start=not args.cold_folds,
         language_model_settings=language_model_settings(args.lm_settings),
+        learner_options={"lexicon": words} if words else None,
     )
     print(result.summary())
     # A run of a whole RSS 2015 folder is set beside the published accuracies and the project's goals.

@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from groundlang.commands import PALETTE_HELP, positive_int
+from groundlang.commands import PALETTE_HELP, add_lexicon_option, positive_int
 
 
 def register(subparsers) -> None:
@@ -19,6 +19,7 @@ def register(subparsers) -> None:
     p.add_argument("--top", type=positive_int, default=5, help="interpretations to print")
     p.add_argument("--max-steps", type=positive_int, default=200)
     p.add_argument("--json", action="store_true")
+    add_lexicon_option(p)
     p.set_defaults(func=run)
 
 
@@ -33,6 +34,8 @@ def run(args: argparse.Namespace) -> int:
         check_picture_destination(args.out)
     state = read_initial_state(args.env, args.palette)
     learner = Learner.load(args.model)
+    if args.lexicon:
+        learner.add_words(args.lexicon)
     result = learner.follow(args.command_text, state, max_steps=args.max_steps)
     goals = result.posterior.goals()[: args.top]
     if args.out:

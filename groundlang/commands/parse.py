@@ -14,7 +14,7 @@ import json
 import sys
 from pathlib import Path
 
-from groundlang.commands import positive_int
+from groundlang.commands import add_lexicon_option, positive_int
 from groundlang.grammar.parser import parse
 
 
@@ -26,6 +26,7 @@ def register(subparsers) -> None:
     p.add_argument("--file", type=Path, help="a text file (one command per line) or a corpus folder")
     p.add_argument("--json", action="store_true", help="one JSON object per command")
     p.add_argument("--max-readings", type=positive_int, default=8, help="readings kept per command (default 8)")
+    add_lexicon_option(p)
     p.set_defaults(func=run)
 
 
@@ -49,16 +50,20 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("give either a COMMAND or --file FILE_OR_CORPUS_DIR (exactly one)")
     if args.max_readings < 1:
         raise ValueError(f"--max-readings must be >= 1, got {args.max_readings}")
+    from groundlang.model.domain_words import domain_lexicon, extra_words
+
+    # the words a learner parses with: English, the Cleanup World's, and --lexicon files
+    words = domain_lexicon(extra_words(args.lexicon))
     items = [("argument", args.text)] if args.file is None else _commands(args.file)
     full = fallback = empty = 0
     for source, command in items:
         if not command.strip():
             if args.file is None:
-                parse(command)  # raises the clear ParseError for an empty command
+                parse(command, word_lexicon=words)  # raises the clear ParseError for an empty command
             empty += 1
             print(f"{source}: empty command, skipped", file=sys.stderr)
             continue
-        readings = parse(command, max_readings=args.max_readings)
+        readings = parse(command, max_readings=args.max_readings, word_lexicon=words)
         if readings[0].logical_form.fallback:
             fallback += 1
         else:

@@ -6,7 +6,8 @@ import argparse
 import time
 
 from groundlang.corpus import read_corpus
-from groundlang.commands import PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings, language_model_settings, seed
+from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
+                                 add_lexicon_option, language_model_settings, seed)
 
 
 def register(subparsers) -> None:
@@ -16,6 +17,7 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--output", required=True, metavar="MODEL_DIR", help="folder to write the model to")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
     add_language_model_settings(p)
+    add_lexicon_option(p)
     p.add_argument("--library", metavar="LP", action="append", help="task library .lp file(s) instead of the default")
     p.add_argument("--skip-inconsistent", action="store_true")
     p.add_argument("--seed", type=seed, default=0)
@@ -25,18 +27,20 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
     from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.domain_words import extra_words
     from groundlang.model.language_models import get_language_model
 
     from groundlang.model_io import check_model_destination
 
     check_model_destination(args.output, "-o")  # before training, not after it
+    words = extra_words(args.lexicon)  # a malformed word file stops here, before the corpus is read
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     if corpus.skipped:
         print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
     library = TaskLibrary.load(args.library) if args.library else None
     started = time.perf_counter()
     lm = get_language_model(args.language_model, **language_model_settings(args.lm_settings))
-    learner = Learner(lm, library=library, seed=args.seed)
+    learner = Learner(lm, library=library, seed=args.seed, lexicon=words)
     learner.fit(corpus.instances, progress=args.progress)
     learner.save(args.output)
     fit = learner.fit_result

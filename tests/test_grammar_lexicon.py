@@ -1,0 +1,155 @@
+"""Tests for groundlang.grammar.lexicon: the word files, extending the lexicon, multiword prepositions."""
+
+from __future__ import annotations
+
+import ast
+import json
+from pathlib import Path
+
+import pytest
+
+from groundlang.cli import main
+from groundlang.grammar.lexicon import FILE_CATEGORIES, Lexicon, LexiconError, read_word_file
+from groundlang.grammar.parser import parse, tokenise
+from groundlang.model.domain_words import domain_lexicon, extra_words
+
+GRAMMAR = Path(__file__).resolve().parents[1] / "grammar"
+LOGIC = Path(__file__).resolve().parents[1] / "logic"
+CLEANUP = domain_lexicon()
+
+
+def _entities(command: str, lexicon: Lexicon) -> list[tuple]:
+    lf = parse(command, word_lexicon=lexicon)[0].logical_form
+    return [(e.prep, e.modifiers, e.head, e.role) for e in lf.entities]
+
+
+def test_the_english_file_loads_with_every_category_the_parser_reads():
+    english = Lexicon.english()
+    entries = read_word_file(GRAMMAR / "english.words")
+    assert set(entries) == set(FILE_CATEGORIES) - {"HUE"}  # hues are the domain's colour names
+    assert sum(map(len, entries.values())) == 485  # entries of the file (a word may sit in several categories)
+    assert english.listed("the") == {"DET"} and english.listed("without") == {"PREP"}
+    assert english.listed("up") == {"PREP", "ADV"}  # a particle
+    assert english.listed("left") == {"ADJ", "ADV"}  # not the past of "leave": a direction
+    assert english.listed("pushed") == {"VERB", "ADJ"} and english.listed("pushing") == {"GER"}
+    assert english.lemma("went") == "go" and english.lemma("'re") == "be" and english.lemma("pushes") == "push"
+    assert english.negating_prepositions == {"without"}
+    assert english.source_and_comitative_prepositions == {"from", "with"}
+    assert english.listed("in_front_of") == {"PREP"} and english.listed("next_to") == {"PREP"}
+
+
+def test_domain_words_are_in_the_domain_file_not_the_english_one():
+    english = Lexicon.english()
+    for word in ("star", "chair", "backpack", "block", "toy", "green", "beige", "orange", "salmon"):
+        assert not english.listed(word), word
+        assert CLEANUP.listed(word), word
+    assert CLEANUP.listed("star") == {"NOUN"} and CLEANUP.listed("beige") == {"COLOR"}
+    assert CLEANUP.split_compound_colour("bluegreen") == ("blue", "green")
+    assert english.split_compound_colour("bluegreen") == ("bluegreen",)  # English knows no hues
+    # No corpus's typos: unknown, they are guessed, parsed and learned like any unknown word.
+    for typo in ("tranfser", "throught", "diagonaly"):
+        assert not CLEANUP.listed(typo), typo
+    assert CLEANUP.categories("diagonaly") == {"ADV"}  # by its -ly
+    # an unknown word opening a clause may be its verb, whatever its ending: read as when it was listed
+    assert CLEANUP.categories("tranfser", first=True) == {"ADJ", "NOUN", "VERB"}
+    assert CLEANUP.categories("tranfser") == {"ADJ", "NOUN"}
+    lf = parse("tranfser to blue retangle .", word_lexicon=CLEANUP)[0].logical_form
+    assert lf.paper_str() == "tranfser(retangle1), P1(retangle1, blue)"
+
+
+def test_lexicon_py_names_no_domain_noun_or_colour_word():
+    """grep, with Python's own parser: apart from docstrings (which give examples), no string in
+    grammar/lexicon.py is a word of the domain (a noun, a colour) or a list of words; the only words it
+    names are categories and suffixes."""
+    tree = ast.parse((GRAMMAR / "lexicon.py").read_text(encoding="utf-8"))
+    docstrings = {id(node.body[0].value) for node in ast.walk(tree)
+                  if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef)) and node.body
+                  and isinstance(node.body[0], ast.Expr) and isinstance(node.body[0].value, ast.Constant)}
+    literals = [node.value for node in ast.walk(tree) if isinstance(node, ast.Constant)
+                and isinstance(node.value, str) and id(node) not in docstrings]
+    cleanup = read_word_file(LOGIC / "cleanup.words")
+    domain = {w for words in cleanup.values() for w in words}
+    assert {"star", "chair", "block", "green", "beige", "salmon"} <= domain and len(domain) == 58
+    words = {w.strip(".,:;()!?'\"`").lower() for text in literals for w in text.split()}
+    assert not words & domain
+    assert not words & {"tranfser", "throught", "diagonaly", "push", "room", "doorway"}  # nor English words
+    # the module lists no words: no literal is a run of more than four lowercase words
+    assert max(len(text.split()) for text in literals if text.islower() and text.replace(" ", "").isalpha()) <= 4
+
+
+def test_multiword_prepositions_are_one_preposition():
+    # "left of the sink" lost "left" when read as two words ("go(chair1)": left was dropped)
+    assert _entities("go left of the red chair", CLEANUP) == [("left_of", ("red",), "chair", "vpp")]
+    assert _entities("go next to the box", CLEANUP) == [("next_to", (), "box", "vpp")]
+    assert _entities("stand in front of the door", CLEANUP) == [("in_front_of", (), "door", "vpp")]
+    assert _entities("push the star to the left of the door", CLEANUP) == [
+        (None, (), "star", "dobj"), ("to_the_left_of", (), "door", "vpp")]
+    lf = parse("put the star on top of the chair", word_lexicon=CLEANUP)[0].logical_form
+    assert lf.clauses[0].preps == (("on_top_of", "chair1"),)
+    # where "left" heads a noun phrase, its words stay apart
+    assert tokenise("go to the left of the room", CLEANUP) == ["go", "to_the_left_of", "the", "room"]
+    assert tokenise("walk along the left of the room", CLEANUP)[2:5] == ["the", "left", "of"]
+    assert tokenise("stop to left of star", CLEANUP) == ["stop", "to", "left", "of", "star"]
+    assert tokenise("start in bottom left of orange room", CLEANUP)[3:5] == ["left", "of"]
+    assert tokenise("go left of star", CLEANUP) == ["go", "left_of", "star"]
+
+
+def test_a_users_word_file_adds_a_noun_and_a_multiword_preposition(tmp_path):
+    words = tmp_path / "kitchen.words"
+    words.write_text("# a kitchen\nNOUN: sink mug\nPREP: left of   # written with a space: two entries\n"
+                     "PREP: underneath_of\nHUE: mauve\n", encoding="utf-8")
+    before = _entities("put the mug underneath of the mauve sink", CLEANUP)
+    assert [e[0] for e in before] == [None, "of"]  # "underneath" lost, as "left" of "left of" was
+    lexicon = CLEANUP.with_files(words)
+    assert lexicon.listed("mug") == {"NOUN"} and lexicon.listed("underneath_of") == {"PREP"}
+    assert lexicon.listed("mauve") == {"COLOR"}
+    assert _entities("put the mug underneath of the mauve sink", lexicon) == [
+        (None, (), "mug", "dobj"), ("underneath_of", ("mauve",), "sink", "vpp")]
+    # the same as data, as a domain schema hands class names and palette values
+    data = CLEANUP.extend({"NOUN": ["mug", "sink"], "PREP": ["underneath of"], "HUE": ["Mauve"]})
+    assert data.listed("underneath_of") == {"PREP"} and data.listed("mauve") == {"COLOR"}
+    assert _entities("put the mug underneath of the mauve sink", data) == _entities(
+        "put the mug underneath of the mauve sink", lexicon)
+    assert CLEANUP.listed("mug") == frozenset()  # extending gives a new lexicon
+    assert extra_words([words, {"NOUN": ["kettle"]}])["NOUN"] == ["sink", "mug", "kettle"]
+
+
+@pytest.mark.parametrize("text, line, expected", [
+    ("NOUN: mug\nmug sink\n", 2, "expected `CATEGORY: word word ...`, got 'mug sink'"),
+    ("# fine\n\nNOUNS: mug\n", 3, "unknown category 'NOUNS'"),
+    ("NOUN:\n", 1, "no words after NOUN:"),
+    ("IRREGULAR: went\n", 1, "IRREGULAR entry 'went' is not form=lemma"),
+    ("VERB: go=went\n", 1, "only IRREGULAR pairs form=lemma"),
+])
+def test_a_malformed_word_file_is_one_line_naming_file_and_line(tmp_path, text, line, expected):
+    path = tmp_path / "bad.words"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(LexiconError) as caught:
+        Lexicon.from_files(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}:{line}: ") and expected in message and "\n" not in message
+    assert isinstance(caught.value, ValueError)
+
+
+def test_the_cli_turns_a_malformed_word_file_into_exit_code_2(tmp_path, capsys):
+    path = tmp_path / "bad.words"
+    path.write_bytes(b"NOUN: mug\nPREP left_of\n")
+    assert main(["parse", "go left of the mug", "--lexicon", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"groundlang parse: error: {path}:2: expected `CATEGORY: word word ...`, got 'PREP left_of'\n"
+    path.write_bytes(b"NOUN: caf\xe9\n")
+    assert main(["parse", "go", "--lexicon", str(path)]) == 2
+    assert f"{path}: not UTF-8 text" in capsys.readouterr().err
+    assert main(["parse", "go", "--lexicon", str(tmp_path / "absent.words")]) == 2
+    assert "absent.words: No such file or directory" in capsys.readouterr().err
+
+
+def test_cli_parse_reads_extra_word_files(tmp_path, capsys):
+    path = tmp_path / "kitchen.words"
+    path.write_text("NOUN: coffee_table\n", encoding="utf-8")
+    assert main(["parse", "--json", "put the star on the coffee table", "--lexicon", str(path)]) == 0
+    top = json.loads(capsys.readouterr().out)["readings"][0]["logical_form"]
+    assert top == "put(star1, coffeetable1)"  # one word, one variable
+    assert main(["parse", "--json", "put the star on the coffee table"]) == 0
+    top = json.loads(capsys.readouterr().out)["readings"][0]["logical_form"]
+    assert top == "put(star1, table1), P1(table1, coffee)"
