@@ -13,7 +13,7 @@ from groundlang.model.world import WorldError, get_palette
 
 
 def test_the_shipped_palettes_are_files():
-    assert palette_names() == ["sokoban", "sokoban2"]
+    assert palette_names() == ["sokoban", "sokoban2", "williams2018"]
     sokoban = get_palette("sokoban")
     assert sokoban.colours[10] == "red" and sokoban.colours[5] == "green" and len(sokoban.colours) == 13
     assert sokoban.shapes == ("star", "moon", "circle", "smiley", "square")
