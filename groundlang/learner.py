@@ -12,6 +12,7 @@ import logging
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
@@ -101,6 +102,30 @@ class FollowResult:
         return self.states[-1]
 
 
+def word_files_beside(library: TaskLibrary) -> list[Path]:
+    """The word file of each library file that has one: ``mine.words`` beside ``mine.lp`` (the package's
+    own files too: ``logic/domains/williams2018.words``)."""
+    out = []
+    for source in library.sources:
+        if source.name.startswith("groundlang.logic/"):
+            path = Path(str(files("groundlang.logic"))) / source.name.removeprefix("groundlang.logic/")
+        else:
+            path = Path(source.name)
+        words = path.with_suffix(".words")
+        if path.suffix == ".lp" and words.is_file():
+            out.append(words)
+    return out
+
+
+def schema_words(schema) -> dict[str, list[str]]:
+    """The words a domain's schema names: its classes and shapes are nouns, its colours hues (values
+    written in camelCase, ``darkGray``, are not words anyone types and are left out)."""
+    nouns = [c for c in schema.classes] + list(schema.values.get("shape", ()))
+    hues = list(schema.values.get("colour", ()))
+    return {category: [w for w in words if w.isalpha() and w.islower()]
+            for category, words in (("NOUN", nouns), ("HUE", hues))}
+
+
 class Learner:
     """Learns word meanings from (command, demonstration) pairs and follows new commands.
 
@@ -136,7 +161,10 @@ class Learner:
         self.settings = settings or TaskSettings()
         self.cache_dir = cache_dir
         # Only the added words are kept apart: they are what a saved model must carry to parse alike.
-        self.lexicon_words: dict[str, list[str]] = extra_words(lexicon)
+        # A library's word files (mine.words beside mine.lp) come first, then the words given here.
+        own = word_files_beside(self.library)
+        given = [] if lexicon is None else [lexicon] if isinstance(lexicon, (str, Path, Mapping)) else list(lexicon)
+        self.lexicon_words: dict[str, list[str]] = extra_words([*own, *given])
         self.word_lexicon = domain_lexicon(self.lexicon_words)
         self.vocab: Vocabulary | None = None
         self.globals: dict[str, torch.Tensor] | None = None
@@ -166,6 +194,16 @@ class Learner:
 
     def observe(self, instances: Sequence, progress: bool = False) -> list[Observation]:
         """Observations with behaviour likelihoods for training instances (cached on disk)."""
+        palettes = {inst.initial_state.layout.palette: None for inst in instances}
+        # Only words the lexicon does not list: a value's name is not always a word of its category
+        # (williams2018 stores box sizes, "small", in the colour field).
+        words = {}
+        for p in palettes:
+            named = schema_words(domain_schema(self.library, (p.name, (("colour", p.colours), ("shape", p.shapes)))))
+            for category, entries in named.items():
+                words.setdefault(category, []).extend(w for w in entries if not self.word_lexicon.listed(w))
+        if any(words.values()):
+            self.add_words(words)
         interps = [self._interpretations(inst.initial_state) for inst in instances]
         goals = [sorted({i.goal for i in group}) for group in interps]
         table = behaviour_likelihood_table(

@@ -52,9 +52,10 @@ goal(agentToToy, agentNextToToy, ("A", "T")).
 """
 
 WORDS = """\
-# The toy shop's words.
-NOUN: mug mugs
+# The toy shop's words ("mug" and "star" are also the palette's shapes: the schema names them).
+NOUN: mugs
 ADJ: largest biggest
+PREP: beside
 """
 
 # room,COLOUR,LEFT,TOP,RIGHT,BOTTOM; door,LEFT,TOP,RIGHT,BOTTOM; block,COLOUR,SHAPE,X,Y; agent,X,Y.
@@ -98,7 +99,8 @@ def demonstration(start, goal, library):
 @pytest.fixture(scope="module")
 def domain(tmp_path_factory):
     folder = tmp_path_factory.mktemp("toyshop")
-    for name, text in (("toyshop.lp", PALETTE), ("pfs.lp", PFS), ("tasks.lp", TASKS), ("toyshop.words", WORDS)):
+    # The words sit beside the PF file they name things of (pfs.words beside pfs.lp).
+    for name, text in (("toyshop.lp", PALETTE), ("pfs.lp", PFS), ("tasks.lp", TASKS), ("pfs.words", WORDS)):
         (folder / name).write_text(text, encoding="utf-8")
     return folder
 
@@ -119,6 +121,15 @@ def trained(domain, library, tmp_path_factory):
         instances.append(Instance(Path(f"shop{n}.txt"), command, tuple(actions), tuple(states)))
     learner = Learner(library=library, cache_dir=tmp_path_factory.mktemp("cache"), steps=200)
     return learner.fit(instances), palette
+
+
+def test_the_words_come_from_the_files_and_the_schema(trained):
+    learner, _ = trained
+    lexicon = learner.word_lexicon
+    assert lexicon.listed("mugs") == {"NOUN"} and lexicon.listed("largest") == {"ADJ"}  # pfs.words
+    assert "NOUN" in lexicon.listed("mug")  # the palette's shape, named by the schema
+    assert "PREP" in lexicon.listed("next_to")  # closed-class English
+    assert learner.lexicon_words["NOUN"][:1] == ["mugs"]  # saved with the model
 
 
 def test_the_palette_file_is_read(domain):
