@@ -217,7 +217,8 @@ def test_extra_words_are_saved_with_the_model_so_it_parses_alike(corpus, tmp_pat
     command = "take the gizmo over by the red room"
     state = corpus.instances[0].initial_state
     mine = Learner("parse", lexicon=words).fit(corpus.instances[:6])
-    assert mine.lexicon_words == {"NOUN": ["gizmo"], "PREP": ["over_by"]}
+    # the given words, then the schema's the lexicon did not list (the class "agent")
+    assert mine.lexicon_words == {"NOUN": ["gizmo", "agent"], "PREP": ["over_by"]}
     read = mine.posterior(command, state).readings[0].logical_form
     assert read.words == ("take", "the", "gizmo", "over_by", "the", "red", "room")
     assert [(e.head, e.prep) for e in read.entities] == [("gizmo", None), ("room", "over_by")]
@@ -232,7 +233,7 @@ def test_extra_words_are_saved_with_the_model_so_it_parses_alike(corpus, tmp_pat
     words.write_text("PREP: over_by\n", encoding="utf-8")
     assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "cli"),
                  "--lexicon", str(words)]) == 0
-    assert json.loads((tmp_path / "cli" / "model.json").read_text())["lexicon"] == {"PREP": ["over_by"]}
+    assert json.loads((tmp_path / "cli" / "model.json").read_text())["lexicon"] == {"PREP": ["over_by"], "NOUN": ["agent"]}
     capsys.readouterr()
     more = tmp_path / "more.words"
     more.write_text("NOUN gizmo\n", encoding="utf-8")
