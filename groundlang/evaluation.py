@@ -24,13 +24,15 @@ from collections import Counter, defaultdict
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
+from groundlang.confidence import calibration_report, format_calibration
 from groundlang.corpus import Corpus, Instance
 from groundlang.labels import goal_holds, label_for
-from groundlang.learner import Learner
+from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
 from groundlang.model.encoding import encode
 from groundlang.model.language_models import get_language_model
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.world import State
+from groundlang.wording import goal_phrase
 
 __all__ = [
     "EvaluationResult",
@@ -124,6 +126,12 @@ class EvaluationResult:
     novel_correct: int = 0
     failed_folds: list = field(default_factory=list)
     records: list = field(default_factory=list)
+    # confidence against correctness (groundlang.confidence.calibration_report), held-out commands
+    # in their own layouts; "novel" the same for the novel layouts
+    calibration: dict = field(default_factory=dict)
+    novel_calibration: dict = field(default_factory=dict)
+    # layout-free goal -> the same goal in words (from the first command with it)
+    goal_words: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -141,10 +149,16 @@ class EvaluationResult:
         lines.append("per gold task:")
         for task, row in self.per_task.items():
             lines.append(f"  {task:<32} {row['accuracy']:.2%} ({row['correct']}/{row['n']})")
-        lines.append("confusion (gold -> executed goal):")
+        lines.append("confusion (gold -> executed goal, in words and layout-free):")
+        words = self.goal_words
         for gold, row in self.confusion.items():
             for pred, count in sorted(row.items(), key=lambda kv: -kv[1]):
-                lines.append(f"  {gold:<32} -> {pred:<40} {count}")
+                lines.append(f"  {count:>4}  {words.get(gold, gold)} -> {words.get(pred, pred)}"
+                             f"    ({gold} -> {pred})")
+        if self.calibration:
+            lines.append(format_calibration(self.calibration, "confidence"))
+        if self.novel_calibration:
+            lines.append(format_calibration(self.novel_calibration, "confidence in novel environments"))
         if self.failed_folds:
             lines.append(f"failed folds: {len(self.failed_folds)}")
             for item in self.failed_folds[:5]:
@@ -169,7 +183,11 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
         "gold_task": describe_goal(gold, instance.initial_state),
         "predicted": format_goal(result.goal),
         "predicted_task": describe_goal(result.goal, instance.initial_state),
+        "gold_words": goal_phrase(gold, instance.initial_state, learner.library),
+        "predicted_words": result.goal_words,
         "correct": goal_holds(gold, result.final_state),
+        "confidence": result.posterior.confidence,
+        "margin": result.posterior.margin,
         "novel": [],
     }
     for name, state in novel_states:
@@ -182,6 +200,7 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
                 "predicted": format_goal(novel.goal),
                 "predicted_task": describe_goal(novel.goal, state),
                 "correct": goal_holds(translated, novel.final_state),
+                "confidence": novel.posterior.confidence,
             }
         )
     return record
@@ -342,6 +361,14 @@ def evaluate(
     for row in per_task.values():
         row["accuracy"] = row["correct"] / row["n"]
     novel = [x["correct"] for r in scored for x in r["novel"]]
+    goal_words: dict = {}
+    for r in scored:
+        goal_words.setdefault(r["gold_task"], r["gold_words"])
+        goal_words.setdefault(r["predicted_task"], r["predicted_words"])
+    calibration = calibration_report([r["confidence"] for r in scored], [r["correct"] for r in scored],
+                                     threshold=DEFAULT_MIN_CONFIDENCE) if scored else {}
+    novel_calibration = calibration_report([x["confidence"] for r in scored for x in r["novel"]], novel,
+                                           threshold=DEFAULT_MIN_CONFIDENCE) if novel else {}
     low, high = wilson_interval(correct, n)
     if scored:
         slowest = max(scored, key=lambda r: r["seconds"])
@@ -365,4 +392,7 @@ def evaluate(
         novel_correct=sum(novel),
         failed_folds=failed,
         records=records,
+        calibration=calibration,
+        novel_calibration=novel_calibration,
+        goal_words=goal_words,
     )
