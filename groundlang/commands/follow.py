@@ -87,6 +87,11 @@ def _ask(learner, result, state, max_steps: int):
     return None
 
 
+def _refuse(result, args) -> None:
+    print(f"groundlang follow: not acting: confidence {result.posterior.confidence:.2f} is below "
+          f"--min-confidence {args.min_confidence:g}; answer with --ask, or act anyway with --guess", file=sys.stderr)
+
+
 def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import format_state, read_initial_state
     from groundlang.learner import Learner
@@ -126,7 +131,10 @@ def run(args: argparse.Namespace) -> int:
                         actions=[a.word for a in result.actions], final_state=format_state(result.final_state),
                         reached=result.reached, reason=result.reason)
         print(json.dumps(data))
-        return ASKED if result.abstained else (0 if result.reached else 1)
+        if result.abstained:
+            _refuse(result, args)
+            return ASKED
+        return 0 if result.reached else 1
     print("interpretations:")
     for goal, p in goals:
         print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library)}")
@@ -134,9 +142,7 @@ def run(args: argparse.Namespace) -> int:
           f"goal that differs)")
     if result.abstained:
         _print_question(result, state, learner.library)
-        print(f"groundlang follow: not acting: confidence {result.posterior.confidence:.2f} is below "
-              f"--min-confidence {args.min_confidence:g}; answer with --ask, or act anyway with --guess",
-              file=sys.stderr)
+        _refuse(result, args)
         return ASKED
     if args.out:
         from groundlang.render import save_picture
