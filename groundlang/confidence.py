@@ -181,6 +181,6 @@ def format_calibration(report: dict, title: str = "confidence") -> str:
                      f"accuracy {row['accuracy']:.2%}")
     if "threshold" in report:
         t = report["threshold"]
-        lines.append(f"  acting at confidence >= {t['min_confidence']:g} (follow's default): "
+        lines.append(f"  acting at confidence >= {t['min_confidence']:g} (--min-confidence): "
                      f"{t['acted']} of {report['n']} ({t['coverage']:.1%}), accuracy {t['accuracy']:.2%}")
     return "\n".join(lines)

@@ -283,11 +283,15 @@ def evaluate(
     train_indices: Sequence[int] | None = None,
     warm_start: bool = True,
     language_model_settings: dict | None = None,
+    min_confidence: float = DEFAULT_MIN_CONFIDENCE,
 ) -> EvaluationResult:
     """Run ``loo`` or ``train`` on a corpus; ``limit`` scores only the first N held-out instances.
 
     ``language_model_settings``: keywords of the language model (``{"mention_phrases": "any"}``),
     see :func:`groundlang.model.language_models.get_language_model`; the result records them.
+
+    ``min_confidence``: the threshold whose coverage and accuracy the calibration report gives
+    (commands acted on at or above it); it changes no prediction.
 
     ``train_indices`` (default: all) trains one model on those instances only
     (learning curves): ``loo`` then scores the held-out remainder, each
@@ -366,9 +370,9 @@ def evaluate(
         goal_words.setdefault(r["gold_task"], r["gold_words"])
         goal_words.setdefault(r["predicted_task"], r["predicted_words"])
     calibration = calibration_report([r["confidence"] for r in scored], [r["correct"] for r in scored],
-                                     threshold=DEFAULT_MIN_CONFIDENCE) if scored else {}
+                                     threshold=min_confidence) if scored else {}
     novel_calibration = calibration_report([x["confidence"] for r in scored for x in r["novel"]], novel,
-                                           threshold=DEFAULT_MIN_CONFIDENCE) if novel else {}
+                                           threshold=min_confidence) if novel else {}
     low, high = wilson_interval(correct, n)
     if scored:
         slowest = max(scored, key=lambda r: r["seconds"])

@@ -99,3 +99,46 @@ def test_a_known_command_is_acted_on_and_reads_in_short(learner, novel_b):
     assert len(post) < 200 and "confidence=0.9" in post
     # without a threshold it always acts, as before
     assert not learner.follow("go to the purple room", novel_b).abstained
+
+
+@pytest.fixture(scope="module")
+def model_dir(learner, tmp_path_factory):
+    return learner.save(tmp_path_factory.mktemp("model") / "m")
+
+
+def _follow(model_dir, command, *extra):
+    from groundlang.cli import main
+
+    return main(["--quiet", "follow", command, "--env", str(EXAMPLES / "novel_b.state"), "--palette", "sokoban",
+                 "--model", str(model_dir), *extra])
+
+
+def test_cli_asks_with_exit_code_3_and_guess_acts(model_dir, capsys):
+    from groundlang.commands.follow import ASKED, DEFAULT_MIN_CONFIDENCE as CLI_DEFAULT
+
+    assert CLI_DEFAULT == DEFAULT_MIN_CONFIDENCE and ASKED == 3
+    assert _follow(model_dir, "go to the purple room") == 3
+    out, err = capsys.readouterr()
+    assert ("I don't know the word 'purple'. Which room do you mean: the red room, the blue room or the green room?"
+            in out)
+    assert "  2) the blue room  (0.33; agentInRoom(agent0, room1))" in out and "plan" not in out
+    assert err.strip() == ("groundlang follow: not acting: confidence 0.33 is below --min-confidence 0.7; "
+                           "answer with --ask, or act anyway with --guess")
+    assert _follow(model_dir, "go to the purple room", "--guess") == 0
+    assert "goal the agent in the red room \u2014 agentInRoom(agent0, room0): reached (goal)" in capsys.readouterr().out
+    assert _follow(model_dir, "take the star to the red room") == 0
+    out = capsys.readouterr().out
+    assert "0.9850  the yellow star in the red room \u2014 toyInRoom(block0, room0)" in out
+
+
+def test_cli_ask_reads_the_answer_from_stdin(model_dir, capsys, monkeypatch):
+    import io
+
+    monkeypatch.setattr("sys.stdin", io.StringIO("the orange one\nthe blue one\n"))
+    assert _follow(model_dir, "go to the purple room", "--ask") == 0
+    out = capsys.readouterr().out
+    assert "names none of the choices" in out  # the first answer, asked again
+    assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room1): reached (goal)" in out
+    monkeypatch.setattr("sys.stdin", io.StringIO(""))  # end of input: nothing done
+    assert _follow(model_dir, "go to the purple room", "--ask") == 3
+    assert capsys.readouterr().err.strip() == "groundlang follow: no answer named a choice; nothing done"
