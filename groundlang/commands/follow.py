@@ -47,7 +47,7 @@ def register(subparsers) -> None:
                      help="act on the most probable goal however unsure (what --min-confidence 0 does)")
     ask.add_argument("--ask", action="store_true",
                      help="when unsure, ask on the terminal (stdin) and act on the answer: a number or words "
-                          "such as 'the green one'")
+                          "such as 'the green one' (up to 3 tries; with --json it reports the question instead)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text (default: text)")
     p.set_defaults(func=run)
 
