@@ -113,11 +113,12 @@ def _follow(model_dir, command, *extra):
                  "--model", str(model_dir), *extra])
 
 
-def test_cli_asks_with_exit_code_3_and_guess_acts(model_dir, capsys):
+def test_cli_asks_with_exit_code_3_and_guess_acts(model_dir, capsys, tmp_path):
     from groundlang.commands.follow import ASKED, DEFAULT_MIN_CONFIDENCE as CLI_DEFAULT
 
     assert CLI_DEFAULT == DEFAULT_MIN_CONFIDENCE and ASKED == 3
-    assert _follow(model_dir, "go to the purple room") == 3
+    assert _follow(model_dir, "go to the purple room", "--out", str(tmp_path / "asked.png")) == 3
+    assert not (tmp_path / "asked.png").exists()  # nothing done, nothing drawn
     out, err = capsys.readouterr()
     assert ("I don't know the word 'purple'. Which room do you mean: the red room, the blue room or the green room?"
             in out)

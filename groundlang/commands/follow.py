@@ -115,6 +115,11 @@ def run(args: argparse.Namespace) -> int:
             return ASKED
         result = answered
     goals = result.posterior.goals()[: args.top]
+    if args.out and not result.abstained:
+        from groundlang.render import save_picture
+
+        save_picture(args.out, state, trajectory=result.states,
+                     title=f"{args.command_text}\n-> {result.goal_words}")
     if args.json:
         data = {
             "interpretations": [{"goal": format_goal(g), "words": goal_phrase(g, state, learner.library),
@@ -144,11 +149,6 @@ def run(args: argparse.Namespace) -> int:
         _print_question(result, state, learner.library)
         _refuse(result, args)
         return ASKED
-    if args.out:
-        from groundlang.render import save_picture
-
-        save_picture(args.out, state, trajectory=result.states,
-                     title=f"{args.command_text}\n-> {result.goal_words}")
     print(f"plan ({len(result.actions)} steps): {', '.join(a.word for a in result.actions) or '(none)'}")
     print(f"goal {labelled_goal(result.goal, state, learner.library)}: "
           f"{'reached' if result.reached else 'NOT reached'} ({result.reason})")
