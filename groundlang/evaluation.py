@@ -24,13 +24,15 @@ from collections import Counter, defaultdict
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
+from groundlang.confidence import calibration_report, format_calibration
 from groundlang.corpus import Corpus, Instance
 from groundlang.labels import goal_holds, label_for
-from groundlang.learner import Learner
+from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
 from groundlang.model.encoding import encode
 from groundlang.model.language_models import get_language_model
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.world import State
+from groundlang.wording import goal_phrase
 
 __all__ = [
     "EvaluationResult",
@@ -122,6 +124,12 @@ class EvaluationResult:
     novel_correct: int = 0
     failed_folds: list = field(default_factory=list)
     records: list = field(default_factory=list)
+    # confidence against correctness (groundlang.confidence.calibration_report), held-out commands
+    # in their own layouts; "novel" the same for the novel layouts
+    calibration: dict = field(default_factory=dict)
+    novel_calibration: dict = field(default_factory=dict)
+    # layout-free goal -> the same goal in words (from the first command with it)
+    goal_words: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -139,10 +147,16 @@ class EvaluationResult:
         lines.append("per gold task:")
         for task, row in self.per_task.items():
             lines.append(f"  {task:<32} {row['accuracy']:.2%} ({row['correct']}/{row['n']})")
-        lines.append("confusion (gold -> executed goal):")
+        lines.append("confusion (gold -> executed goal, in words and layout-free):")
+        words = self.goal_words
         for gold, row in self.confusion.items():
             for pred, count in sorted(row.items(), key=lambda kv: -kv[1]):
-                lines.append(f"  {gold:<32} -> {pred:<40} {count}")
+                lines.append(f"  {count:>4}  {words.get(gold, gold)} -> {words.get(pred, pred)}"
+                             f"    ({gold} -> {pred})")
+        if self.calibration:
+            lines.append(format_calibration(self.calibration, "confidence"))
+        if self.novel_calibration:
+            lines.append(format_calibration(self.novel_calibration, "confidence in novel environments"))
         if self.failed_folds:
             lines.append(f"failed folds: {len(self.failed_folds)}")
             for item in self.failed_folds[:5]:
@@ -167,7 +181,11 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
         "gold_task": describe_goal(gold, instance.initial_state),
         "predicted": format_goal(result.goal),
         "predicted_task": describe_goal(result.goal, instance.initial_state),
+        "gold_words": goal_phrase(gold, instance.initial_state, learner.library),
+        "predicted_words": result.goal_words,
         "correct": goal_holds(gold, result.final_state, learner.library),
+        "confidence": result.posterior.confidence,
+        "margin": result.posterior.margin,
         "novel": [],
     }
     for name, state in novel_states:
@@ -180,6 +198,7 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
                 "predicted": format_goal(novel.goal),
                 "predicted_task": describe_goal(novel.goal, state),
                 "correct": goal_holds(translated, novel.final_state, learner.library),
+                "confidence": novel.posterior.confidence,
             }
         )
     return record
@@ -262,11 +281,15 @@ def evaluate(
     train_indices: Sequence[int] | None = None,
     warm_start: bool = True,
     language_model_settings: dict | None = None,
+    min_confidence: float = DEFAULT_MIN_CONFIDENCE,
 ) -> EvaluationResult:
     """Run ``loo`` or ``train`` on a corpus; ``limit`` scores only the first N held-out instances.
 
     ``language_model_settings``: keywords of the language model (``{"mention_phrases": "any"}``),
     see :func:`groundlang.model.language_models.get_language_model`; the result records them.
+
+    ``min_confidence``: the threshold whose coverage and accuracy the calibration report gives
+    (commands acted on at or above it); it changes no prediction.
 
     ``train_indices`` (default: all) trains one model on those instances only
     (learning curves): ``loo`` then scores the held-out remainder, each
@@ -340,6 +363,14 @@ def evaluate(
     for row in per_task.values():
         row["accuracy"] = row["correct"] / row["n"]
     novel = [x["correct"] for r in scored for x in r["novel"]]
+    goal_words: dict = {}
+    for r in scored:
+        goal_words.setdefault(r["gold_task"], r["gold_words"])
+        goal_words.setdefault(r["predicted_task"], r["predicted_words"])
+    calibration = calibration_report([r["confidence"] for r in scored], [r["correct"] for r in scored],
+                                     threshold=min_confidence) if scored else {}
+    novel_calibration = calibration_report([x["confidence"] for r in scored for x in r["novel"]], novel,
+                                           threshold=min_confidence) if novel else {}
     low, high = wilson_interval(correct, n)
     if scored:
         slowest = max(scored, key=lambda r: r["seconds"])
@@ -363,4 +394,7 @@ def evaluate(
         novel_correct=sum(novel),
         failed_folds=failed,
         records=records,
+        calibration=calibration,
+        novel_calibration=novel_calibration,
+        goal_words=goal_words,
     )

@@ -11,7 +11,6 @@ from __future__ import annotations
 import logging
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
@@ -19,11 +18,13 @@ import numpy as np
 import torch
 
 from groundlang.grammar.parser import parse
+from groundlang.clarify import AnswerError, choose, competing, question, unknown_words
+from groundlang.confidence import GoalGroup, group_goals
 from groundlang.inference.acting import rollout, rollout_states
 from groundlang.inference.joint import FitResult, fit_globals, posterior
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
-from groundlang.logic.atoms import Atom, format_goal
+from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
@@ -32,74 +33,24 @@ from groundlang.logic.schema import domain_schema
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
-from groundlang.model.statespace import enumerate_states
+from groundlang.model.statespace import StateSpace, enumerate_states
 from groundlang.model.vocabulary import Vocabulary, class_token
-from groundlang.model.world import Action, State
+from groundlang.model.world import State
+from groundlang.results import FollowResult, Posterior
+from groundlang.wording import goal_phrase
 
-__all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError"]
+__all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError", "AnswerError", "DEFAULT_MIN_CONFIDENCE"]
+
+# follow's default threshold on the CLI: chosen on held-out data (see README, "Knowing when it does not know").
+DEFAULT_MIN_CONFIDENCE = 0.7
+# State spaces kept per learner for grouping goals and planning (crowd layouts: about 100 states each).
+_SPACES_KEPT = 16
 
 log = logging.getLogger(__name__)
 
 
 class NotFittedError(ValueError):
     """A learner was asked to interpret a command before it was trained or loaded."""
-
-
-@dataclass
-class Posterior:
-    """Posterior over interpretations (L, T, C) of one command in one state."""
-
-    command: str
-    interpretations: list[Interpretation]
-    probabilities: np.ndarray  # [J]
-    readings: list = field(default_factory=list)  # grammar Readings
-    reading_probabilities: np.ndarray | None = None  # [R] posterior over readings
-
-    def ranked(self) -> list[tuple[float, Interpretation]]:
-        order = np.argsort(-self.probabilities, kind="stable")
-        return [(float(self.probabilities[j]), self.interpretations[j]) for j in order]
-
-    def goals(self) -> list[tuple[tuple[Atom, ...], float]]:
-        """Marginal posterior over grounded goals (T), summed over constraints, most probable first."""
-        totals: dict[tuple[Atom, ...], float] = {}
-        for p, interp in zip(self.probabilities, self.interpretations):
-            totals[interp.goal] = totals.get(interp.goal, 0.0) + float(p)
-        return sorted(totals.items(), key=lambda kv: -kv[1])
-
-    def lifted_tasks(self) -> dict[str, float]:
-        totals: dict[str, float] = {}
-        for p, interp in zip(self.probabilities, self.interpretations):
-            totals[interp.lifted] = totals.get(interp.lifted, 0.0) + float(p)
-        return dict(sorted(totals.items(), key=lambda kv: -kv[1]))
-
-    @property
-    def best_goal(self) -> tuple[Atom, ...]:
-        return self.goals()[0][0]
-
-    def table(self, top: int = 10) -> str:
-        """A plain-text table of the most probable interpretations."""
-        lines = [f"{'prob':>7}  {'task':<22} {'goal':<40} constraints"]
-        for p, interp in self.ranked()[:top]:
-            constraint = " ∧ ".join(str(a) for a in interp.constraint.atoms) or "(none)"
-            lines.append(f"{p:7.4f}  {interp.lifted:<22} {format_goal(interp.goal):<40} {constraint}")
-        return "\n".join(lines)
-
-
-@dataclass
-class FollowResult:
-    """What :meth:`Learner.follow` did: its reading of the command and the plan it executed."""
-
-    command: str
-    posterior: Posterior
-    goal: tuple[Atom, ...]
-    states: list[State]
-    actions: list[Action]
-    reached: bool
-    reason: str
-
-    @property
-    def final_state(self) -> State:
-        return self.states[-1]
 
 
 def word_files_beside(library: TaskLibrary) -> list[Path]:
@@ -171,6 +122,7 @@ class Learner:
         self.fit_result: FitResult | None = None
         self._interp_cache: dict[State, list[Interpretation]] = {}
         self._plans: dict = {}
+        self._spaces: dict[State, StateSpace] = {}
 
     def add_words(self, lexicon: WordSource | Sequence[WordSource]) -> "Learner":
         """Let the parser know more words (word files or words by category, as ``Learner(lexicon=...)``),
@@ -326,16 +278,62 @@ class Learner:
             prior = np.array([r.probability for r in obs.readings])
             share = prior / np.bincount(group, weights=prior)[group]  # a reading's share of its structure
             reading_probs = structure[group] * share  # P(reading | words), one per reading
-        return Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
+        post = Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
                          list(obs.readings), reading_probs)
+        post.groups = group_goals(post.goals(), self._space(state))
+        return post
 
-    def follow(self, command: str, state: State, max_steps: int = 200) -> FollowResult:
-        """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act."""
+    def _space(self, state: State) -> StateSpace:
+        if state not in self._spaces:
+            if len(self._spaces) >= _SPACES_KEPT:
+                self._spaces.pop(next(iter(self._spaces)))
+            self._spaces[state] = enumerate_states(state)
+        return self._spaces[state]
+
+    def follow(self, command: str, state: State, max_steps: int = 200,
+               min_confidence: float | None = None) -> FollowResult:
+        """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act.
+
+        With ``min_confidence`` (0 to 1), a reading less confident than that is not acted on:
+        the result has ``abstained=True``, the ``question`` to ask, its ``choices`` and the
+        ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer.
+        """
         post = self.posterior(command, state)
-        goal = post.best_goal
+        if min_confidence is not None and post.confidence < min_confidence:
+            choices = competing(post.goal_groups())
+            unknown = unknown_words(post.readings, self._knows)
+            return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
+                                question=question(choices, unknown, state, self.library),
+                                choices=choices, unknown_words=unknown)
+        return self._act(command, state, post, post.best_goal, max_steps)
+
+    def clarify(self, result: FollowResult, answer: str, max_steps: int = 200) -> FollowResult:
+        """Act on the choice ``answer`` names among an abstained ``result``'s ``choices``: a number
+        from 1 or words ("the green one"). Raises AnswerError when it names none or several."""
+        if not result.abstained:
+            raise ValueError("clarify() takes a result that abstained; this one acted already")
+        state = result.states[0]
+        chosen = choose(answer, result.choices, state, self.library,
+                        read=lambda text, choices: self._read_answer(result.command, text, choices, state))
+        return self._act(result.command, state, result.posterior, chosen.goal, max_steps)
+
+    def _knows(self, word: str) -> bool:
+        return self.vocab is not None and self.vocab.word_id(word) != 0
+
+    def _read_answer(self, command: str, answer: str, choices: list[GoalGroup], state: State) -> GoalGroup | None:
+        """The model's reading of the command followed by the answer, among ``choices``: the choice at
+        least twice as probable as any other, or None."""
+        goals = dict(self.posterior(f"{command}, {answer}", state).goals())
+        mass = [sum(goals.get(g, 0.0) for g in c.goals) for c in choices]
+        order = sorted(range(len(choices)), key=lambda k: -mass[k])
+        if len(order) > 1 and mass[order[0]] < 2 * mass[order[1]]:
+            return None
+        return choices[order[0]]
+
+    def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int) -> FollowResult:
         key = (state, goal, max_steps)
         if key not in self._plans:  # plans depend on the world only, never on the words
-            space = enumerate_states(state)
+            space = self._space(state)
             mask = goal_mask(space, goal, pf_tables(state.layout, self.library.tabulation_program))
             solved = solve_task(space.next_state, mask, self.settings)
             trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
@@ -345,7 +343,8 @@ class Learner:
             reason = trajectory.reason if reached or bool(np.asarray(mask).any()) else "unreachable"
             self._plans[key] = (states, actions, reached, reason)
         states, actions, reached, reason = self._plans[key]
-        return FollowResult(command, post, goal, list(states), list(actions), reached, reason)
+        return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
+                            goal_words=goal_phrase(goal, state, self.library))
 
     def lexicon(self, top: int = 3) -> dict[str, list[tuple[str, float]]]:
         """Each known word's most probable meanings, ``P(token | word)``.

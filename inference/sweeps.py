@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import warnings
 
 import numpy as np
 import torch
@@ -111,10 +112,24 @@ def carry_sweep(out, carry, columns, arrival, action_reward, stop, discount: flo
 _COMPILED: dict = {}
 
 
+def _quiet_inductor_imports() -> None:
+    """Import torch's own ``torch/utils/mkldnn.py`` once, without its warnings. Compiling imports it
+    through inductor, and it still decorates with the deprecated ``torch.jit.script_method``: one
+    DeprecationWarning per method (14 in a test run), about torch's file, not ours; a warning our
+    own use of torch raised would still show."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="`torch.jit.script_method` is", category=DeprecationWarning)
+        try:
+            import torch.utils.mkldnn  # noqa: F401
+        except ImportError:  # a torch without it: nothing to quieten
+            pass
+
+
 def compiled(fn):
     """``torch.compile(fn)`` with dynamic shapes (one compilation serves every state count), or None where
     compilation does not work here (logged once, then eager)."""
     if fn not in _COMPILED:
+        _quiet_inductor_imports()
         try:
             _COMPILED[fn] = torch.compile(fn, fullgraph=True, dynamic=True)
         except Exception as exc:  # any failure in the compiler stack: fall back, do not crash

@@ -219,6 +219,38 @@ else:
     post = crowd_learner.posterior(inst.command, inst.initial_state)
     print(post.table(5))
     posterior_bar_chart(post, kind="goals", top=5).figure'''),
+    ("md", """## Knowing when it does not know: calibration
+
+A reading's confidence is the posterior probability of the goal it acts on (goals with the same outcome in the layout count as one). Leave-one-out on both crowd folders (full mode, when the corpus is present; the example corpus otherwise) gives each held-out command a confidence and whether acting on it was right. The **reliability diagram** sets accuracy against confidence per bin (on the diagonal: calibrated); the **risk-coverage curve** gives the accuracy of the commands acted on when the learner abstains from the least confident first. `follow` asks instead of acting below `--min-confidence` (0.7, the dotted line's coverage)."""),
+    ("code", '''from groundlang.confidence import format_calibration
+from groundlang.evaluation import evaluate
+from groundlang.labels import read_labels
+
+crowd_root = Path(os.environ.get("GROUNDLANG_CORPUS", "../../shared/data/commands-to-tasks"))
+if QUICK or not (crowd_root / "allTurkTrain").is_dir():
+    runs = {"example corpus": (corpus, read_labels(examples / "labels.csv"))}
+else:
+    labels = read_labels(crowd_root / "labels.csv")
+    runs = {name: (read_corpus(crowd_root / name, "sokoban"), labels)
+            for name in ("allTurkTrainLimitedCommand", "allTurkTrain")}
+fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+for name, (data, gold) in runs.items():
+    result = evaluate(data, gold, workers=2)
+    report = result.calibration
+    print(name, f"accuracy {result.accuracy:.2%}")
+    print(format_calibration(report))
+    bins = report["reliability"]
+    axes[0].plot([b["confidence"] for b in bins], [b["accuracy"] for b in bins], "o-", label=name)
+    cov, acc = zip(*report["risk_coverage"])
+    axes[1].plot(cov, acc, label=name)
+    axes[1].axvline(report["threshold"]["coverage"], ls=":", color=axes[1].lines[-1].get_color())
+axes[0].plot([0, 1], [0, 1], "k--", lw=0.8)
+axes[0].set_xlabel("confidence (bin mean)"); axes[0].set_ylabel("accuracy"); axes[0].set_title("reliability")
+axes[1].set_xlabel("coverage (share of commands acted on)"); axes[1].set_ylabel("accuracy on those")
+axes[1].set_title("risk-coverage"); axes[1].set_ylim(0.85, 1.005)
+for ax in axes:
+    ax.legend(fontsize=8)
+fig.tight_layout()'''),
 ]
 
 NB04 = [

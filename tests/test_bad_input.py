@@ -190,6 +190,20 @@ CONTROL = "go\x00 to the\x07 red\x1b[31m room\r\x7f"
 UNICODE = "bring the ☆ to the rouge räum 🚀 ﬁnally, 紅い部屋へ"
 UNSEEN = "blorf the zzyzx into quux"
 
+
+def _asks(unknown: tuple[str, ...]) -> Callable[[str], None]:
+    """A ``follow --json`` answer that did not act: it asks, naming the unknown words."""
+
+    def check(out: str) -> None:
+        answer = json.loads(out)
+        assert answer["abstained"] is True and "actions" not in answer
+        assert answer["confidence"] < 0.7 and len(answer["choices"]) >= 2
+        assert answer["unknown_words"] == list(unknown)
+        assert answer["question"].startswith("I don't know the word")
+
+    return check
+
+
 ROWS: list[Row] = []
 
 # Corpus files: the messages of tests/test_corpus.py, now seen by a CLI user (show draws the file).
@@ -222,7 +236,9 @@ ROWS += [
 ]
 
 # Commands.
-for _via, _argv in (("parse", lambda c: ("parse", c, "--json")), ("follow", lambda c: _follow(c, NOVEL, "--json"))):
+# follow --guess acts however unsure, as follow did before it could ask (the asking is tested below).
+for _via, _argv in (("parse", lambda c: ("parse", c, "--json")),
+                    ("follow", lambda c: _follow(c, NOVEL, "--json", "--guess"))):
     ROWS += [
         Row(f"command/{_via}/empty", _argv(""),
             pieces=("cannot parse an empty command (the text is empty or only whitespace)",)),
@@ -237,6 +253,9 @@ for _via, _argv in (("parse", lambda c: ("parse", c, "--json")), ("follow", lamb
         Row(f"command/{_via}/words never seen in training (works)", _argv(UNSEEN), code=0,
             check=_parsed if _via == "parse" else _works()),
     ]
+ROWS.append(Row("command/follow/words never seen in training, without --guess: asks (exit 3)",
+                _follow(UNSEEN, NOVEL, "--json"), code=3, check=_asks(("zzyzx", "quux")),
+                pieces=("groundlang follow: not acting: confidence 0.", "below --min-confidence 0.7")))
 
 
 def _no_toy_tasks(out: str) -> None:
@@ -385,6 +404,8 @@ def test_bad_input(row: Row, capsys, tmp_path, trained_model, monkeypatch):
         assert lines[0].startswith(f"groundlang {argv[0]}: ")
         for piece in row.pieces:
             assert _fill(piece, values) in lines[0]
+        if row.check is not None:  # a refusal that still answers on stdout (follow asking, exit 3)
+            row.check(out)
     else:
         assert err == ""
         row.check(out)

@@ -27,7 +27,7 @@ def test_a_rare_word_one_edit_from_one_common_word_reads_as_it():
 
 
 def test_real_words_and_short_words_are_left_alone():
-    # "reach"/"peach" and "light"/"right" differ in the first letter; "star"/"stars" is
+    # "reach"/"peach" and "light"/"right" differ in the first letter; in training, "star"/"stars" is
     # too short to tell from another word; "white" is common itself.
     counts = {"peach": 5, "reach": 1, "right": 9, "light": 1, "stars": 4, "star": 1, "white": 5, "whites": 1,
               "whitey": 1}
@@ -43,7 +43,12 @@ def test_an_unknown_word_reads_as_its_one_known_neighbour_or_unk():
     assert vocab.word_id("peaches") == 0  # two edits
     assert vocab.word_id("lighd") == vocab.word_id("light")
     assert vocab.word_id("xyzzy") == 0 and vocab.words[0] == UNK
-    assert vocab.word_id("stat") == 0  # shorter than five letters: never corrected
+    assert vocab.word_id("stat") == vocab.word_id("star")  # four letters, one neighbour
+    assert vocab.word_id("rom") == 0  # shorter than four letters: never corrected
+    short = vocabulary({w: 5 for w in ("green", "gray", "red", "room")})
+    assert short.word_id("gren") == short.word_id("green")  # "gray" is two edits away
+    both = vocabulary({w: 5 for w in ("green", "grey")})
+    assert both.word_id("gren") == 0  # one edit from "green" and from "grey": which one is not known
 
 
 def test_words_the_lexicon_lists_as_other_kinds_stay_apart():

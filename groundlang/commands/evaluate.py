@@ -7,7 +7,8 @@ import json
 from pathlib import Path
 
 from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
-                                 add_lexicon_option, language_model_settings, positive_int)
+                                 add_lexicon_option, fraction, language_model_settings, positive_int)
+from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
 def register(subparsers) -> None:
@@ -27,7 +28,11 @@ def register(subparsers) -> None:
     p.add_argument("--cold-folds", action="store_true",
                    help="fit every leave-one-out fold from scratch instead of from the full model "
                         "(about 6x slower: 123 s against 21 s on the simplified crowd commands)")
-    p.add_argument("--json", metavar="OUT", help="write the result as JSON here")
+    p.add_argument("--min-confidence", type=fraction, default=DEFAULT_MIN_CONFIDENCE, metavar="P",
+                   help="report coverage and accuracy of the commands read with confidence P or more, as "
+                        f"follow would act on them (default {DEFAULT_MIN_CONFIDENCE}, follow's); predictions unchanged")
+    p.add_argument("--json", metavar="OUT", help="write the result as JSON here (with the calibration report: "
+                                                 "reliability bins, risk-coverage curve, per-command confidence)")
     p.set_defaults(func=run)
 
 
@@ -64,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
         progress=args.progress, limit=args.limit, warm_start=not args.cold_folds,
         language_model_settings=language_model_settings(args.lm_settings),
         learner_options={"lexicon": words} if words else None,
+        min_confidence=args.min_confidence,
     )
     print(result.summary())
     # A run of a whole RSS 2015 folder is set beside the published accuracies and the project's goals.

@@ -1,4 +1,9 @@
-"""``groundlang follow "COMMAND" --env FILE --palette NAME --model MODEL_DIR [--out PNG] [--json]``."""
+"""``groundlang follow "COMMAND" --env FILE --palette NAME --model MODEL_DIR [--ask | --guess] [--out PNG] [--json]``.
+
+Exit codes: 0 the goal was reached; 1 it was not; 2 bad input; 3 the command
+was read with confidence below ``--min-confidence`` and nothing was done (the
+question is printed; ``--ask`` asks it on the terminal instead).
+"""
 
 from __future__ import annotations
 
@@ -6,27 +11,91 @@ import argparse
 import json
 import sys
 
-from groundlang.commands import PALETTE_HELP, add_lexicon_option, positive_int
+from groundlang.commands import PALETTE_HELP, add_lexicon_option, fraction, positive_int
+
+# Exit code of a command that asked instead of acting (documented in the README).
+ASKED = 3
+# What follow's --min-confidence defaults to: groundlang.learner.DEFAULT_MIN_CONFIDENCE (not imported
+# here: building the parser stays light; a test checks they agree).
+DEFAULT_MIN_CONFIDENCE = 0.7
+ANSWER_TRIES = 3
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("follow", help="interpret a command in an environment, plan and act")
-    p.add_argument("command_text", metavar="COMMAND")
-    p.add_argument("--env", required=True, metavar="FILE", help="a corpus file or a one-line .state file")
+    p = subparsers.add_parser(
+        "follow", help="interpret a command in an environment, plan and act (or ask when unsure)",
+        description="Interpret COMMAND in the layout of --env with a trained model, plan for the goal it most "
+                    "probably means and act. A reading less confident than --min-confidence is not acted on: "
+                    "the competing readings are printed as a question and the exit code is 3.",
+    )
+    p.add_argument("command_text", metavar="COMMAND", help="the command, in quotes")
+    p.add_argument("--env", required=True, metavar="FILE",
+                   help="the initial state: a corpus file (its first state) or a one-line .state file")
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
-    p.add_argument("--model", required=True, metavar="MODEL_DIR")
-    p.add_argument("--out", metavar="PNG", help="draw the executed trajectory here")
-    p.add_argument("--top", type=positive_int, default=5, help="interpretations to print")
-    p.add_argument("--max-steps", type=positive_int, default=200)
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--model", required=True, metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
+    p.add_argument("--out", metavar="PNG", help="draw the executed trajectory here (.png, .svg or .pdf; default: no picture)")
+    p.add_argument("--top", type=positive_int, default=5, help="how many goals to list with their probabilities (default 5)")
+    p.add_argument("--max-steps", type=positive_int, default=200,
+                   help="stop acting after this many steps if the goal does not hold by then (default 200)")
+    p.add_argument("--min-confidence", type=fraction, default=DEFAULT_MIN_CONFIDENCE, metavar="P",
+                   help="ask instead of acting when the chosen goal's probability is below P, 0 to 1 "
+                        f"(default {DEFAULT_MIN_CONFIDENCE}, chosen on held-out crowd commands; see README)")
+    ask = p.add_mutually_exclusive_group()
+    ask.add_argument("--guess", action="store_true",
+                     help="act on the most probable goal however unsure (what --min-confidence 0 does)")
+    ask.add_argument("--ask", action="store_true",
+                     help="when unsure, ask on the terminal (stdin) and act on the answer: a number or words "
+                          "such as 'the green one' (up to 3 tries; with --json it reports the question instead)")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of text (default: text)")
     add_lexicon_option(p)
     p.set_defaults(func=run)
+
+
+def _choices_json(result, state, library) -> list[dict]:
+    from groundlang.clarify import option_phrases
+    from groundlang.logic.atoms import format_goal
+
+    names = option_phrases(result.choices, state, library)
+    return [{"number": k, "words": name, "goal": format_goal(c.goal), "probability": c.probability}
+            for k, (name, c) in enumerate(zip(names, result.choices), start=1)]
+
+
+def _print_question(result, state, library) -> None:
+    print(result.question)
+    for row in _choices_json(result, state, library):
+        print(f"  {row['number']}) {row['words']}  ({row['probability']:.2f}; {row['goal']})")
+
+
+def _ask(learner, result, state, max_steps: int):
+    """Ask on the terminal until an answer names one choice; None at end of input or after ANSWER_TRIES."""
+    from groundlang.clarify import AnswerError
+
+    _print_question(result, state, learner.library)
+    for _ in range(ANSWER_TRIES):
+        print("answer> ", end="", flush=True)
+        line = sys.stdin.readline()
+        if not line:
+            print()
+            return None
+        if not sys.stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read
+            print(line.strip())
+        try:
+            return learner.clarify(result, line, max_steps=max_steps)
+        except AnswerError as exc:
+            print(f"  {exc}")
+    return None
+
+
+def _refuse(result, args) -> None:
+    print(f"groundlang follow: not acting: confidence {result.posterior.confidence:.2f} is below "
+          f"--min-confidence {args.min_confidence:g}; answer with --ask, or act anyway with --guess", file=sys.stderr)
 
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import format_state, read_initial_state
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
+    from groundlang.wording import goal_phrase, labelled_goal
 
     if args.out:
         from groundlang.render import check_picture_destination
@@ -36,28 +105,54 @@ def run(args: argparse.Namespace) -> int:
     learner = Learner.load(args.model)
     if args.lexicon:
         learner.add_words(args.lexicon)
-    result = learner.follow(args.command_text, state, max_steps=args.max_steps)
+    threshold = None if args.guess else args.min_confidence
+    result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
+    if not args.json:
+        print(f"command: {args.command_text}")
+    if result.abstained and args.ask and not args.json:
+        answered = _ask(learner, result, state, args.max_steps)
+        if answered is None:
+            print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
+            return ASKED
+        result = answered
     goals = result.posterior.goals()[: args.top]
-    if args.out:
+    if args.out and not result.abstained:
         from groundlang.render import save_picture
 
         save_picture(args.out, state, trajectory=result.states,
-                     title=f"{args.command_text}\n-> {format_goal(result.goal)}")
+                     title=f"{args.command_text}\n-> {result.goal_words}")
     if args.json:
-        print(json.dumps({
-            "interpretations": [{"goal": format_goal(g), "probability": p} for g, p in goals],
-            "actions": [a.word for a in result.actions],
-            "final_state": format_state(result.final_state),
-            "reached": result.reached,
-            "reason": result.reason,
-        }))
+        data = {
+            "interpretations": [{"goal": format_goal(g), "words": goal_phrase(g, state, learner.library),
+                                 "probability": p} for g, p in goals],
+            "confidence": result.posterior.confidence,
+            "margin": result.posterior.margin,
+            "abstained": result.abstained,
+        }
+        if result.abstained:
+            data.update(question=result.question, choices=_choices_json(result, state, learner.library),
+                        unknown_words=list(result.unknown_words))
+        else:
+            data.update(goal=format_goal(result.goal), goal_words=result.goal_words,
+                        actions=[a.word for a in result.actions], final_state=format_state(result.final_state),
+                        reached=result.reached, reason=result.reason)
+        print(json.dumps(data))
+        if result.abstained:
+            _refuse(result, args)
+            return ASKED
         return 0 if result.reached else 1
-    print(f"command: {args.command_text}")
     print("interpretations:")
     for goal, p in goals:
-        print(f"  {p:7.4f}  {format_goal(goal)}")
+        print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library)}")
+    print(f"confidence {result.posterior.confidence:.2f} (margin {result.posterior.margin:.2f} over the next "
+          f"goal that differs)")
+    if result.abstained:
+        _print_question(result, state, learner.library)
+        _refuse(result, args)
+        return ASKED
     print(f"plan ({len(result.actions)} steps): {', '.join(a.word for a in result.actions) or '(none)'}")
-    print(f"goal {format_goal(result.goal)} {'reached' if result.reached else 'NOT reached'} ({result.reason})")
+    print(f"goal {labelled_goal(result.goal, state, learner.library)}: "
+          f"{'reached' if result.reached else 'NOT reached'} ({result.reason})")
     if args.out:
         print(f"picture written to {args.out}")
     if not result.reached:

@@ -1,0 +1,130 @@
+"""Asking instead of guessing: the question for a command read with too little confidence, and its answer.
+
+The question offers the competing goals (groups of goals with the same
+outcome) in words. When they differ in one object only, of one class, it
+asks for that object ("Which room do you mean: the blue room, the green room
+or the red room?"); otherwise it asks for the whole goal. Words of the
+command's noun phrases that the model never learned are named first ("I
+don't know the word 'purple'."): they are why the words could not decide.
+
+An answer is a number (the choice's place in the list, from 1) or words.
+Words choose the choice whose phrase shares the most words with the answer,
+counting only words that set the phrases apart ("the green one" picks "the
+green room" among rooms; "room" and "the" count for none); when none shares one,
+or two tie, the answer is read by the model as a description of the object
+asked for ("the tan one" in a model that learned "tan").
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Sequence
+
+from groundlang.confidence import GoalGroup
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.encoding import entity_words
+from groundlang.model.interpretations import class_of
+from groundlang.model.world import State
+from groundlang.wording import choice_list, goal_phrase, object_phrase
+
+__all__ = ["AnswerError", "competing", "unknown_words", "question", "choose"]
+
+# A group is offered when it has at least this share of the most probable group's probability.
+RELATIVE_FLOOR = 0.1
+MAX_CHOICES = 6
+
+
+class AnswerError(ValueError):
+    """An answer that names none of the choices, or several."""
+
+
+def competing(groups: Sequence[GoalGroup]) -> list[GoalGroup]:
+    """The groups worth asking about: those within RELATIVE_FLOOR of the best (at most MAX_CHOICES)."""
+    top = groups[0].probability
+    return [g for g in groups if g.probability >= RELATIVE_FLOOR * top][:MAX_CHOICES]
+
+
+def unknown_words(readings: Sequence, known: Callable[[str], bool]) -> tuple[str, ...]:
+    """Words of the best reading's noun phrases (modifiers and heads) that ``known`` rejects, in order."""
+    if not readings:
+        return ()
+    found: list[str] = []
+    for _, modifiers, head in entity_words(readings[0].logical_form):
+        for word in (*modifiers, *head):
+            if not known(word) and word not in found:
+                found.append(word)
+    return tuple(found)
+
+
+def _differing_object(choices: Sequence[GoalGroup]) -> list[str] | None:
+    """The one object per choice in which the choices' goals differ, when that is all they differ in."""
+    shapes = {tuple((a.predicate, len(a.args)) for a in g.goal) for g in choices}
+    if len(shapes) != 1:
+        return None
+    flat = [[x for a in g.goal for x in a.args] for g in choices]
+    differing = [k for k in range(len(flat[0])) if len({f[k] for f in flat}) > 1]
+    if not differing:
+        return None
+    objects = []
+    for f in flat:
+        here = {f[k] for k in differing}
+        if len(here) != 1:
+            return None
+        objects.append(here.pop())
+    if len({class_of(o) for o in objects}) != 1:
+        return None
+    return objects
+
+
+def question(choices: Sequence[GoalGroup], unknown: Sequence[str], state: State, library: TaskLibrary) -> str:
+    """One line: the unknown words, then which of ``choices`` is meant."""
+    said = ""
+    if unknown:
+        quoted = choice_list([f"'{w}'" for w in unknown]).replace(" or ", " and ")
+        said = f"I don't know the word{'s' if len(unknown) > 1 else ''} {quoted}. "
+    objects = _differing_object(choices)
+    if objects is not None:
+        phrases = [object_phrase(o, state, library) for o in objects]
+        return f"{said}Which {class_of(objects[0])} do you mean: {choice_list(phrases)}?"
+    phrases = [goal_phrase(g.goal, state, library) for g in choices]
+    return f"{said}Do you mean {choice_list(phrases)}?"
+
+
+def option_phrases(choices: Sequence[GoalGroup], state: State, library: TaskLibrary) -> list[str]:
+    """What each choice is called in the question (an object's phrase or the goal's)."""
+    objects = _differing_object(choices)
+    if objects is not None:
+        return [object_phrase(o, state, library) for o in objects]
+    return [goal_phrase(g.goal, state, library) for g in choices]
+
+
+def _words(text: str) -> set[str]:
+    return set(re.findall(r"[a-z0-9]+", text.lower()))
+
+
+def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: TaskLibrary,
+           read: Callable[[str, Sequence[GoalGroup]], GoalGroup | None] | None = None) -> GoalGroup:
+    """The choice ``answer`` names: a number from 1, or words (see the module docstring).
+    ``read(answer, choices)`` is the model's reading, used when no phrase matches one choice.
+    Raises AnswerError naming the choices when the answer names none of them or several."""
+    text = answer.strip()
+    if not text:
+        raise AnswerError("empty answer: expected a number or words naming one of the choices")
+    phrases = option_phrases(choices, state, library)
+    if text.isdigit():
+        k = int(text)
+        if not 1 <= k <= len(choices):
+            raise AnswerError(f"answer {k}: expected a number from 1 to {len(choices)}")
+        return choices[k - 1]
+    named = [_words(p) for p in phrases]
+    telling = set().union(*named) - set.intersection(*named)  # words some phrases have and others lack
+    words = _words(text) & telling
+    overlap = [len(words & n) for n in named]
+    best = max(overlap)
+    if best > 0 and overlap.count(best) == 1:
+        return choices[overlap.index(best)]
+    chosen = read(text, choices) if read is not None else None
+    if chosen is None:
+        raise AnswerError(f"{text!r} names none of the choices ({choice_list(phrases)}): "
+                          f"answer with their number, 1 to {len(choices)}, or their words")
+    return chosen

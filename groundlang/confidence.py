@@ -1,0 +1,186 @@
+"""Confidence in a reading of a command, and how well it is calibrated.
+
+The confidence of a reading is the posterior probability of the goal it acts
+on, where goals that hold in exactly the same states of the layout count as
+one (two names for one outcome are not a doubt). The margin is that
+probability less the probability of the next goal that differs in the world.
+
+Calibration is measured the usual way on held-out predictions (pairs of a
+confidence and whether acting on it was correct): expected calibration error
+over equal-width bins, the risk-coverage curve (accuracy on the commands
+acted on when abstaining from the least confident first) and the area under
+the ROC curve of confidence as a detector of correct readings.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from groundlang.logic.atoms import Atom
+from groundlang.model.features import goal_mask
+from groundlang.model.geometry import cell_tables
+from groundlang.model.statespace import StateSpace
+
+__all__ = [
+    "GoalGroup", "group_goals", "expected_calibration_error", "risk_coverage", "accuracy_at_coverage",
+    "auroc", "reliability", "calibration_report", "format_calibration", "choose_threshold",
+]
+
+# Goals below this probability are not compared by their masks: they cannot change the
+# confidence or the margin by more than this each.
+NEGLIGIBLE = 1e-6
+
+
+@dataclass(frozen=True)
+class GoalGroup:
+    """Goals that hold in the same states of a layout, and their total posterior probability."""
+
+    goals: tuple[tuple[Atom, ...], ...]  # most probable first; goals[0] is the one acted on
+    probability: float
+
+    @property
+    def goal(self) -> tuple[Atom, ...]:
+        return self.goals[0]
+
+
+def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpace) -> list[GoalGroup]:
+    """Merge goals (most probable first, as :meth:`Posterior.goals` gives them) whose goal masks
+    over ``space`` are equal; returns the groups, most probable first (ties: the first goal's order)."""
+    tables = cell_tables(space.layout)
+    by_mask: dict[bytes, list] = {}
+    order: list[bytes] = []
+    for k, (goal, p) in enumerate(goals):
+        if p < NEGLIGIBLE:
+            key = f"#{k}".encode()  # kept apart: comparing it could not matter
+        else:
+            key = hashlib.sha1(np.packbits(goal_mask(space, goal, tables)).tobytes()).digest()
+        if key not in by_mask:
+            by_mask[key] = [[], 0.0]
+            order.append(key)
+        by_mask[key][0].append(goal)
+        by_mask[key][1] += p
+    groups = [GoalGroup(tuple(by_mask[k][0]), by_mask[k][1]) for k in order]
+    return sorted(groups, key=lambda g: -g.probability)  # stable: equal masses keep the goals' order
+
+
+# ---------------------------------------------------------------- calibration measures
+
+def _arrays(confidence: Sequence[float], correct: Sequence[bool]) -> tuple[np.ndarray, np.ndarray]:
+    c = np.asarray(confidence, dtype=float)
+    y = np.asarray(correct, dtype=bool)
+    if c.shape != y.shape or c.ndim != 1:
+        raise ValueError(f"confidence {c.shape} and correct {y.shape} must be two lists of one length")
+    return c, y
+
+
+def reliability(confidence: Sequence[float], correct: Sequence[bool], bins: int = 10) -> list[dict]:
+    """Equal-width bins of confidence: each with its count, mean confidence and accuracy
+    (the reliability diagram's points; empty bins left out). The last bin includes 1.0."""
+    c, y = _arrays(confidence, correct)
+    index = np.minimum((c * bins).astype(int), bins - 1)
+    rows = []
+    for b in range(bins):
+        inside = index == b
+        if inside.any():
+            rows.append({"low": b / bins, "high": (b + 1) / bins, "n": int(inside.sum()),
+                         "confidence": float(c[inside].mean()), "accuracy": float(y[inside].mean())})
+    return rows
+
+
+def expected_calibration_error(confidence: Sequence[float], correct: Sequence[bool], bins: int = 10) -> float:
+    """Mean over commands of |accuracy - confidence| of their bin (equal-width bins)."""
+    c, _ = _arrays(confidence, correct)
+    if not len(c):
+        return 0.0
+    return sum(r["n"] * abs(r["accuracy"] - r["confidence"]) for r in reliability(confidence, correct, bins)) / len(c)
+
+
+def risk_coverage(confidence: Sequence[float], correct: Sequence[bool]) -> list[tuple[float, float]]:
+    """(coverage, accuracy on the commands acted on) as the least confident are abstained from, one
+    at a time; commands of equal confidence are dropped together (a threshold cannot split them)."""
+    c, y = _arrays(confidence, correct)
+    order = np.argsort(-c, kind="stable")
+    c, y = c[order], y[order]
+    points = []
+    for k in range(len(c), 0, -1):
+        if k < len(c) and c[k] == c[k - 1]:
+            continue  # not a threshold: the k-th and the next have the same confidence
+        points.append((k / len(c), float(y[:k].mean())))
+    return points
+
+
+def accuracy_at_coverage(confidence: Sequence[float], correct: Sequence[bool], coverage: float) -> tuple[float, float]:
+    """(accuracy, coverage actually reached) acting on at least ``coverage`` of the commands,
+    the most confident first: the smallest covering threshold (ties are kept together)."""
+    points = [p for p in risk_coverage(confidence, correct) if p[0] >= coverage - 1e-12]
+    if not points:
+        return (math.nan, 0.0)
+    reached, accuracy = min(points)
+    return accuracy, reached
+
+
+def auroc(confidence: Sequence[float], correct: Sequence[bool]) -> float:
+    """Probability that a correct reading is more confident than a wrong one (ties count half);
+    nan when all are correct or all wrong."""
+    c, y = _arrays(confidence, correct)
+    pos, neg = c[y], c[~y]
+    if not len(pos) or not len(neg):
+        return math.nan
+    greater = (pos[:, None] > neg[None, :]).sum()
+    ties = (pos[:, None] == neg[None, :]).sum()
+    return float((greater + 0.5 * ties) / (len(pos) * len(neg)))
+
+
+def choose_threshold(confidence: Sequence[float], correct: Sequence[bool], target: float) -> float:
+    """The lowest confidence threshold whose commands at or above it are at least ``target``
+    accurate (the widest coverage reaching it); 1.0 when none does."""
+    c, y = _arrays(confidence, correct)
+    best = 1.0
+    for threshold in sorted(set(c.tolist()), reverse=True):
+        if y[c >= threshold].mean() >= target:
+            best = threshold
+    return float(best)
+
+
+def calibration_report(confidence: Sequence[float], correct: Sequence[bool],
+                       coverages: Sequence[float] = (0.85, 0.9, 0.95), threshold: float | None = None) -> dict:
+    """What ``evaluate`` prints and writes: ECE, AUROC, accuracy at the given coverages, the
+    reliability bins and, with ``threshold``, what acting only at or above it does."""
+    c, y = _arrays(confidence, correct)
+    report = {
+        "n": int(len(c)),
+        "ece": expected_calibration_error(c, y),
+        "auroc": auroc(c, y),
+        "mean_confidence": float(c.mean()) if len(c) else math.nan,
+        "at_coverage": [],
+        "reliability": reliability(c, y),
+        "risk_coverage": risk_coverage(c, y),
+    }
+    for wanted in coverages:
+        accuracy, reached = accuracy_at_coverage(c, y, wanted)
+        report["at_coverage"].append({"coverage": wanted, "reached": reached, "accuracy": accuracy})
+    if threshold is not None:
+        acted = c >= threshold
+        report["threshold"] = {"min_confidence": threshold, "acted": int(acted.sum()),
+                               "coverage": float(acted.mean()) if len(c) else math.nan,
+                               "accuracy": float(y[acted].mean()) if acted.any() else math.nan}
+    return report
+
+
+def format_calibration(report: dict, title: str = "confidence") -> str:
+    """A few lines of :func:`calibration_report` for a person: ECE, AUROC, accuracy at coverages."""
+    lines = [f"{title} ({report['n']} commands): expected calibration error {report['ece']:.3f}, "
+             f"AUROC for correctness {report['auroc']:.3f}, mean confidence {report['mean_confidence']:.3f}"]
+    for row in report["at_coverage"]:
+        lines.append(f"  acting on the {row['reached']:.1%} most confident (asked {row['coverage']:.0%}): "
+                     f"accuracy {row['accuracy']:.2%}")
+    if "threshold" in report:
+        t = report["threshold"]
+        lines.append(f"  acting at confidence >= {t['min_confidence']:g} (--min-confidence): "
+                     f"{t['acted']} of {report['n']} ({t['coverage']:.1%}), accuracy {t['accuracy']:.2%}")
+    return "\n".join(lines)

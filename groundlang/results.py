@@ -1,0 +1,140 @@
+"""What the learner returns: its posterior over readings of a command, and what following it did."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from groundlang.confidence import GoalGroup
+from groundlang.logic.atoms import Atom, format_goal
+from groundlang.model.interpretations import Interpretation
+from groundlang.model.world import Action, State
+
+__all__ = ["Posterior", "FollowResult"]
+
+
+@dataclass
+class Posterior:
+    """Posterior over interpretations (L, T, C) of one command in one state, from its words alone.
+
+    Fields:
+        command: the command as given.
+        interpretations: every (L, T, C) candidate of the state.
+        probabilities: ``[J]`` their posterior probabilities (sum 1).
+        readings: the grammar's readings of the command; ``reading_probabilities``: ``[R]``
+            their posterior (parse language model only, else None).
+        groups: goals merged when they hold in the same states of the layout, most probable
+            first (:func:`groundlang.confidence.group_goals`); None when no state space was
+            consulted, and then every goal is its own group.
+
+    ``confidence`` is the probability of the goal acted on (:attr:`best_goal`), ``margin``
+    its lead over the next goal that differs in the world.
+    """
+
+    command: str
+    interpretations: list[Interpretation]
+    probabilities: np.ndarray  # [J]
+    readings: list = field(default_factory=list)  # grammar Readings
+    reading_probabilities: np.ndarray | None = None  # [R] posterior over readings
+    groups: list[GoalGroup] | None = None
+
+    def ranked(self) -> list[tuple[float, Interpretation]]:
+        order = np.argsort(-self.probabilities, kind="stable")
+        return [(float(self.probabilities[j]), self.interpretations[j]) for j in order]
+
+    def goals(self) -> list[tuple[tuple[Atom, ...], float]]:
+        """Marginal posterior over grounded goals (T), summed over constraints, most probable first."""
+        totals: dict[tuple[Atom, ...], float] = {}
+        for p, interp in zip(self.probabilities, self.interpretations):
+            totals[interp.goal] = totals.get(interp.goal, 0.0) + float(p)
+        return sorted(totals.items(), key=lambda kv: -kv[1])
+
+    def goal_groups(self) -> list[GoalGroup]:
+        """:attr:`groups`, or one group per goal when the layout was not consulted."""
+        if self.groups is not None:
+            return self.groups
+        return [GoalGroup((g,), p) for g, p in self.goals()]
+
+    def lifted_tasks(self) -> dict[str, float]:
+        totals: dict[str, float] = {}
+        for p, interp in zip(self.probabilities, self.interpretations):
+            totals[interp.lifted] = totals.get(interp.lifted, 0.0) + float(p)
+        return dict(sorted(totals.items(), key=lambda kv: -kv[1]))
+
+    @property
+    def best_goal(self) -> tuple[Atom, ...]:
+        """The goal acted on: the most probable goal of the most probable group."""
+        return self.goal_groups()[0].goal
+
+    @property
+    def confidence(self) -> float:
+        """Posterior probability of :attr:`best_goal`, goals with the same outcome counted as one."""
+        return self.goal_groups()[0].probability
+
+    @property
+    def margin(self) -> float:
+        """:attr:`confidence` less the probability of the next goal that differs in the world."""
+        groups = self.goal_groups()
+        return groups[0].probability - (groups[1].probability if len(groups) > 1 else 0.0)
+
+    def table(self, top: int = 10) -> str:
+        """A plain-text table of the most probable interpretations."""
+        lines = [f"{'prob':>7}  {'task':<22} {'goal':<40} constraints"]
+        for p, interp in self.ranked()[:top]:
+            constraint = " ∧ ".join(str(a) for a in interp.constraint.atoms) or "(none)"
+            lines.append(f"{p:7.4f}  {interp.lifted:<22} {format_goal(interp.goal):<40} {constraint}")
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return (f"Posterior({self.command!r}, best_goal={format_goal(self.best_goal)!r}, "
+                f"confidence={self.confidence:.3f}, margin={self.margin:.3f}, "
+                f"{len(self.interpretations)} interpretations)")
+
+
+@dataclass(repr=False)
+class FollowResult:
+    """What :meth:`Learner.follow` did: its reading of the command and the plan it executed.
+
+    Fields:
+        command: the command as given.
+        posterior: the :class:`Posterior` the goal was chosen from.
+        goal: the goal planned for (the best goal, or the one an answer chose).
+        states: the states visited, the initial state first (only it when the learner abstained).
+        actions: the actions executed (none when it abstained).
+        reached: whether ``goal`` holds in the last state.
+        reason: why execution stopped: ``goal``, ``max_steps``, ``unreachable``, or ``abstained``.
+        abstained: True when confidence was below ``min_confidence`` and nothing was done.
+        question: what to ask the user then ("Which room do you mean: ...?"); "" otherwise.
+        choices: the competing goals (:class:`GoalGroup`) the question offers, most probable first;
+            :meth:`Learner.clarify` takes an answer naming one.
+        unknown_words: words of the command's noun phrases the model never learned.
+        goal_words: ``goal`` in words ("the yellow star in the red room").
+    """
+
+    command: str
+    posterior: Posterior
+    goal: tuple[Atom, ...]
+    states: list[State]
+    actions: list[Action]
+    reached: bool
+    reason: str
+    abstained: bool = False
+    question: str = ""
+    choices: list[GoalGroup] = field(default_factory=list)
+    unknown_words: tuple[str, ...] = ()
+    goal_words: str = ""
+
+    @property
+    def final_state(self) -> State:
+        return self.states[-1]
+
+    @property
+    def confidence(self) -> float:
+        return self.posterior.confidence
+
+    def __repr__(self) -> str:
+        if self.abstained:
+            return f"FollowResult({self.command!r}, abstained, confidence={self.confidence:.3f}, question={self.question!r})"
+        return (f"FollowResult({self.command!r}, goal={format_goal(self.goal)!r}, reached={self.reached}, "
+                f"reason={self.reason!r}, {len(self.actions)} actions, confidence={self.confidence:.3f})")

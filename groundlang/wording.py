@@ -1,0 +1,117 @@
+"""Objects and goals in words a person reads: "the star in the red room — toyInRoom(block0, room0)".
+
+Nothing here names a colour, shape, PF or task. An object is described from
+what clingo says is true of it (:func:`groundlang.model.tasks.attribute_pfs`,
+:func:`~groundlang.model.tasks.object_descriptions`): the value of each of its
+attribute PFs as the library writes the term (``roomIs(red)`` gives "red"),
+the value of its ``shape`` PF as the head noun when it has one, else its class
+name; spatial PFs (``doorWestOfAgent`` gives "west of the agent") only where
+two objects would otherwise read alike. A goal atom is read from its
+predicate's camel-case words, each class word replaced by its object's
+phrase (``toyInRoom`` gives "<the toy> in <the room>"). When the domain
+schema moves into data files this is the one place to re-point.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+
+from groundlang.logic.atoms import Atom, format_goal
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.interpretations import OTHER_ROLES, class_of, object_names
+from groundlang.model.tasks import attribute_pfs, object_descriptions
+from groundlang.model.world import State
+
+__all__ = ["object_phrase", "goal_phrase", "labelled_goal", "choice_list", "DASH"]
+
+DASH = "\u2014"  # between words and ids: "the red room — room0"
+HEAD_CLASS = "shape"  # the PF class whose value names the thing ("the star"), as model.interpretations reads it
+_TERM = re.compile(r"^[^()]*\((.*)\)$")
+_CLASSES = frozenset(r.removeprefix("other:") for r in OTHER_ROLES)
+_CAMEL = re.compile(r"[A-Z]?[a-z0-9]+|[A-Z]+(?![a-z])")
+
+
+def _camel_words(name: str) -> list[str]:
+    return [w.lower() for w in _CAMEL.findall(name)]
+
+
+def _value(term: str) -> str | None:
+    """``roomIs(red)`` -> ``red``; ``toyHue("pale peach")`` -> ``pale peach``; a bare name -> None."""
+    m = _TERM.match(term)
+    return " ".join(_camel_words(m.group(1).strip('"'))) if m else None
+
+
+def _plain_phrase(obj: str, state: State, library: TaskLibrary) -> str:
+    cls = class_of(obj)
+    described = object_descriptions(state, library).get(obj, {})
+    heads = set(described.get(HEAD_CLASS, ()))
+    modifiers, head = [], None
+    for name, term in attribute_pfs(state, library).get(obj, ()):
+        value = _value(term)
+        if value is None:
+            continue
+        if name in heads and head is None:
+            head = value
+        elif name not in heads:
+            modifiers.append(value)
+    return " ".join(["the", *modifiers, head or cls])
+
+
+def _spatial(obj: str, state: State, library: TaskLibrary) -> str:
+    cls = class_of(obj)
+    sides = []
+    for name in object_descriptions(state, library).get(obj, {}).get("spatial", ()):
+        words = _camel_words(name)
+        if words and words[0] == cls:
+            words = words[1:]
+        if words and words[-1] in _CLASSES:  # the other object of a spatial PF is named by its class
+            words[-1:] = ["the", words[-1]]
+        sides.append(" ".join(words))
+    return " and ".join(sides)
+
+
+def object_phrase(obj: str, state: State, library: TaskLibrary) -> str:
+    """``room0`` -> "the red room", ``block0`` -> "the yellow star"; "the door west of the agent"
+    when another door would read alike; the bare id if two objects still read alike."""
+    plain = _plain_phrase(obj, state, library)
+    same = [o for o in object_names(state) if o != obj and class_of(o) == class_of(obj)
+            and _plain_phrase(o, state, library) == plain]
+    if not same:
+        return plain
+    side = _spatial(obj, state, library)
+    if side and all(_spatial(o, state, library) != side for o in same):
+        return f"{plain} {side}"
+    return f"{plain} {obj}"
+
+
+def _atom_phrase(atom: Atom, state: State, library: TaskLibrary) -> str:
+    words = _camel_words(atom.predicate)
+    out, used = [], 0
+    for word in words:
+        if used < len(atom.args) and word == class_of(atom.args[used]):
+            out.append(object_phrase(atom.args[used], state, library))
+            used += 1
+        else:
+            out.append(word)
+    if used < len(atom.args):  # a predicate that does not spell its classes: say it with phrases as arguments
+        return f"{atom.predicate}({', '.join(object_phrase(a, state, library) for a in atom.args)})"
+    return " ".join(out)
+
+
+def goal_phrase(goal: Sequence[Atom], state: State, library: TaskLibrary) -> str:
+    """``toyInRoom(block0, room0)`` -> "the yellow star in the red room"; atoms joined by "and"."""
+    return " and ".join(_atom_phrase(a, state, library) for a in goal)
+
+
+def labelled_goal(goal: Sequence[Atom], state: State, library: TaskLibrary) -> str:
+    """Words, then the ids: "the yellow star in the red room — toyInRoom(block0, room0)"."""
+    return f"{goal_phrase(goal, state, library)} {DASH} {format_goal(tuple(goal))}"
+
+
+def choice_list(phrases: Sequence[str]) -> str:
+    """"a", "a or b", "a, b or c"."""
+    phrases = list(phrases)
+    if len(phrases) <= 1:
+        return "".join(phrases)
+    return ", ".join(phrases[:-1]) + " or " + phrases[-1]

@@ -1,0 +1,145 @@
+"""Asking instead of guessing: abstention, the question's wording, answers, and goals in words."""
+
+from __future__ import annotations
+
+import pytest
+
+from groundlang.clarify import AnswerError, choose, question
+from groundlang.confidence import GoalGroup
+from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
+from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
+from groundlang.logic.atoms import parse_goal
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.wording import goal_phrase, labelled_goal, object_phrase
+
+EXAMPLES = example_corpus_path()
+FIXTURES = __import__("pathlib").Path(__file__).parent / "fixtures"
+
+
+@pytest.fixture(scope="module")
+def learner():
+    return Learner("parse").fit(read_corpus(EXAMPLES, "sokoban").instances)
+
+
+@pytest.fixture(scope="module")
+def novel_b():
+    return read_state_file(EXAMPLES / "novel_b.state", "sokoban")
+
+
+@pytest.fixture(scope="module")
+def library():
+    return TaskLibrary.load()
+
+
+def _groups(*goals: str) -> list[GoalGroup]:
+    return [GoalGroup((parse_goal(g),), 1 / len(goals)) for g in goals]
+
+
+def test_objects_and_goals_in_words(novel_b, library):
+    assert object_phrase("room0", novel_b, library) == "the red room"
+    assert object_phrase("block0", novel_b, library) == "the yellow star"
+    assert object_phrase("door0", novel_b, library) == "the door south of the agent and west of the agent"
+    assert goal_phrase(parse_goal("toyInRoom(block0, room0)"), novel_b, library) == "the yellow star in the red room"
+    assert (labelled_goal(parse_goal("agentInRoom(agent0, room1) toyInRoom(block0, room2)"), novel_b, library)
+            == "the agent in the blue room and the yellow star in the green room \u2014 "
+               "agentInRoom(agent0, room1) toyInRoom(block0, room2)")
+
+
+def test_question_for_rooms_toys_and_conjunctions(novel_b, library):
+    rooms = _groups("agentInRoom(agent0, room1)", "agentInRoom(agent0, room2)", "agentInRoom(agent0, room0)")
+    assert (question(rooms, ("purple",), novel_b, library)
+            == "I don't know the word 'purple'. Which room do you mean: the blue room, the green room or the red room?")
+    two_toys = read_state_file(FIXTURES / "two_toys.state", "sokoban")
+    toys = _groups("toyInRoom(block0, room1)", "toyInRoom(block1, room1)")
+    assert question(toys, (), two_toys, library) == "Which toy do you mean: the dark gray star or the blue smiley?"
+    # conjunctions that differ in one room: asked as a room; goals of different shapes: asked whole
+    both = [GoalGroup((parse_goal("agentInRoom(agent0, room0) toyInRoom(block0, room1)"),), 0.5),
+            GoalGroup((parse_goal("agentInRoom(agent0, room0) toyInRoom(block0, room2)"),), 0.5)]
+    assert question(both, (), novel_b, library) == "Which room do you mean: the blue room or the green room?"
+    mixed = _groups("agentInRoom(agent0, room1)", "toyInRoom(block0, room1)")
+    assert (question(mixed, ("fetch", "blu"), novel_b, library)
+            == "I don't know the words 'fetch' and 'blu'. "
+               "Do you mean the agent in the blue room or the yellow star in the blue room?")
+
+
+def test_answers_by_number_and_by_words(novel_b, library):
+    rooms = _groups("agentInRoom(agent0, room0)", "agentInRoom(agent0, room1)", "agentInRoom(agent0, room2)")
+    assert choose("2", rooms, novel_b, library) is rooms[1]
+    assert choose("the green one", rooms, novel_b, library) is rooms[2]
+    assert choose("  I mean the RED room ", rooms, novel_b, library) is rooms[0]
+    with pytest.raises(AnswerError, match="expected a number from 1 to 3"):
+        choose("4", rooms, novel_b, library)
+    with pytest.raises(AnswerError, match="names none of the choices"):
+        choose("the room", rooms, novel_b, library)  # "room" is in every choice: it tells none apart
+    assert choose("the mauve one", rooms, novel_b, library, read=lambda text, c: c[1]) is rooms[1]
+
+
+def test_follow_asks_about_an_unknown_colour_and_acts_on_the_answer(learner, novel_b):
+    result = learner.follow("go to the purple room", novel_b, min_confidence=DEFAULT_MIN_CONFIDENCE)
+    assert result.abstained and result.reason == "abstained" and not result.actions
+    assert result.confidence == pytest.approx(1 / 3, abs=0.01)
+    assert result.unknown_words == ("purple",)
+    assert result.question.startswith("I don't know the word 'purple'. Which room do you mean: ")
+    assert len(result.choices) == 3
+    assert repr(result).startswith("FollowResult('go to the purple room', abstained, confidence=0.33")
+    answered = learner.clarify(result, "the blue one")
+    assert answered.goal == parse_goal("agentInRoom(agent0, room1)") and answered.reached
+    assert answered.goal_words == "the agent in the blue room"
+    with pytest.raises(ValueError, match="acted already"):
+        learner.clarify(answered, "1")
+
+
+def test_a_known_command_is_acted_on_and_reads_in_short(learner, novel_b):
+    result = learner.follow("take the star to the red room", novel_b, min_confidence=DEFAULT_MIN_CONFIDENCE)
+    assert not result.abstained and result.reached and result.confidence > 0.95
+    assert result.posterior.margin > 0.9
+    text = repr(result)
+    assert len(text) < 200 and "goal='toyInRoom(block0, room0)'" in text and "reached=True" in text
+    post = repr(result.posterior)
+    assert len(post) < 200 and "confidence=0.9" in post
+    # without a threshold it always acts, as before
+    assert not learner.follow("go to the purple room", novel_b).abstained
+
+
+@pytest.fixture(scope="module")
+def model_dir(learner, tmp_path_factory):
+    return learner.save(tmp_path_factory.mktemp("model") / "m")
+
+
+def _follow(model_dir, command, *extra):
+    from groundlang.cli import main
+
+    return main(["--quiet", "follow", command, "--env", str(EXAMPLES / "novel_b.state"), "--palette", "sokoban",
+                 "--model", str(model_dir), *extra])
+
+
+def test_cli_asks_with_exit_code_3_and_guess_acts(model_dir, capsys, tmp_path):
+    from groundlang.commands.follow import ASKED, DEFAULT_MIN_CONFIDENCE as CLI_DEFAULT
+
+    assert CLI_DEFAULT == DEFAULT_MIN_CONFIDENCE and ASKED == 3
+    assert _follow(model_dir, "go to the purple room", "--out", str(tmp_path / "asked.png")) == 3
+    assert not (tmp_path / "asked.png").exists()  # nothing done, nothing drawn
+    out, err = capsys.readouterr()
+    assert ("I don't know the word 'purple'. Which room do you mean: the red room, the blue room or the green room?"
+            in out)
+    assert "  2) the blue room  (0.33; agentInRoom(agent0, room1))" in out and "plan" not in out
+    assert err.strip() == ("groundlang follow: not acting: confidence 0.33 is below --min-confidence 0.7; "
+                           "answer with --ask, or act anyway with --guess")
+    assert _follow(model_dir, "go to the purple room", "--guess") == 0
+    assert "goal the agent in the red room \u2014 agentInRoom(agent0, room0): reached (goal)" in capsys.readouterr().out
+    assert _follow(model_dir, "take the star to the red room") == 0
+    out = capsys.readouterr().out
+    assert "0.9850  the yellow star in the red room \u2014 toyInRoom(block0, room0)" in out
+
+
+def test_cli_ask_reads_the_answer_from_stdin(model_dir, capsys, monkeypatch):
+    import io
+
+    monkeypatch.setattr("sys.stdin", io.StringIO("the orange one\nthe blue one\n"))
+    assert _follow(model_dir, "go to the purple room", "--ask") == 0
+    out = capsys.readouterr().out
+    assert "names none of the choices" in out  # the first answer, asked again
+    assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room1): reached (goal)" in out
+    monkeypatch.setattr("sys.stdin", io.StringIO(""))  # end of input: nothing done
+    assert _follow(model_dir, "go to the purple room", "--ask") == 3
+    assert capsys.readouterr().err.strip() == "groundlang follow: no answer named a choice; nothing done"

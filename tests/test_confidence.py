@@ -1,0 +1,61 @@
+"""Confidence measures (ECE, risk-coverage, AUROC, threshold) and goals merged by their outcome."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from groundlang.confidence import (GoalGroup, accuracy_at_coverage, auroc, calibration_report, choose_threshold,
+                                   expected_calibration_error, group_goals, reliability, risk_coverage)
+from groundlang.corpus import parse_state
+from groundlang.logic.atoms import parse_goal
+from groundlang.model.statespace import enumerate_states
+
+# The star sits in the corner of room0 (red): walls on two sides, so nothing can push it out.
+STUCK = "room,10,0,8,5,0 room,1,5,8,10,0 room,5,10,8,15,0 door,5,3,5,3 door,10,5,10,5 block,12,0,1,1 agent,7,5"
+
+
+def test_ece_of_a_perfectly_calibrated_and_of_an_overconfident_model():
+    # 10 at confidence 0.8, 8 right: calibrated; 10 at 0.9, 5 right: off by 0.4
+    assert expected_calibration_error([0.8] * 10, [True] * 8 + [False] * 2) == pytest.approx(0.0)
+    assert expected_calibration_error([0.9] * 10, [True] * 5 + [False] * 5) == pytest.approx(0.4)
+    rows = reliability([0.05, 0.95, 1.0], [False, True, True])
+    assert [(r["n"], r["accuracy"]) for r in rows] == [(1, 0.0), (2, 1.0)]  # 1.0 falls in the last bin
+
+
+def test_risk_coverage_drops_the_least_confident_first_and_keeps_ties_together():
+    conf = [0.9, 0.8, 0.8, 0.3]
+    right = [True, True, False, False]
+    assert risk_coverage(conf, right) == [(1.0, 0.5), (0.75, pytest.approx(2 / 3)), (0.25, 1.0)]
+    assert accuracy_at_coverage(conf, right, 0.5) == (pytest.approx(2 / 3), 0.75)  # ties: 0.75 is the least above 0.5
+    assert accuracy_at_coverage(conf, right, 0.25) == (1.0, 0.25)
+
+
+def test_auroc_counts_pairs_and_ties_half():
+    assert auroc([0.9, 0.8, 0.2, 0.1], [True, True, False, False]) == 1.0
+    assert auroc([0.1, 0.9], [True, False]) == 0.0
+    assert auroc([0.5, 0.5], [True, False]) == 0.5
+    assert math.isnan(auroc([0.5, 0.6], [True, True]))
+
+
+def test_threshold_is_the_widest_that_reaches_the_target():
+    conf = [0.95, 0.9, 0.8, 0.7, 0.6]
+    right = [True, True, True, False, True]
+    assert choose_threshold(conf, right, 1.0) == 0.8
+    assert choose_threshold(conf, right, 0.8) == 0.6  # 4 of 5
+    assert choose_threshold([0.9], [False], 0.5) == 1.0  # none reaches it: act on nothing below certainty
+    report = calibration_report(conf, right, coverages=(0.6,), threshold=0.8)
+    assert report["threshold"] == {"min_confidence": 0.8, "acted": 3, "coverage": 0.6, "accuracy": 1.0}
+    assert report["at_coverage"] == [{"coverage": 0.6, "reached": 0.6, "accuracy": 1.0}]
+
+
+def test_goals_that_hold_in_the_same_states_count_as_one():
+    space = enumerate_states(parse_state(STUCK, "sokoban"))
+    goals = [(parse_goal("toyInRoom(block0, room1)"), 0.4), (parse_goal("agentInRoom(agent0, room2)"), 0.35),
+             (parse_goal("toyInRoom(block0, room2)"), 0.25)]
+    groups = group_goals(goals, space)
+    # The star can reach neither room: both goals hold nowhere, one outcome with 0.65 of the mass.
+    assert [g.probability for g in groups] == [pytest.approx(0.65), pytest.approx(0.35)]
+    assert groups[0].goals == (goals[0][0], goals[2][0]) and groups[0].goal == goals[0][0]
+    assert groups[1] == GoalGroup((goals[1][0],), 0.35)
