@@ -23,7 +23,7 @@ import numpy as np
 
 from groundlang.logic.atoms import Atom
 from groundlang.model.features import goal_mask
-from groundlang.model.geometry import cell_tables
+from groundlang.model.pf_tables import pf_tables
 from groundlang.model.statespace import StateSpace
 
 __all__ = [
@@ -48,10 +48,12 @@ class GoalGroup:
         return self.goals[0]
 
 
-def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpace) -> list[GoalGroup]:
+def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpace,
+                library=None) -> list[GoalGroup]:
     """Merge goals (most probable first, as :meth:`Posterior.goals` gives them) whose goal masks
-    over ``space`` are equal; returns the groups, most probable first (ties: the first goal's order)."""
-    tables = cell_tables(space.layout)
+    over ``space`` are equal; returns the groups, most probable first (ties: the first goal's order).
+    ``library``: the TaskLibrary whose PF rules say what the goals mean (default: the package's)."""
+    tables = pf_tables(space.layout, None if library is None else library.tabulation_program)
     by_mask: dict[bytes, list] = {}
     order: list[bytes] = []
     for k, (goal, p) in enumerate(goals):

@@ -280,7 +280,7 @@ class Learner:
             reading_probs = structure[group] * share  # P(reading | words), one per reading
         post = Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
                          list(obs.readings), reading_probs)
-        post.groups = group_goals(post.goals(), self._space(state))
+        post.groups = group_goals(post.goals(), self._space(state), self.library)
         return post
 
     def _space(self, state: State) -> StateSpace:
