@@ -13,6 +13,7 @@ from itertools import combinations, permutations
 from typing import Mapping, Sequence
 
 from groundlang.logic.atoms import Atom, attribute_pf
+from groundlang.logic.schema import domain_classes
 from groundlang.logic.tasks import CLASS_ORDER, LiftedTask, Variable
 
 __all__ = ["structure_key", "lifted_key", "task_name", "lift_goal", "singling_out"]
@@ -54,7 +55,8 @@ def lifted_key(task: LiftedTask) -> tuple:
 def _mover_rank(pred_args: tuple[str, tuple[str, ...]], classes: dict[str, str]) -> tuple:
     # The toy's goal before the agent's, as tasks.lp names toyToRoomAgentToRoom.
     first = classes[pred_args[1][0]]
-    return ({"toy": 0, "agent": 1}.get(first, 2), pred_args[0], pred_args[1])
+    movers = [c for c in reversed(domain_classes().classes) if c in domain_classes().movable]
+    return (movers.index(first) if first in movers else len(movers), pred_args[0], pred_args[1])
 
 
 def task_name(goal: Sequence[tuple[str, Sequence[str]]], classes: dict[str, str]) -> str:

@@ -23,6 +23,7 @@ import torch
 from groundlang.grammar.lexicon import Lexicon
 from groundlang.grammar.logical_form import LogicalForm, Reading
 from groundlang.model.domain_words import domain_lexicon
+from groundlang.logic.schema import domain_classes
 from groundlang.model.interpretations import UNALIGNED_CLASSES, Interpretation, RoleBinding, class_of
 from groundlang.model.vocabulary import DIRECT_OBJECT, NULL, Vocabulary, class_token, is_task_role
 
@@ -199,7 +200,7 @@ def is_mentionable(rb: RoleBinding) -> bool:
     crowd corpus, rooms added to toys: leave-one-out 218 against 212 of 240 original commands
     (223 against 224 simplified), in novel layouts 571 against 585 of 720 (629 against 622), both with
     the same behaviour cache."""
-    return rb.cls == "toy" or (rb.cls not in UNALIGNED_CLASSES and is_task_role(rb.role))
+    return rb.cls in domain_classes().mentioned or (rb.cls not in UNALIGNED_CLASSES and is_task_role(rb.role))
 
 
 def machine_string(interp: Interpretation) -> list[str]:

@@ -57,7 +57,8 @@ from groundlang.logic.tasks import BindingConstraint, GroundedTask, LiftedTask, 
 from groundlang.model.geometry import cell_tables
 from groundlang.model.tasks import candidate_tasks, object_descriptions
 from groundlang.model.vocabulary import NO_ROLE
-from groundlang.model.world import State
+from groundlang.logic.schema import domain_classes
+from groundlang.model.world import WORLD_CLASSES, State, object_class
 
 __all__ = [
     "Interpretation",
@@ -76,10 +77,10 @@ __all__ = [
 # The room a command may presuppose the agent starts in ("go *from the orange room* to ..."): a bystander
 # role of its own (see start_rooms).
 START_ROLE = "other:start"
-OTHER_ROLES = tuple(f"other:{cls}" for cls in ("agent", "room", "door", "toy")) + (START_ROLE,)
-# The addressee is "you", which the parser leaves without words: no noun phrase aligns with the
-# agent (model.encoding), whatever its role.
-UNALIGNED_CLASSES = frozenset({"agent"})
+OTHER_ROLES = tuple(f"other:{cls}" for cls in WORLD_CLASSES) + (START_ROLE,)
+# The addressee (addressee/1 of logic/domain.lp) is "you", which the parser leaves without words: no
+# noun phrase aligns with it (model.encoding), whatever its role.
+UNALIGNED_CLASSES = domain_classes().addressee
 
 
 @dataclass(frozen=True)
@@ -135,12 +136,8 @@ def alignable_roles(lifted: LiftedTask) -> tuple[str, ...]:
 
 
 def class_of(obj: str) -> str:
-    """Object class from the corpus naming convention (block0 is a toy), for atoms read without their
-    layout; with one, ``Layout.objects`` says it."""
-    for prefix, cls in (("agent", "agent"), ("room", "room"), ("door", "door"), ("block", "toy")):
-        if obj.startswith(prefix):
-            return cls
-    raise ValueError(f"cannot tell the class of object {obj!r}")
+    """Object class by the world's naming (``block0`` is a toy; ``model.world.object_class``)."""
+    return object_class(obj)
 
 
 def object_names(state: State) -> list[str]:

@@ -40,10 +40,20 @@ __all__ = [
 ]
 
 
-# The classes of the objects that move (``movable/1`` of logic/domain.lp): the agent, and the toys
-# the corpora call blocks.
-AGENT_CLASS = "agent"
-TOY_CLASS = "toy"
+# The world's kinds of object, as the classes of logic/domain.lp (class/1) call them, and the prefix of
+# their names (the corpora's: a toy is a "block"). The one place Python names them: the Cleanup World's
+# dynamics (walls, doors, pushing) are code; a test checks that domain.lp declares the same classes.
+AGENT_CLASS, ROOM_CLASS, DOOR_CLASS, TOY_CLASS = "agent", "room", "door", "toy"
+NAME_PREFIXES = (("agent", AGENT_CLASS), ("room", ROOM_CLASS), ("door", DOOR_CLASS), ("block", TOY_CLASS))
+WORLD_CLASSES = tuple(cls for _, cls in NAME_PREFIXES)
+
+
+def object_class(name: str) -> str:
+    """The class of an object of the world by its name (``block0`` is a toy); ValueError otherwise."""
+    for prefix, cls in NAME_PREFIXES:
+        if name.startswith(prefix) and name[len(prefix):].isdigit():
+            return cls
+    raise ValueError(f"cannot tell the class of object {name!r}")
 
 
 class WorldError(ValueError):
@@ -235,9 +245,9 @@ class Layout:
         kinds of object meet the schema's classes (``class/1`` of ``logic/domain.lp``; a test checks
         they agree). ``facts`` are ``(predicate, arguments)`` pairs, ``("colour", ("green",))``."""
         out = [(AGENT_CLASS, "agent0", ())]
-        out += [("room", n, (("rect", (r.left, r.top, r.right, r.bottom)), ("colour", (r.colour,))))
+        out += [(ROOM_CLASS, n, (("rect", (r.left, r.top, r.right, r.bottom)), ("colour", (r.colour,))))
                 for n, r in zip(self.room_names, self.rooms)]
-        out += [("door", n, (("rect", (d.left, d.top, d.right, d.bottom)),))
+        out += [(DOOR_CLASS, n, (("rect", (d.left, d.top, d.right, d.bottom)),))
                 for n, d in zip(self.door_names, self.doors)]
         out += [(TOY_CLASS, n, (("colour", (c,)), ("shape", (s,))))
                 for n, (c, s) in zip(self.toy_names, self.toy_attributes)]

@@ -195,3 +195,16 @@ def test_the_schema_is_read_from_the_files(domain, library):
                           capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert "  size: roomIsLargest(room)" in done.stdout and "  shape: toyIsStar(toy), toyIsMug(toy)" in done.stdout
+
+
+def test_the_worlds_kinds_of_object_are_the_classes_domain_lp_declares():
+    from groundlang.logic.schema import domain_classes
+    from groundlang.model.world import TOY_CLASS, WORLD_CLASSES, object_class
+
+    classes = domain_classes()
+    assert set(WORLD_CLASSES) == set(classes.classes)
+    assert classes.movable == {"agent", TOY_CLASS} and classes.addressee == {"agent"}
+    assert classes.mentioned == {TOY_CLASS}
+    assert [object_class(n) for n in ("agent0", "room12", "door0", "block3")] == ["agent", "room", "door", "toy"]
+    with pytest.raises(ValueError):
+        object_class("blocky")
