@@ -11,25 +11,22 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["canonical_predicate", "Atom", "AtomError", "PREDICATE_ALIASES", "attribute_pf", "parse_atom", "parse_goal", "format_goal"]
+__all__ = ["canonical_predicate", "Atom", "AtomError", "attribute_pf", "parse_atom", "parse_goal", "format_goal"]
 
-# Corpus spelling -> groundlang (paper) spelling.
-PREDICATE_ALIASES = {
-    "blockInRoom": "toyInRoom",
-    "blockInDoor": "toyInDoor",
-    "agentTouchingBlock": "agentTouchingToy",
-}
-
-# The commands-to-tasks corpus calls toys blocks, in object and predicate names (blockIsStar).
+# The commands-to-tasks corpus calls toys blocks, in object and predicate names (blockInRoom,
+# agentTouchingBlock): its spelling of the class toy, wherever it is a word of a camelCase name.
 _CORPUS_CLASS_SPELLING = ("block", "toy")
+_CAMEL_WORD = re.compile(r"[A-Z]?[a-z0-9_]+|[A-Z]+(?![a-z])")
 
 
 def canonical_predicate(name: str) -> str:
-    """The paper's spelling of a predicate the corpus spells its own way (``blockIsStar`` -> ``toyIsStar``)."""
-    if name in PREDICATE_ALIASES:
-        return PREDICATE_ALIASES[name]
+    """The paper's spelling of a predicate the corpus spells its own way: ``blockInRoom`` -> ``toyInRoom``,
+    ``agentTouchingBlock`` -> ``agentTouchingToy``; any other name is itself."""
     theirs, ours = _CORPUS_CLASS_SPELLING
-    return ours + name[len(theirs):] if name.startswith(theirs) and name[len(theirs):][:1].isupper() else name
+    words = _CAMEL_WORD.findall(name)
+    if "".join(words) != name or theirs not in (w.lower() for w in words):
+        return name
+    return "".join((ours if w == theirs else ours.capitalize() if w == theirs.capitalize() else w) for w in words)
 
 
 _ATOM = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*\(([^()]*)\)\s*")

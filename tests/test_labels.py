@@ -170,3 +170,11 @@ def test_quotes_left_open_or_closed_on_another_line_are_refused(tmp_path):
     spanning.write_text('prefix,goal\na_,"agentInRoom(agent0,\n room1)"\n')
     with pytest.raises(LabelError, match="span.csv, line 2: a quote opened on this line closes only on line 3"):
         read_labels(spanning)
+
+
+def test_the_corpus_spelling_of_toys_is_read_in_any_predicate():
+    from groundlang.logic.atoms import canonical_predicate
+
+    assert [canonical_predicate(p) for p in ("blockInRoom", "blockInDoor", "agentTouchingBlock", "blockIsStar",
+                                             "agentNextToBlock", "blocky", "roomIsDarkGray")] == [
+        "toyInRoom", "toyInDoor", "agentTouchingToy", "toyIsStar", "agentNextToToy", "blocky", "roomIsDarkGray"]
