@@ -104,11 +104,15 @@ IRREGULAR = {
 AUX_VERBS = frozenset("is are am was were be been 're 's 'm have has had do does did".split())
 
 
+_LONGEST_HUE = max(map(len, HUES))
+
+
 def split_compound_colour(word: str) -> tuple[str, ...]:
     """A colour compound written solid split into its hues ("bluegreen" -> ("blue", "green")), as the
     tokeniser splits a hyphenated one; any other word is itself. Both parts must be hues, so words
     that merely start with one ("tangerine", "redo") are left whole."""
-    if word not in COLOURS:
+    # A longer word cannot be two hues; without this bound a 1 MB "word" took minutes of slicing.
+    if word not in COLOURS and len(word) <= 2 * _LONGEST_HUE:
         for cut in range(3, len(word) - 2):
             if word[:cut] in HUES and word[cut:] in HUES:
                 return word[:cut], word[cut:]
