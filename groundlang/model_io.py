@@ -136,7 +136,7 @@ def _read_json(directory: Path, any_version: bool = False) -> dict:
     path = directory / MODEL_JSON
     if not directory.is_dir():
         raise ModelFormatError(f"{directory}: not a model directory (it does not exist or is not a folder)")
-    if not path.is_file():
+    if not path.exists():  # anything else there (a FIFO, a folder) is refused by kind when read
         raise ModelFormatError(f"{directory}: no {MODEL_JSON}; this is not a groundlang model directory")
     try:
         meta = json.loads(storage.read_limited(path, MAX_JSON_BYTES, "a model's model.json").decode("utf-8"))
@@ -183,7 +183,7 @@ def load_learner(directory: str | Path):
     except (KeyError, TypeError, AttributeError, ValueError, RecursionError, RuntimeError) as exc:
         raise ModelFormatError(f"{directory}: model files are incomplete or corrupt ({_reason(exc)})") from None
     tensor_path = directory / tensor_name
-    if not tensor_path.is_file():
+    if not tensor_path.exists():
         raise ModelFormatError(f"{tensor_path}: the model's tensor file is missing ({MODEL_JSON} names it)")
     # What np.savez writes for these arrays: each one's data and header, plus the archive's directories.
     limit = sum(8 * math.prod(t.shape) + 1024 for t in expected.values()) + 4096
