@@ -25,6 +25,7 @@ import io
 import json
 import logging
 import math
+import os
 import re
 import zipfile
 from pathlib import Path
@@ -42,7 +43,7 @@ FORMAT_VERSION = 13  # 2: mention and arity globals; 3: transitive prepositions,
 log = logging.getLogger(__name__)
 
 MODEL_JSON = "model.json"
-GLOBALS = "globals.npz"  # the tensor file's name before format 13; removed by the next save
+# The tensor file; plain "globals.npz" is its name before format 13, removed by the next save.
 _TENSOR_FILE = re.compile(r"globals(-[0-9a-f]{16})?\.npz")
 # An interrupted save's temporary files (storage.atomic_path names them ".NAME.HEX.tmp").
 _TEMPORARY = re.compile(r"\.(model\.json|globals-[0-9a-f]{16}\.npz)\.[0-9a-f]{16}\.tmp")
@@ -114,9 +115,23 @@ def save_learner(learner, directory: str | Path) -> Path:
     # land anywhere, and leaves the old model or the new one, plus files the next save removes.
     with deferred_interrupts():
         storage.write_atomically(directory / tensor_name, tensors)
+        # The folder is synced after each rename: after a power cut, model.json must not name tensors whose
+        # rename was lost, nor the old tensors be gone while the old model.json is back.
+        _sync_folder(directory)
         storage.write_atomically(directory / MODEL_JSON, json.dumps(meta, indent=1).encode("utf-8"))  # the commit
+        _sync_folder(directory)
         _remove_leftovers(directory, keep=tensor_name)
     return directory
+
+
+def _sync_folder(directory: Path) -> None:
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror or str(exc), str(directory)) from exc
+    finally:
+        os.close(fd)
 
 
 def _remove_leftovers(directory: Path, keep: str) -> None:
