@@ -22,6 +22,7 @@ Safety and errors (all ``AspError``, a ``ValueError``, so the CLI prints one lin
 
 from __future__ import annotations
 
+import errno
 import json
 import logging
 import numbers
@@ -104,9 +105,17 @@ def _read_regular(path: Path) -> bytes:
     """A regular file of at most MAX_PROGRAM_BYTES (model.storage.read_limited does the same for the layers
     above; logic imports none of them). Opened non-blocking: a FIFO must not hang the open."""
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    try:
+        mode = os.fstat(fd).st_mode
+    except BaseException:
+        os.close(fd)
+        raise
+    if not stat.S_ISREG(mode):  # checked before fdopen, which refuses a folder naming only the descriptor
+        os.close(fd)
+        if stat.S_ISDIR(mode):
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        raise AspError(f"{path}: not a regular file (a FIFO or device); expected an ASP program (.lp)")
     with os.fdopen(fd, "rb") as handle:
-        if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
-            raise AspError(f"{path}: not a regular file (a folder, FIFO or device); expected an ASP program (.lp)")
         data = handle.read(MAX_PROGRAM_BYTES + 1)
     if len(data) > MAX_PROGRAM_BYTES:
         raise AspError(f"{path}: more than the {MAX_PROGRAM_BYTES:,} bytes allowed for an ASP program")

@@ -14,6 +14,7 @@ a byte limit per kind of file, refused in one line naming the path.
 
 from __future__ import annotations
 
+import errno
 import os
 import secrets
 import stat
@@ -29,8 +30,6 @@ class FileRefused(ValueError):
 
 
 def _kind(mode: int) -> str:
-    if stat.S_ISDIR(mode):
-        return "a folder"
     if stat.S_ISFIFO(mode):
         return "a FIFO (named pipe)"
     if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
@@ -47,10 +46,17 @@ def read_limited(path: str | os.PathLike, limit: int, what: str) -> bytes:
     no more than ``limit + 1`` bytes are ever read, even from a file that grows meanwhile."""
     path = Path(path)
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    try:
+        info = os.fstat(fd)
+    except BaseException:
+        os.close(fd)
+        raise
+    if not stat.S_ISREG(info.st_mode):
+        os.close(fd)
+        if stat.S_ISDIR(info.st_mode):  # what reading a folder has always said
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        raise FileRefused(f"{path}: {_kind(info.st_mode)}, not a regular file; expected {what}")
     with os.fdopen(fd, "rb") as handle:
-        info = os.fstat(handle.fileno())
-        if not stat.S_ISREG(info.st_mode):
-            raise FileRefused(f"{path}: {_kind(info.st_mode)}, not a regular file; expected {what}")
         if info.st_size > limit:
             raise FileRefused(f"{path}: {info.st_size:,} bytes, more than the {limit:,} allowed for {what}")
         data = handle.read(limit + 1)

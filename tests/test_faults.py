@@ -160,7 +160,7 @@ def test_a_fifo_or_device_is_refused_by_name(learner, tmp_path, fifo, capsys, wh
     err = capsys.readouterr().err.splitlines()
     assert code == 2 and len(err) == 1 and time.monotonic() - started < 30
     if where == "--library":
-        assert f"{bad}: not a regular file (a folder, FIFO or device); expected an ASP program (.lp)" in err[0]
+        assert f"{bad}: not a regular file (a FIFO or device); expected an ASP program (.lp)" in err[0]
     else:
         assert f"{bad}: {what}, not a regular file; expected" in err[0]
 
