@@ -92,6 +92,8 @@ def save_learner(learner, directory: str | Path) -> Path:
 
     if learner.globals is None or learner.vocab is None:
         raise NotFittedError("cannot save a learner that has not been trained")
+    if not learner.palettes:
+        raise ValueError("cannot save a learner whose training palettes are unknown (train it with fit())")
     directory = check_model_destination(directory)
     buffer = io.BytesIO()
     np.savez(buffer, **{k: v.detach().cpu().numpy() for k, v in learner.globals.items()})

@@ -12,7 +12,7 @@ import numpy as np
 
 from groundlang.model.world import State
 
-__all__ = ["SHAPE_GLYPHS", "COLOUR_VALUES", "draw_state", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
+__all__ = ["SHAPE_GLYPHS", "COLOUR_VALUES", "cell_inches", "draw_state", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
 
 # Text glyphs present in DejaVu Sans (matplotlib's bundled font), one per palette shape.
 SHAPE_GLYPHS = {
@@ -73,7 +73,7 @@ def _cell_colours(state: State) -> np.ndarray:
     return img
 
 
-def _cell_inches(state: State) -> float:
+def cell_inches(state: State) -> float:
     """The side of one cell in the figure: half an inch, less on a grid larger than MAX_FIGURE_INCHES."""
     return min(0.5, MAX_FIGURE_INCHES / max(state.layout.width, state.layout.height))
 
@@ -87,7 +87,7 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None)
     import matplotlib.patheffects as pe
     from matplotlib.figure import Figure
 
-    cell = _cell_inches(state)
+    cell = cell_inches(state)
     if ax is None:
         lay = state.layout
         fig = Figure(figsize=(cell * lay.width + 1, cell * lay.height + 1))
@@ -159,7 +159,7 @@ def save_picture(path: str | Path, state: State, trajectory=None, title: str | N
     path = Path(path)
     fmt = picture_format(path)
     lay = state.layout
-    cell = _cell_inches(state)
+    cell = cell_inches(state)
     fig = Figure(figsize=(cell * lay.width + 1.5, cell * lay.height + 1.5))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)

@@ -290,3 +290,24 @@ def test_learner_checks_its_arguments(learner):
         Learner(steps=0)
     with pytest.raises(ValueError, match=r"^Learner: lr must be a positive number, got nan$"):
         Learner(lr=float("nan"))
+
+
+def test_an_animation_of_a_huge_room_has_a_bounded_size(tmp_path):
+    from PIL import Image
+
+    from groundlang.animation import save_animation
+
+    state = _big_room()
+    out = save_animation(tmp_path / "big.gif", [state, state], dpi=60)
+    with Image.open(out) as image:
+        assert max(image.size) <= 60 * (16 + 1.5)
+
+
+def test_a_learner_without_its_training_palettes_is_not_saved(learner, tmp_path):
+    import copy
+
+    stripped = copy.copy(learner)
+    stripped.palettes = None
+    with pytest.raises(ValueError, match=r"^cannot save a learner whose training palettes are unknown"):
+        stripped.save(tmp_path / "m")
+    assert not (tmp_path / "m").exists()
