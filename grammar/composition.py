@@ -96,12 +96,14 @@ class _Composer:
         out: list[Relation] = []
         p_index = 0
         by_obj = {obj: (prep, head) for prep, head, obj in self.attachments}
+        # Entities grouped by clause once: scanning every entity per clause made a long command quadratic.
+        by_clause: dict[int, list] = {}
+        for ent in self.entities:
+            by_clause.setdefault(ent.clause, []).append(ent)
         for idx, clause in enumerate(self.clauses):
             assert clause is not None
             out.append(Relation(clause.verb or "_", clause.args, clause.verb, "verb", clause.negated))
-            for ent in self.entities:
-                if ent.clause != idx:
-                    continue
+            for ent in by_clause.get(idx, ()):
                 if ent.head is not None:
                     out.append(Relation("isa", (ent.var, ent.head), ent.head, "isa"))
                 for mod in ent.modifiers:

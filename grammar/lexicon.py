@@ -249,7 +249,9 @@ class Lexicon:
         """A colour compound written solid split into its hues ("bluegreen" -> ("blue", "green")), as the
         tokeniser splits a hyphenated one; any other word is itself. Both parts must be hues, so words
         that merely start with one ("tangerine", "redo") are left whole."""
-        if not self.is_colour(word):
+        # A longer word cannot be two hues; without this bound a 1 MB "word" took minutes of slicing.
+        longest = max(map(len, self.hues), default=0)
+        if not self.is_colour(word) and len(word) <= 2 * longest:
             for cut in range(3, len(word) - 2):
                 if word[:cut] in self.hues and word[cut:] in self.hues:
                     return word[:cut], word[cut:]

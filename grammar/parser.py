@@ -44,6 +44,10 @@ __all__ = ["DEFAULT_WEIGHTS", "ParseError", "Word", "parse", "tokenise", "tag"]
 # Longer sentences are split at commas first, then chunked: Earley is cubic and the number of PP
 # attachments grows exponentially, and no corpus sentence needs more.
 MAX_SENTENCE_TOKENS = 40
+# Sentences (or comma-separated parts of long ones) whose readings are combined jointly; each later part
+# adds its most probable reading only. Joint combination copies and compares whole reading tuples, so
+# without a cap a command of thousands of sentences took minutes (quadratic); real commands have a few.
+MAX_JOINT_PARTS = 16
 SENTENCE_END = frozenset({".", "!", "?", ";", ":"})
 CLAUSE_BREAK = frozenset({",", "(", ")", "-", "[", "]", "{", "}"})
 
@@ -244,14 +248,23 @@ def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None =
     logw = log_weights({**DEFAULT_WEIGHTS, **(weights or {})})
     combined: list[tuple[float, tuple]] = [(0.0, ())]
     fallback = False
-    for sentence in _sentences(tokens, cats):
-        for part in _split_long(sentence):
-            cands, fell_back = _parse_sentence(part, logw, beam)
-            fallback |= fell_back
-            combined = top_k([(w1 + w2, c1 + c2) for (w1, c1), (w2, c2) in itertools.product(combined, cands)], beam)
+    tail: list = []  # best clause values of the parts after MAX_JOINT_PARTS, in order
+    tail_weight = 0.0
+    parts = (part for sentence in _sentences(tokens, cats) for part in _split_long(sentence))
+    for n, part in enumerate(parts):
+        cands, fell_back = _parse_sentence(part, logw, beam)
+        fallback |= fell_back
+        if n >= MAX_JOINT_PARTS:
+            tail_weight += cands[0][0]
+            tail.extend(cands[0][1])
+            continue
+        combined = top_k([(w1 + w2, c1 + c2) for (w1, c1), (w2, c2) in itertools.product(combined, cands)], beam)
+    if tail:
+        combined = [(w + tail_weight, c + tuple(tail)) for w, c in combined]
+    token_tuple = tuple(tokens)
     if not any(c for c in cats):
         fallback = True  # punctuation only: one empty logical form that still keeps the tokens
-    scored = [(w, compose(c, tuple(tokens), tags, fallback, words)) for w, c in combined]
+    scored = [(w, compose(c, token_tuple, tags, fallback, words)) for w, c in combined]
     readings = _normalise(scored)
     if lexicon is not None:
         expanded = []

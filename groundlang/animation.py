@@ -36,7 +36,7 @@ def save_animation(path: str | Path, states: Sequence[State], title: str | None 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from groundlang.render import draw_state
+    from groundlang.render import cell_inches, draw_state
 
     path = Path(path)
     if path.suffix.lower() != ".gif":
@@ -45,7 +45,8 @@ def save_animation(path: str | Path, states: Sequence[State], title: str | None 
     if not states:
         raise ValueError(f"{path}: no states to animate; expected a trajectory of at least one state")
     lay = states[0].layout
-    fig = Figure(figsize=(0.5 * lay.width + 1.5, 0.5 * lay.height + 1.5), dpi=dpi)
+    cell = cell_inches(states[0])  # bounded like a picture's: a large layout is drawn with smaller cells
+    fig = Figure(figsize=(cell * lay.width + 1.5, cell * lay.height + 1.5), dpi=dpi)
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
     frames = list(range(len(states))) + [len(states) - 1] * max(0, int(hold_last))

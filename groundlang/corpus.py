@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
-from groundlang.model.storage import write_atomically
+from groundlang.model.storage import read_limited, write_atomically
 from groundlang.model.world import (
     Action,
     Agent,
@@ -59,6 +59,8 @@ log = logging.getLogger(__name__)
 # Coordinates beyond this are refused: a layout's grids are allocated densely,
 # so one absurd number in a file must not become a gigabyte array.
 MAX_COORDINATE = 1000
+# A corpus or state file: a demonstration of 10^4 steps takes about 1 MB.
+MAX_FILE_BYTES = 16 * 2**20
 
 _INTEGER = re.compile(r"-?[0-9]{1,7}")
 _NUMBERED = re.compile(r"^(.*_)[0-9]+$")
@@ -168,10 +170,11 @@ def _integer(text: str, where: str, name: str, obj: str) -> int:
     return value
 
 
-def parse_state(line: str, palette: str | Palette, where: str = "state") -> State:
+def parse_state(line: str, palette: str | Palette, where: str = "state", shared_cells_ok: bool = False) -> State:
     """Parse one state line and check it is a valid world; ``where`` prefixes error messages.
 
-    Raises CorpusError naming the object and field that is wrong.
+    Raises CorpusError naming the object and field that is wrong. ``shared_cells_ok`` lets two objects
+    share a cell (a later state of a demonstration: :func:`read_instance` reports it as inconsistent).
     """
     palette = get_palette(palette)
     tokens = line.split()
@@ -209,10 +212,32 @@ def parse_state(line: str, palette: str | Palette, where: str = "state") -> Stat
     layout = Layout(tuple(rooms), tuple(doors), tuple((t.colour, t.shape) for t in toys), palette)
     state = State(layout, agents[0], tuple(toys))
     try:
-        state.validate()
+        if shared_cells_ok and _shared_cell(state):
+            _validate_positions(state)
+        else:
+            state.validate()
     except WorldError as exc:
         raise CorpusError(f"{where}: {exc}") from None
     return state
+
+
+def _shared_cell(state: State) -> str | None:
+    """Which two objects share a cell, or None."""
+    seen: dict[tuple[int, int], str] = {}
+    for name, (x, y) in zip(["agent0"] + state.layout.toy_names, state.positions.tolist()):
+        if (x, y) in seen:
+            return f"{seen[(x, y)]} and {name} share the cell ({x},{y})"
+        seen[(x, y)] = name
+    return None
+
+
+def _validate_positions(state: State) -> None:
+    """State.validate without its shared-cell check: the layout, and every object on a walkable cell."""
+    state.layout.validate()
+    walk = state.layout.walkable
+    for name, (x, y) in zip(["agent0"] + state.layout.toy_names, state.positions.tolist()):
+        if not (0 <= x < walk.shape[0] and 0 <= y < walk.shape[1]) or not walk[x, y]:
+            raise WorldError(f"{name} at ({x},{y}) is inside a wall or outside every room")
 
 
 def format_state(state: State) -> str:
@@ -231,7 +256,7 @@ def format_state(state: State) -> str:
 def _read_lines(path: Path) -> list[str]:
     """Decode a file as UTF-8 and split it into lines (CRLF and a leading byte-order mark accepted, trailing
     blank lines dropped)."""
-    data = Path(path).read_bytes()
+    data = read_limited(path, MAX_FILE_BYTES, "a corpus or state file")
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -316,7 +341,10 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
     states: list[State] = []
     for offset, text in enumerate(state_lines):
         lineno = offset + 3
-        state = parse_state(text, palette, where=f"{path}, line {lineno}")
+        # Only the first state must be a valid world: a later one with two objects in a cell (six
+        # demonstrations of the RSS 2015 expert corpus) cannot come from the actions, and is reported below
+        # as an inconsistent demonstration, which --skip-inconsistent skips.
+        state = parse_state(text, palette, where=f"{path}, line {lineno}", shared_cells_ok=bool(states))
         if states:
             first = states[0].layout
             if state.layout != first:
@@ -329,9 +357,11 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
     for i, action in enumerate(actions):
         replayed = step(states[i], action)
         if (replayed.positions != states[i + 1].positions).any():
+            shared = _shared_cell(states[i + 1])
             raise InconsistentDemonstration(
                 f"{path}, line {i + 4}: step {i + 1} ({action.word}) from line {i + 3} gives "
-                f"{_describe(replayed)}; the file has {_describe(states[i + 1])}",
+                f"{_describe(replayed)}; the file has {_describe(states[i + 1])}"
+                + (f" ({shared}: no move puts two objects in one cell)" if shared else ""),
                 path,
                 i + 4,
                 i + 1,

@@ -18,6 +18,7 @@ from groundlang.corpus import Corpus, CorpusError, Instance, file_prefix
 from groundlang.logic.atoms import Atom, AtomError, parse_goal
 from groundlang.logic.program import AspError
 from groundlang.model.features import atoms_hold
+from groundlang.model.storage import read_limited
 from groundlang.model.world import State
 
 __all__ = [
@@ -30,6 +31,10 @@ __all__ = [
     "check_goal_objects",
     "label_coverage",
 ]
+
+
+# The crowd corpus's labels take 10 KB; this bounds what a wrong path (a log, /dev/zero) can cost.
+MAX_LABELS_BYTES = 16 * 2**20
 
 
 class LabelError(CorpusError):
@@ -50,7 +55,7 @@ def read_labels(csv_path: str | Path) -> Labels:
     Raises LabelError naming the file and line of a bad header, row, goal or duplicate prefix.
     """
     path = Path(csv_path)
-    data = path.read_bytes()
+    data = read_limited(path, MAX_LABELS_BYTES, "a labels CSV")
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -156,8 +161,9 @@ def label_coverage(corpus: Corpus, labels: Labels | dict) -> LabelCoverage:
     source = getattr(labels, "path", "labels")
     missing = sorted(p for p in labels if p not in prefixes)
     if missing:
+        shown = ", ".join(missing[:5]) + (f", ... ({len(missing)} in all)" if len(missing) > 5 else "")
         raise LabelError(
-            f"{source}: prefixes {', '.join(missing)} name no files in {corpus.directory}; "
+            f"{source}: prefixes {shown} name no files in {corpus.directory}; "
             "expected every labelled prefix to have corpus files"
         )
     cov = LabelCoverage(total=len(corpus.instances), labelled=0, holding=0)

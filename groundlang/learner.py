@@ -33,7 +33,7 @@ from groundlang.logic.schema import domain_schema
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
-from groundlang.model.statespace import StateSpace, enumerate_states
+from groundlang.model.statespace import StateSpace, check_state_count, enumerate_states
 from groundlang.model.vocabulary import Vocabulary, class_token
 from groundlang.model.world import State
 from groundlang.results import FollowResult, Posterior
@@ -77,6 +77,11 @@ def schema_words(schema) -> dict[str, list[str]]:
             for category, words in (("NOUN", nouns), ("HUE", hues))}
 
 
+def _check_count(method: str, name: str, value) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{method}: {name} must be a positive integer, got {value!r}")
+
+
 class Learner:
     """Learns word meanings from (command, demonstration) pairs and follows new commands.
 
@@ -106,6 +111,13 @@ class Learner:
         if not self.library.tasks:  # a file of PFs only (discover --pfs) is a library of none
             raise ValueError(f"{self.library.program.user_names}: the task library declares no task/1; a learner "
                              "needs at least one task to read commands as")
+        _check_count("Learner", "steps", steps)
+        if isinstance(lr, bool) or not isinstance(lr, (int, float)) or not 0 < lr < float("inf"):
+            raise ValueError(f"Learner: lr must be a positive number, got {lr!r}")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+            raise ValueError(f"Learner: seed must be an integer, got {seed!r}")
+        if settings is not None and not isinstance(settings, TaskSettings):
+            raise TypeError(f"Learner: settings must be a TaskSettings, got {type(settings).__name__}")
         self.steps = steps
         self.lr = lr
         self.seed = seed
@@ -118,6 +130,8 @@ class Learner:
         self.lexicon_words: dict[str, list[str]] = extra_words([*own, *given])
         self.word_lexicon = domain_lexicon(self.lexicon_words)
         self.vocab: Vocabulary | None = None
+        # The palettes trained on, as {name, colours, shapes}: words were learned for their values only.
+        self.palettes: list[dict] | None = None
         self.globals: dict[str, torch.Tensor] | None = None
         self.fit_result: FitResult | None = None
         self._interp_cache: dict[State, list[Interpretation]] = {}
@@ -226,16 +240,26 @@ class Learner:
         vocabulary they were encoded with to stay in place, as does ``init``,
         which warm-starts the globals.
         """
+        if instances is None or isinstance(instances, (str, bytes)):
+            raise TypeError(f"fit: instances must be a sequence of corpus instances, not {type(instances).__name__}")
         instances = list(instances)
         if not instances:
             raise ValueError("cannot fit on an empty corpus")
+        bad = next((x for x in instances if not isinstance(getattr(x, "initial_state", None), State)), None)
+        if bad is not None:
+            raise TypeError(f"fit: each instance needs command, initial_state, states and actions (a corpus "
+                            f"Instance); got {type(bad).__name__}")
+        _check_count("fit", "steps", self.steps)
         if batch is None:
             if observations is None:
                 observations = self.observe(instances, progress=progress)
             if init is None or self.vocab is None:
                 # One layout per palette: what the domain declares depends on the palette's values.
                 layouts = {inst.initial_state.layout.palette: inst.initial_state.layout for inst in instances}
-                self.vocab = self._build_vocabulary(observations, [layouts[p] for p in sorted(layouts, key=lambda p: p.name)])
+                palettes = sorted(layouts, key=lambda p: p.name)
+                self.vocab = self._build_vocabulary(observations, [layouts[p] for p in palettes])
+                self.palettes = [{"name": p.name, "colours": list(p.colours), "shapes": list(p.shapes)}
+                                 for p in palettes]
                 init = None
             batch = encode(observations, self.vocab)
         elif self.vocab is None:
@@ -260,9 +284,27 @@ class Learner:
         if self.globals is None or self.vocab is None:
             raise NotFittedError("this learner has not been trained: call fit() or Learner.load() first")
 
+    def _check_state(self, method: str, command: str, state: State) -> None:
+        """TypeError for arguments of the wrong type; ValueError for a state of a palette not trained on."""
+        if not isinstance(command, str):
+            raise TypeError(f"{method}: command must be a str, got {type(command).__name__}")
+        if not isinstance(state, State):
+            raise TypeError(f"{method}: state must be a State (read_state_file, read_initial_state), "
+                            f"got {type(state).__name__}")
+        palette = state.layout.palette
+        seen = {"name": palette.name, "colours": list(palette.colours), "shapes": list(palette.shapes)}
+        if self.palettes is not None and seen not in self.palettes:
+            trained = ", ".join(p["name"] for p in self.palettes)
+            raise ValueError(f"{method}: the state is of palette {palette.name!r}; this model was trained on "
+                             f"palette {trained} (colours and shapes must be the same to read its words)")
+
     def posterior(self, command: str, state: State) -> Posterior:
-        """Posterior over interpretations of ``command`` in ``state`` from the words alone."""
+        """Posterior over interpretations of ``command`` in ``state`` from the words alone.
+
+        TypeError for a non-string command or a non-State state; ValueError when the state's palette
+        is not one the model was trained on."""
         self._require_fitted()
+        self._check_state("posterior", command, state)
         obs = self._command_observation(command, state)
         batch = encode([obs], self.vocab)
         probs = posterior(batch, self.lm, self.globals, use_behaviour=False)[0]
@@ -294,10 +336,16 @@ class Learner:
                min_confidence: float | None = None) -> FollowResult:
         """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act.
 
+        ``max_steps``: a positive integer. The state space is sized (and refused when too large)
+        before the command is interpreted, which on a large layout is the slow part.
         With ``min_confidence`` (0 to 1), a reading less confident than that is not acted on:
         the result has ``abstained=True``, the ``question`` to ask, its ``choices`` and the
         ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer.
         """
+        _check_count("follow", "max_steps", max_steps)
+        self._require_fitted()
+        self._check_state("follow", command, state)
+        check_state_count(state)
         post = self.posterior(command, state)
         if min_confidence is not None and post.confidence < min_confidence:
             choices = competing(post.goal_groups())

@@ -1,11 +1,21 @@
 """Saving and loading trained learners: JSON plus an ``.npz`` of tensors, never pickle.
 
 A model directory holds ``model.json`` (format name and version, language
-model and its settings, vocabulary, the words added to the lexicon, the task
-library as ASP text, planning settings, the sha256 of the tensor file) and ``globals.npz``. Both are
-written to temporary files and renamed; the JSON goes last and names the
-tensor file's hash, so a directory whose tensors were swapped or truncated
-is refused on load instead of giving silently different answers.
+model and its settings, vocabulary, the words added to the lexicon, the palettes it was trained on, the task
+library as ASP text, planning settings, the name and sha256 of the tensor
+file) and the tensor file ``globals-<first 16 hex digits of its sha256>.npz``.
+
+Saving is all-or-nothing: the tensors go to a new, content-named file first,
+then ``model.json`` is renamed into place, and that one rename is the moment
+the new model replaces the old (whose tensor file the old ``model.json``
+still names until then). Only afterwards are tensor files no ``model.json``
+names, and temporary files an interrupted save left, removed. A crash, a
+``kill -9`` or a full disk at any point leaves the previous model loadable.
+
+Loading reads nothing unbounded: ``model.json`` and the tensor file are read
+with byte limits, the vocabulary's sizes are checked before any tensor is
+built, and each array's shape and type are read from its ``.npy`` header and
+checked against those the vocabulary implies before the array is read.
 """
 
 from __future__ import annotations
@@ -13,6 +23,10 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import logging
+import math
+import os
+import re
 import zipfile
 from pathlib import Path
 
@@ -25,9 +39,18 @@ from groundlang.model import storage
 __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "save_learner", "load_learner"]
 
 FORMAT = "groundlang-model"
-FORMAT_VERSION = 13  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases; 13: the words added to the lexicon (``lexicon``), multiword prepositions joined into one token
+FORMAT_VERSION = 14  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases; 13: the words added to the lexicon (``lexicon``), multiword prepositions joined into one token; 14: content-named tensor file, palettes recorded
+log = logging.getLogger(__name__)
+
 MODEL_JSON = "model.json"
-GLOBALS = "globals.npz"
+# The tensor file; plain "globals.npz" is its name before format 13, removed by the next save.
+_TENSOR_FILE = re.compile(r"globals(-[0-9a-f]{16})?\.npz")
+# An interrupted save's temporary files (storage.atomic_path names them ".NAME.HEX.tmp").
+_TEMPORARY = re.compile(r"\.(model\.json|globals-[0-9a-f]{16}\.npz)\.[0-9a-f]{16}\.tmp")
+# A model of the crowd corpus has a 60 KB model.json and 1 MB of tensors; these bound what a crafted
+# file can make the loader read or build (float32 elements of all globals together).
+MAX_JSON_BYTES = 32 * 2**20
+MAX_GLOBAL_ELEMENTS = 20_000_000
 
 
 class ModelFormatError(ValueError):
@@ -48,8 +71,8 @@ def check_model_destination(directory: str | Path, option: str = "") -> Path:
         raise ModelFormatError(f"{exc}; a model is written to a folder") from None
     if not directory.is_dir():
         return directory
-    others = sorted(p.name for p in directory.iterdir() if p.name not in (MODEL_JSON, GLOBALS)
-                    and not p.name.startswith("."))
+    others = sorted(p.name for p in directory.iterdir() if p.name != MODEL_JSON
+                    and not _TENSOR_FILE.fullmatch(p.name) and not p.name.startswith("."))
     if others:
         shown = ", ".join(others[:3]) + (", ..." if len(others) > 3 else "")
         raise ModelFormatError(f"{where}: holds other files ({shown}); write the model to a new or empty "
@@ -69,10 +92,14 @@ def save_learner(learner, directory: str | Path) -> Path:
 
     if learner.globals is None or learner.vocab is None:
         raise NotFittedError("cannot save a learner that has not been trained")
+    if not learner.palettes:
+        raise ValueError("cannot save a learner whose training palettes are unknown (train it with fit())")
     directory = check_model_destination(directory)
     buffer = io.BytesIO()
     np.savez(buffer, **{k: v.detach().cpu().numpy() for k, v in learner.globals.items()})
     tensors = buffer.getvalue()
+    digest = hashlib.sha256(tensors).hexdigest()
+    tensor_name = f"globals-{digest[:16]}.npz"
     meta = {
         "format": FORMAT,
         "version": FORMAT_VERSION,
@@ -81,16 +108,45 @@ def save_learner(learner, directory: str | Path) -> Path:
         "vocabulary": learner.vocab.to_json(),
         # the words themselves, not the files' paths: the model parses alike where the files are not
         "lexicon": learner.lexicon_words,
+        "palettes": learner.palettes,
         "task_library": learner.library.source_text(),
         "planning": learner.settings.as_dict(),
         "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed},
-        "globals_sha256": hashlib.sha256(tensors).hexdigest(),
+        "globals_file": tensor_name,
+        "globals_sha256": digest,
     }
-    # Ctrl-C between the two renames would leave new tensors beside the old JSON: hold it back.
+    # Interrupts are held back so that the clean-up after the commit is not skipped; a kill -9 may still
+    # land anywhere, and leaves the old model or the new one, plus files the next save removes.
     with deferred_interrupts():
-        storage.write_atomically(directory / GLOBALS, tensors)
-        storage.write_atomically(directory / MODEL_JSON, json.dumps(meta, indent=1).encode("utf-8"))
+        storage.write_atomically(directory / tensor_name, tensors)
+        # The folder is synced after each rename: after a power cut, model.json must not name tensors whose
+        # rename was lost, nor the old tensors be gone while the old model.json is back.
+        _sync_folder(directory)
+        storage.write_atomically(directory / MODEL_JSON, json.dumps(meta, indent=1).encode("utf-8"))  # the commit
+        _sync_folder(directory)
+        _remove_leftovers(directory, keep=tensor_name)
     return directory
+
+
+def _sync_folder(directory: Path) -> None:
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror or str(exc), str(directory)) from exc
+    finally:
+        os.close(fd)
+
+
+def _remove_leftovers(directory: Path, keep: str) -> None:
+    """Remove tensor files other than ``keep`` and temporary files of interrupted saves (best effort:
+    a file that cannot be removed is left, and ignored by the next load)."""
+    for path in directory.iterdir():
+        if path.name != keep and (_TENSOR_FILE.fullmatch(path.name) or _TEMPORARY.fullmatch(path.name)):
+            try:
+                path.unlink()
+            except OSError as exc:
+                log.warning("%s: left behind (%s)", path, exc.strerror or exc)
 
 
 def _read_json(directory: Path, any_version: bool = False) -> dict:
@@ -99,10 +155,12 @@ def _read_json(directory: Path, any_version: bool = False) -> dict:
     path = directory / MODEL_JSON
     if not directory.is_dir():
         raise ModelFormatError(f"{directory}: not a model directory (it does not exist or is not a folder)")
-    if not path.is_file():
+    if not path.exists():  # anything else there (a FIFO, a folder) is refused by kind when read
         raise ModelFormatError(f"{directory}: no {MODEL_JSON}; this is not a groundlang model directory")
     try:
-        meta = json.loads(path.read_text(encoding="utf-8"))
+        meta = json.loads(storage.read_limited(path, MAX_JSON_BYTES, "a model's model.json").decode("utf-8"))
+    except storage.FileRefused as exc:
+        raise ModelFormatError(str(exc)) from None
     except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise ModelFormatError(f"{path}: not valid JSON ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
@@ -125,21 +183,7 @@ def load_learner(directory: str | Path):
 
     directory = Path(directory)
     meta = _read_json(directory)
-    tensor_path = directory / GLOBALS
-    if not tensor_path.is_file():
-        raise ModelFormatError(f"{directory}: {GLOBALS} is missing")
-    data = tensor_path.read_bytes()
-    if hashlib.sha256(data).hexdigest() != meta.get("globals_sha256"):
-        raise ModelFormatError(
-            f"{tensor_path}: contents do not match the hash recorded in {MODEL_JSON} (truncated or swapped?)"
-        )
-    if not data.startswith(b"PK\x03\x04"):
-        # np.load would guess "pickled data" for any non-archive and suggest loading it unsafely.
-        raise ModelFormatError(f"{tensor_path}: not an .npz archive (it starts with {data[:8]!r}); "
-                               "expected the tensors groundlang saved")
     try:
-        with np.load(io.BytesIO(data), allow_pickle=False) as npz:
-            values = {k: torch.from_numpy(np.array(npz[k])) for k in npz.files}
         if not isinstance(meta["lexicon"], dict):  # never a path: loading a model reads no other file
             raise ValueError(f"lexicon is {type(meta['lexicon']).__name__}, expected words by category")
         learner = Learner(
@@ -149,35 +193,99 @@ def load_learner(directory: str | Path):
             settings=TaskSettings(**meta["planning"]), lexicon=[meta["lexicon"]],
         )
         learner.vocab = Vocabulary.from_json(meta["vocabulary"], learner.word_lexicon)
+        learner.palettes = _checked_palettes(meta["palettes"])
         missing = {t.name for t in learner.library.tasks} - set(learner.vocab.tasks)
         if missing:
             raise ValueError(f"the vocabulary lacks the lifted tasks {sorted(missing)} of the saved task library")
-    except (KeyError, TypeError, AttributeError, ValueError, EOFError, zipfile.BadZipFile, OSError) as exc:
-        raise ModelFormatError(f"{directory}: model files are incomplete or corrupt ({exc!r})") from None
-    learner.globals = _checked_globals(learner, values, tensor_path)
+        tensor_name = meta["globals_file"]
+        if not isinstance(tensor_name, str) or not _TENSOR_FILE.fullmatch(tensor_name):
+            raise ValueError(f"globals_file is {tensor_name!r}; expected globals-<16 hex digits>.npz")
+        expected = _expected_globals(learner)
+    except (KeyError, TypeError, AttributeError, ValueError, RecursionError, RuntimeError) as exc:
+        raise ModelFormatError(f"{directory}: model files are incomplete or corrupt ({_reason(exc)})") from None
+    tensor_path = directory / tensor_name
+    if not tensor_path.exists():
+        raise ModelFormatError(f"{tensor_path}: the model's tensor file is missing ({MODEL_JSON} names it)")
+    # What np.savez writes for these arrays: each one's data and header, plus the archive's directories.
+    limit = sum(8 * math.prod(t.shape) + 1024 for t in expected.values()) + 4096
+    try:
+        data = storage.read_limited(tensor_path, limit, "the tensors of a model of this vocabulary")
+    except storage.FileRefused as exc:
+        raise ModelFormatError(str(exc)) from None
+    if hashlib.sha256(data).hexdigest() != meta.get("globals_sha256"):
+        raise ModelFormatError(
+            f"{tensor_path}: contents do not match the hash recorded in {MODEL_JSON} (truncated or swapped?)"
+        )
+    learner.globals = _read_globals(data, expected, tensor_path, learner.lm.name)
     return learner
 
 
-def _checked_globals(learner, values: dict, tensor_path: Path) -> dict:
-    """The loaded tensors, refused unless names, shapes and finiteness fit the vocabulary and language model."""
+def _reason(exc: BaseException) -> str:
+    if isinstance(exc, KeyError):
+        return f"no field {exc.args[0]!r}"
+    return " ".join(f"{type(exc).__name__}: {exc}".split())[:300]
+
+
+def _checked_palettes(palettes) -> list[dict]:
+    """The palettes a model was trained on, as written: a list of {name, colours, shapes}."""
+    if not isinstance(palettes, list) or not palettes:
+        raise ValueError("palettes must be a non-empty list")
+    for p in palettes:
+        if (not isinstance(p, dict) or not isinstance(p.get("name"), str)
+                or not all(isinstance(v, list) and all(isinstance(x, str) for x in v)
+                           for v in (p.get("colours"), p.get("shapes")))):
+            raise ValueError("each palette must be {name: str, colours: [str], shapes: [str]}")
+    return palettes
+
+
+def _expected_globals(learner) -> dict:
+    """The globals a model of this vocabulary and language model has (shapes and dtypes), sized before
+    anything is built: a crafted vocabulary of 10^5 words made the prior tables alone take 10 GB."""
     import pyro.poutine
 
     from groundlang.model.generative import global_sizes
 
-    v = learner.vocab
+    sizes = global_sizes(learner.vocab)
+    tokens, words, roles = sizes["num_tokens"], sizes["num_words"], sizes["num_roles"]
+    tasks, preps = sizes["num_tasks"], sizes["num_preps"]
+    # phi [tokens, words] is the largest table; alignment tables are at most [tasks * preps, roles].
+    bound = tokens * words + (max(tasks, 1) * max(preps, 1) + 64) * max(roles, 1) + 64 * (tasks + preps + 64)
+    if bound > MAX_GLOBAL_ELEMENTS:
+        raise ValueError(f"the vocabulary ({tokens} tokens, {words} words, {roles} roles, {preps} prepositions, "
+                         f"{tasks} tasks) implies up to {bound:,} parameters; at most {MAX_GLOBAL_ELEMENTS:,} "
+                         "are loaded")
     with pyro.poutine.block():
-        expected = learner.lm.sample_globals(**global_sizes(v))
-    if sorted(values) != sorted(expected):
-        raise ModelFormatError(
-            f"{tensor_path}: holds {sorted(values)}; language model {learner.lm.name} needs {sorted(expected)}"
-        )
-    out = {}
-    for name, want in expected.items():
-        got = values[name]
-        if tuple(got.shape) != tuple(want.shape) or not (got.is_floating_point() and bool(torch.isfinite(got).all())):
-            raise ModelFormatError(
-                f"{tensor_path}: {name} is {got.dtype} {tuple(got.shape)}; expected finite floats of shape "
-                f"{tuple(want.shape)} for this vocabulary"
-            )
-        out[name] = got.to(want.dtype)
-    return out
+        return learner.lm.sample_globals(**sizes)
+
+
+def _read_globals(data: bytes, expected: dict, tensor_path: Path, lm_name: str) -> dict:
+    """The tensors of an ``.npz``, each refused from its header (name, shape, dtype) before it is read."""
+    try:
+        if not data.startswith(b"PK\x03\x04"):
+            # np.load would guess "pickled data" for any non-archive and suggest loading it unsafely.
+            raise ValueError(f"not an .npz archive (it starts with {data[:8]!r}); expected the tensors groundlang saved")
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            names = sorted(n.removesuffix(".npy") for n in archive.namelist())
+            if names != sorted(expected) or len(set(archive.namelist())) != len(expected):
+                raise ValueError(f"holds {names}; language model {lm_name} needs {sorted(expected)}")
+            out = {}
+            for name, template in expected.items():
+                with archive.open(f"{name}.npy") as member:
+                    version = np.lib.format.read_magic(member)
+                    header = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                              else np.lib.format.read_array_header_2_0)
+                    shape, fortran, dtype = header(member)
+                    if tuple(shape) != tuple(template.shape) or dtype.kind != "f" or dtype.itemsize > 8 or fortran:
+                        raise ValueError(f"{name} is {dtype} {tuple(shape)}; expected finite floats of shape "
+                                         f"{tuple(template.shape)} for this vocabulary")
+                with archive.open(f"{name}.npy") as member:
+                    array = np.lib.format.read_array(member, allow_pickle=False)
+                tensor = torch.from_numpy(np.array(array))
+                if not bool(torch.isfinite(tensor).all()):
+                    raise ValueError(f"{name} is {array.dtype} {tuple(array.shape)} with values that are not "
+                                     "finite; expected finite floats")
+                out[name] = tensor.to(template.dtype)
+            return out
+    except (ValueError, EOFError, zipfile.BadZipFile, OSError, NotImplementedError, RuntimeError) as exc:
+        said = exc if isinstance(exc, ValueError) else f"model files are incomplete or corrupt ({_reason(exc)})"
+        raise ModelFormatError(f"{tensor_path}: {said}") from None

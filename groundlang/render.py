@@ -12,7 +12,12 @@ import numpy as np
 
 from groundlang.model.world import State
 
-__all__ = ["glyph", "draw_state", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
+__all__ = ["glyph", "cell_inches", "draw_state", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
+
+# Half an inch a cell up to this many inches a side, then smaller cells: a 1000 x 1000 room at half an
+# inch a cell was a 50,000-pixel-square canvas (75 GiB). Ticks are labelled only on small grids.
+MAX_FIGURE_INCHES = 16.0
+MAX_TICKED_CELLS = 40
 
 _WALL = (0.18, 0.18, 0.2)
 _DOOR = (0.93, 0.89, 0.80)
@@ -61,6 +66,11 @@ def _cell_colours(state: State) -> np.ndarray:
     return img
 
 
+def cell_inches(state: State) -> float:
+    """The side of one cell in the figure: half an inch, less on a grid larger than MAX_FIGURE_INCHES."""
+    return min(0.5, MAX_FIGURE_INCHES / max(state.layout.width, state.layout.height))
+
+
 def draw_state(state: State, ax=None, trajectory=None, title: str | None = None):
     """Draw a state (and optionally a trajectory as paths) on a matplotlib Axes; returns the Axes.
 
@@ -70,11 +80,14 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None)
     import matplotlib.patheffects as pe
     from matplotlib.figure import Figure
 
+    cell = cell_inches(state)
     if ax is None:
         lay = state.layout
-        fig = Figure(figsize=(0.5 * lay.width + 1, 0.5 * lay.height + 1))
+        fig = Figure(figsize=(cell * lay.width + 1, cell * lay.height + 1))
         ax = fig.add_subplot(1, 1, 1)
     lay = state.layout
+    glyph_size = 32 * cell  # points: 16 at half an inch a cell, as before; smaller with the cells
+    marker_size = 26 * cell
     ax.imshow(
         _cell_colours(state), origin="lower", interpolation="nearest",
         extent=(-0.5, lay.width - 0.5, -0.5, lay.height - 0.5),
@@ -92,18 +105,20 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None)
             if k < pos.shape[1] and (pos[-1, k] != pos[0, k]).any():
                 # Where the toy ends up, faint, so start and end both show.
                 ax.text(pos[-1, k, 0], pos[-1, k, 1], glyph(toy.shape, state.layout.palette),
-                        ha="center", va="center", fontsize=16, color=_rgb(toy.colour, state.layout.palette), alpha=0.5,
-                        family="DejaVu Sans", zorder=4)
+                        ha="center", va="center", fontsize=glyph_size, color=_rgb(toy.colour, state.layout.palette),
+                        alpha=0.5, family="DejaVu Sans", zorder=4)
     for toy in state.toys:
-        ax.text(toy.x, toy.y, glyph(toy.shape, state.layout.palette), ha="center", va="center", fontsize=16,
+        ax.text(toy.x, toy.y, glyph(toy.shape, state.layout.palette), ha="center", va="center", fontsize=glyph_size,
                 color=_rgb(toy.colour, state.layout.palette),
                 family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1.5, foreground="black")], zorder=5)
-    ax.plot(state.agent.x, state.agent.y, "o", ms=13, color="white", mec="black", mew=2, zorder=6)
-    ax.text(state.agent.x, state.agent.y, "A", ha="center", va="center", fontsize=9, weight="bold", zorder=7)
+    ax.plot(state.agent.x, state.agent.y, "o", ms=marker_size, color="white", mec="black", mew=min(2, 4 * cell),
+            zorder=6)
+    ax.text(state.agent.x, state.agent.y, "A", ha="center", va="center", fontsize=18 * cell, weight="bold", zorder=7)
     ax.set_xlim(-0.5, lay.width - 0.5)
     ax.set_ylim(-0.5, lay.height - 0.5)
-    ax.set_xticks(range(lay.width))
-    ax.set_yticks(range(lay.height))
+    if max(lay.width, lay.height) <= MAX_TICKED_CELLS:
+        ax.set_xticks(range(lay.width))
+        ax.set_yticks(range(lay.height))
     ax.tick_params(labelsize=7)
     ax.set_aspect("equal")
     if title:
@@ -137,7 +152,8 @@ def save_picture(path: str | Path, state: State, trajectory=None, title: str | N
     path = Path(path)
     fmt = picture_format(path)
     lay = state.layout
-    fig = Figure(figsize=(0.5 * lay.width + 1.5, 0.5 * lay.height + 1.5))
+    cell = cell_inches(state)
+    fig = Figure(figsize=(cell * lay.width + 1.5, cell * lay.height + 1.5))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
     draw_state(state, ax=ax, trajectory=trajectory, title=title)

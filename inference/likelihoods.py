@@ -21,8 +21,15 @@ working directory; ``cache_dir=False`` turns caching off. Files are written
 atomically (temporary file + ``os.replace``), so an interrupted run leaves
 only whole entries. They are not fsynced: a power cut may lose the latest
 ones, which only costs recomputing them, while an fsync per entry would
-slow every run. An entry that does not parse or whose recorded key differs is
-logged as a warning and recomputed.
+slow every run.
+
+Each entry records a checksum over its key and the exact text of its value,
+so a flipped bit in the number (a sign, a digit) is detected rather than read
+as another likelihood. An entry that is damaged (checksum, key or value
+wrong, not JSON, not a regular file or too large) is recomputed and
+rewritten; one warning per table says how many there were. The cache is
+only an optimisation: a cache folder that cannot be written (read-only,
+full) gives one warning and the run goes on without writing to it.
 """
 
 from __future__ import annotations
@@ -39,14 +46,16 @@ import numpy as np
 
 from groundlang.inference.planning import TaskSettings, as_transitions, demonstration_log_likelihood, solve_task
 from groundlang.logic.atoms import Atom, parse_atom
-from groundlang.model.storage import check_folder, write_atomically
+from groundlang.model.storage import FileRefused, check_folder, read_limited, write_atomically
 
 __all__ = ["CACHE_VERSION", "behaviour_likelihood_table", "cache_directory", "entry_key", "pad_table"]
 
 logger = logging.getLogger(__name__)
 
-# Bump when the meaning of a cached number changes (planner or reward semantics).
-CACHE_VERSION = 1
+# Bump when the meaning of a cached number changes (planner or reward semantics). 2: entries carry a checksum.
+CACHE_VERSION = 2
+# An entry is about 200 bytes; anything far larger is not one (a FIFO or /dev/zero is refused by kind).
+MAX_ENTRY_BYTES = 64 * 1024
 
 
 def cache_directory(cache_dir: str | os.PathLike | None = None) -> Path:
@@ -99,31 +108,44 @@ def _entry_path(root: Path, key: str) -> Path:
     return root / "behaviour" / key[:2] / f"{key}.json"
 
 
+def _checksum(key: str, value_text: str) -> str:
+    """Over the key and the value's text: a sign or digit changed in the file no longer matches."""
+    return hashlib.sha256(f"{key} {value_text}".encode()).hexdigest()[:16]
+
+
+class _Damaged(ValueError):
+    """A cache entry that exists but cannot be trusted."""
+
+
 def _read_entry(path: Path, key: str) -> float | None:
-    """The cached value, or None when absent; a corrupt entry is logged and treated as absent."""
+    """The cached value, or None when absent; _Damaged (saying why) when present but not trustworthy."""
     try:
-        raw = path.read_bytes()
+        raw = read_limited(path, MAX_ENTRY_BYTES, "a behaviour cache entry")
     except FileNotFoundError:
         return None
-    except OSError as exc:
-        logger.warning("behaviour cache entry %s unreadable (%s); recomputing", path, exc)
-        return None
+    except (OSError, FileRefused) as exc:
+        raise _Damaged(f"unreadable: {exc.strerror if isinstance(exc, OSError) and exc.strerror else exc}") from None
     try:
         data = json.loads(raw.decode("utf-8"))  # UnicodeDecodeError is a ValueError: a corrupt entry
         if data.get("key") != key:
             raise ValueError(f"records key {str(data.get('key'))[:12]}..., expected {key[:12]}...")
-        value = float(data["log_likelihood"])
-        if math.isnan(value) or value == math.inf:
-            raise ValueError(f"holds {value}")
+        value = data["log_likelihood"]
+        # A float's repr round-trips exactly through JSON, so the checksum of the value read matches that
+        # of the value written unless a character of it changed.
+        if not isinstance(value, float) or data.get("checksum") != _checksum(key, repr(value)):
+            raise ValueError("checksum does not match the value")
+        if math.isnan(value) or value > 0:
+            raise ValueError(f"holds {value}; a log-likelihood is at most 0")
         return value
-    except (ValueError, TypeError, KeyError, AttributeError) as exc:
-        logger.warning("behaviour cache entry %s is corrupt (%s); recomputing", path, exc)
-        return None
+    except (ValueError, TypeError, KeyError, AttributeError, RecursionError) as exc:
+        raise _Damaged(str(exc)) from None
 
 
 def _write_entry(path: Path, key: str, value: float, goal: Sequence[Atom]) -> None:
-    text = json.dumps({"key": key, "goal": " ".join(str(a) for a in goal), "log_likelihood": value})
-    write_atomically(path, text, durable=False)  # a lost entry is recomputed: no fsync per entry
+    value = float(value)
+    entry = {"key": key, "goal": " ".join(str(a) for a in goal), "log_likelihood": value,
+             "checksum": _checksum(key, repr(value))}
+    write_atomically(path, json.dumps(entry), durable=False)  # a lost entry is recomputed: no fsync per entry
 
 
 def behaviour_likelihood_table(
@@ -164,16 +186,27 @@ def behaviour_likelihood_table(
     # (initial state) -> {goal: [(instance, candidate)]} for the entries still to compute.
     todo: dict = {}
     hits = 0
+    damaged: dict[Path, str] = {}  # path -> why; an entry shared by many instances is counted once
     for i, (inst, row) in enumerate(zip(instances, goals)):
         actions = [int(a) for a in inst.actions]
         keys.append([entry_key(inst.initial_state, g, actions, settings, pfs) for g in row])
         for k, (g, key) in enumerate(zip(row, keys[i])):
-            value = None if root is None else _read_entry(_entry_path(root, key), key)
+            value = None
+            if root is not None:
+                path = _entry_path(root, key)
+                try:
+                    value = None if path in damaged else _read_entry(path, key)
+                except _Damaged as exc:
+                    damaged[path] = str(exc)
             if value is None:
                 todo.setdefault(inst.initial_state, {}).setdefault(g, []).append((i, k))
             else:
                 table[i][k] = value
                 hits += 1
+    if damaged:
+        first, why = next(iter(damaged.items()))
+        logger.warning("behaviour cache: %d corrupt entr%s recomputed (first: %s: %s)",
+                       len(damaged), "y" if len(damaged) == 1 else "ies", first, why)
     solves = sum(len(by_goal) for by_goal in todo.values())
     logger.info("behaviour likelihoods: %d cached, %d to compute with %d solves in %d state spaces",
                 hits, sum(len(v) for by_goal in todo.values() for v in by_goal.values()), solves, len(todo))
@@ -200,7 +233,12 @@ def behaviour_likelihood_table(
                 value = float(demonstration_log_likelihood(result.log_policy, demo_indices[i], actions))
                 table[i][k] = value
                 if root is not None:
-                    _write_entry(_entry_path(root, keys[i][k]), keys[i][k], value, goal)
+                    try:
+                        _write_entry(_entry_path(root, keys[i][k]), keys[i][k], value, goal)
+                    except OSError as exc:
+                        logger.warning("behaviour cache %s cannot be written (%s: %s); going on without writing "
+                                       "to it", root, exc.filename or root, exc.strerror or exc)
+                        root = None
             if bar is not None:
                 bar.update(1)
     if bar is not None:

@@ -261,6 +261,22 @@ class TaskSettings:
     tol: float = 1e-4
     max_sweeps: int = 5000
 
+    def __post_init__(self):
+        # Checked here, not by each reader: a saved model's planning settings come from a file, and
+        # step_cost=-1e308 overflowed deep inside the solver instead of being refused.
+        for name, low, high in (("goal_reward", -1e6, 1e6), ("step_cost", 0.0, 1e6), ("discount", 0.0, 1.0),
+                                ("temperature", 0.0, 1e6), ("tol", 0.0, 1e3)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
+                raise PlanningError(f"planning setting {name}={value!r}: expected a number from {low:g} to {high:g}")
+        for name in ("discount", "temperature", "tol"):
+            if not getattr(self, name) > 0:
+                raise PlanningError(f"planning setting {name}={getattr(self, name)!r}: expected a number above 0")
+        if not isinstance(self.absorbing_goal, bool):
+            raise PlanningError(f"planning setting absorbing_goal={self.absorbing_goal!r}: expected true or false")
+        if isinstance(self.max_sweeps, bool) or not isinstance(self.max_sweeps, int) or not 1 <= self.max_sweeps <= 10**6:
+            raise PlanningError(f"planning setting max_sweeps={self.max_sweeps!r}: expected an integer from 1 to 1000000")
+
     def as_dict(self) -> dict:
         return dict(self.__dict__)
 

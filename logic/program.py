@@ -22,11 +22,13 @@ Safety and errors (all ``AspError``, a ``ValueError``, so the CLI prints one lin
 
 from __future__ import annotations
 
+import errno
 import json
 import logging
 import numbers
 import os
 import re
+import stat
 import subprocess
 import sys
 import threading
@@ -95,10 +97,35 @@ def package_source(filename: str) -> Source:
     return Source(f"groundlang.logic/{filename}", resource.read_text(encoding="utf-8"))
 
 
+# A task library is a few KB; a wrong path (a log, /dev/zero) must not be read whole.
+MAX_PROGRAM_BYTES = 4 * 2**20
+
+
+def _read_regular(path: Path) -> bytes:
+    """A regular file of at most MAX_PROGRAM_BYTES (model.storage.read_limited does the same for the layers
+    above; logic imports none of them). Opened non-blocking: a FIFO must not hang the open."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    try:
+        mode = os.fstat(fd).st_mode
+    except BaseException:
+        os.close(fd)
+        raise
+    if not stat.S_ISREG(mode):  # checked before fdopen, which refuses a folder naming only the descriptor
+        os.close(fd)
+        if stat.S_ISDIR(mode):
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        raise AspError(f"{path}: not a regular file (a FIFO or device); expected an ASP program (.lp)")
+    with os.fdopen(fd, "rb") as handle:
+        data = handle.read(MAX_PROGRAM_BYTES + 1)
+    if len(data) > MAX_PROGRAM_BYTES:
+        raise AspError(f"{path}: more than the {MAX_PROGRAM_BYTES:,} bytes allowed for an ASP program")
+    return data
+
+
 def file_source(path: str | Path) -> Source:
     """A user's ``.lp`` file; raises OSError when unreadable and AspError when not UTF-8."""
     path = Path(path)
-    data = path.read_bytes()
+    data = _read_regular(path)
     try:
         return Source(str(path), data.decode("utf-8"))
     except UnicodeDecodeError as exc:

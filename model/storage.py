@@ -1,21 +1,68 @@
-"""Atomic files: everything groundlang writes appears whole or not at all.
+"""Atomic files: everything groundlang writes appears whole or not at all; bounded reads.
 
 A writer gets a temporary path next to the target and the temporary file is
 renamed onto the target only when writing succeeded, so an interruption or
 a crash leaves the previous file (or none), never half of one. Temporary
 files are created private to the owner and then get the permissions a
-plain ``open`` would give.
+plain ``open`` would give. Every OS error raised while writing names the
+path it concerns (a full disk says which file it was writing).
+
+:func:`read_limited` is how groundlang reads a file a user names: regular
+files only (a FIFO would hang, ``/dev/zero`` would fill memory) and at most
+a byte limit per kind of file, refused in one line naming the path.
 """
 
 from __future__ import annotations
 
+import errno
 import os
 import secrets
+import stat
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-__all__ = ["atomic_path", "check_destination", "check_folder", "write_atomically"]
+__all__ = ["FileRefused", "atomic_path", "check_destination", "check_folder", "read_limited", "write_atomically"]
+
+
+class FileRefused(ValueError):
+    """A file that is not a regular file, or larger than its kind may be; the message names the path."""
+
+
+def _kind(mode: int) -> str:
+    if stat.S_ISFIFO(mode):
+        return "a FIFO (named pipe)"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def read_limited(path: str | os.PathLike, limit: int, what: str) -> bytes:
+    """The bytes of ``path``, a regular file of at most ``limit`` bytes; FileRefused otherwise (``what``
+    names the kind of file expected, e.g. "a labels CSV"), OSError (naming the path) when unreadable.
+    The kind is read from the open descriptor (opened non-blocking, so a FIFO cannot hang the open), and
+    no more than ``limit + 1`` bytes are ever read, even from a file that grows meanwhile."""
+    path = Path(path)
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    try:
+        info = os.fstat(fd)
+    except BaseException:
+        os.close(fd)
+        raise
+    if not stat.S_ISREG(info.st_mode):
+        os.close(fd)
+        if stat.S_ISDIR(info.st_mode):  # what reading a folder has always said
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        raise FileRefused(f"{path}: {_kind(info.st_mode)}, not a regular file; expected {what}")
+    with os.fdopen(fd, "rb") as handle:
+        if info.st_size > limit:
+            raise FileRefused(f"{path}: {info.st_size:,} bytes, more than the {limit:,} allowed for {what}")
+        data = handle.read(limit + 1)
+    if len(data) > limit:
+        raise FileRefused(f"{path}: more than the {limit:,} bytes allowed for {what}")
+    return data
 
 
 def _read_umask() -> int:
@@ -89,12 +136,17 @@ def write_atomically(path: str | os.PathLike, data: bytes | str, *, durable: boo
     """
     path = Path(path)
     payload = data.encode("utf-8") if isinstance(data, str) else data
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as handle:
-            handle.write(payload)
-            if durable:
-                handle.flush()
-                os.fsync(handle.fileno())
+    try:
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as handle:
+                handle.write(payload)
+                if durable:
+                    handle.flush()
+                    os.fsync(handle.fileno())
+    except OSError as exc:
+        if exc.filename is None:  # a failed write or fsync (a full disk) names no file: name the target
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
+        raise
     return path
 
 

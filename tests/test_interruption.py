@@ -91,7 +91,7 @@ def test_save_interrupted_between_its_two_files_still_writes_both(learner, tmp_p
     monkeypatch.setattr(storage, "write_atomically", write_then_interrupt)
     with pytest.raises(KeyboardInterrupt):
         learner.save(tmp_path / "model")
-    assert calls == ["globals.npz", "model.json"]
+    assert len(calls) == 2 and calls[0].startswith("globals-") and calls[1] == "model.json"
     monkeypatch.undo()
     loaded = load_learner(tmp_path / "model")
     assert loaded.vocab.words == learner.vocab.words

@@ -91,7 +91,7 @@ def test_corrupt_entries_are_recomputed_with_a_warning(small_instances, tmp_path
     with caplog.at_level(logging.WARNING, logger="groundlang.inference.likelihoods"):
         again = behaviour_likelihood_table(small_instances, goals, cache_dir=tmp_path)
     corrupt = [r for r in caplog.records if "corrupt" in r.getMessage()]
-    assert len(corrupt) == 3
+    assert len(corrupt) == 1 and "3 corrupt entries recomputed" in corrupt[0].getMessage()  # one line per run
     for a, b in zip(good, again):
         np.testing.assert_allclose(a, b)
     assert '"log_likelihood"' in entries[0].read_text()  # rewritten whole

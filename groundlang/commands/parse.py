@@ -15,7 +15,9 @@ import sys
 from pathlib import Path
 
 from groundlang.commands import add_lexicon_option, positive_int
+from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import parse
+from groundlang.model.storage import read_limited
 
 
 def register(subparsers) -> None:
@@ -30,6 +32,10 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+# One command a line; the crowd corpus's 480 commands take 30 KB.
+MAX_COMMANDS_BYTES = 16 * 2**20
+
+
 def _commands(path: Path) -> list[tuple[str, str]]:
     """(source, command) pairs: first lines of a corpus folder's files, or a file's non-empty lines."""
     if path.is_dir():
@@ -38,10 +44,10 @@ def _commands(path: Path) -> list[tuple[str, str]]:
             raise ValueError(f"{path}: no *.txt command files in this folder")
         out = []
         for f in files:
-            with open(f, encoding="utf-8", errors="replace") as fh:
-                out.append((str(f), fh.readline().strip()))
+            text = read_limited(f, MAX_CORPUS_FILE_BYTES, "a corpus file").decode("utf-8", errors="replace")
+            out.append((str(f), text.split("\n", 1)[0].strip()))
         return out
-    lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    lines = read_limited(path, MAX_COMMANDS_BYTES, "a file of commands").decode("utf-8", errors="replace").splitlines()
     return [(f"{path}:{i}", line.strip()) for i, line in enumerate(lines, 1) if line.strip()]
 
 

@@ -1,0 +1,324 @@
+"""Saving survives full disks and kills; loading a hostile model stays bounded and says one line.
+
+groundlang.model_io: the save is all-or-nothing (tensors in a content-named
+file, ``model.json`` renamed last), leftovers are removed by the next save,
+OS errors name their path, and the loader checks sizes from headers before
+it builds anything (a fuzz run in a child process measures its peak memory).
+"""
+
+from __future__ import annotations
+
+import errno
+import hashlib
+import io
+import json
+import os
+import subprocess
+import sys
+import textwrap
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from groundlang.cli import main
+from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
+from groundlang.learner import Learner
+from groundlang.model import storage
+from groundlang.model_io import ModelFormatError, load_learner
+
+EXAMPLES = example_corpus_path()
+REPO = Path(__file__).parent.parent
+
+
+@pytest.fixture(scope="module")
+def instances():
+    return read_corpus(EXAMPLES, "sokoban").instances
+
+
+@pytest.fixture(scope="module")
+def learners(instances):
+    """Two small learners with different globals: the saved one, and the one a failed save tries to write."""
+    old = Learner(steps=20, cache_dir=False).fit(instances[:6])
+    new = Learner(steps=20, seed=1, cache_dir=False).fit(instances[6:12])
+    return old, new
+
+
+def _tensor_files(d: Path) -> list[str]:
+    return sorted(p.name for p in d.iterdir() if p.name != "model.json")
+
+
+def _same_globals(a, b) -> bool:
+    return sorted(a.globals) == sorted(b.globals) and all(torch.equal(a.globals[k], b.globals[k]) for k in a.globals)
+
+
+# ----------------------------------------------------------------- all-or-nothing saving
+@pytest.mark.parametrize("failing_write", [1, 2, 3])  # fsyncs: 1 the tensors, 2 the folder, 3 model.json
+def test_a_full_disk_keeps_the_previous_model_and_names_the_file(learners, tmp_path, monkeypatch, failing_write):
+    old, new = learners
+    model = old.save(tmp_path / "m")
+    before = {p.name: p.read_bytes() for p in model.iterdir()}
+    calls = []
+    real_fsync = os.fsync
+
+    def full_disk(fd):
+        calls.append(fd)
+        if len(calls) == failing_write:
+            raise OSError(errno.ENOSPC, "No space left on device")  # as write/fsync raise it: no file name
+        real_fsync(fd)
+
+    monkeypatch.setattr(os, "fsync", full_disk)
+    with pytest.raises(OSError) as caught:
+        new.save(model)
+    monkeypatch.undo()
+    assert caught.value.errno == errno.ENOSPC
+    assert Path(caught.value.filename) == {1: model / f"globals-{_digest(new)}.npz", 2: model,
+                                           3: model / "model.json"}[failing_write]
+    loaded = load_learner(model)
+    assert _same_globals(loaded, old)
+    assert json.loads(before["model.json"]) == json.loads((model / "model.json").read_bytes())
+    assert not [p for p in model.iterdir() if p.name.startswith(".")]  # the temporary file was removed
+
+
+def _digest(learner) -> str:
+    buffer = io.BytesIO()
+    np.savez(buffer, **{k: v.detach().cpu().numpy() for k, v in learner.globals.items()})
+    return hashlib.sha256(buffer.getvalue()).hexdigest()[:16]
+
+
+def test_cli_train_on_a_full_disk_says_which_file_and_keeps_the_model(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("GROUNDLANG_CACHE", str(tmp_path / "cache"))
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "m"),
+                 "--seed", "0"]) == 0
+    before = load_learner(tmp_path / "m")
+    real_fsync = os.fsync
+
+    def full_disk(fd):
+        if os.readlink(f"/proc/self/fd/{fd}").endswith(".tmp") and ".model.json." in os.readlink(f"/proc/self/fd/{fd}"):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_fsync(fd)
+
+    monkeypatch.setattr(os, "fsync", full_disk)
+    capsys.readouterr()
+    code = main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "m"),
+                 "--seed", "1"])
+    monkeypatch.undo()
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err == f"groundlang train: error: {tmp_path / 'm' / 'model.json'}: No space left on device\n"
+    assert _same_globals(load_learner(tmp_path / "m"), before)
+
+
+_KILLER = textwrap.dedent("""
+    import os, signal, sys
+    from groundlang.corpus import example_corpus_path, read_corpus
+    from groundlang.learner import Learner
+    from groundlang.model import storage
+    where, target = sys.argv[1], sys.argv[2]
+    learner = Learner(steps=20, seed=1, cache_dir=False).fit(read_corpus(example_corpus_path(), "sokoban").instances[6:12])
+    real_write, real_replace = storage.write_atomically, os.replace
+    def write(path, data, **kw):
+        real_write(path, data, **kw)
+        if where == "after the tensors" and "globals-" in str(path):
+            os.kill(os.getpid(), signal.SIGKILL)
+    def replace(src, dst):
+        if where == "before the model.json rename" and str(dst).endswith("model.json"):
+            os.kill(os.getpid(), signal.SIGKILL)
+        real_replace(src, dst)
+    storage.write_atomically = write
+    storage.os.replace = replace
+    learner.save(target)
+""")
+
+
+@pytest.mark.parametrize("where", ["after the tensors", "before the model.json rename"])
+def test_kill_9_between_the_steps_of_a_save_keeps_the_previous_model(learners, tmp_path, where):
+    old, new = learners
+    model = old.save(tmp_path / "m")
+    done = subprocess.run([sys.executable, "-c", _KILLER, where, str(model)], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == -9, done.stderr
+    leftovers = _tensor_files(model)
+    assert len(leftovers) == (2 if where == "after the tensors" else 3)  # new tensors (and a temporary model.json)
+    assert _same_globals(load_learner(model), old)  # the old model.json still names the old tensors
+    new.save(model)  # the next save removes what the killed one left
+    assert len(_tensor_files(model)) == 1 and not [p for p in model.iterdir() if p.name.startswith(".")]
+    assert _same_globals(load_learner(model), new)
+
+
+def test_a_save_removes_temporary_files_of_interrupted_saves_and_keeps_others(learners, tmp_path):
+    old, _ = learners
+    model = old.save(tmp_path / "m")
+    (model / ".model.json.0123456789abcdef.tmp").write_text("half")
+    (model / f".globals-{'a' * 16}.npz.0123456789abcdef.tmp").write_bytes(b"PK")
+    (model / ".notes").write_text("mine")  # a file of the user's: not ours to remove
+    old.save(model)
+    assert sorted(p.name for p in model.iterdir()) == [".notes", f"globals-{_digest(old)}.npz", "model.json"]
+
+
+# ----------------------------------------------------------------- hostile models, bounded
+def _edit(d: Path, change) -> None:
+    meta = json.loads((d / "model.json").read_text())
+    change(meta)
+    (d / "model.json").write_text(json.dumps(meta))
+
+
+def _npy_header(shape: tuple[int, ...], dtype: str = "<f4") -> bytes:
+    buffer = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buffer, {"descr": dtype, "fortran_order": False, "shape": shape})
+    return buffer.getvalue()  # magic string included
+
+
+def _huge_npz(d: Path) -> None:
+    """A 25000 x 25000 phi declared in its header (2.5 GB if built), a few bytes of data, hash rewritten."""
+    meta = json.loads((d / "model.json").read_text())
+    path = d / meta["globals_file"]
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as archive:
+        for name, array in arrays.items():
+            if name == "phi":
+                archive.writestr("phi.npy", _npy_header((25000, 25000)) + b"\0" * 64)
+            else:
+                member = io.BytesIO()
+                np.lib.format.write_array(member, array)
+                archive.writestr(f"{name}.npy", member.getvalue())
+    path.write_bytes(buffer.getvalue())
+    _edit(d, lambda m: m.update(globals_sha256=hashlib.sha256(path.read_bytes()).hexdigest()))
+
+
+HOSTILE = {
+    "30,000 extra words": (lambda d: _edit(d, lambda m: m["vocabulary"]["words"].extend(f"w{i}" for i in range(30000))),
+                           ["phi is float32", "expected finite floats of shape"]),
+    "10^6 extra words": (lambda d: _edit(d, lambda m: m["vocabulary"]["words"].extend(f"w{i}" for i in range(10**6))),
+                         ["parameters; at most 20,000,000 are loaded"]),
+    "30,000 prepositions and roles": (
+        lambda d: _edit(d, lambda m: (m["vocabulary"]["preps"].extend(f"p{i}" for i in range(30000)),
+                                      m["vocabulary"]["roles"].extend(f"r{i}" for i in range(30000)))),
+        ["are loaded"]),
+    "a 25000 x 25000 tensor in the header": (_huge_npz, ["phi is float32 (25000, 25000); expected finite floats"]),
+    "step_cost -1e308": (lambda d: _edit(d, lambda m: m["planning"].update(step_cost=-1e308)),
+                         ["planning setting step_cost=-1e+308: expected a number from 0 to 1e+06"]),
+    "discount 2": (lambda d: _edit(d, lambda m: m["planning"].update(discount=2)), ["planning setting discount=2"]),
+    "max_sweeps 10^12": (lambda d: _edit(d, lambda m: m["planning"].update(max_sweeps=10**12)),
+                         ["planning setting max_sweeps=1000000000000"]),
+    "palettes missing": (lambda d: _edit(d, lambda m: m.pop("palettes")), ["no field 'palettes'"]),
+    "tensor file named outside the folder": (lambda d: _edit(d, lambda m: m.update(globals_file="../x.npz")),
+                                             ["globals_file is '../x.npz'"]),
+    "model.json a FIFO": (lambda d: ((d / "model.json").unlink(), os.mkfifo(d / "model.json")),
+                          ["model.json: a FIFO (named pipe), not a regular file"]),
+    "tensor file /dev/zero": (lambda d: _symlink_tensors(d, "/dev/zero"), ["a device, not a regular file"]),
+}
+
+
+def _symlink_tensors(d: Path, target: str) -> None:
+    path = d / json.loads((d / "model.json").read_text())["globals_file"]
+    path.unlink()
+    path.symlink_to(target)
+
+
+@pytest.mark.parametrize("case", sorted(HOSTILE))
+def test_hostile_model_files_are_refused_in_one_line(learners, tmp_path, capsys, case):
+    change, pieces = HOSTILE[case]
+    model = learners[0].save(tmp_path / "m")
+    change(model)
+    code = main(["lexicon", str(model), "--words", "red"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+    assert err.startswith(f"groundlang lexicon: error: {model}")
+    for piece in pieces:
+        assert piece in err, err
+
+
+_FUZZ = textwrap.dedent("""
+    import json, random, resource, shutil, sys, hashlib, traceback
+    from pathlib import Path
+    from groundlang.model_io import ModelFormatError, load_learner
+    good, work, cases = Path(sys.argv[1]), Path(sys.argv[2]), int(sys.argv[3])
+    rng = random.Random(24)
+    values = [None, True, -1, 0, 1, 2**31, 10**6, 10**12, -1e308, 1e308, float("nan"), "", "x" * 50,
+              [], {}, ["a"] * 5000, {"a": 1}]
+    loaded = refused = 0
+    for case in range(cases):
+        shutil.rmtree(work, ignore_errors=True)
+        shutil.copytree(good, work)
+        meta = json.loads((work / "model.json").read_text())
+        tensors = work / meta["globals_file"]
+        kind = rng.randrange(4)
+        if kind == 0:  # a field, or a field of a field, replaced
+            key = rng.choice(sorted(meta))
+            if isinstance(meta[key], dict) and meta[key] and rng.random() < 0.7:
+                sub = rng.choice(sorted(meta[key]))
+                meta[key][sub] = rng.choice(values)
+            else:
+                meta[key] = rng.choice(values)
+        elif kind == 1:  # a vocabulary list grown
+            part = rng.choice(["words", "tokens", "roles", "preps", "tasks"])
+            meta["vocabulary"][part] += [f"{part}{i}" for i in range(rng.choice([10, 3000, 30000, 300000]))]
+        else:  # bytes of the tensor file changed, inserted or cut, the hash rewritten to match (hostile)
+            data = bytearray(tensors.read_bytes())
+            for _ in range(rng.randrange(1, 8)):
+                at = rng.randrange(len(data))
+                if kind == 2:
+                    data[at] = rng.randrange(256)
+                else:
+                    data[at:at + rng.randrange(64)] = bytes(rng.randrange(256) for _ in range(rng.randrange(64)))
+            tensors.write_bytes(bytes(data))
+            meta["globals_sha256"] = hashlib.sha256(bytes(data)).hexdigest()
+        (work / "model.json").write_text(json.dumps(meta))
+        try:
+            load_learner(work)
+            loaded += 1
+        except ModelFormatError as exc:
+            assert "\\n" not in str(exc), str(exc)
+            refused += 1
+        except BaseException:
+            print(f"case {case}: not a ModelFormatError", file=sys.stderr)
+            traceback.print_exc()
+            sys.exit(1)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    print(json.dumps({"loaded": loaded, "refused": refused, "peak": peak}))
+""")
+
+
+@pytest.mark.slow
+def test_fuzz_of_the_model_loader_stays_under_1_gb_and_never_escapes(learners, tmp_path):
+    """Random edits of model.json and the tensor file, in a child process whose peak memory is measured."""
+    model = learners[0].save(tmp_path / "good")
+    done = subprocess.run([sys.executable, "-c", _FUZZ, str(model), str(tmp_path / "work"), "60"],
+                          capture_output=True, text=True, timeout=1200)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout)
+    assert result["loaded"] + result["refused"] == 60 and result["refused"] > 40
+    print(result)
+    assert result["peak"] < 2**30, result
+
+
+# ----------------------------------------------------------------- the palette a model was trained on
+def test_a_model_records_its_palette_and_refuses_a_state_of_another(learners, tmp_path):
+    old, _ = learners
+    model = old.save(tmp_path / "m")
+    recorded = json.loads((model / "model.json").read_text())["palettes"]
+    assert recorded == [{"name": "sokoban", "colours": ["black", "blue", "cyan", "darkGray", "gray", "green",
+                                                        "lightGray", "magenta", "orange", "pink", "red", "white",
+                                                        "yellow"],
+                         "shapes": ["star", "moon", "circle", "smiley", "square"]}]
+    other = tmp_path / "other.state"
+    other.write_text("room,0,0,6,4,0 room,3,4,6,8,0 door,4,3,4,3 block,1,0,1,1 agent,6,2\n")
+    state = read_state_file(other, "sokoban2")
+    for learner in (old, load_learner(model)):
+        with pytest.raises(ValueError, match=r"^posterior: the state is of palette 'sokoban2'; this model was "
+                                             r"trained on palette sokoban \(colours and shapes must be the same"):
+            learner.posterior("go to the red room", state)
+
+
+def test_cli_follow_in_a_state_of_another_palette_is_one_line(learners, tmp_path, capsys):
+    model = learners[0].save(tmp_path / "m")
+    other = tmp_path / "other.state"
+    other.write_text("room,0,0,6,4,0 room,3,4,6,8,0 door,4,3,4,3 block,1,0,1,1 agent,6,2\n")
+    code = main(["follow", "go to the red room", "--env", str(other), "--palette", "sokoban2", "--model", str(model)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("groundlang follow: error: follow: the state is of palette 'sokoban2'")
