@@ -25,7 +25,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from groundlang.corpus import MAX_COORDINATE, CorpusError
+from groundlang.corpus import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError
+from groundlang.model.storage import FileRefused, read_limited
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
 __all__ = ["Pair", "Command", "DEFAULT_PALETTE", "parse_bdm_state", "read_bdm", "is_bdm", "bdm_files",
@@ -161,8 +162,10 @@ def format_bdm_state(state: State, toy_names: tuple[str, ...] | None = None) -> 
 def read_bdm(path: str | Path, palette: str | Palette = DEFAULT_PALETTE) -> list[Command]:
     """Every command of a ``.bdm`` file with its pairs; raises CorpusError naming the file and line."""
     path = Path(path)
-    try:
-        data = path.read_bytes()
+    try:  # regular files only, of a bounded size: a FIFO or /dev/zero is refused by name
+        data = read_limited(path, MAX_FILE_BYTES, "a .bdm corpus file")
+    except FileRefused as exc:
+        raise CorpusError(str(exc)) from None
     except OSError as exc:
         raise CorpusError(f"{path}: {exc.strerror or exc}") from None
     try:

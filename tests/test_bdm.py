@@ -133,3 +133,13 @@ def test_synthesised_demonstrations_end_in_the_end_state_by_a_shortest_path(comm
     # Manhattan distance is a lower bound, reached when no wall is in the way.
     assert lengths == [7, 5, 5, 7, 7, 9]
     assert shortest_actions(commands[0].pairs[0].start, commands[0].pairs[0].start) == ()
+
+
+def test_a_fifo_or_device_is_refused_by_name(tmp_path):
+    import os
+
+    fifo = tmp_path / "pipe.bdm"
+    os.mkfifo(fifo)
+    for path in (fifo, Path("/dev/zero")):
+        with pytest.raises(CorpusError, match="not a regular file"):
+            read_bdm(path)
