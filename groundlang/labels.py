@@ -30,6 +30,7 @@ __all__ = [
     "goal_holds",
     "check_goal_objects",
     "label_coverage",
+    "check_label_prefixes",
 ]
 
 
@@ -152,11 +153,9 @@ class LabelCoverage:
     failing: list[tuple[Instance, tuple[Atom, ...]]] = field(default_factory=list)
 
 
-def label_coverage(corpus: Corpus, labels: Labels | dict) -> LabelCoverage:
-    """Match labels to a corpus and check each goal in the instance's final state.
-
-    Raises LabelError when a labelled prefix has no files in the corpus or a goal names a missing object.
-    """
+def check_label_prefixes(corpus: Corpus, labels: Labels | dict) -> None:
+    """Raise LabelError (one line, at most five prefixes named) when a labelled prefix has no files in
+    the corpus: labels of another corpus, or of another folder of it."""
     prefixes = {inst.prefix for inst in corpus.instances} | {file_prefix(p.stem) for p, _ in corpus.skipped}
     source = getattr(labels, "path", "labels")
     missing = sorted(p for p in labels if p not in prefixes)
@@ -166,6 +165,14 @@ def label_coverage(corpus: Corpus, labels: Labels | dict) -> LabelCoverage:
             f"{source}: prefixes {shown} name no files in {corpus.directory}; "
             "expected every labelled prefix to have corpus files"
         )
+
+
+def label_coverage(corpus: Corpus, labels: Labels | dict) -> LabelCoverage:
+    """Match labels to a corpus and check each goal in the instance's final state.
+
+    Raises LabelError when a labelled prefix has no files in the corpus or a goal names a missing object.
+    """
+    check_label_prefixes(corpus, labels)
     cov = LabelCoverage(total=len(corpus.instances), labelled=0, holding=0)
     for inst in corpus.instances:
         goal = label_for(inst, labels)

@@ -178,3 +178,19 @@ def test_the_corpus_spelling_of_toys_is_read_in_any_predicate():
     assert [canonical_predicate(p) for p in ("blockInRoom", "blockInDoor", "agentTouchingBlock", "blockIsStar",
                                              "agentNextToBlock", "blocky", "roomIsDarkGray")] == [
         "toyInRoom", "toyInDoor", "agentTouchingToy", "toyIsStar", "agentNextToToy", "blocky", "roomIsDarkGray"]
+
+
+def test_evaluate_refuses_labels_of_another_corpus_as_check_does(tmp_path):
+    import subprocess
+    import sys
+
+    from groundlang import example_corpus_path
+
+    labels = tmp_path / "labels.csv"
+    labels.write_text("prefix,goal\n" + "".join(f'other{n}_,"agentInRoom(agent0, room0)"\n' for n in range(1000)),
+                      encoding="utf-8")
+    for argv in (["check", str(example_corpus_path()), "--palette", "sokoban", "--labels", str(labels)],
+                 ["evaluate", "--corpus", str(example_corpus_path()), "--palette", "sokoban", "--labels", str(labels)]):
+        done = subprocess.run([sys.executable, "-m", "groundlang.cli", *argv], capture_output=True, text=True)
+        assert done.returncode == 2 and len(done.stderr.splitlines()) == 1, done.stderr
+        assert "prefixes other0_, other100_, other101_, other102_, other103_, ... (1000 in all) name no files" in done.stderr

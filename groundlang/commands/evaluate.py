@@ -51,7 +51,7 @@ def read_novel_states(directory: str, palette: str) -> list:
 def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import read_corpus
     from groundlang.evaluation import evaluate
-    from groundlang.labels import read_labels
+    from groundlang.labels import check_label_prefixes, read_labels
     from groundlang.model.domain_words import extra_words
     from groundlang.model.storage import check_destination, write_atomically
     from groundlang.published import comparison, format_comparison
@@ -62,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
     words = extra_words(args.lexicon)
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)
+    check_label_prefixes(corpus, labels)  # as check does: labels of another corpus are refused, not ignored
     novel = read_novel_states(args.novel_envs, args.palette) if args.novel_envs else []
     result = evaluate(
         corpus, labels, protocol=args.protocol, language_model=args.language_model,
