@@ -36,6 +36,9 @@ __all__ = ["PFTables", "TabulationError", "pf_tables", "tabulation_program", "MA
 # Entries of one atom's table (cells to the power of its movable arguments): two movable arguments
 # on a 32x32 grid are 10^6; three are refused here rather than grounded for minutes.
 MAX_TABLE_CELLS = 1 << 24
+# Walkable cells a layout may have to be tabulated: every movable object is copied onto each, and a
+# PF of two movable objects joins two such sets (4096^2 = MAX_TABLE_CELLS). Checked before grounding.
+MAX_TABULATED_CELLS = 1 << 12
 
 
 class TabulationError(AspError):
@@ -171,6 +174,9 @@ def pf_tables(layout: Layout, program: Program | None = None,
     """The PF tables of ``layout`` under ``program`` (default: the package's PFs); cached per pair."""
     program = program or tabulation_program(())
     cells = int(layout.walkable.sum())
+    if cells > MAX_TABULATED_CELLS:
+        raise TabulationError(f"this layout has {cells:,} walkable cells; PFs are tabulated for at most "
+                              f"{MAX_TABULATED_CELLS:,} (every movable object is copied onto each cell)")
     models = program.solve(layout_facts(layout, movable=False) + _copies(layout), models=1, time_limit=time_limit)
     if not models:
         raise TabulationError(f"{program.user_names}: no answer set for the layout (a constraint always fails)")

@@ -226,3 +226,17 @@ def test_corpus_goals_hold_only_at_the_end(shared_corpus):
         mask = goal_mask(space, goal, pf_tables(space.layout))
         assert mask[space.index_of(instance.final_state)], prefix
         assert not mask[0], prefix
+
+
+def test_a_layout_too_large_to_tabulate_is_refused_before_grounding(fixtures):
+    import time
+
+    from groundlang.corpus import read_state_file
+    from groundlang.model.pf_tables import MAX_TABULATED_CELLS, TabulationError
+
+    state = read_state_file(fixtures / "bad_input" / "huge_grid.state", "sokoban")
+    assert state.layout.walkable.sum() > MAX_TABULATED_CELLS
+    start = time.perf_counter()
+    with pytest.raises(TabulationError, match="162,793 walkable cells; PFs are tabulated for at most 4,096"):
+        pf_tables(state.layout)
+    assert time.perf_counter() - start < 5  # refused, not grounded (grounding took minutes and gigabytes)

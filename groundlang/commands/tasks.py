@@ -29,7 +29,7 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
-    from groundlang.model.pf_tables import pf_tables
+    from groundlang.model.pf_tables import TabulationError, pf_tables
     from groundlang.model.tasks import candidate_tasks, object_descriptions
 
     state = read_initial_state(args.file, args.palette)
@@ -39,8 +39,12 @@ def run(args: argparse.Namespace) -> int:
     # The layout's order (rooms, doors, toys), as the corpus writes a state, not the names' alphabetical order.
     described = {obj: by_name[obj] for obj in object_names(state) if obj in by_name}
     # Relations (toyInRoom, a user's agentNextToToy, ...) as the PF tables planning uses say they hold.
-    holding = [a for a in pf_tables(state.layout, library.tabulation_program).holding(state.positions)
-               if len(a.args) > 1]
+    try:
+        holding = [a for a in pf_tables(state.layout, library.tabulation_program).holding(state.positions)
+                   if len(a.args) > 1]
+        untabulated = None
+    except TabulationError as exc:  # a layout too large to tabulate still lists its tasks
+        holding, untabulated = [], str(exc)
     relations = {obj: atoms for obj in object_names(state) if (atoms := [a for a in holding if obj in a.args])}
     if args.json:
         out = {
@@ -70,6 +74,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"unary PFs of each object in the initial state, by class ({len(described)} objects):")
     for obj, by_class in described.items():
         print(f"  {obj}: " + "; ".join(f"{cls} {', '.join(pfs)}" for cls, pfs in by_class.items()))
+    if untabulated:
+        print(f"PFs of two or more objects: not listed ({untabulated})")
+        return 0
     print(f"PFs of two or more objects in the initial state, by object ({len(holding)} "
           "facts):")
     for obj, atoms in relations.items():
