@@ -229,14 +229,11 @@ def test_corpus_goals_hold_only_at_the_end(shared_corpus):
 
 
 def test_a_layout_too_large_to_tabulate_is_refused_before_grounding(fixtures):
-    import time
-
     from groundlang.corpus import read_state_file
     from groundlang.model.pf_tables import MAX_TABULATED_CELLS, TabulationError
 
     state = read_state_file(fixtures / "bad_input" / "huge_grid.state", "sokoban")
     assert state.layout.walkable.sum() > MAX_TABULATED_CELLS
-    start = time.perf_counter()
+    # Refused by its size, not after grounding (which took minutes and gigabytes).
     with pytest.raises(TabulationError, match="162,793 walkable cells; PFs are tabulated for at most 4,096"):
         pf_tables(state.layout)
-    assert time.perf_counter() - start < 5  # refused, not grounded (grounding took minutes and gigabytes)
