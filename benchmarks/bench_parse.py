@@ -50,7 +50,23 @@ def timed(commands: list[str], share_forests: bool = True) -> tuple[float, int]:
     return time.process_time() - start, full
 
 
+def long_commands() -> None:
+    """Parsing time against command length, side by side: 8 times the sentences should cost about 8 times
+    the time (it cost 64 times when composing a logical form was quadratic)."""
+    sentence = "take the star to the green room and go to the blue room ."
+    parser.parse(sentence, word_lexicon=WORDS)
+    times = {}
+    for n in (200, 1600):
+        command = " ".join([sentence] * n) + " go to purple."
+        t0 = time.process_time()
+        parser.parse(command, word_lexicon=WORDS)
+        times[n] = time.process_time() - t0
+    print(f"long commands: 200 sentences {times[200]:.2f} s cpu, 1600 sentences {times[1600]:.2f} s cpu: "
+          f"{times[1600] / times[200]:.1f}x for 8x the words (linear: 8x, quadratic: 64x)")
+
+
 def main() -> int:
+    long_commands()  # needs no corpus
     given = len(sys.argv) > 1
     corpus = Path(sys.argv[1]) if given else DEFAULT_CORPUS
     folders = [corpus / "allTurkTrain", corpus / "allTurkTrainLimitedCommand"]

@@ -230,19 +230,21 @@ def _big_room(size: int = 1000) -> State:
     return State(layout, Agent(3, 3), (Toy("red", "star", 5, 5),))
 
 
-def test_the_state_count_refusal_of_a_huge_room_takes_milliseconds():
-    state = _big_room()
-    started = time.perf_counter()
+def test_the_state_count_of_a_huge_room_is_refused_from_its_size():
+    # (speed is benchmarks/bench_statespace.py's to print; here: refused by the estimate, no enumeration)
     with pytest.raises(StateSpaceError, match=r"up to 996,004,998,000 states \(998001 walkable cells, 1 toy"):
-        check_state_count(state)
-    assert time.perf_counter() - started < 1.0
+        check_state_count(_big_room())
 
 
-def test_follow_in_a_huge_room_refuses_before_grounding(learner):
-    started = time.perf_counter()
+def test_follow_in_a_huge_room_refuses_before_grounding(learner, monkeypatch):
+    import groundlang.model.tasks as tasks
+
+    def grounded(*args, **kwargs):  # grounding its million cells first took 20 s or more
+        raise AssertionError("the layout was grounded before its state count was checked")
+
+    monkeypatch.setattr(tasks, "ground_environment", grounded)
     with pytest.raises(StateSpaceError, match="could reach up to"):
         learner.follow("go to the red room", _big_room())
-    assert time.perf_counter() - started < 5.0  # grounding its million cells first took 20 s or more
 
 
 def test_a_picture_of_a_huge_room_has_a_bounded_size(tmp_path):
@@ -250,26 +252,18 @@ def test_a_picture_of_a_huge_room_has_a_bounded_size(tmp_path):
 
     from groundlang.render import save_picture
 
-    started = time.perf_counter()
     out = save_picture(tmp_path / "big.png", _big_room(), title="1000 x 1000")
     image = imread(out)
-    assert max(image.shape[:2]) <= 100 * (16 + 1.5) and time.perf_counter() - started < 30
+    assert max(image.shape[:2]) <= 100 * (16 + 1.5)
 
 
 @pytest.mark.slow
 def test_parsing_stays_near_linear_and_reads_the_whole_command():
     from groundlang.grammar.parser import parse
 
-    def timed(n: int) -> tuple[float, list]:
-        command = " ".join(["take the star to the green room and go to the blue room ."] * n) + " go to purple."
-        started = time.perf_counter()
-        readings = parse(command)
-        return time.perf_counter() - started, readings
-
-    timed(20)  # the grammar is built once
-    short, _ = timed(200)
-    long, readings = timed(1600)
-    assert long < 12 * short  # 8 times the words; quadratic growth was 64 times
+    # How the time grows with the length is benchmarks/bench_parse.py's to print, side by side.
+    command = " ".join(["take the star to the green room and go to the blue room ."] * 1600) + " go to purple."
+    readings = parse(command)
     assert "purple" in readings[0].logical_form.words[-3:]  # the end is still read
     assert any("purple" in e.modifiers or e.head == "purple" for e in readings[0].logical_form.entities[-2:])
 
