@@ -15,7 +15,7 @@ from functools import lru_cache
 
 import clingo
 
-from .palettes import read_palette
+from .palette_files import read_palette
 from .program import Program, Source, package_source
 from .tasks import LiftedTask, TaskLibrary, pf_name
 

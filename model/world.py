@@ -20,7 +20,7 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
-from groundlang.logic.palettes import read_palette
+from groundlang.logic.palette_files import read_palette
 from groundlang.logic.program import AspError
 
 __all__ = [

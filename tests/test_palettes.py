@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from groundlang import example_corpus_path, read_corpus
-from groundlang.logic.palettes import palette_names
+from groundlang.logic.palette_files import palette_names
 from groundlang.model.world import WorldError, get_palette
 
 

@@ -47,7 +47,7 @@ def test_ascii_colliding_shape_initials_use_digits():
 
 
 def test_every_palette_shape_has_a_glyph():
-    from groundlang.logic.palettes import palette_names
+    from groundlang.logic.palette_files import palette_names
 
     shapes = [s for name in palette_names() for s in get_palette(name).shapes]
     glyphs = {s: glyph(s, get_palette(name)) for name in palette_names() for s in get_palette(name).shapes}
