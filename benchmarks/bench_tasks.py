@@ -16,7 +16,8 @@ import argparse
 import statistics
 import time
 
-from groundlang.logic.tasks import TaskLibrary, enumerate_groundings
+from groundlang.logic.groundings import enumerate_groundings
+from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.geometry import cell_tables, state_facts
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette

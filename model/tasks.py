@@ -15,12 +15,8 @@ from types import MappingProxyType
 from typing import Collection, Mapping, Sequence
 
 from groundlang.logic.atoms import Atom
-from groundlang.logic.tasks import (
-    BindingConstraint,
-    GroundedTask,
-    TaskLibrary,
-    ground_environment,
-)
+from groundlang.logic.groundings import ground_environment
+from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
 
 from .geometry import state_facts
 from .world import State

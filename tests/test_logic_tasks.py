@@ -10,17 +10,8 @@ import pytest
 
 from groundlang.logic.atoms import Atom
 from groundlang.logic.program import AspError, AspScriptRefused, AspSyntaxError
-from groundlang.logic.tasks import (
-    BindingConstraint,
-    GroundedTask,
-    LiftedTask,
-    TaskLibrary,
-    Variable,
-    binding_constraints,
-    enumerate_groundings,
-    format_lifted_task,
-    ground_environment,
-)
+from groundlang.logic.groundings import binding_constraints, enumerate_groundings, ground_environment
+from groundlang.logic.tasks import BindingConstraint, GroundedTask, LiftedTask, TaskLibrary, Variable, format_lifted_task
 from groundlang.model.world import get_palette
 
 # Two rooms (green room0 west, blue room1 east) joined by a door at (4,2); two toys:

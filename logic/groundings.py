@@ -1,0 +1,166 @@
+"""Groundings of lifted tasks in one environment, with their binding constraints and what words may
+say of every object: ``groundings.lp`` solved once per environment (one Control, one grounding, one
+solve enumerating every answer set)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from itertools import combinations
+
+import clingo
+
+from .atoms import Atom
+from .program import AspError
+from .tasks import CLASS_ORDER, BindingConstraint, GroundedTask, TaskLibrary, _natural_key, _text, _tuple_args, pf_name
+
+__all__ = ["binding_constraints", "enumerate_groundings", "ground_environment", "Descriptions", "PFTerms"]
+
+
+def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
+    """Every conjunction of ``atoms`` (all subsets), largest first, the empty one last."""
+    atoms = tuple(atoms)
+    out = []
+    for k in range(len(atoms), -1, -1):
+        out.extend(BindingConstraint(c) for c in combinations(atoms, k))
+    return out
+
+
+# Object -> PF class -> names of the unary PFs of that class true of the object, e.g.
+# {"room0": {"colour": ("roomIsGreen",)}, "door1": {"spatial": ("doorWestOfAgent",)}}.
+Descriptions = dict[str, dict[str, tuple[str, ...]]]
+# A described PF's name -> its term as the library writes it (restrict/3 takes the term):
+# {"roomIsGreen": "roomIs(green)", "doorWestOfAgent": "doorWestOfAgent"}.
+PFTerms = dict[str, str]
+
+
+def enumerate_groundings(
+    library: TaskLibrary, facts: str, *, time_limit: float | None = None
+) -> list[tuple[GroundedTask, list[BindingConstraint]]]:
+    """Every permissible grounding not true initially, with its binding constraints: the first part
+    of :func:`ground_environment`."""
+    return ground_environment(library, facts, time_limit=time_limit)[0]
+
+
+def ground_environment(
+    library: TaskLibrary, facts: str, *, time_limit: float | None = None, environment: str | None = None
+) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions, PFTerms]:
+    """Every permissible grounding not true initially, with its binding constraints; the
+    unary PFs of every class but position true of each object, by class
+    (``{"door1": {"spatial": ("doorWestOfAgent",)}}``; objects none holds of are left out); and
+    the term of each of those PFs as a library writes it (``{"roomIsGreen": "roomIs(green)"}``).
+
+    ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
+    ``time_limit``: seconds, default the library's. One Control, one grounding, one solve
+    enumerating all answer sets; the descriptions are the same in every answer set, one of
+    which chooses no task (so an environment where nothing can be asked is still described).
+    Order: library order of tasks, then bound objects in variable order (``room2`` before ``room10``).
+
+    A ``restrict/3`` that names no colour or shape PF of one object of its variable's class that
+    pf/3 declares with these facts (a palette value they lack, a typo) would bind nothing; it raises
+    AspError naming the library's files, the task, ``environment`` (e.g. "palette sokoban") and
+    what it does declare. (So declare a family of PFs for every palette value, as pfs.lp does, not
+    only for the values the objects of a state have.)
+    """
+    tasks = {t.name: t for t in library.tasks}
+    order = {t.name: i for i, t in enumerate(library.tasks)}
+    found = []
+    described: dict[str, dict[str, set[str]]] = {}
+    terms: PFTerms = {}
+    # The same atoms recur in many answer sets; decoding clingo symbols is the costly part.
+    decoded: dict[clingo.Symbol, tuple[str, object]] = {}
+
+    def decode(sym: clingo.Symbol) -> tuple[str, object]:
+        kind, args = sym.name, sym.arguments
+        if kind == "chosen" and len(args) == 1:
+            return kind, _text(args[0])
+        if kind == "bind" and len(args) == 2:
+            return kind, (_text(args[0]), _text(args[1]))
+        if kind == "described" and len(args) == 3:
+            return kind, (_text(args[0]), pf_name(args[1]), _text(args[2]), str(args[1]))
+        if kind == "unusable_restriction" and len(args) == 3:
+            return kind, (_text(args[0]), _text(args[1]), args[2])
+        if kind == "restrictable" and len(args) == 2:
+            return kind, (_text(args[0]), args[1])
+        if kind in ("pf_of_no_class", "attribute_pf_not_unary") and len(args) == 2:
+            return kind, (str(args[0]), str(args[1]))
+        if kind in ("goal_atom", "constraint_atom", "goal_atom_holds") and len(args) == 2:
+            return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
+        return "other", None  # atoms a user library shows for its own purposes
+
+    limit = library.time_limit if time_limit is None else time_limit
+    unusable: set[tuple[str, str, clingo.Symbol]] = set()
+    restrictable: dict[str, set[clingo.Symbol]] = {}
+    for model in library.grounding_program.solve(facts, models=0, time_limit=limit):
+        chosen, bind, goal, extra, holding = None, {}, [], [], []
+        for sym in model:
+            if sym not in decoded:
+                decoded[sym] = decode(sym)
+            kind, value = decoded[sym]
+            if kind == "chosen":
+                chosen = value
+            elif kind == "bind":
+                bind[value[0]] = value[1]
+            elif kind == "goal_atom":
+                goal.append(value)
+            elif kind == "goal_atom_holds":
+                holding.append(value)
+            elif kind == "constraint_atom":
+                extra.append(value)
+            elif kind == "described":
+                cls, name, obj, term = value
+                described.setdefault(obj, {}).setdefault(cls, set()).add(name)
+                if terms.setdefault(name, term) != term:
+                    raise AspError(f"{library.program.user_names}: PFs {terms[name]} and {term} are both called "
+                                   f"{name} in groundlang; rename one of them")
+            elif kind == "unusable_restriction":
+                unusable.add(value)
+            elif kind == "restrictable":
+                restrictable.setdefault(value[0], set()).add(value[1])
+            elif kind in ("pf_of_no_class", "attribute_pf_not_unary"):
+                where = f" ({environment})" if environment else ""
+                first, second = value
+                problem = (f"PF {first} is declared over class {second}, which no object has (classes: "
+                           f"{', '.join(sorted(CLASS_ORDER))})" if kind == "pf_of_no_class" else
+                           f"{first} PF {second} takes more than one argument; colour and shape PFs describe "
+                           f"one object, e.g. pf({first}, {second}, (toy,))")
+                raise AspError(f"{library.program.user_names}{where}: {problem}")
+        if chosen is None:
+            continue  # the answer set of no task: descriptions and diagnostics only
+        lifted = tasks[chosen]
+        binding = tuple((v.name, bind[v.name]) for v in lifted.variables)
+        # Goal atoms sorted (one text per goal, whatever the binding), constraint atoms in variable order.
+        goal.sort(key=lambda a: (a.predicate, tuple(_natural_key(o) for o in a.args)))
+        position = {o: i for i, (_, o) in enumerate(binding)}
+        extra.sort(key=lambda a: (min(position[o] for o in a.args), a.predicate, a.args))
+        grounded = GroundedTask(chosen, binding, tuple(goal), tuple(a for a in goal if a in holding))
+        key = (order[chosen], tuple(_natural_key(o) for _, o in binding))
+        found.append((key, grounded, binding_constraints(extra)))
+    if unusable:
+        first = min(unusable, key=lambda u: (u[0], u[1], str(u[2])))
+        more = len(unusable) - 1
+        raise AspError(_unusable_restriction_message(library, first, restrictable, environment)
+                       + (f" ({more} more restrict/3 fact{'s' if more > 1 else ''} cannot be honoured here)" if more else ""))
+    found.sort(key=lambda item: item[0])
+    descriptions = {
+        o: {cls: tuple(sorted(names)) for cls, names in sorted(described[o].items())}
+        for o in sorted(described, key=_natural_key)
+    }
+    return [(g, c) for _, g, c in found], descriptions, dict(sorted(terms.items()))
+
+
+def _unusable_restriction_message(library: TaskLibrary, restriction: tuple[str, str, clingo.Symbol],
+                                  restrictable: dict[str, set[clingo.Symbol]], environment: str) -> str:
+    """One line: which restrict/3 ``environment`` cannot honour, and the PFs it could name instead."""
+    task, var, term = restriction
+    cls = next(v.cls for v in library.task(task).variables if v.name == var)
+    offered = sorted(restrictable.get(cls, ()), key=str)
+    same_name = [p for p in offered if pf_name(p) == pf_name(term)] if term.type is clingo.SymbolType.Function else []
+    if same_name:  # groundlang's name for a family term, e.g. toyIsStar for toyIs(star)
+        hint = f"; write {same_name[0]}, the term pf/3 declares"
+    elif offered:
+        hint = f"; it declares these of a {cls}: {', '.join(map(str, offered))}"
+    else:
+        hint = f"; it declares none of a {cls}"
+    where = f"the environment ({environment})" if environment else "the environment"
+    return (f'{library.grounding_program.user_names}: task {task}: restrict({task}, "{var}", {term}): '
+            f"{where} declares no colour or shape PF {term} of a {cls}, so the task would bind nothing{hint}")
