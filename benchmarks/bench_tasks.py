@@ -23,27 +23,24 @@ from groundlang.model.pf_tables import pf_tables
 from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette
 
 
+def _state(rooms, doors, toys, agent) -> State:
+    """A state of ``toys`` ``(colour, shape, x, y)`` and ``agent`` ``(x, y)`` in a layout of the sokoban palette."""
+    layout = Layout(tuple(rooms), tuple(doors), tuple((c, s) for c, s, _, _ in toys), get_palette("sokoban"))
+    return State(layout, Agent(*agent), tuple(Toy(c, s, x, y) for c, s, x, y in toys))
+
+
 def corpus_state(num_toys: int) -> State:
-    toys = [("yellow", "star", 4, 8), ("red", "moon", 8, 8), ("blue", "circle", 2, 2)][:num_toys]
-    layout = Layout(
-        (Room("green", 0, 10, 6, 4), Room("red", 6, 10, 10, 4), Room("blue", 0, 4, 10, 0)),
-        (Door(3, 4, 3, 3), Door(8, 4, 8, 3), Door(6, 6, 6, 6)),
-        tuple((c, s) for c, s, _, _ in toys),
-        get_palette("sokoban"),
-    )
-    return State(layout, Agent(8, 6), tuple(Toy(c, s, x, y) for c, s, x, y in toys))
+    """The commands-to-tasks corpus's layout with one to three toys."""
+    return _state((Room("green", 0, 10, 6, 4), Room("red", 6, 10, 10, 4), Room("blue", 0, 4, 10, 0)),
+                  (Door(3, 4, 3, 3), Door(8, 4, 8, 3), Door(6, 6, 6, 6)),
+                  [("yellow", "star", 4, 8), ("red", "moon", 8, 8), ("blue", "circle", 2, 2)][:num_toys], (8, 6))
 
 
 def large_state() -> State:
     """A 16x16 layout of three rooms with three toys, as the Williams et al. 2018 corpus's largest."""
-    toys = [("yellow", "star", 3, 3), ("red", "moon", 12, 3), ("blue", "circle", 4, 12)]
-    layout = Layout(
-        (Room("green", 0, 15, 8, 7), Room("red", 8, 15, 15, 0), Room("blue", 0, 7, 8, 0)),
-        (Door(8, 11, 8, 11), Door(4, 7, 4, 7), Door(8, 3, 8, 3)),
-        tuple((c, s) for c, s, _, _ in toys),
-        get_palette("sokoban"),
-    )
-    return State(layout, Agent(10, 10), tuple(Toy(c, s, x, y) for c, s, x, y in toys))
+    return _state((Room("green", 0, 15, 8, 7), Room("red", 8, 15, 15, 0), Room("blue", 0, 7, 8, 0)),
+                  (Door(8, 11, 8, 11), Door(4, 7, 4, 7), Door(8, 3, 8, 3)),
+                  [("yellow", "star", 3, 3), ("red", "moon", 12, 3), ("blue", "circle", 4, 12)], (10, 10))
 
 
 def median_ms(fn, repeats: int) -> str:

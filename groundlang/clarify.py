@@ -23,7 +23,7 @@ from collections.abc import Callable, Sequence
 from groundlang.confidence import GoalGroup
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.encoding import entity_words
-from groundlang.model.interpretations import class_of
+from groundlang.model.world import object_class
 from groundlang.model.world import State
 from groundlang.wording import choice_list, goal_phrase, object_phrase
 
@@ -71,7 +71,7 @@ def _differing_object(choices: Sequence[GoalGroup]) -> list[str] | None:
         if len(here) != 1:
             return None
         objects.append(here.pop())
-    if len({class_of(o) for o in objects}) != 1:
+    if len({object_class(o) for o in objects}) != 1:
         return None
     return objects
 
@@ -85,7 +85,7 @@ def question(choices: Sequence[GoalGroup], unknown: Sequence[str], state: State,
     objects = _differing_object(choices)
     if objects is not None:
         phrases = [object_phrase(o, state, library) for o in objects]
-        return f"{said}Which {class_of(objects[0])} do you mean: {choice_list(phrases)}?"
+        return f"{said}Which {object_class(objects[0])} do you mean: {choice_list(phrases)}?"
     phrases = [goal_phrase(g.goal, state, library) for g in choices]
     return f"{said}Do you mean {choice_list(phrases)}?"
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from groundlang.logic.atoms import Atom
 from groundlang.model.features import goal_mask
-from groundlang.model.pf_tables import pf_tables
+from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.statespace import StateSpace
 
 __all__ = [
@@ -53,7 +53,7 @@ def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpa
     """Merge goals (most probable first, as :meth:`Posterior.goals` gives them) whose goal masks
     over ``space`` are equal; returns the groups, most probable first (ties: the first goal's order).
     ``library``: the TaskLibrary whose PF rules say what the goals mean (default: the package's)."""
-    tables = pf_tables(space.layout, None if library is None else library.tabulation_program)
+    tables = library_pf_tables(space.layout, library)
     by_mask: dict[bytes, list] = {}
     order: list[bytes] = []
     for k, (goal, p) in enumerate(goals):

@@ -18,6 +18,7 @@ from groundlang.corpus import Corpus, CorpusError, Instance, file_prefix
 from groundlang.logic.atoms import Atom, AtomError, parse_goal
 from groundlang.logic.program import AspError
 from groundlang.model.features import atoms_hold
+from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.storage import read_limited
 from groundlang.model.world import State
 
@@ -100,16 +101,10 @@ def read_labels(csv_path: str | Path) -> Labels:
     return labels
 
 
-def _tables(state: State, library):
-    from groundlang.model.pf_tables import pf_tables
-
-    return pf_tables(state.layout, None if library is None else library.tabulation_program)
-
-
 def check_goal_objects(goal: tuple[Atom, ...], state: State, context: str = "goal", library=None) -> None:
     """Raise LabelError when a goal uses a predicate the domain does not declare (``logic/pfs.lp``, or
     ``library``'s own PF rules), the wrong number of arguments or an object the state lacks."""
-    tables = _tables(state, library)
+    tables = library_pf_tables(state.layout, library)
     for atom in goal:
         try:
             tables.check(atom)
@@ -123,7 +118,7 @@ def goal_holds(goal: tuple[Atom, ...] | list[Atom], state: State, library=None) 
     Raises LabelError for unknown predicates or objects."""
     if not goal:
         return True
-    tables = _tables(state, library)
+    tables = library_pf_tables(state.layout, library)
     try:
         return bool(atoms_hold(state, list(goal), tables).all())
     except AspError as exc:

@@ -25,11 +25,11 @@ from groundlang.inference.joint import FitResult, fit_globals, posterior
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.logic.atoms import Atom
+from groundlang.logic.schema import domain_schema
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
 from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
-from groundlang.logic.schema import domain_schema
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
@@ -165,7 +165,7 @@ class Learner:
         # (williams2018 stores box sizes, "small", in the colour field).
         words = {}
         for p in palettes:
-            named = schema_words(domain_schema(self.library, (p.name, (("colour", p.colours), ("shape", p.shapes)))))
+            named = schema_words(self._schema(p))
             for category, entries in named.items():
                 words.setdefault(category, []).extend(w for w in entries if not self.word_lexicon.listed(w))
         if any(words.values()):
@@ -194,7 +194,11 @@ class Learner:
         return Observation(tuple(readings[0].logical_form.words), readings, tuple(self._interpretations(state)))
 
     # ----------------------------------------------------------------- training
-    def _build_vocabulary(self, observations: Iterable[Observation], layouts: Iterable) -> Vocabulary:
+    def _schema(self, palette):
+        """The domain's schema with ``palette``'s values (its colour and shape families depend on them)."""
+        return domain_schema(self.library, (palette.name, (("colour", palette.colours), ("shape", palette.shapes))))
+
+    def _build_vocabulary(self, observations: Iterable[Observation], palettes: Iterable) -> Vocabulary:
         vocab = Vocabulary(lexicon=self.word_lexicon)
         vocab.add_tasks((task.name for task in self.library.tasks),
                         roles={task.name: alignable_roles(task) for task in self.library.tasks})
@@ -216,9 +220,8 @@ class Learner:
         # Every property PF the domain declares for the palettes seen (colours, shapes, a user's
         # sizes...) and every class: a layout of the test may have values training never saw.
         classes: list[str] = []
-        for layout in layouts:
-            p = layout.palette
-            schema = domain_schema(self.library, (p.name, (("colour", p.colours), ("shape", p.shapes))))
+        for palette in palettes:
+            schema = self._schema(palette)
             tokens.extend(d.name for d in schema.pfs.values() if len(d.signature) == 1
                           and d.pf_class not in ("position", "spatial"))
             classes.extend(schema.classes)
@@ -254,10 +257,8 @@ class Learner:
             if observations is None:
                 observations = self.observe(instances, progress=progress)
             if init is None or self.vocab is None:
-                # One layout per palette: what the domain declares depends on the palette's values.
-                layouts = {inst.initial_state.layout.palette: inst.initial_state.layout for inst in instances}
-                palettes = sorted(layouts, key=lambda p: p.name)
-                self.vocab = self._build_vocabulary(observations, [layouts[p] for p in palettes])
+                palettes = sorted({inst.initial_state.layout.palette for inst in instances}, key=lambda p: p.name)
+                self.vocab = self._build_vocabulary(observations, palettes)
                 self.palettes = [{"name": p.name, "colours": list(p.colours), "shapes": list(p.shapes)}
                                  for p in palettes]
                 init = None

@@ -12,30 +12,19 @@ PF tables (``model.pf_tables``): the domain's ASP, nothing written here.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from itertools import product
 
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.pf_tables import PFTables, pf_tables
+from groundlang.logic.atoms import Atom
+from groundlang.model.pf_tables import PFTables, library_pf_tables
 from groundlang.model.statespace import StateSpaceError, enumerate_states
 from groundlang.model.world import State
 
-__all__ = ["Fact", "lifted_facts", "pair_task", "satisfies", "reachable", "REACHABILITY_MAX_STATES"]
+__all__ = ["lifted_facts", "pair_task", "satisfies", "reachable", "REACHABILITY_MAX_STATES"]
 
 # Upper bound (the enumerator's estimate) on the states a reachability check may enumerate: the 8x8
 # layouts with three blocks estimate 2.4 million and reach about 10^4; the 16x16 ones estimate 10^9.
 REACHABILITY_MAX_STATES = 5_000_000
-
-
-@dataclass(frozen=True, order=True)
-class Fact:
-    """A position PF with each argument replaced by something said of it: ``agentInRoom(agent, roomIsRed)``."""
-
-    predicate: str
-    said: tuple[str, ...]
-
-    def __str__(self) -> str:
-        return f"{self.predicate}({', '.join(self.said)})"
 
 
 def _said(tables: PFTables) -> dict[str, tuple[str, ...]]:
@@ -47,18 +36,16 @@ def _said(tables: PFTables) -> dict[str, tuple[str, ...]]:
     return {name: tuple(sorted(set(said), key=said.index)) for name, said in out.items()}
 
 
-def lifted_facts(state: State, library: TaskLibrary | None = None) -> frozenset[Fact]:
-    """Every lifted fact of ``state``: each position PF that holds, with its arguments said every way."""
-    tables = pf_tables(state.layout, None if library is None else library.tabulation_program)
+def lifted_facts(state: State, library: TaskLibrary | None = None) -> frozenset[Atom]:
+    """Every lifted fact of ``state``: each position PF that holds, with its arguments said every way
+    (an Atom whose arguments are what is said of the objects, ``agentInRoom(agent, roomIsRed)``)."""
+    tables = library_pf_tables(state.layout, library)
     said = _said(tables)
-    facts = set()
-    for atom in tables.holding(state.positions):
-        if atom.predicate in tables.tabulated:
-            facts.update(Fact(atom.predicate, combo) for combo in product(*(said[o] for o in atom.args)))
-    return frozenset(facts)
+    return frozenset(Atom(atom.predicate, combo) for atom in tables.position_holding(state.positions)
+                     for combo in product(*(said[o] for o in atom.args)))
 
 
-def pair_task(pairs, library: TaskLibrary | None = None) -> frozenset[Fact]:
+def pair_task(pairs, library: TaskLibrary | None = None) -> frozenset[Atom]:
     """What ``pairs`` (``(start, end)`` States) show: the facts of every end state that do not hold of
     every start state. Empty when the pairs agree on nothing that changed (a noisy command)."""
     ends = frozenset.intersection(*(lifted_facts(end, library) for _, end in pairs))
@@ -66,7 +53,7 @@ def pair_task(pairs, library: TaskLibrary | None = None) -> frozenset[Fact]:
     return ends - starts
 
 
-def satisfies(state: State, task: frozenset[Fact], library: TaskLibrary | None = None) -> bool:
+def satisfies(state: State, task: frozenset[Atom], library: TaskLibrary | None = None) -> bool:
     """True when every fact of ``task`` holds in ``state`` (in its own layout); False for an empty task."""
     return bool(task) and task <= lifted_facts(state, library)
 

@@ -19,9 +19,9 @@ from collections.abc import Sequence
 
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.interpretations import OTHER_ROLES, class_of, object_names
+from groundlang.model.interpretations import OTHER_ROLES, object_names
 from groundlang.model.tasks import attribute_pfs, object_descriptions
-from groundlang.model.world import State
+from groundlang.model.world import State, object_class
 
 __all__ = ["object_phrase", "goal_phrase", "labelled_goal", "choice_list", "DASH"]
 
@@ -43,7 +43,7 @@ def _value(term: str) -> str | None:
 
 
 def _plain_phrase(obj: str, state: State, library: TaskLibrary) -> str:
-    cls = class_of(obj)
+    cls = object_class(obj)
     described = object_descriptions(state, library).get(obj, {})
     heads = set(described.get(HEAD_CLASS, ()))
     modifiers, head = [], None
@@ -59,7 +59,7 @@ def _plain_phrase(obj: str, state: State, library: TaskLibrary) -> str:
 
 
 def _spatial(obj: str, state: State, library: TaskLibrary) -> str:
-    cls = class_of(obj)
+    cls = object_class(obj)
     sides = []
     for name in object_descriptions(state, library).get(obj, {}).get("spatial", ()):
         words = _camel_words(name)
@@ -75,7 +75,7 @@ def object_phrase(obj: str, state: State, library: TaskLibrary) -> str:
     """``room0`` -> "the red room", ``block0`` -> "the yellow star"; "the door west of the agent"
     when another door would read alike; the bare id if two objects still read alike."""
     plain = _plain_phrase(obj, state, library)
-    same = [o for o in object_names(state) if o != obj and class_of(o) == class_of(obj)
+    same = [o for o in object_names(state) if o != obj and object_class(o) == object_class(obj)
             and _plain_phrase(o, state, library) == plain]
     if not same:
         return plain
@@ -89,7 +89,7 @@ def _atom_phrase(atom: Atom, state: State, library: TaskLibrary) -> str:
     words = _camel_words(atom.predicate)
     out, used = [], 0
     for word in words:
-        if used < len(atom.args) and word == class_of(atom.args[used]):
+        if used < len(atom.args) and word == object_class(atom.args[used]):
             out.append(object_phrase(atom.args[used], state, library))
             used += 1
         else:

@@ -13,7 +13,7 @@ from itertools import combinations, permutations
 from typing import Mapping, Sequence
 
 from groundlang.logic.atoms import Atom, attribute_pf
-from groundlang.logic.schema import domain_classes
+from groundlang.logic.classes import domain_classes
 from groundlang.logic.tasks import CLASS_ORDER, LiftedTask, Variable
 
 __all__ = ["structure_key", "lifted_key", "task_name", "lift_goal", "singling_out"]
@@ -55,7 +55,8 @@ def lifted_key(task: LiftedTask) -> tuple:
 def _mover_rank(pred_args: tuple[str, tuple[str, ...]], classes: dict[str, str]) -> tuple:
     # The toy's goal before the agent's, as tasks.lp names toyToRoomAgentToRoom.
     first = classes[pred_args[1][0]]
-    movers = [c for c in reversed(domain_classes().classes) if c in domain_classes().movable]
+    classes_ = domain_classes()
+    movers = [c for c in reversed(classes_.classes) if c in classes_.movable]
     return (movers.index(first) if first in movers else len(movers), pred_args[0], pred_args[1])
 
 

@@ -15,8 +15,9 @@ from functools import lru_cache
 
 import clingo
 
+from .classes import ranked
 from .palette_files import read_palette
-from .program import Program, Source, package_source
+from .program import Program, Source
 from .tasks import LiftedTask, TaskLibrary, pf_name
 
 __all__ = ["PFDeclaration", "Domain", "domain_schema"]
@@ -75,33 +76,6 @@ def _palette_facts(values: dict[str, tuple[str, ...]]) -> str:
     return "".join(f"palette_{attribute}({v}).\n" for attribute, vs in values.items() for v in vs)
 
 
-@dataclass(frozen=True)
-class DomainClasses:
-    """The classes of ``domain.lp`` alone: by rank, which move, which is spoken to."""
-
-    classes: tuple[str, ...]
-    movable: frozenset[str]
-    addressee: frozenset[str]
-
-    @property
-    def mentioned(self) -> frozenset[str]:
-        """Classes whose objects a command names whenever their task moves them (movers but "you")."""
-        return self.movable - self.addressee
-
-
-@lru_cache(maxsize=1)
-def domain_classes() -> DomainClasses:
-    """``class/1``, ``class_rank/2``, ``movable/1`` and ``addressee/1`` of ``domain.lp``, solved once."""
-    show = Source("groundlang.logic.schema", "#show class/1. #show class_rank/2. #show movable/1. #show addressee/1.")
-    found: dict[str, dict[str, int]] = {"class": {}, "class_rank": {}, "movable": {}, "addressee": {}}
-    for sym in Program((package_source("domain.lp"), show)).solve(models=1)[0]:
-        value = sym.arguments[1].number if sym.name == "class_rank" else 0
-        found[sym.name][str(sym.arguments[0])] = value
-    rank = found["class_rank"]
-    classes = tuple(sorted(found["class"], key=lambda c: (rank.get(c, len(rank) + 1), c)))
-    return DomainClasses(classes, frozenset(found["movable"]), frozenset(found["addressee"]))
-
-
 @lru_cache(maxsize=16)
 def domain_schema(library: TaskLibrary | None = None, palette: str | tuple = "sokoban") -> Domain:
     """The schema of ``library`` (default: the package's tasks and PFs) with ``palette``: a shipped name,
@@ -136,5 +110,5 @@ def domain_schema(library: TaskLibrary | None = None, palette: str | tuple = "so
         return functors.get(functor, len(functors)), d.pf_class, index.get(rest.rstrip(")"), -1), d.name
 
     pfs = {d.name: d for d in sorted(found.values(), key=key)}
-    return Domain(tuple(sorted(classes, key=lambda c: (rank.get(c, len(rank) + 1), c))), frozenset(movable),
+    return Domain(ranked(classes, rank), frozenset(movable),
                   name, values, pfs, library.tasks)

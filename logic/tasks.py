@@ -19,7 +19,6 @@ world model.
 from __future__ import annotations
 
 import re
-from functools import lru_cache
 from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
@@ -28,6 +27,7 @@ from typing import Iterable, Sequence
 import clingo
 
 from .atoms import Atom, attribute_pf, format_goal
+from .classes import domain_classes
 from .program import (
     DEFAULT_TIME_LIMIT,
     AspError,
@@ -47,26 +47,12 @@ __all__ = [
     "format_lifted_task",
     "DOMAIN_FILES",
     "CLASS_ORDER",
-    "class_order",
 ]
 
 # The domain rules every task program needs, in load order.
 DOMAIN_FILES = ("domain.lp", "pfs.lp")
-# Variables of a lifted task are listed in this class order, then by name.
-@lru_cache(maxsize=1)
-def class_order() -> tuple[str, ...]:
-    """The classes of domain.lp (``class/1``) by ``class_rank/2``: the order of a lifted task's variables."""
-    program = Program((package_source("domain.lp"), Source("groundlang.logic.tasks", "#show class/1. #show class_rank/2.")))
-    rank, classes = {}, set()
-    for sym in program.solve(models=1)[0]:
-        if sym.name == "class_rank":
-            rank[str(sym.arguments[0])] = sym.arguments[1].number
-        else:
-            classes.add(str(sym.arguments[0]))
-    return tuple(sorted(classes, key=lambda c: (rank.get(c, len(rank) + 1), c)))
-
-
-CLASS_ORDER = class_order()
+# Variables of a lifted task are listed in this class order (class_rank/2 of domain.lp), then by name.
+CLASS_ORDER = domain_classes().classes
 # groundings.lp derives goal atoms for PFs of these arities.
 MAX_GOAL_ARITY = 3
 

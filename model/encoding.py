@@ -23,9 +23,10 @@ import torch
 from groundlang.grammar.lexicon import Lexicon
 from groundlang.grammar.logical_form import LogicalForm, Reading
 from groundlang.model.domain_words import domain_lexicon
-from groundlang.logic.schema import domain_classes
-from groundlang.model.interpretations import UNALIGNED_CLASSES, Interpretation, RoleBinding, class_of
+from groundlang.logic.classes import domain_classes
+from groundlang.model.interpretations import UNALIGNED_CLASSES, Interpretation, RoleBinding
 from groundlang.model.vocabulary import DIRECT_OBJECT, NULL, Vocabulary, class_token, is_task_role
+from groundlang.model.world import object_class
 
 __all__ = ["Observation", "Batch", "encode", "entity_words", "is_mentionable", "is_referring", "machine_string",
            "backoff_key", "backoff_prep_ids", "PAD_LOGIT"]
@@ -120,22 +121,14 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None) -> list[tuple[
     star into the green room" differ here) and None for a direct object.
     A verb-attached phrase in a clause with a direct object gets ``prep+obj``:
     "take the star *to* the red room" names where the object goes, "go *to*
-    the red room" where the agent goes (measured on the crowd corpus: 555
-    against 549 of 720 commands carried out in novel layouts, leave-one-out
-    unchanged). Phrases in a negated clause ("do not enter the green room")
-    get a ``not:`` prefix, so they may learn to align with nothing. The last
-    phrase with words gets a ``|last`` suffix: commands end with where things
-    go (measured with alignment per task: leave-one-out 227 and 218 of 240
-    against 225 and 221 without, simplified and original commands; in novel
-    layouts 646 and 623 of 720 against 650 and 598). A verb-attached phrase that says where a motion
-    starts or what goes along ("from the blue room", "... go to the beige room *with the star*";
-    ``PREP_SOURCE`` of the word files; ``lexicon``, default :func:`domain_lexicon`) never says where things
-    end, so ``|last`` passes over it to the phrase before (measured on the crowd corpus, simplified and
-    original commands: leave-one-out 230
-    and 227 of 240 against 229 and 227, novel layouts 662 and 648 of 720 against 659 and 643; 10-fold
-    held-out log-likelihood of the words -8289.2 against -8293.6 and -12359.7 against -12366.8 nats, of
-    the demonstrations given the words unchanged within 0.6 nats. Path prepositions ("through", "via",
-    "by", ...) passed over too measured worse: 228 and 226, 659 and 643).
+    the red room" where the agent goes. Phrases in a negated clause ("do not
+    enter the green room") get a ``not:`` prefix, so they may learn to align
+    with nothing. The last phrase with words gets a ``|last`` suffix: commands
+    end with where things go. A verb-attached phrase that says where a motion
+    starts or what goes along ("from the blue room", "... go to the beige room
+    *with the star*"; ``PREP_SOURCE`` of the word files; ``lexicon``, default
+    :func:`domain_lexicon`) never says where things end, so ``|last`` passes
+    over it to the phrase before. What each of these measured: ABLATIONS.md.
     """
     passed_over = (lexicon or domain_lexicon()).source_and_comitative_prepositions
     negated = {i for i, clause in enumerate(lf.clauses) if getattr(clause, "negated", False)}
@@ -208,10 +201,10 @@ def machine_string(interp: Interpretation) -> list[str]:
     out = []
     for atom in interp.goal:
         out.append(atom.predicate)
-        out.extend(class_token(class_of(a)) for a in atom.args)
+        out.extend(class_token(object_class(a)) for a in atom.args)
     for atom in interp.constraint.atoms:
         out.append(atom.predicate)
-        out.extend(class_token(class_of(a)) for a in atom.args)
+        out.extend(class_token(object_class(a)) for a in atom.args)
     return out
 
 

@@ -35,7 +35,7 @@ def position_atoms(layout: Layout, tables: PFTables | None = None) -> list[Atom]
         from .pf_tables import pf_tables
 
         tables = pf_tables(layout)
-    return tables.atoms()
+    return list(tables.position_atoms)
 
 
 def _boolean_matrix(layout: Layout, positions: np.ndarray, atoms: Sequence[Atom | str],

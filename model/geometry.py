@@ -38,12 +38,19 @@ def fact(cls: str, name: str, facts) -> str:
     return text
 
 
-def layout_facts(layout: Layout, movable: bool = True) -> str:
-    """Facts for the static part: palette, every object's class and attributes (see domain.lp);
-    ``movable=False`` leaves out the objects that move (the agent and the toys)."""
+def palette_facts(layout: Layout) -> str:
+    """``palette_colour/1`` and ``palette_shape/1``: every value of the layout's palette (pfs.lp declares
+    its colour and shape families over them)."""
     pal = layout.palette
     lines = [f"palette_colour({_constant(c, 'colour')})." for c in pal.colours]
     lines += [f"palette_shape({_constant(s, 'shape')})." for s in pal.shapes]
+    return "\n".join(lines)
+
+
+def layout_facts(layout: Layout, movable: bool = True) -> str:
+    """Facts for the static part: palette, every object's class and attributes (see domain.lp);
+    ``movable=False`` leaves out the objects that move (the agent and the toys)."""
+    lines = [palette_facts(layout)]
     moving = set(layout.movable_names)
     lines += [fact(cls, name, facts) for cls, name, facts in layout.objects
               if name != "agent0" and (movable or name not in moving)]

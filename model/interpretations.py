@@ -57,15 +57,14 @@ from groundlang.logic.tasks import BindingConstraint, GroundedTask, LiftedTask, 
 from groundlang.model.geometry import cell_tables
 from groundlang.model.tasks import candidate_tasks, object_descriptions
 from groundlang.model.vocabulary import NO_ROLE
-from groundlang.logic.schema import domain_classes
-from groundlang.model.world import WORLD_CLASSES, State, object_class
+from groundlang.logic.classes import domain_classes
+from groundlang.model.world import WORLD_CLASSES, State
 
 __all__ = [
     "Interpretation",
     "RoleBinding",
     "interpretations",
     "object_names",
-    "class_of",
     "task_roles",
     "alignable_roles",
     "OTHER_ROLES",
@@ -133,11 +132,6 @@ def alignable_roles(lifted: LiftedTask) -> tuple[str, ...]:
     own = (role for var, role in zip(lifted.variables, task_roles(lifted)) if var.cls not in UNALIGNED_CLASSES)
     others = (role for role in OTHER_ROLES if role.removeprefix("other:") not in UNALIGNED_CLASSES)
     return (NO_ROLE, *dict.fromkeys(own), *others)
-
-
-def class_of(obj: str) -> str:
-    """Object class by the world's naming (``block0`` is a toy; ``model.world.object_class``)."""
-    return object_class(obj)
 
 
 def object_names(state: State) -> list[str]:

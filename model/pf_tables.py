@@ -19,7 +19,7 @@ from __future__ import annotations
 import hashlib
 import re
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import clingo
 import numpy as np
@@ -28,10 +28,10 @@ from groundlang.logic.atoms import Atom, canonical_predicate, parse_atom
 from groundlang.logic.program import DEFAULT_TIME_LIMIT, AspError, Program, package_source
 from groundlang.logic.tasks import pf_name
 
-from .geometry import fact, layout_facts
+from .geometry import fact, layout_facts, palette_facts
 from .world import Layout
 
-__all__ = ["PFTables", "TabulationError", "pf_tables", "tabulation_program", "MAX_TABLE_CELLS"]
+__all__ = ["PFTables", "TabulationError", "pf_tables", "library_pf_tables", "tabulation_program", "MAX_TABLE_CELLS"]
 
 # Entries of one atom's table (cells to the power of its movable arguments): two movable arguments
 # on a 32x32 grid are 10^6; three are refused here rather than grounded for minutes.
@@ -71,20 +71,23 @@ class PFTables:
     """Where each grounded PF of a layout holds, per placement of its movable arguments.
 
     signatures: PF name -> classes of its arguments, for every PF the program declares.
-    tabulated:  names of the PFs with a movable argument (their value changes with the state).
+    order:      the position PFs (their value changes with the state), as the program declares them.
     grids:      atom -> (indices of its movable arguments among a state's positions, bool grid
                 ``[W, H] * m``); atoms that hold nowhere are absent.
-    static:     atoms of PFs with no movable argument that hold in the layout.
+    static:     atoms of the other PFs (but the spatial ones) that hold in the layout.
     objects:    object name -> class.
     """
 
     layout: Layout
     signatures: dict[str, tuple[str, ...]]
-    tabulated: frozenset[str]
+    order: tuple[str, ...]
     grids: dict[Atom, tuple[tuple[int, ...], np.ndarray]]
     static: frozenset[Atom]
     objects: dict[str, str]
-    order: tuple[str, ...]  # the tabulated PFs in the order the program declares them
+
+    @cached_property
+    def tabulated(self) -> frozenset[str]:
+        return frozenset(self.order)
 
     def check(self, atom: Atom) -> Atom:
         """The atom with the paper's predicate name; TabulationError when its predicate, arity or
@@ -92,20 +95,16 @@ class PFTables:
         predicate = canonical_predicate(atom.predicate)
         classes = self.signatures.get(predicate)
         if classes is None:
-            raise TabulationError(
-                f"{atom}: unknown predicate {atom.predicate!r} in {atom}; the domain declares "
-                f"{', '.join(sorted(self.signatures)) or 'no PF'}")
+            raise TabulationError(f"{atom}: unknown predicate {atom.predicate!r}; the domain declares "
+                                  f"{', '.join(sorted(self.signatures)) or 'no PF'}")
         if len(atom.args) != len(classes):
-            raise TabulationError(f"{atom} has {len(atom.args)} arguments; expected {len(classes)}: {predicate} takes "
-                                  f"{len(classes)} argument{'s' if len(classes) != 1 else ''} ({', '.join(classes)})")
-        for i, (name, cls) in enumerate(zip(atom.args, classes)):
+            raise TabulationError(f"{atom} has {len(atom.args)} arguments; {predicate} takes {len(classes)} "
+                                  f"({', '.join(classes)})")
+        for name, cls in zip(atom.args, classes):
             if name not in self.objects:
-                raise TabulationError(f"{atom} names {name}, which does not exist (objects: "
-                                      f"{', '.join(self.objects)}): argument {i + 1} {name!r} is not {_a(cls)} "
-                                      "of this layout")
+                raise TabulationError(f"{atom} names {name}, which does not exist (objects: {', '.join(self.objects)})")
             if self.objects[name] != cls:
-                raise TabulationError(f"{atom}: {name} is {_a(self.objects[name])}; expected {_a(cls)} there: "
-                                      f"argument {i + 1} {name!r} is not {_a(cls)}")
+                raise TabulationError(f"{atom}: {name} is {_a(self.objects[name])}; expected {_a(cls)} there")
         return Atom(predicate, atom.args)
 
     def column(self, atom: Atom | str, positions: np.ndarray) -> np.ndarray:
@@ -119,8 +118,9 @@ class PFTables:
         index = tuple(positions[:, m, axis] for m in movers for axis in (0, 1))
         return grid[index]
 
-    def atoms(self) -> list[Atom]:
-        """Every grounded atom of a tabulated PF over this layout's objects, by PF (in the order the
+    @cached_property
+    def position_atoms(self) -> tuple[Atom, ...]:
+        """Every grounded atom of a position PF over this layout's objects, by PF (in the order the
         files declare them) then objects."""
         by_class: dict[str, list[str]] = {}
         for name, cls in self.objects.items():
@@ -131,15 +131,16 @@ class PFTables:
             for cls in self.signatures[predicate]:
                 tuples = [t + (o,) for t in tuples for o in by_class.get(cls, []) if o not in t]
             out.extend(Atom(predicate, t) for t in tuples)
-        return out
+        return tuple(out)
 
+    def position_holding(self, positions: np.ndarray) -> list[Atom]:
+        """The position atoms that hold in the state with positions ``[1 + k, 2]``, in ``position_atoms`` order."""
+        return [a for a in self.position_atoms if self.column(a, positions[None])[0]]
 
     def holding(self, positions: np.ndarray) -> list[Atom]:
-        """Every atom that holds in the state with positions ``[1 + k, 2]``: the tabulated ones (by PF in
-        declared order, then objects), then the static ones (sorted)."""
-        atoms = self.atoms()
-        values = [self.column(a, positions[None])[0] for a in atoms]
-        return [a for a, v in zip(atoms, values) if v] + sorted(self.static)
+        """Every atom that holds in the state with positions ``[1 + k, 2]``: the position ones, then the
+        static ones (sorted)."""
+        return self.position_holding(positions) + sorted(self.static)
 
 
 def _a(word: str) -> str:
@@ -168,69 +169,87 @@ def _decode(text: str, names: dict[str, str]) -> tuple[str, tuple[str, ...], tup
     return names[term], tuple(objects), tuple(cells)
 
 
+@dataclass(frozen=True)
+class _Declarations:
+    signatures: dict[str, tuple[str, ...]]
+    order: tuple[str, ...]  # position PFs, in declared order
+    movers: dict[str, int]  # position PF -> how many of its arguments move
+
+
+@lru_cache(maxsize=64)
+def _declarations(program: Program, palette_facts: str, time_limit: float | None) -> _Declarations:
+    """What ``program`` declares with a palette's values, before any layout is grounded (one solve per
+    program and palette): the PFs' signatures, the position PFs in order, their movable arguments."""
+    models = program.solve(palette_facts, models=1, time_limit=time_limit)
+    if not models:
+        raise TabulationError(f"{program.user_names}: no answer set (a constraint always fails)")
+    args: dict[str, dict[int, str]] = {}
+    tabulated, movable, never = set(), set(), []
+    for sym in models[0]:
+        kind = sym.name
+        if kind == "pf_arg":
+            args.setdefault(pf_name(sym.arguments[0]), {})[sym.arguments[1].number] = str(sym.arguments[2])
+        elif kind == "tabulated":
+            tabulated.add(pf_name(sym.arguments[0]))
+        elif kind == "movable":
+            movable.add(str(sym.arguments[0]))
+        elif kind == "position_pf_never_moves":
+            never.append(pf_name(sym.arguments[0]))
+    if never:
+        raise TabulationError(f"{program.user_names}: position PF {min(never)} has no argument of a class that "
+                              f"moves ({', '.join(sorted(movable))}): no state could change it; "
+                              "declare it in another PF class")
+    signatures = {n: tuple(a[i] for i in sorted(a)) for n, a in args.items()}
+    declared = {name: i for i, name in enumerate(program.declared_order("pf", 3, 1))}
+    order = tuple(sorted(tabulated, key=lambda n: (declared.get(n, len(declared)), n)))
+    return _Declarations(signatures, order, {n: sum(c in movable for c in signatures[n]) for n in order})
+
+
 @lru_cache(maxsize=256)
 def pf_tables(layout: Layout, program: Program | None = None,
               time_limit: float | None = DEFAULT_TIME_LIMIT) -> PFTables:
-    """The PF tables of ``layout`` under ``program`` (default: the package's PFs); cached per pair."""
+    """The PF tables of ``layout`` under ``program`` (default: the package's PFs); cached per pair.
+    Refused (TabulationError), before the layout is grounded, when a table would be too large."""
     program = program or tabulation_program(())
     cells = int(layout.walkable.sum())
     if cells > MAX_TABULATED_CELLS:
         raise TabulationError(f"this layout has {cells:,} walkable cells; PFs are tabulated for at most "
                               f"{MAX_TABULATED_CELLS:,} (every movable object is copied onto each cell)")
-    models = program.solve(layout_facts(layout, movable=False) + _copies(layout), models=1, time_limit=time_limit)
-    if not models:
-        raise TabulationError(f"{program.user_names}: no answer set for the layout (a constraint always fails)")
-    args: dict[str, dict[int, str]] = {}
-    tabulated = set()
-    holds = []
-    movable_classes = set()
-    never = []
-    for sym in models[0]:
-        kind = sym.name  # one call into clingo per symbol: the atoms are thousands
-        if kind == "holds":
-            holds.append(sym)
-        elif kind == "pf_arg":
-            args.setdefault(pf_name(sym.arguments[0]), {})[sym.arguments[1].number] = str(sym.arguments[2])
-        elif kind == "tabulated":
-            tabulated.add(pf_name(sym.arguments[0]))
-        elif kind == "movable":
-            movable_classes.add(str(sym.arguments[0]))
-        elif kind == "position_pf_never_moves":
-            never.append(pf_name(sym.arguments[0]))
-    if never:
-        raise TabulationError(f"{program.user_names}: position PF {min(never)} has no argument of a class that "
-                              f"moves ({', '.join(sorted(movable_classes))}): no state could change it; "
-                              "declare it in another PF class")
-    signatures = {n: tuple(a[i] for i in sorted(a)) for n, a in args.items()}
-    objects = {name: cls for cls, name, _ in layout.objects}
-    movable_index = {name: i for i, name in enumerate(layout.movable_names)}
-    for n in tabulated:
-        movers = sum(cls in movable_classes for cls in signatures[n])
+    declared = _declarations(program, palette_facts(layout), time_limit)
+    for n, movers in declared.movers.items():
         if cells ** movers > MAX_TABLE_CELLS:
             raise TabulationError(f"{program.user_names}: PF {n} has {movers} movable arguments: its table over "
                                   f"{cells} walkable cells would hold {cells}^{movers} entries per atom "
                                   f"(at most {MAX_TABLE_CELLS})")
+    models = program.solve(layout_facts(layout, movable=False) + _copies(layout), models=1, time_limit=time_limit)
+    if not models:
+        raise TabulationError(f"{program.user_names}: no answer set for the layout (a constraint always fails)")
+    movable_index = {name: i for i, name in enumerate(layout.movable_names)}
     found: dict[Atom, list[tuple[int, ...]]] = {}
     static = set()
     names: dict[str, str] = {}
-    for sym in holds:
-        name, objects_of, cells_of = _decode(str(sym), names)
-        atom = Atom(name, objects_of)
-        if name not in tabulated:
-            static.add(atom)
+    for sym in models[0]:
+        if sym.name != "holds":
             continue
-        found.setdefault(atom, []).append(cells_of)
-    shape = layout.walkable.shape
+        name, objects_of, cells_of = _decode(str(sym), names)
+        if name in declared.movers:
+            found.setdefault(Atom(name, objects_of), []).append(cells_of)
+        else:
+            static.add(Atom(name, objects_of))
     grids = {}
     for atom, placements in found.items():
         movers = tuple(movable_index[o] for o in atom.args if o in movable_index)
-        grid = np.zeros(shape * len(movers), dtype=bool)
+        grid = np.zeros(layout.walkable.shape * len(movers), dtype=bool)
         grid[tuple(np.array(placements, dtype=np.intp).T)] = True
         grid.flags.writeable = False
         grids[atom] = (movers, grid)
-    declared = {name: i for i, name in enumerate(program.declared_order("pf", 3, 1))}
-    order = tuple(sorted(tabulated, key=lambda n: (declared.get(n, len(declared)), n)))
-    return PFTables(layout, signatures, frozenset(tabulated), grids, frozenset(static), objects, order)
+    objects = {name: cls for cls, name, _ in layout.objects}
+    return PFTables(layout, declared.signatures, declared.order, grids, frozenset(static), objects)
+
+
+def library_pf_tables(layout: Layout, library=None) -> PFTables:
+    """The PF tables of ``layout`` under a TaskLibrary's PF rules (None: the package's PFs)."""
+    return pf_tables(layout, None if library is None else library.tabulation_program)
 
 
 def program_digest(program: Program) -> str | None:

@@ -67,24 +67,21 @@ for task in library.tasks:
     ("md", """## The schema, and a PF of two objects as a goal
 
 Everything groundlang knows of the domain is read from these files: `domain_schema` gathers the classes, the palette, every PF by PF class and the tasks in one solve (`groundlang domain` prints the same). A position PF may relate two movable objects: clingo tabulates it once per layout over the cells of both (`model/pf_tables.py`), and it is a goal like any other.""", "01-schema-md"),
-    ("code", '''from groundlang.logic.schema import domain_schema
+    ("code", '''from groundlang.logic.program import Source, file_source
+from groundlang.logic.schema import domain_schema
 from groundlang.model.pf_tables import pf_tables
 from groundlang.logic.atoms import Atom
 
-NEXT_TO = """
-pf(position, agentNextToToy, (agent, toy)).
-holds(agentNextToToy, (A, T)) :- agent(A), toy(T), at(A, X, Y), at(T, U, V),
-                                 |X - U| <= 1, |Y - V| <= 1, |X - U| + |Y - V| > 0.
-task(agentNextToToy). var(agentNextToToy, "A", agent). var(agentNextToToy, "T", toy).
-goal(agentNextToToy, agentNextToToy, ("A", "T")).
-"""
-relational = TaskLibrary.from_text(kept + AUTHORED + NEXT_TO, "authored.lp")
+# groundlang/examples/next_to.lp: a PF of the agent and a toy, and a task whose goal it is.
+relational = TaskLibrary([Source("authored.lp", kept + AUTHORED), file_source(examples / "next_to.lp")])
 print(domain_schema(relational, "sokoban").describe())
+(new_task,) = [t for t in relational.tasks if t.name not in library.names]
+relation = new_task.goal[0][0]
 tables = pf_tables(novel["a"].layout, relational.tabulation_program)
-movers, grid = tables.grids[Atom("agentNextToToy", ("agent0", "block0"))]  # [W, H, W, H]: agent cell, star cell
+movers, grid = tables.grids[Atom(relation, ("agent0", "block0"))]  # [W, H, W, H]: agent cell, star cell
 star = novel["a"].toys[0]
 xs, ys = grid[:, :, star.x, star.y].nonzero()
-print("cells where the agent is next to the star at", (star.x, star.y), ":", sorted(zip(xs.tolist(), ys.tolist())))''', "01-schema-code"),
+print(f"cells where {relation}(agent0, block0) holds, the star at {(star.x, star.y)}:", sorted(zip(xs.tolist(), ys.tolist())))''', "01-schema-code"),
     ("md", "## Groundings in a layout\n\nclingo enumerates every grounding not already true, with the colour, shape and now *size* PFs true of the bound objects (the binding constraints)."),
     ("code", '''state = novel["a"]
 for grounded, constraints in candidate_tasks(state, library):

@@ -12,7 +12,8 @@ import pytest
 from groundlang.bdm import format_bdm_state, parse_bdm_state, read_bdm
 from groundlang.corpus import CorpusError, read_initial_state
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.pair_tasks import Fact, pair_task, reachable, satisfies
+from groundlang.logic.atoms import Atom
+from groundlang.pair_tasks import pair_task, reachable, satisfies
 
 FIXTURE = Path(__file__).parent / "fixtures" / "williams2018"
 SHARED = Path(__file__).parent.parent.parent / "shared" / "data" / "williams2018" / "train"
@@ -51,9 +52,9 @@ def test_a_one_line_bdm_state_file_is_a_state_file():
 
 def test_the_tasks_pairs_show_are_lifted_facts(commands, library):
     largest, chair = (pair_task([(p.start, p.end) for p in c.pairs], library) for c in commands)
-    assert Fact("agentInRoom", ("agent", "roomIsLargest")) in largest
-    assert not any("Green" in f.said[1] or "Red" in f.said[1] for f in largest)  # colours differ across pairs
-    assert Fact("agentNextToToy", ("agent", "toyIsChair")) in chair
+    assert Atom("agentInRoom", ("agent", "roomIsLargest")) in largest
+    assert not any("Green" in f.args[1] or "Red" in f.args[1] for f in largest)  # colours differ across pairs
+    assert Atom("agentNextToToy", ("agent", "toyIsChair")) in chair
     assert not any(f.predicate == "agentInRoom" for f in chair)  # the agent ends in different kinds of room
     for c, task in zip(commands, (largest, chair)):
         assert all(satisfies(p.end, task, library) and not satisfies(p.start, task, library) for p in c.pairs)

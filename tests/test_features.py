@@ -172,13 +172,13 @@ def test_constant_colour_and_shape_columns(one_toy):
     [
         ("agentNearRoom(agent0, room0)", r"agentNearRoom\(agent0, room0\): unknown predicate"),
         ("toyInRoom(block0, room7)", r"toyInRoom\(block0, room7\) names room7, which does not exist"),
-        ("toyInRoom(block3, room0)", "'block3' is not a toy"),
-        ("agentInRoom(block0, room0)", "'block0' is not an agent"),
-        ("agentInRoom(agent0)", "takes 2 arguments"),
-        ("roomIsGreen(room0, room1)", "takes 1 argument"),
+        ("toyInRoom(block3, room0)", r"toyInRoom\(block3, room0\) names block3, which does not exist"),
+        ("agentInRoom(block0, room0)", "block0 is a toy; expected an agent there"),
+        ("agentInRoom(agent0)", r"has 1 arguments; agentInRoom takes 2 \(agent, room\)"),
+        ("roomIsGreen(room0, room1)", r"has 2 arguments; roomIsGreen takes 1 \(room\)"),
         ("roomIsStar(room0)", "unknown predicate 'roomIsStar'"),
         ("roomIsPurple(room0)", "unknown predicate"),
-        ("toyIsGreen(room0)", "'room0' is not a toy"),
+        ("toyIsGreen(room0)", "room0 is a room; expected a toy there"),
     ],
 )
 def test_bad_atoms_are_named(one_toy, atom, message):

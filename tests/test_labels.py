@@ -105,7 +105,7 @@ def test_colour_and_shape_atoms():
         ("toyInRoom(block0, room0)", "names block0, which does not exist"),
         ("agentInRoom(room0, agent0)", "room0 is a room; expected an agent there"),
         ("roomIsPurple(room0)", "unknown predicate 'roomIsPurple'"),
-        ("agentInRoom(agent0)", "has 1 arguments; expected 2"),
+        ("agentInRoom(agent0)", "has 1 arguments; agentInRoom takes 2 (agent, room)"),
     ],
 )
 def test_bad_goals_are_clear_errors(goal, piece):

@@ -37,7 +37,7 @@ def setting():
     state = read_state_file(TWO_TOYS, "sokoban2")
     learner = Learner("parse")
     observations = [learner._command_observation(c, state) for c in COMMANDS]
-    learner.vocab = learner._build_vocabulary(observations, [state.layout])
+    learner.vocab = learner._build_vocabulary(observations, [state.layout.palette])
     # Observations made before the vocabulary existed still encode with it.
     batch = encode(observations, learner.vocab)
     pyro.set_rng_seed(3)

@@ -198,7 +198,7 @@ def test_the_schema_is_read_from_the_files(domain, library):
 
 
 def test_the_worlds_kinds_of_object_are_the_classes_domain_lp_declares():
-    from groundlang.logic.schema import domain_classes
+    from groundlang.logic.classes import domain_classes
     from groundlang.model.world import TOY_CLASS, WORLD_CLASSES, object_class
 
     classes = domain_classes()

@@ -29,7 +29,7 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
-    from groundlang.model.pf_tables import TabulationError, pf_tables
+    from groundlang.model.pf_tables import TabulationError, library_pf_tables
     from groundlang.model.tasks import candidate_tasks, object_descriptions
 
     state = read_initial_state(args.file, args.palette)
@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     described = {obj: by_name[obj] for obj in object_names(state) if obj in by_name}
     # Relations (toyInRoom, a user's agentNextToToy, ...) as the PF tables planning uses say they hold.
     try:
-        holding = [a for a in pf_tables(state.layout, library.tabulation_program).holding(state.positions)
+        holding = [a for a in library_pf_tables(state.layout, library).holding(state.positions)
                    if len(a.args) > 1]
         untabulated = None
     except TabulationError as exc:  # a layout too large to tabulate still lists its tasks
