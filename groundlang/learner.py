@@ -22,6 +22,7 @@ from groundlang.clarify import AnswerError, choose, competing, question, unknown
 from groundlang.confidence import GoalGroup, group_goals
 from groundlang.inference.acting import rollout, rollout_states
 from groundlang.inference.joint import FitResult, fit_globals, posterior
+from groundlang.inference.end_states import end_state_likelihood_table
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.logic.atoms import Atom
@@ -172,9 +173,16 @@ class Learner:
             self.add_words(words)
         interps = [self._interpretations(inst.initial_state) for inst in instances]
         goals = [sorted({i.goal for i in group}) for group in interps]
-        table = behaviour_likelihood_table(
-            instances, goals, self.settings, cache_dir=self.cache_dir, progress=progress, library=self.library
-        )
+        shown = [getattr(inst, "actions", None) is not None for inst in instances]
+        if not any(shown):  # (start, end) pairs: the end state's likelihood (inference.end_states)
+            table = end_state_likelihood_table(instances, goals, self.library.tabulation_program)
+        elif all(shown):
+            table = behaviour_likelihood_table(
+                instances, goals, self.settings, cache_dir=self.cache_dir, progress=progress, library=self.library
+            )
+        else:
+            raise ValueError("observe: instances with demonstrations and (start, end) pairs without them "
+                             "cannot be mixed in one corpus")
         observations = []
         for inst, group, goal_list, row in zip(instances, interps, goals, table):
             by_goal = dict(zip(goal_list, row))

@@ -37,12 +37,23 @@ def _said(tables: PFTables) -> dict[str, tuple[str, ...]]:
 
 
 def lifted_facts(state: State, library: TaskLibrary | None = None) -> frozenset[Atom]:
-    """Every lifted fact of ``state``: each position PF that holds, with its arguments said every way
+    """Every lifted fact of ``state``: each relation (:func:`_relations`) that holds, with its arguments said every way
     (an Atom whose arguments are what is said of the objects, ``agentInRoom(agent, roomIsRed)``)."""
     tables = library_pf_tables(state.layout, library)
     said = _said(tables)
+    relations = _relations(library)
     return frozenset(Atom(atom.predicate, combo) for atom in tables.position_holding(state.positions)
+                     if relations is None or atom.predicate in relations
                      for combo in product(*(said[o] for o in atom.args)))
+
+
+def _relations(library: TaskLibrary | None) -> frozenset[str] | None:
+    """The relations a task is made of: the goal predicates of the library's tasks (None: every
+    position PF). A position PF no task has as its goal (``agentInDoor`` where the corpus's tasks never
+    ask for a door) holds in end states by chance and is not what a command asks."""
+    if library is None:
+        return None
+    return frozenset(predicate for task in library.tasks for predicate, _ in task.goal)
 
 
 def pair_task(pairs, library: TaskLibrary | None = None) -> frozenset[Atom]:

@@ -40,8 +40,11 @@ NUM_ACTIONS = len(ACTION_DELTAS)
 DENSE_KEY_LIMIT = 1 << 25
 
 # Default refusal threshold of enumerate_states; users of the CLI raise it
-# with this environment variable (library callers pass max_states).
-DEFAULT_MAX_STATES = 2_000_000
+# with this environment variable (library callers pass max_states). The bound it
+# is checked against counts every placement of distinct cells, far above what a
+# walled layout reaches: an 8x8 grid of three rooms with three blocks is bounded
+# by 2.4 million and reaches a few tens of thousands, so the default admits it.
+DEFAULT_MAX_STATES = 5_000_000
 MAX_STATES_VARIABLE = "GROUNDLANG_MAX_STATES"
 
 
@@ -270,7 +273,7 @@ def enumerate_states(state: State, max_states: int | None = None) -> StateSpace:
     (a ValueError) when the initial state is invalid, or when the layout could
     hold more than ``max_states`` states (checked up front, from the number of
     walkable cells and toys; pass a larger ``max_states`` to allow it; the
-    default is ``$GROUNDLANG_MAX_STATES`` or 2,000,000).
+    default is ``$GROUNDLANG_MAX_STATES`` or 5,000,000).
     """
     return _enumerate(state, default_max_states() if max_states is None else max_states, dense=None)
 

@@ -281,7 +281,7 @@ ROWS += [
     Row("environment/state space too large: refused up front",
         _follow("push the star into the red room", BAD / "huge_grid.state", "--out", "{tmp}/picture.png"),
         pieces=("this layout could reach up to 26,501,398,056 states (162793 walkable cells, 1 toy(s))",
-                "more than max_states=2,000,000", "set GROUNDLANG_MAX_STATES=26501398056 in the environment"),
+                "more than max_states=5,000,000", "set GROUNDLANG_MAX_STATES=26501398056 in the environment"),
         absent=("{tmp}/picture.png",)),
     Row("environment/limit lowered with GROUNDLANG_MAX_STATES",
         _follow("go to the red room", NOVEL), env={"GROUNDLANG_MAX_STATES": "1000"},

@@ -13,9 +13,19 @@ from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("evaluate", help="leave-one-out or train-set accuracy against gold labels")
-    p.add_argument("--corpus", required=True, metavar="DIR")
-    p.add_argument("--palette", required=True, help=PALETTE_HELP)
-    p.add_argument("--labels", required=True, metavar="CSV")
+    p.add_argument("--corpus", required=True, metavar="DIR",
+                   help="training corpus: a folder of *.txt files, or a .bdm file or folder of them (Williams 2018)")
+    p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
+    p.add_argument("--labels", metavar="CSV", help="gold labels of a *.txt corpus (required for it)")
+    p.add_argument("--test", metavar="BDM", help="a .bdm test file or folder: train on --corpus, follow every test "
+                   "command from each of its start states, scored by what its pairs show")
+    p.add_argument("--format", choices=["commands-to-tasks", "williams2018"],
+                   help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
+    p.add_argument("--library", metavar="LP", action="append",
+                   help="task library .lp file (repeatable; default for .bdm: the package's williams2018 domain)")
+    p.add_argument("--demonstrations", choices=["end-state", "shortest-plan"], default="end-state",
+                   help="how a (start, end) pair without a trajectory is evidence (default end-state: the end "
+                        "state's likelihood under each task; shortest-plan: a synthesised shortest plan)")
     p.add_argument("--protocol", default="loo", choices=["loo", "train"])
     p.add_argument("--novel-envs", metavar="DIR", help="folder of *.state files to execute each command in too")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
@@ -58,6 +68,13 @@ def run(args: argparse.Namespace) -> int:
 
     if args.json:
         check_destination(args.json, "--json")
+    if _is_pairs(args):
+        return run_pairs(args)
+    if args.test:
+        raise ValueError("--test takes a .bdm test file for a .bdm training corpus; a *.txt corpus is "
+                         "evaluated by --protocol loo or train")
+    if not args.palette or not args.labels:
+        raise ValueError("a *.txt corpus needs --palette and --labels (the gold labels it is scored against)")
     # read here, before any work: a malformed word file is one error line, and workers get the words
     words = extra_words(args.lexicon)
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
@@ -86,3 +103,45 @@ def run(args: argparse.Namespace) -> int:
         write_atomically(Path(args.json), json.dumps(data, indent=1).encode("utf-8"))
         print(f"result written to {args.json}")
     return 0 if not result.failed_folds else 1
+
+
+def _is_pairs(args) -> bool:
+    from groundlang.bdm import bdm_files
+
+    return args.format == "williams2018" or (args.format is None and bool(bdm_files(args.corpus)))
+
+
+def run_pairs(args: argparse.Namespace) -> int:
+    """``evaluate`` on a corpus of (start, end) pairs against a test file (groundlang.pair_evaluation)."""
+    from groundlang.bdm import DEFAULT_PALETTE
+    from groundlang.bdm_check import default_library
+    from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.domain_words import extra_words
+    from groundlang.model.storage import write_atomically
+    from groundlang.pair_corpus import read_pair_corpus
+    from groundlang.pair_evaluation import evaluate_pairs
+
+    if not args.test:
+        raise ValueError(f"{args.corpus}: a corpus of (start, end) pairs is evaluated against a test file: "
+                         "pass --test TEST.bdm (hold out commands by text for a development split)")
+    if args.labels or args.novel_envs or args.protocol != "loo":
+        raise ValueError("--labels, --novel-envs and --protocol are for a *.txt corpus; a .bdm corpus is scored "
+                         "by what its test pairs show")
+    palette = args.palette or DEFAULT_PALETTE
+    words = extra_words(args.lexicon)
+    library = TaskLibrary.load(args.library) if args.library else default_library()
+    train = read_pair_corpus(args.corpus, palette)
+    test = read_pair_corpus(args.test, palette)
+    from groundlang.model.language_models import get_language_model
+
+    options = {"language_model": get_language_model(args.language_model, **language_model_settings(args.lm_settings))}
+    if words:
+        options["lexicon"] = words
+    result = evaluate_pairs(train.commands, test.commands, library, demonstrations=args.demonstrations,
+                            skip_inconsistent=args.skip_inconsistent, learner_options=options,
+                            progress=args.progress)
+    print(result.summary())
+    if args.json:
+        write_atomically(Path(args.json), json.dumps(result.to_json(), indent=1).encode("utf-8"))
+        print(f"result written to {args.json}")
+    return 0
