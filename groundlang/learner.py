@@ -22,9 +22,9 @@ from groundlang.clarify import AnswerError, choose, competing, question, unknown
 from groundlang.confidence import GoalGroup, group_goals
 from groundlang.inference.acting import rollout, rollout_states
 from groundlang.inference.joint import FitResult, fit_globals, posterior
-from groundlang.inference.end_states import end_state_likelihood_table
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
+from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.logic.atoms import Atom
 from groundlang.logic.schema import domain_schema
 from groundlang.logic.tasks import TaskLibrary
@@ -172,27 +172,27 @@ class Learner:
         if any(words.values()):
             self.add_words(words)
         interps = [self._interpretations(inst.initial_state) for inst in instances]
-        goals = [sorted({i.goal for i in group}) for group in interps]
         shown = [getattr(inst, "actions", None) is not None for inst in instances]
-        if not any(shown):  # (start, end) pairs: the end state's likelihood (inference.end_states)
-            table = end_state_likelihood_table(instances, goals, self.library.tabulation_program)
+        if not any(shown):  # (start, end) pairs: end states' likelihoods (inference.end_states, shared_meaning)
+            behaviour = end_state_behaviour(instances, interps, self.library)
         elif all(shown):
+            goals = [sorted({i.goal for i in group}) for group in interps]
             table = behaviour_likelihood_table(
                 instances, goals, self.settings, cache_dir=self.cache_dir, progress=progress, library=self.library
             )
+            behaviour = [[float(dict(zip(g, row))[i.goal]) for i in group] for g, row, group in zip(goals, table, interps)]
         else:
             raise ValueError("observe: instances with demonstrations and (start, end) pairs without them "
                              "cannot be mixed in one corpus")
         observations = []
-        for inst, group, goal_list, row in zip(instances, interps, goals, table):
-            by_goal = dict(zip(goal_list, row))
+        for inst, group, values in zip(instances, interps, behaviour):
             readings = tuple(parse(inst.command, word_lexicon=self.word_lexicon))
             observations.append(
                 Observation(
                     tuple(readings[0].logical_form.words),
                     readings,
                     tuple(group),
-                    tuple(float(by_goal[i.goal]) for i in group),
+                    tuple(values),
                 )
             )
         return observations

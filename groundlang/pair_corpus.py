@@ -15,18 +15,26 @@ inconsistent demonstration (an error naming file and line, or skipped with ``ski
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from groundlang.bdm import DEFAULT_PALETTE, Command, bdm_files, read_bdm
 from groundlang.corpus import CorpusError, InconsistentDemonstration, Instance
-from groundlang.model.statespace import StateSpaceError, check_state_count, enumerate_states
+from groundlang.inference.end_states import EndStateNoise
+from groundlang.inference.shared_meaning import LayoutEvidence
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.statespace import StateSpaceError, check_state_count
 from groundlang.model.world import State, replay
 from groundlang.pair_tasks import REACHABILITY_MAX_STATES, shortest_actions
 
-__all__ = ["PairInstance", "PairCorpus", "read_pair_corpus", "training_instances", "DEMONSTRATIONS"]
+__all__ = ["PairInstance", "PairedCommand", "PairCorpus", "LAYOUTS", "read_pair_corpus", "training_instances", "held_out_by_text",
+           "DEMONSTRATIONS"]
 
 DEMONSTRATIONS = ("end-state", "shortest-plan")
+# How a command's pairs in several layouts are used: as one instance of one lifted meaning, or each as
+# an instance of its own (the baseline). Shared needs end-state evidence (no trajectories to multiply).
+LAYOUTS = ("shared", "separate")
 
 
 @dataclass(frozen=True)
@@ -39,6 +47,33 @@ class PairInstance:
     initial_state: State
     final_state: State
     actions: None = None  # no demonstration: the learner scores the end state (inference.end_states)
+    evidence: tuple = field(default=(), compare=False, repr=False)  # inference.shared_meaning.LayoutEvidence
+
+    @property
+    def name(self) -> str:
+        return f"{Path(self.path).name}:{self.line}"
+
+
+@dataclass(frozen=True)
+class PairedCommand:
+    """A command with its usable (start, end) pairs, each in its own layout: one training instance whose
+    interpretations are read in the first pair's layout and whose behaviour term multiplies the pairs'
+    under one lifted meaning (``inference.shared_meaning``)."""
+
+    path: Path
+    line: int  # of the command
+    command: str
+    pairs: tuple[tuple[State, State], ...]
+    actions: None = None
+    evidence: tuple = field(default=(), compare=False, repr=False)  # one LayoutEvidence per pair
+
+    @property
+    def initial_state(self) -> State:
+        return self.pairs[0][0]
+
+    @property
+    def final_state(self) -> State:
+        return self.pairs[0][1]
 
     @property
     def name(self) -> str:
@@ -64,6 +99,22 @@ def read_pair_corpus(path: str | Path, palette=DEFAULT_PALETTE) -> PairCorpus:
     return PairCorpus(paths, [c for p in paths for c in read_bdm(p, palette)])
 
 
+def held_out_by_text(commands: list[Command], fraction: float) -> tuple[list[Command], list[Command]]:
+    """A development split disjoint by command text: a text is held out when its hash (SHA-256 of the
+    lower-cased, stripped text) falls in the first ``fraction`` of the range, so every copy of a text
+    lands on one side, and the split is the same on every machine and for every corpus order."""
+    if not 0 < fraction < 1:
+        raise ValueError(f"held-out fraction {fraction}: expected a number strictly between 0 and 1")
+
+    def held(text: str) -> bool:
+        digest = hashlib.sha256(text.strip().lower().encode("utf-8")).digest()
+        return int.from_bytes(digest[:8], "big") < fraction * 2**64
+
+    train = [c for c in commands if not held(c.text)]
+    test = [c for c in commands if held(c.text)]
+    return train, test
+
+
 @dataclass
 class TrainingPairs:
     """What :func:`training_instances` made of a corpus, and what it left out (command, pair, why)."""
@@ -76,15 +127,24 @@ class TrainingPairs:
         return sum(1 for _, _, why in self.skipped if why == reason)
 
 
-def training_instances(commands: list[Command], demonstrations: str = "end-state", skip_inconsistent: bool = False,
-                       max_states: int = REACHABILITY_MAX_STATES) -> TrainingPairs:
+def training_instances(commands: list[Command], library: TaskLibrary, demonstrations: str = "end-state",
+                       skip_inconsistent: bool = False, max_states: int = REACHABILITY_MAX_STATES,
+                       layouts: str = "shared") -> TrainingPairs:
     """The instances of ``commands``' pairs (see the module docstring); pairs too large to enumerate are
     skipped as ``"too large"``, unreachable ones raise InconsistentDemonstration unless
-    ``skip_inconsistent`` (then skipped as ``"unreachable"``)."""
+    ``skip_inconsistent`` (then skipped as ``"unreachable"``). With ``layouts="shared"`` (end-state
+    evidence only) a command's usable pairs make one :class:`PairedCommand`."""
     if demonstrations not in DEMONSTRATIONS:
         raise ValueError(f"demonstrations={demonstrations!r}: expected one of {', '.join(DEMONSTRATIONS)}")
+    if layouts not in LAYOUTS:
+        raise ValueError(f"layouts={layouts!r}: expected one of {', '.join(LAYOUTS)}")
+    if layouts == "shared" and demonstrations != "end-state":
+        raise ValueError("layouts='shared' multiplies end-state evidence; with shortest-plan demonstrations "
+                         "use layouts='separate'")
     out = TrainingPairs()
+    noise = EndStateNoise()
     for index, command in enumerate(commands):
+        usable = []
         for pair in command.pairs:
             try:
                 check_state_count(pair.start, max_states)
@@ -96,9 +156,13 @@ def training_instances(commands: list[Command], demonstrations: str = "end-state
                 instance = None if actions is None else Instance(
                     Path(f"{command.path}:{pair.line}"), command.text, actions, tuple(replay(pair.start, actions)))
             else:
-                instance = PairInstance(command.path, pair.line, command.text, pair.start, pair.end)
-                if not _reaches(pair.start, pair.end, max_states):
+                try:  # enumerates the pair's states once: the reachability check and the evidence
+                    evidence = LayoutEvidence(pair.start, pair.end, library, noise, max_states)
+                except StateSpaceError:
                     instance = None
+                else:
+                    instance = PairInstance(command.path, pair.line, command.text, pair.start, pair.end,
+                                            evidence=(evidence,))
             if instance is None:
                 if not skip_inconsistent:
                     raise InconsistentDemonstration(
@@ -107,14 +171,11 @@ def training_instances(commands: list[Command], demonstrations: str = "end-state
                         Path(command.path), pair.line, 0)
                 out.skipped.append((command, pair, "unreachable"))
                 continue
-            out.instances.append(instance)
-            out.commands.append(index)
+            usable.append(instance)
+        if layouts == "shared" and usable:
+            usable = [PairedCommand(command.path, command.line, command.text,
+                                    tuple((i.initial_state, i.final_state) for i in usable),
+                                    evidence=tuple(e for i in usable for e in i.evidence))]
+        out.instances.extend(usable)
+        out.commands.extend([index] * len(usable))
     return out
-
-
-def _reaches(start: State, end: State, max_states: int) -> bool:
-    try:
-        enumerate_states(start, max_states=max_states).index_of(end)
-    except (StateSpaceError, KeyError, ValueError):
-        return False
-    return True

@@ -52,6 +52,7 @@ class PairEvaluation:
     seconds_training: float
     seconds_following: float
     demonstrations: str
+    layouts: str
     executions: list[dict] = field(default_factory=list)
 
     @property
@@ -77,7 +78,8 @@ class PairEvaluation:
 
         skipped = ", ".join(f"{n} {why}" for why, n in sorted(self.train_skipped.items())) or "none"
         lines = [
-            f"trained on {self.train_commands} commands, {self.train_pairs} pairs ({self.demonstrations}); "
+            f"trained on {self.train_commands} commands, {self.train_pairs} pairs ({self.demonstrations}, "
+            f"layouts {self.layouts}); "
             f"pairs skipped: {skipped}",
             f"test: {self.test_commands} commands; {self.no_task_commands} whose pairs show no task (not scored)",
             f"per execution: {share(self.executions_correct, self.executions_n)}",
@@ -102,11 +104,12 @@ def _task_kind(task) -> str:
 
 
 def evaluate_pairs(train: list[Command], test: list[Command], library, demonstrations: str = "end-state",
-                   skip_inconsistent: bool = False, learner_options: dict | None = None,
+                   layouts: str = "shared", skip_inconsistent: bool = False, learner_options: dict | None = None,
                    max_states: int = REACHABILITY_MAX_STATES, progress: bool = False) -> PairEvaluation:
     """Train on ``train``'s pairs, follow ``test``'s commands from each start state (module docstring)."""
     started = time.perf_counter()
-    made = training_instances(train, demonstrations, skip_inconsistent=skip_inconsistent, max_states=max_states)
+    made = training_instances(train, library, demonstrations, skip_inconsistent=skip_inconsistent, max_states=max_states,
+                              layouts=layouts)
     if not made.instances:
         raise ValueError("no usable training pair (every pair was skipped)")
     learner = Learner(library=library, **(learner_options or {})).fit(made.instances, progress=progress)
@@ -149,12 +152,12 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
             no_task += 1
     finished = time.perf_counter()
     return PairEvaluation(
-        train_commands=len(train), train_pairs=len(made.instances),
+        train_commands=len(train), train_pairs=sum(len(getattr(i, "pairs", (i,))) for i in made.instances),
         train_skipped=dict(Counter(why for _, _, why in made.skipped)),
         test_commands=len(test), scored_commands=scored, no_task_commands=no_task,
         executions_n=n, executions_correct=correct, commands_correct=commands_correct,
         unseen_n=unseen_n, unseen_correct=unseen_correct, skipped_executions=skipped,
         per_task={k: tuple(v) for k, v in per_task.items()},
         seconds_training=trained - started, seconds_following=finished - trained,
-        demonstrations=demonstrations, executions=rows,
+        demonstrations=demonstrations, layouts=layouts, executions=rows,
     )

@@ -1,18 +1,17 @@
 """The likelihood of an end state under a grounded task, for data that show no trajectory.
 
 A corpus of (start, end) pairs (Williams et al. 2018) shows where the demonstrator stopped, not how it
-got there. Under a grounded task ``g`` the demonstrator plans a shortest route to a state where ``g``
-holds and stops there, so its end state is one of the *nearest* goal states of ``g`` (fewest moves
-from the start). Pairs are noisy, so two more ways to end are allowed:
+got there. Under a grounded task ``g`` the demonstrator heads for the states where ``g`` holds and
+stops in one; the farther a goal state is beyond the nearest one, the less likely it stops there
+(it walks a step or two into a room, seldom across it):
 
-    P(end | g) = (1 - rho_goal - rho_any) * [end in N_g] / |N_g|
-               + rho_goal * [end in G_g] / |G_g|
-               + rho_any / |S|
+    P(end | g) = (1 - rho) * [end in G_g] * exp(-beta * (d(end) - d_g)) / Z_g  +  rho / |S|
 
-with ``N_g`` the nearest goal states, ``G_g`` every goal state and ``S`` every state reachable from
-the start. A goal true of the end state but reached the long way round still explains it, less well;
-a goal the end state does not satisfy explains it only as noise. One breadth-first search per start
-state gives every distance; a goal then costs one mask over the states (no value iteration).
+with ``d`` the fewest moves from the start, ``G_g`` the goal states of ``g``, ``d_g`` the nearest of
+them, ``Z_g`` the sum of ``exp(-beta * (d(s) - d_g))`` over ``G_g`` and ``S`` every state reachable
+from the start: a goal the end state does not satisfy explains it only as noise (weight ``rho``).
+``beta = 0`` is uniform over the goal states, ``beta -> inf`` the nearest ones only. One breadth-first
+search per start state gives every distance; a goal then costs one mask over the states.
 """
 
 from __future__ import annotations
@@ -34,22 +33,27 @@ logger = logging.getLogger(__name__)
 
 
 class EndStateNoise:
-    """The two noise weights of the end-state likelihood (see the module docstring)."""
+    """The two parameters of the end-state likelihood (see the module docstring): ``beta``, how sharply
+    the end is drawn to the nearest goal states, and ``anywhere`` (rho), the weight of noise. Defaults
+    chosen by the likelihood of training pairs (ABLATIONS.md)."""
 
-    def __init__(self, goal: float = 0.1, anywhere: float = 0.01):
-        if not (0 <= goal and 0 < anywhere and goal + anywhere < 1):
-            raise ValueError(f"end-state noise: expected 0 <= goal, 0 < anywhere and goal + anywhere < 1; "
-                             f"got goal={goal}, anywhere={anywhere}")
-        self.goal = goal
+    def __init__(self, beta: float = 1.5, anywhere: float = 0.05):
+        if not (0 <= beta < math.inf and 0 < anywhere < 1):
+            raise ValueError(f"end-state noise: expected 0 <= beta < inf and 0 < anywhere < 1; "
+                             f"got beta={beta}, anywhere={anywhere}")
+        self.beta = beta
         self.anywhere = anywhere
 
     def key(self) -> tuple[float, float]:
-        return (self.goal, self.anywhere)
+        return (self.beta, self.anywhere)
 
 
 def distances(space: StateSpace, start: int = 0) -> np.ndarray:
-    """``[S]`` int: the fewest moves from state ``start`` to each state (-1: unreachable), breadth-first
-    a layer at a time, vectorised over the layer."""
+    """``[S]`` int: the fewest moves from state ``start`` to each state (-1: unreachable). From the
+    initial state of a space enumerated breadth-first, its levels; else breadth-first here, a layer at
+    a time, vectorised over the layer."""
+    if start == 0 and space.level_sizes is not None:
+        return np.repeat(np.arange(len(space.level_sizes), dtype=np.int64), space.level_sizes)
     next_state = np.asarray(space.next_state)[:, : len(Action)]
     dist = np.full(space.num_states, -1, dtype=np.int64)
     dist[start] = 0
@@ -67,19 +71,17 @@ def distances(space: StateSpace, start: int = 0) -> np.ndarray:
 def end_state_log_likelihood(dist: np.ndarray, end: int, masks: np.ndarray, noise: EndStateNoise) -> np.ndarray:
     """``[G]``: log P(end | g) for each goal mask (``masks`` ``[G, S]`` bool over the states)."""
     reachable = dist >= 0
-    masks = masks & reachable[None, :]
-    big = np.iinfo(np.int64).max
-    nearest_dist = np.where(masks, dist[None, :], big).min(axis=1)  # [G]
-    in_goal = masks[:, end]
-    n_goal = masks.sum(axis=1)
-    n_nearest = (masks & (dist[None, :] == nearest_dist[:, None])).sum(axis=1)
-    is_nearest = in_goal & (dist[end] == nearest_dist)
-    near = 1.0 - noise.goal - noise.anywhere
-    with np.errstate(divide="ignore", invalid="ignore"):
-        p = (near * np.where(is_nearest, 1.0 / np.maximum(n_nearest, 1), 0.0)
-             + noise.goal * np.where(in_goal, 1.0 / np.maximum(n_goal, 1), 0.0)
-             + noise.anywhere / int(reachable.sum()))
-    return np.log(p)
+    out = np.empty(len(masks))
+    floor = noise.anywhere / int(reachable.sum())
+    for g, mask in enumerate(masks):  # a loop over goals; each step is vectorised over the states
+        p = floor
+        if mask[end]:
+            goal_dist = dist[mask & reachable]
+            nearest = goal_dist.min()
+            z = np.exp(-noise.beta * (goal_dist - nearest)).sum()
+            p += (1 - noise.anywhere) * math.exp(-noise.beta * (dist[end] - nearest)) / z
+        out[g] = math.log(p)
+    return out
 
 
 def end_state_likelihood_table(instances: Sequence, goals: Sequence[Sequence[tuple]], program,

@@ -75,6 +75,8 @@ class StateSpace:
             from state ``s`` by action ``a`` (``Action`` order NORTH, SOUTH,
             EAST, WEST); blocked moves point back at ``s``.
         positions: ``[S, 1 + k, 2]`` int16, (x, y) of the agent then each toy.
+        level_sizes: ``[D]`` the number of states first reached after 0, 1, ...
+            moves (breadth-first levels), when the space was built that way; else None.
     """
 
     def __init__(
@@ -84,7 +86,9 @@ class StateSpace:
         positions: np.ndarray,
         keys: np.ndarray,
         cell_of: np.ndarray,
+        level_sizes: np.ndarray | None = None,
     ) -> None:
+        self.level_sizes = level_sizes
         self.layout: Layout = initial.layout
         self.initial = initial
         self.next_state = next_state
@@ -368,7 +372,8 @@ def _enumerate(state: State, max_states: int, dense: bool | None) -> StateSpace:
         "enumerated %d states in %d levels (%s key map)",
         count, len(level_next), "dense" if dense else "sorted",
     )
-    return StateSpace(state, next_state, positions, all_keys.astype(np.int64), cell_of)
+    sizes = np.array([len(k) for k in level_keys if len(k)], dtype=np.int64)
+    return StateSpace(state, next_state, positions, all_keys.astype(np.int64), cell_of, level_sizes=sizes)
 
 
 def _decode(keys: np.ndarray, num_cells: int, num_objects: int, cell_xy: np.ndarray) -> np.ndarray:

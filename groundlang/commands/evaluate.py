@@ -19,6 +19,12 @@ def register(subparsers) -> None:
     p.add_argument("--labels", metavar="CSV", help="gold labels of a *.txt corpus (required for it)")
     p.add_argument("--test", metavar="BDM", help="a .bdm test file or folder: train on --corpus, follow every test "
                    "command from each of its start states, scored by what its pairs show")
+    p.add_argument("--layouts", choices=["shared", "separate"], default="shared",
+                   help="a .bdm command's pairs as one instance of one lifted meaning grounded in each layout "
+                        "(shared, the default; needs end-state) or each pair as an instance of its own (separate)")
+    p.add_argument("--holdout", type=fraction, metavar="F",
+                   help="instead of --test: hold out the .bdm corpus's commands whose text hashes into a fraction "
+                        "F (a development split disjoint by text, the same on every machine)")
     p.add_argument("--format", choices=["commands-to-tasks", "williams2018"],
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
     p.add_argument("--library", metavar="LP", action="append",
@@ -118,26 +124,30 @@ def run_pairs(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.domain_words import extra_words
     from groundlang.model.storage import write_atomically
-    from groundlang.pair_corpus import read_pair_corpus
+    from groundlang.pair_corpus import held_out_by_text, read_pair_corpus
     from groundlang.pair_evaluation import evaluate_pairs
 
-    if not args.test:
-        raise ValueError(f"{args.corpus}: a corpus of (start, end) pairs is evaluated against a test file: "
-                         "pass --test TEST.bdm (hold out commands by text for a development split)")
+    if bool(args.test) == bool(args.holdout):
+        raise ValueError(f"{args.corpus}: a corpus of (start, end) pairs is evaluated against a test file or a "
+                         "held-out split: pass one of --test TEST.bdm and --holdout F")
     if args.labels or args.novel_envs or args.protocol != "loo":
         raise ValueError("--labels, --novel-envs and --protocol are for a *.txt corpus; a .bdm corpus is scored "
                          "by what its test pairs show")
     palette = args.palette or DEFAULT_PALETTE
     words = extra_words(args.lexicon)
     library = TaskLibrary.load(args.library) if args.library else default_library()
-    train = read_pair_corpus(args.corpus, palette)
-    test = read_pair_corpus(args.test, palette)
+    train = read_pair_corpus(args.corpus, palette).commands
+    if args.test:
+        test = read_pair_corpus(args.test, palette).commands
+    else:
+        train, test = held_out_by_text(train, args.holdout)
     from groundlang.model.language_models import get_language_model
 
     options = {"language_model": get_language_model(args.language_model, **language_model_settings(args.lm_settings))}
     if words:
         options["lexicon"] = words
-    result = evaluate_pairs(train.commands, test.commands, library, demonstrations=args.demonstrations,
+    result = evaluate_pairs(train, test, library, demonstrations=args.demonstrations,
+                            layouts=args.layouts,
                             skip_inconsistent=args.skip_inconsistent, learner_options=options,
                             progress=args.progress)
     print(result.summary())

@@ -1,0 +1,156 @@
+"""Learning from (start, end) pairs without trajectories: the end state's likelihood, one meaning over
+several layouts, the development split and ``evaluate --test`` (Williams et al. 2018 format)."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from importlib.resources import files
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from groundlang.bdm import parse_bdm_state, read_bdm
+from groundlang.inference.end_states import EndStateNoise, distances, end_state_log_likelihood
+from groundlang.inference.shared_meaning import LayoutEvidence, shared_meaning_terms
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.interpretations import interpretations
+from groundlang.model.statespace import enumerate_states
+from groundlang.model.tasks import candidate_tasks
+from groundlang.pair_corpus import PairedCommand, PairInstance, held_out_by_text, training_instances
+from groundlang.pair_tasks import pair_task, satisfies
+
+FIXTURE = Path(__file__).parent / "fixtures" / "williams2018"
+
+
+@pytest.fixture(scope="module")
+def library():
+    return TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
+
+
+@pytest.fixture(scope="module")
+def commands():
+    return read_bdm(FIXTURE / "small.bdm")
+
+
+def _bfs(next_state: np.ndarray) -> np.ndarray:
+    """Distances by a plain queue, to check the vectorised ones against."""
+    dist = np.full(len(next_state), -1)
+    dist[0], queue = 0, [0]
+    for s in queue:
+        for t in next_state[s, :4]:
+            if dist[t] < 0:
+                dist[t] = dist[s] + 1
+                queue.append(int(t))
+    return dist
+
+
+def test_distances_are_the_breadth_first_levels(commands):
+    space = enumerate_states(commands[1].pairs[0].start)
+    assert space.level_sizes is not None and space.level_sizes.sum() == space.num_states
+    expected = _bfs(np.asarray(space.next_state))
+    assert np.array_equal(distances(space), expected)
+    space.level_sizes = None  # a space built otherwise: breadth-first search here
+    assert np.array_equal(distances(space), expected)
+
+
+def test_the_end_state_likelihood_falls_with_the_steps_beyond_the_nearest_goal_state():
+    # five states in a row: 0 - 1 - 2 - 3 - 4; goal A holds at 2 and 4, goal B at 3 only
+    dist = np.arange(5)
+    masks = np.array([[0, 0, 1, 0, 1], [0, 0, 0, 1, 0]], dtype=bool)
+    noise = EndStateNoise(beta=1.0, anywhere=0.05)
+    z = 1 + math.exp(-2)
+    at_nearest = end_state_log_likelihood(dist, 2, masks, noise)
+    assert at_nearest[0] == pytest.approx(math.log(0.95 / z + 0.05 / 5))
+    assert at_nearest[1] == pytest.approx(math.log(0.05 / 5))  # B does not hold there: noise only
+    far = end_state_log_likelihood(dist, 4, masks, noise)
+    assert far[0] == pytest.approx(math.log(0.95 * math.exp(-2) / z + 0.05 / 5))  # two steps beyond
+    flat = end_state_log_likelihood(dist, 4, masks, EndStateNoise(beta=0.0, anywhere=0.05))
+    assert flat[0] == pytest.approx(math.log(0.95 / 2 + 0.05 / 5))  # beta 0: uniform over goal states
+    with pytest.raises(ValueError, match="noise"):
+        EndStateNoise(beta=-1.0)
+
+
+def test_the_shared_meaning_prefers_what_the_largest_room_is_in_every_layout(commands, library):
+    largest = commands[0]  # "go to the largest room": a different room, of another colour, in each layout
+    pairs = [(p.start, p.end) for p in largest.pairs]
+    others = [LayoutEvidence(s, e, library, EndStateNoise()) for s, e in pairs[1:]]
+    found = [(t, cs[0]) for t, cs in candidate_tasks(pairs[0][0], library) if t.task == "agentToRoom"]
+    terms = dict(zip((t.goal for t, _ in found), shared_meaning_terms([t for t, _ in found], [c for _, c in found], others)))
+    gold = pair_task(pairs, library)
+    best = max(terms, key=terms.get)
+    assert satisfies(pairs[0][1], gold, library)
+    # the room the first pair ends in is the room the other layouts' ends confirm
+    from groundlang.model.pf_tables import library_pf_tables
+    holding = library_pf_tables(pairs[0][1].layout, library).position_holding(pairs[0][1].positions)
+    assert best[0] in holding
+    # by a margin the description "a room" (its class alone, true of every room) bounds: it explains
+    # every room's pairs alike, a third of the time
+    assert sorted(terms.values())[-1] - sorted(terms.values())[-2] > 0.5
+
+
+def test_training_instances_share_one_meaning_or_stand_apart(commands, library):
+    shared = training_instances(commands, library)
+    assert [type(i) for i in shared.instances] == [PairedCommand, PairedCommand]
+    assert [len(i.pairs) for i in shared.instances] == [3, 3] and len(shared.instances[0].evidence) == 3
+    separate = training_instances(commands, library, layouts="separate")
+    assert len(separate.instances) == 6 and all(isinstance(i, PairInstance) for i in separate.instances)
+    assert separate.commands == [0, 0, 0, 1, 1, 1]
+    plans = training_instances(commands, library, demonstrations="shortest-plan", layouts="separate")
+    assert all(i.states[-1] == p.end for i, p in zip(plans.instances, [p for c in commands for p in c.pairs]))
+    with pytest.raises(ValueError, match="shortest-plan"):
+        training_instances(commands, library, demonstrations="shortest-plan", layouts="shared")
+
+
+def test_the_development_split_is_disjoint_by_text_and_stable(commands):
+    many = commands * 10
+    train, test = held_out_by_text(many, 0.5)
+    assert len(train) + len(test) == len(many)
+    assert not {c.text for c in train} & {c.text for c in test}
+    assert held_out_by_text(list(reversed(many)), 0.5)[1][0].text == test[0].text
+    with pytest.raises(ValueError, match="between 0 and 1"):
+        held_out_by_text(many, 1.0)
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "groundlang.cli", *args], capture_output=True, text=True, timeout=600)
+
+
+def test_evaluate_with_a_test_file_writes_one_row_per_execution(tmp_path):
+    out = tmp_path / "result.json"
+    small = str(FIXTURE / "small.bdm")
+    run = _cli("evaluate", "--corpus", small, "--test", small, "--layouts", "separate", "--json", str(out))
+    assert run.returncode == 0, run.stderr
+    assert "per execution: 100.00% (6/6" in run.stdout and "per command (every pair right): 100.00% (2/2" in run.stdout
+    assert "F1 0.82" in run.stdout
+    data = json.loads(out.read_text())
+    assert (data["executions_n"], data["executions_correct"], data["commands_correct"]) == (6, 6, 2)
+    rows = data["executions"]
+    assert [(r["index"], r["pair"]) for r in rows] == [(i, k) for i in range(2) for k in range(3)]
+    assert rows[3]["command"] == "go next to the chair" and rows[3]["goal"].startswith("agentNextToToy(agent0, ")
+    final, names = parse_bdm_state(rows[3]["final_state"])
+    assert names == ("block0", "block3")  # the file's names for the toys
+    commands = read_bdm(FIXTURE / "small.bdm")
+    library = TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
+    assert satisfies(final, pair_task([(p.start, p.end) for p in commands[1].pairs], library), library)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--test", "tests/fixtures/williams2018/small.bdm", "--palette", "sokoban", "--labels", "x.csv"], "--test takes a .bdm"),
+    (["--palette", "sokoban"], "needs --palette and --labels"),
+])
+def test_evaluate_refuses_a_test_file_for_a_text_corpus_in_one_line(args, message):
+    run = _cli("evaluate", "--corpus", "groundlang/examples", *args)
+    assert run.returncode != 0 and message in run.stderr and "Traceback" not in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1
+
+
+def test_evaluate_on_pairs_needs_a_test_file_or_a_split():
+    run = _cli("evaluate", "--corpus", str(FIXTURE / "small.bdm"))
+    assert run.returncode != 0 and "--test TEST.bdm and --holdout F" in run.stderr and "Traceback" not in run.stderr
+    run = _cli("evaluate", "--corpus", str(FIXTURE / "small.bdm"), "--holdout", "0.5",
+               "--demonstrations", "shortest-plan")
+    assert run.returncode != 0 and "layouts='separate'" in run.stderr and "Traceback" not in run.stderr
