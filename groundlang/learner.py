@@ -3,6 +3,7 @@
     learner = Learner(language_model="parse").fit(corpus)
     learner.posterior("take the star to the red room", state).table()
     result = learner.follow("take the star to the red room", state)
+    learner.update("go to the purple room", state, goal="agentInRoom(agent0, room1)")  # one more example
     learner.save("model/"); Learner.load("model/")
 """
 

@@ -97,6 +97,14 @@ def test_update_from_a_demonstration(learner, novel_b):
     assert result.goal == parse_goal("toyInRoom(block0, room1)") and result.confidence > 0.85
 
 
+def test_update_works_for_ibm_model_2_too(corpus, novel_b):
+    learner = Learner("ibm2", cache_dir=False).fit(corpus)
+    assert _follow(learner, "take the star to the purple room", novel_b).abstained
+    learner.update("go to the purple room", novel_b, goal="agentInRoom(agent0, room1)")
+    result = _follow(learner, "take the star to the purple room", novel_b)
+    assert result.goal == parse_goal("toyInRoom(block0, room1)") and result.confidence == pytest.approx(0.898, abs=0.01)
+
+
 def test_the_papers_scenario_a_model_without_green_learns_it_from_one_demonstration(corpus):
     """Model 1's first scenario (MacGlashan et al. 2012): every word known but "green"; one command
     with its demonstration teaches it, and new commands then use it."""
