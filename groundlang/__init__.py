@@ -3,7 +3,7 @@
 The public API (loaded on first use, so that ``import groundlang.logic`` and
 the CLI's ``--help`` stay light):
 
-    Learner, Posterior, FollowResult      the joint model: fit, posterior, follow, save/load
+    Learner, Posterior, FollowResult      the joint model: fit, posterior, follow, clarify, update, save/load
     read_corpus, read_instance, read_state_file, write_instance, format_state, example_corpus_path
     read_labels, goal_holds               gold labels and goal checks
     evaluate, EvaluationResult            evaluation protocols

@@ -3,6 +3,7 @@
     learner = Learner(language_model="parse").fit(corpus)
     learner.posterior("take the star to the red room", state).table()
     result = learner.follow("take the star to the red room", state)
+    learner.update("go to the purple room", state, goal="agentInRoom(agent0, room1)")  # one more example
     learner.save("model/"); Learner.load("model/")
 """
 
@@ -373,6 +374,18 @@ class Learner:
         chosen = choose(answer, result.choices, state, self.library,
                         read=lambda text, choices: self._read_answer(result.command, text, choices, state))
         return self._act(result.command, state, result.posterior, chosen.goal, max_steps)
+
+    def update(self, command: str, state: State, demonstration=None, goal=None) -> "Learner":
+        """Fold one more example into the trained model, without refitting: ``command`` in ``state``
+        with a ``demonstration`` (actions, or their words) and/or the ``goal`` it means (a goal
+        string, a tuple of Atoms, or a :class:`GoalGroup` such as an abstained result's choice).
+        New words join the vocabulary; see :mod:`groundlang.update`. Returns the learner.
+
+        ValueError when neither is given, the goal is not one of the state's, or the state's
+        palette is not the model's; TypeError for arguments of the wrong type."""
+        from groundlang.update import update_learner
+
+        return update_learner(self, command, state, demonstration=demonstration, goal=goal)
 
     def _knows(self, word: str) -> bool:
         return self.vocab is not None and self.vocab.word_id(word) != 0

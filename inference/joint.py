@@ -28,7 +28,8 @@ from groundlang.model.generative import global_sizes, instance_model
 from groundlang.model.language_models import LanguageModel
 from groundlang.model.vocabulary import Vocabulary
 
-__all__ = ["FitResult", "fit_globals", "posterior", "posterior_by_enumeration", "single_threaded"]
+__all__ = ["FitResult", "fit_globals", "log_joint", "posterior", "posterior_by_enumeration", "prior_concentrations",
+           "single_threaded"]
 
 log = logging.getLogger(__name__)
 
@@ -129,6 +130,21 @@ def _log_joint(model, values: dict) -> torch.Tensor:
 
 def _empty_guide():
     pass
+
+
+def log_joint(batch: Batch, lm: LanguageModel, vocab: Vocabulary, values: dict[str, torch.Tensor],
+              use_behaviour: bool = True) -> torch.Tensor:
+    """``log p(data, globals)`` of the Pyro model at ``values``, interpretations summed out exactly
+    (differentiable: ``phi * grad`` is EM's expected counts plus the prior's ``alpha - 1``)."""
+    sizes = global_sizes(vocab)
+    return _log_joint(lambda: instance_model(batch, lm, sizes, use_behaviour), values)
+
+
+def prior_concentrations(batch: Batch, lm: LanguageModel, vocab: Vocabulary) -> dict[str, torch.Tensor]:
+    """Each Dirichlet global's prior concentration, shaped like the global."""
+    sizes = global_sizes(vocab)
+    sites = _global_sites(lambda: instance_model(batch, lm, sizes))
+    return {name: prior.concentration for name, prior in sites.items() if isinstance(prior, dist.Dirichlet)}
 
 
 def _fit_em(model, sites, lm, steps, init, tol, progress) -> FitResult:

@@ -1,8 +1,10 @@
-"""``groundlang follow "COMMAND" --env FILE --palette NAME --model MODEL_DIR [--ask | --guess] [--out PNG] [--json]``.
+"""``groundlang follow "COMMAND" --env FILE --palette NAME --model MODEL_DIR [--ask [--learn] | --guess] [--out PNG] [--json]``.
 
 Exit codes: 0 the goal was reached; 1 it was not; 2 bad input; 3 the command
 was read with confidence below ``--min-confidence`` and nothing was done (the
-question is printed; ``--ask`` asks it on the terminal instead).
+question is printed; ``--ask`` asks it on the terminal instead). With
+``--learn``, an answer is also folded into the model (``Learner.update``) and
+the model saved over ``--model``, so that the command is understood next time.
 """
 
 from __future__ import annotations
@@ -46,6 +48,10 @@ def register(subparsers) -> None:
     ask.add_argument("--ask", action="store_true",
                      help="when unsure, ask on the terminal (stdin) and act on the answer: a number or words "
                           "such as 'the green one' (up to 3 tries; with --json it reports the question instead)")
+    p.add_argument("--learn", action="store_true",
+                   help="with --ask: learn from the answer (the command means the goal chosen; words the model did "
+                        "not know are learned) and save the model over --model, all or nothing (default: the model "
+                        "is left as it was)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text (default: text)")
     add_lexicon_option(p)
     p.set_defaults(func=run)
@@ -86,6 +92,18 @@ def _ask(learner, result, state, max_steps: int):
     return None
 
 
+def _learn(learner, asked, answered, state, model) -> None:
+    """Fold the answer into the model and save it over ``model`` (all or nothing: model_io)."""
+    # The whole group the answer chose: goals with the same outcome in this layout are one answer.
+    chosen = next((c for c in asked.choices if answered.goal in c.goals), answered.goal)
+    before = set(learner.vocab.words)
+    learner.update(asked.command, state, goal=chosen)
+    learner.save(model)
+    new = [w for w in learner.vocab.words if w not in before]
+    said = f" (new words: {', '.join(repr(w) for w in new)})" if new else ""
+    print(f"learned that {asked.command!r} means {answered.goal_words}{said}; model saved to {model}")
+
+
 def _refuse(result, args) -> None:
     print(f"groundlang follow: not acting: confidence {result.posterior.confidence:.2f} is below "
           f"--min-confidence {args.min_confidence:g}; answer with --ask, or act anyway with --guess", file=sys.stderr)
@@ -97,6 +115,8 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.atoms import format_goal
     from groundlang.wording import goal_phrase, labelled_goal
 
+    if args.learn and not args.ask:
+        raise ValueError("--learn learns from the answer to a question: use it with --ask")
     if args.out:
         from groundlang.render import check_picture_destination
 
@@ -114,6 +134,8 @@ def run(args: argparse.Namespace) -> int:
         if answered is None:
             print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
             return ASKED
+        if args.learn:
+            _learn(learner, result, answered, state, args.model)
         result = answered
     goals = result.posterior.goals()[: args.top]
     if args.out and not result.abstained:
