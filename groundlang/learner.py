@@ -156,7 +156,8 @@ class Learner:
     def _interpretations(self, state: State) -> list[Interpretation]:
         if state not in self._interp_cache:
             self._interp_cache[state] = interpretations(
-                state, self.library, enumerate_constraints=self.lm.enumerates_constraints
+                state, self.library, enumerate_constraints=self.lm.enumerates_constraints,
+                relation_words=getattr(self.lm, "relation_words", False),
             )
         return self._interp_cache[state]
 

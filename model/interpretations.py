@@ -141,7 +141,7 @@ def object_names(state: State) -> list[str]:
 
 def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary,
            described: Mapping[str, Mapping[str, tuple[str, ...]]],
-           starts: tuple[frozenset[str], bool]) -> tuple[RoleBinding, ...]:
+           starts: tuple[frozenset[str], bool], relation_words: bool = False) -> tuple[RoleBinding, ...]:
     """The roles of an interpretation: the task's variables (what words may say of a bound object:
     its PFs in C, then its spatial PFs), then every other object (all its unary PFs, as clingo
     describes it: colours, shapes, spatial PFs, any class a user's library adds). A head noun may
@@ -149,11 +149,13 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
     lifted = library.task(task.task)
     binding = dict(task.binding)
     bindings = []
+    # The goal's relations, which a phrase about an argument may say ("the left side of the chair").
+    relation = tuple(dict.fromkeys(a.predicate for a in task.goal)) if relation_words else ()
     for var, role in zip(lifted.variables, task_roles(lifted)):
         obj = binding[var.name]
         about = described.get(obj, {})
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())
-        bindings.append(RoleBinding(role, obj, var.cls, said, about.get("shape", ())))
+        bindings.append(RoleBinding(role, obj, var.cls, said + relation, about.get("shape", ()) + relation))
     bound = set(binding.values())
     classes = {name: cls for cls, name, _ in state.layout.objects}
     start_set, start_known = starts
@@ -185,7 +187,8 @@ def start_rooms(state: State) -> tuple[frozenset[str], bool]:
     return frozenset(names), False
 
 
-def interpretations(state: State, library: TaskLibrary, enumerate_constraints: bool = True) -> list[Interpretation]:
+def interpretations(state: State, library: TaskLibrary, enumerate_constraints: bool = True,
+                    relation_words: bool = False) -> list[Interpretation]:
     """Every (L, T, C) of ``state`` with its log prior, in a deterministic order.
 
     With ``enumerate_constraints=False`` each grounding appears once, with C
@@ -195,6 +198,9 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     only tax the goal's description with the C prior, which other objects'
     descriptions do not pay (measured: the model then learned to read "to the
     orange room" as a room other than the goal).
+
+    With ``relation_words`` the goal's PFs join what words may say of each argument of the task
+    (the parse model's setting of that name).
 
     Raises ValueError when no lifted task has a grounding that is not already
     true in ``state`` (nothing could be asked of the agent).
@@ -223,7 +229,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
         log_prior_t = -math.log(n_lifted) - math.log(per_lifted[task.task])
         if not enumerate_constraints:
             largest = max(constraints, key=lambda c: len(c.atoms))
-            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, described, starts)))
+            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, described, starts, relation_words)))
             continue
         for constraint in constraints:
             result.append(
@@ -231,7 +237,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
                     task,
                     constraint,
                     log_prior_t - math.log(len(constraints)),
-                    _roles(task, constraint, state, library, described, starts),
+                    _roles(task, constraint, state, library, described, starts, relation_words),
                 )
             )
     return result

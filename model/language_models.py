@@ -182,6 +182,8 @@ class ParseAligned(LanguageModel):
         align_by_task: bool = True,
         mention_phrases: str = "referring",
         align_backoff: bool = False,
+        relation_words: bool = False,
+        preposition_concentration: float | None = None,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -206,13 +208,19 @@ class ParseAligned(LanguageModel):
         lexicon fixes of the seventh session: 227 and 228 of 240, 639 and 658 of 720, against 227 and 229,
         643 and 659 without it; since "|last" passes over "from" and "with" phrases
         (``encoding.entity_words``): 227 and 228 of 240, 645 and 657 of 720, against 227 and 230, 648 and
-        662)."""
+        662). ``relation_words``: a phrase aligned with an argument of the task may say the goal's relation
+        ("the *left side* of the chair", "*inside* the red room"): the goal PFs join the tokens its
+        modifiers and head noun come from (``interpretations.interpretations``). ``preposition_concentration``
+        turns on a model of each phrase's preposition key given L (None: off; a Dirichlet concentration):
+        a preposition says the relation ("to the right of the chair", "into the room"), which the
+        alignment table, conditioned on the key, cannot. Measured: ABLATIONS.md."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")
         _require_positive(self.name, "align_concentration", align_concentration)
         for name, value in (("mention_concentration", mention_concentration),
-                            ("arity_concentration", arity_concentration)):
+                            ("arity_concentration", arity_concentration),
+                            ("preposition_concentration", preposition_concentration)):
             if value is not None:
                 _require_positive(self.name, name, value)
         if not argument_bonus >= 0:
@@ -225,6 +233,8 @@ class ParseAligned(LanguageModel):
         self.align_by_task = align_by_task
         self.mention_phrases = mention_phrases
         self.align_backoff = align_backoff
+        self.relation_words = relation_words
+        self.preposition_concentration = preposition_concentration
 
     def settings(self) -> dict:
         return {
@@ -236,6 +246,8 @@ class ParseAligned(LanguageModel):
             "align_by_task": self.align_by_task,
             "mention_phrases": self.mention_phrases,
             "align_backoff": self.align_backoff,
+            "relation_words": self.relation_words,
+            "preposition_concentration": self.preposition_concentration,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
@@ -279,6 +291,12 @@ class ParseAligned(LanguageModel):
             with pyro.plate("arity_tasks", num_tasks, dim=-1):
                 g["arity"] = pyro.sample(
                     "arity", dist.Dirichlet(torch.full((CLAUSE_ARITY_BINS,), self.arity_concentration))
+                )
+        if self.preposition_concentration is not None:
+            # Per lifted task: the preposition key of each noun phrase.
+            with pyro.plate("preposition_tasks", num_tasks, dim=-1):
+                g["preposition"] = pyro.sample(
+                    "preposition", dist.Dirichlet(torch.full((num_preps,), self.preposition_concentration))
                 )
         return g
 
@@ -342,6 +360,13 @@ class ParseAligned(LanguageModel):
             # Each clause's number of noun phrases given L: a command's length is its number of clauses,
             # which says little about the task (see ``arity_concentration``).
             per_reading = per_reading + torch.einsum("ijb,irb->ijr", arity[batch.task_index], batch.clause_arity)
+        if "preposition" in g:
+            # Each phrase's preposition key given L, then its role given (L, key), then its words.
+            # The preposition itself, without the marks of the phrase's place (``encoding.backoff_key``:
+            # "|last", "+obj"), which the alignment table is conditioned on already.
+            keys = g["preposition"].clamp_min(1e-30).log()[batch.task_index[:, :, None], batch.type_base_prep[:, None, :]]
+            keys = keys * batch.type_mask[:, None, :]  # [I, J, K]
+            per_reading = per_reading + torch.einsum("ijk,irk->ijr", keys, batch.reading_types)
         return torch.logsumexp(per_reading, dim=-1), per_reading, joint
 
     @staticmethod
