@@ -9,7 +9,8 @@ array per instance, because instances have different candidate lists);
 padding and a mask, the shape Pyro's ``Vindex`` lookups want.
 
 Work is shared: the state space is enumerated once per distinct initial
-state, the task is solved once per (initial state, goal), and every
+state (where the whole world is too large, once per set of objects that
+matter: :func:`groundlang.model.relevance.state_space_for`), the task is solved once per (initial state, goal), and every
 demonstration starting there is scored against that one solution. (The
 commands-to-tasks corpus has 240 instances but 6 demonstrations.)
 
@@ -173,7 +174,8 @@ def behaviour_likelihood_table(
     """
     from groundlang.model.features import goal_mask
     from groundlang.model.pf_tables import pf_tables, program_digest, tabulation_program
-    from groundlang.model.statespace import enumerate_states, trajectory_indices
+    from groundlang.model.relevance import exact_fits, relevant_toys, state_space_for
+    from groundlang.model.statespace import trajectory_indices
 
     if len(candidates) != len(instances):
         raise ValueError(f"{len(instances)} instances but {len(candidates)} candidate lists")
@@ -216,21 +218,29 @@ def behaviour_likelihood_table(
 
         bar = tqdm(total=solves, desc="behaviour likelihoods", unit="solve")
     for initial, by_goal in todo.items():
-        space = enumerate_states(initial)
-        transitions = as_transitions(space.next_state)
-        tables = pf_tables(space.layout, program)
-        demo_indices: dict[int, np.ndarray] = {}
+        tables = pf_tables(initial.layout, program)
+        # Where the whole world does not fit, each goal gets the relevance abstraction of the objects it
+        # names and its demonstrations move; goals that keep the same objects share one space.
+        shared = exact_fits(initial)
+        spaces: dict = {}
+        demo_indices: dict[tuple, np.ndarray] = {}
         for goal, entries in by_goal.items():
+            demos = [] if shared else [instances[i].states for i, _ in entries]
+            key = () if shared else relevant_toys(initial, goal, demos)
+            if key not in spaces:
+                space = state_space_for(initial, goal, demos)
+                spaces[key] = (space, as_transitions(space.next_state))
+            space, transitions = spaces[key]
             mask = goal_mask(space, goal, tables)
             result = solve_task(transitions, mask, settings)
             if not result.converged:
                 logger.warning("goal %s: soft value iteration stopped after %d sweeps (residual %.3g)",
                                " ".join(map(str, goal)), result.sweeps, result.residual)
             for i, k in entries:
-                if i not in demo_indices:
-                    demo_indices[i] = trajectory_indices(space, list(instances[i].states))
+                if (key, i) not in demo_indices:
+                    demo_indices[key, i] = trajectory_indices(space, list(instances[i].states))
                 actions = [int(a) for a in instances[i].actions]
-                value = float(demonstration_log_likelihood(result.log_policy, demo_indices[i], actions))
+                value = float(demonstration_log_likelihood(result.log_policy, demo_indices[key, i], actions))
                 table[i][k] = value
                 if root is not None:
                     try:
