@@ -87,9 +87,10 @@ def _goal(goal) -> tuple[Atom, ...]:
 
 
 def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], settings: TaskSettings,
-              pfs: str | None = None) -> str:
+              pfs: str | None = None, abstraction: bool = False) -> str:
     """sha256 (hex) of the canonical description of one table entry; ``pfs``: a digest of PF rules
-    other than the package's (what the goal's PFs mean)."""
+    other than the package's (what the goal's PFs mean); ``abstraction``: computed in the relevance
+    abstraction rather than the exact space (a different number)."""
     description = {
         "version": CACHE_VERSION,
         "layout": _layout_description(initial_state.layout),
@@ -101,6 +102,8 @@ def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], setti
     }
     if pfs is not None:
         description["pfs"] = pfs
+    if abstraction:  # absent otherwise: entries of the exact space keep their keys
+        description["space"] = "relevance abstraction"
     text = json.dumps(description, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -174,7 +177,7 @@ def behaviour_likelihood_table(
     """
     from groundlang.model.features import goal_mask
     from groundlang.model.pf_tables import pf_tables, program_digest, tabulation_program
-    from groundlang.model.relevance import exact_fits, relevant_toys, state_space_for
+    from groundlang.model.relevance import exact_fits, state_space_for
     from groundlang.model.statespace import trajectory_indices
 
     if len(candidates) != len(instances):
@@ -191,7 +194,8 @@ def behaviour_likelihood_table(
     damaged: dict[Path, str] = {}  # path -> why; an entry shared by many instances is counted once
     for i, (inst, row) in enumerate(zip(instances, goals)):
         actions = [int(a) for a in inst.actions]
-        keys.append([entry_key(inst.initial_state, g, actions, settings, pfs) for g in row])
+        abstraction = not exact_fits(inst.initial_state)
+        keys.append([entry_key(inst.initial_state, g, actions, settings, pfs, abstraction) for g in row])
         for k, (g, key) in enumerate(zip(row, keys[i])):
             value = None
             if root is not None:
@@ -220,15 +224,15 @@ def behaviour_likelihood_table(
     for initial, by_goal in todo.items():
         tables = pf_tables(initial.layout, program)
         # Where the whole world does not fit, each goal gets the relevance abstraction of the objects it
-        # names and its demonstrations move; goals that keep the same objects share one space.
+        # names and its demonstrations move (widened when the goal is out of its reach).
         shared = exact_fits(initial)
         spaces: dict = {}
         demo_indices: dict[tuple, np.ndarray] = {}
         for goal, entries in by_goal.items():
             demos = [] if shared else [instances[i].states for i, _ in entries]
-            key = () if shared else relevant_toys(initial, goal, demos)
+            key = () if shared else goal
             if key not in spaces:
-                space = state_space_for(initial, goal, demos)
+                space = state_space_for(initial, goal, demos, tables=tables)
                 spaces[key] = (space, as_transitions(space.next_state))
             space, transitions = spaces[key]
             mask = goal_mask(space, goal, tables)

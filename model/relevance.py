@@ -167,19 +167,22 @@ def _goal_text(goal: Sequence) -> str:
 
 
 def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstrations: Iterable[Sequence[State]] = (),
-                    tables=None, max_states: int | None = None) -> StateSpace:
+                    tables=None, max_states: int | None = None, method: str = "auto") -> StateSpace:
     """The state space to plan and score in: the exact one when its bound fits ``max_states``, else the
     relevance abstraction for ``goal`` and ``demonstrations`` (logged, with the bounds that chose it).
+    ``method`` "exact" or "abstraction" forces one (to compare them); "auto" chooses.
 
     ``tables`` (PFTables of the layout), when given with a goal: if no goal state is reachable in the
     abstraction, the scenery the agent can touch moves too, while the bound still fits; a plan that must
     push scenery aside is found that way. Raises StateSpaceError (one line) when neither fits.
     """
+    if method not in ("auto", "exact", "abstraction"):
+        raise ValueError(f"method {method!r}: expected auto, exact or abstraction")
     max_states = default_max_states() if max_states is None else max_states
     goal = tuple(parse_atom(a) if isinstance(a, str) else a for a in goal)
     cells, toys = _cells(state), len(state.toys)
     exact = state_count_bound(cells, toys)
-    if exact <= max_states:
+    if method == "exact" or (method == "auto" and exact <= max_states):
         # debug, not info: the usual case, and the CLI shows info lines
         logger.debug("state space: exact enumeration (at most %s states <= max_states=%s)", f"{exact:,}",
                      f"{max_states:,}")
@@ -200,8 +203,9 @@ def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstration
                     _goal_text(goal), len(space.scenery), len(more) - len(relevant))
         relevant = more
         space = abstract_space(state, relevant, max_states)
-    logger.info("state space: relevance abstraction, %d states (whole layout up to %s > max_states=%s; "
-                "moving agent0%s, %d toy(s) as walls)", space.num_states, f"{exact:,}", f"{max_states:,}",
+    logger.info("state space: relevance abstraction, %d states (whole layout up to %s %s max_states=%s; "
+                "moving agent0%s, %d toy(s) as walls)", space.num_states, f"{exact:,}",
+                ">" if exact > max_states else "<=", f"{max_states:,}",
                 "".join(f", {state.layout.toy_names[i]}" for i in space.relevant), len(space.scenery))
     return space
 
