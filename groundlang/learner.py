@@ -20,7 +20,7 @@ import torch
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, competing, question, unknown_words
 from groundlang.confidence import GoalGroup, group_goals
-from groundlang.inference.acting import rollout, rollout_states
+from groundlang.inference.acting import rollout, rollout_states, stop_before
 from groundlang.inference.joint import FitResult, fit_globals, posterior
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
@@ -33,7 +33,8 @@ from groundlang.model.features import goal_mask
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
-from groundlang.model.relevance import check_abstraction_possible, exact_fits, placement_sample, state_space_for
+from groundlang.model.relevance import (check_abstraction_possible, exact_fits, placement_sample, pushes_scenery,
+                                        state_space_for)
 from groundlang.model.statespace import StateSpace
 from groundlang.model.vocabulary import Vocabulary, class_token
 from groundlang.model.world import State
@@ -392,6 +393,7 @@ class Learner:
             mask = goal_mask(space, goal, pf_tables(state.layout, self.library.tabulation_program))
             solved = solve_task(space.next_state, mask, self.settings)
             trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
+            trajectory = stop_before(trajectory, pushes_scenery(space, trajectory.states[:-1], trajectory.actions))
             states, actions = rollout_states(space, trajectory)
             reached = bool(mask[int(trajectory.states[-1])])
             # The space holds only states reachable from ``state``: no goal state in it means no plan can succeed.

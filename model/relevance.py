@@ -8,9 +8,11 @@ enumerated as :mod:`groundlang.model.statespace` enumerates a whole world, over
 far fewer objects: a 16 x 16 layout of three toys has about 10^9 states, its
 abstraction for "take the chair to the blue room" about 4 x 10^4.
 
-Soundness: a plan found in the abstraction never pushes scenery (its cells are
-walls there), so every move it makes has the same effect in the real dynamics,
-and every state it visits is a real state. What the abstraction loses is
+Soundness: a move that changes the abstraction's state has the same effect in
+the real dynamics, so every state a plan visits is a real state. A move into
+scenery is blocked in the abstraction but is a push in reality: such a move
+never helps a plan (it wastes a step), and :func:`pushes_scenery` finds it so
+that acting stops before it rather than report a state the world would not be in. What the abstraction loses is
 plans that must push scenery out of the way; when the goal cannot be reached
 without that, :func:`state_space_for` lets the scenery the agent can touch
 move too, as long as the space still fits.
@@ -47,9 +49,12 @@ from .statespace import (
 from .world import ACTION_DELTAS, State
 
 __all__ = ["AbstractStateSpace", "abstract_space", "exact_fits", "relevant_toys", "state_space_for",
-           "check_abstraction_possible", "PlacementSample", "placement_sample"]
+           "check_abstraction_possible", "pushes_scenery", "PlacementSample", "placement_sample"]
 
 logger = logging.getLogger(__name__)
+
+# (layout, max_states) already announced at info level, oldest first (bounded).
+_ANNOUNCED: dict = {}
 
 
 class AbstractStateSpace(StateSpace):
@@ -151,6 +156,25 @@ def abstract_space(state: State, relevant: Sequence[int], max_states: int | None
     return AbstractStateSpace(state, next_state, full, keys, cell_of, relevant)
 
 
+def pushes_scenery(space: StateSpace, states: np.ndarray, actions: np.ndarray) -> np.ndarray:
+    """``[T]`` bool: which moves ``actions[t]`` from ``states[t]`` (indices) push a scenery toy in the real
+    dynamics. The abstraction blocks them (the state stays), so a plan that takes one is valid only up
+    to there; always False in an exact space."""
+    states, actions = np.asarray(states, dtype=np.int64), np.asarray(actions, dtype=np.int64)
+    if not isinstance(space, AbstractStateSpace) or not space.scenery or not len(actions):
+        return np.zeros(len(actions), dtype=bool)
+    pos = space.positions[states].astype(np.int64)  # [T, 1 + k, 2]
+    target = pos[:, 0] + ACTION_DELTAS[actions]  # [T, 2] the cell the agent steps into
+    beyond = target + ACTION_DELTAS[actions]
+    walk = space.layout.walkable
+    w, h = walk.shape
+    inside = (beyond[:, 0] >= 0) & (beyond[:, 0] < w) & (beyond[:, 1] >= 0) & (beyond[:, 1] < h)
+    free = inside & walk[np.clip(beyond[:, 0], 0, w - 1), np.clip(beyond[:, 1], 0, h - 1)]
+    free &= ~(pos[:, 1:] == beyond[:, None]).all(axis=2).any(axis=1)  # no toy there either
+    on_scenery = (space._fixed[None] == target[:, None]).all(axis=2).any(axis=1)
+    return on_scenery & free
+
+
 def _touched_scenery(space: AbstractStateSpace) -> tuple[int, ...]:
     """Scenery toys next to a cell the agent reaches in ``space``: those it could try to push."""
     if not space.scenery:
@@ -203,7 +227,13 @@ def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstration
                     _goal_text(goal), len(space.scenery), len(more) - len(relevant))
         relevant = more
         space = abstract_space(state, relevant, max_states)
-    logger.info("state space: relevance abstraction, %d states (whole layout up to %s %s max_states=%s; "
+    # info once per layout and limit (a corpus of many pairs in one layout would repeat it), then debug
+    seen = (state.layout, max_states) in _ANNOUNCED
+    _ANNOUNCED[state.layout, max_states] = None
+    if len(_ANNOUNCED) > 256:
+        _ANNOUNCED.pop(next(iter(_ANNOUNCED)))
+    logger.log(logging.DEBUG if seen else logging.INFO,
+               "state space: relevance abstraction, %d states (whole layout up to %s %s max_states=%s; "
                 "moving agent0%s, %d toy(s) as walls)", space.num_states, f"{exact:,}",
                 ">" if exact > max_states else "<=", f"{max_states:,}",
                 "".join(f", {state.layout.toy_names[i]}" for i in space.relevant), len(space.scenery))
