@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Iterable, Sequence
+from functools import lru_cache
 
 import numpy as np
 
@@ -140,9 +141,14 @@ def check_abstraction_possible(state: State, max_states: int | None = None) -> i
 
 def abstract_space(state: State, relevant: Sequence[int], max_states: int | None = None) -> AbstractStateSpace:
     """Enumerate the abstraction in which the agent and the toys ``relevant`` move and every other toy
-    is a wall; index 0 is ``state``. StateSpaceError when its bound exceeds ``max_states``."""
+    is a wall; index 0 is ``state``. StateSpaceError when its bound exceeds ``max_states``. The last few
+    are remembered: the candidate goals of one demonstration mostly keep the same toys."""
     max_states = default_max_states() if max_states is None else max_states
-    relevant = tuple(sorted(set(int(i) for i in relevant)))
+    return _abstract_space(state, tuple(sorted(set(int(i) for i in relevant))), max_states)
+
+
+@lru_cache(maxsize=4)
+def _abstract_space(state: State, relevant: tuple[int, ...], max_states: int) -> AbstractStateSpace:
     scenery = [i for i in range(len(state.toys)) if i not in relevant]
     pos = state.positions
     walkable = state.layout.walkable.copy()
@@ -198,7 +204,8 @@ def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstration
 
     ``tables`` (PFTables of the layout), when given with a goal: if no goal state is reachable in the
     abstraction, the scenery the agent can touch moves too, while the bound still fits; a plan that must
-    push scenery aside is found that way. Raises StateSpaceError (one line) when neither fits.
+    push scenery aside is found that way. With ``demonstrations``, when the goal's toys and the moved
+    ones do not fit, the moved ones alone move. Raises StateSpaceError (one line) when neither fits.
     """
     if method not in ("auto", "exact", "abstraction"):
         raise ValueError(f"method {method!r}: expected auto, exact or abstraction")
@@ -211,15 +218,27 @@ def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstration
         logger.debug("state space: exact enumeration (at most %s states <= max_states=%s)", f"{exact:,}",
                      f"{max_states:,}")
         return enumerate_states(state, max_states)
-    relevant = relevant_toys(state, goal, list(demonstrations))
+    demonstrations = list(demonstrations)
+    relevant = relevant_toys(state, goal, demonstrations)
     bound = abstraction_bound(state, relevant)
+    moved = relevant_toys(state, (), demonstrations) if demonstrations else None
+    if bound > max_states and moved is not None and abstraction_bound(state, moved) <= max_states:
+        # Scoring a demonstration: a toy the goal names but the demonstration leaves in place is either
+        # where the goal wants it from the start (moving it could only undo that) or in a goal the
+        # demonstration does not pursue; either way it is scored as a wall rather than refused.
+        logger.debug("goal %s: toys it names that the demonstration leaves in place are walls (%s states > %s)",
+                     _goal_text(goal), f"{bound:,}", f"{max_states:,}")
+        relevant, bound = moved, abstraction_bound(state, moved)
     if bound > max_states:
         raise StateSpaceError(
             f"too many states for goal {_goal_text(goal)}: the layout could reach {exact:,} ({cells} cells, {toys} "
             f"toy(s)) and the abstraction moving the agent and {len(relevant)} toy(s) {bound:,}, both more than "
             f"max_states={max_states:,}; set {MAX_STATES_VARIABLE}={bound} (or more) to allow the abstraction")
     space = abstract_space(state, relevant, max_states)
-    while tables is not None and goal and not _goal_reachable(space, goal, tables):
+    # widening needs room for at least one more toy
+    while (tables is not None and goal and space.scenery
+           and abstraction_bound(state, relevant + space.scenery[:1]) <= max_states
+           and not _goal_reachable(space, goal, tables)):
         more = tuple(sorted(set(relevant) | set(_touched_scenery(space))))
         if more == relevant or abstraction_bound(state, more) > max_states:
             break
