@@ -218,7 +218,7 @@ def test_a_williams_pair_in_a_16x16_layout_with_three_blocks_is_reached():
     from groundlang.bdm import read_bdm
     from groundlang.pair_tasks import reachable, shortest_actions
 
-    pair = read_bdm(FIXTURES / "williams2018" / "sixteen.bdm")[0].pairs[0]
+    pair = read_bdm(LARGE / "sixteen.bdm")[0].pairs[0]
     assert _bound(pair.start) > 10**9
     assert reachable(pair.start, pair.end) is True
     actions = shortest_actions(pair.start, pair.end)
