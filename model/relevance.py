@@ -37,6 +37,7 @@ import numpy as np
 
 from groundlang.logic.atoms import Atom, parse_atom
 
+from .pf_tables import MAX_TABULATED_CELLS
 from .statespace import (
     MAX_STATES_VARIABLE,
     StateSpace,
@@ -129,9 +130,19 @@ def exact_fits(state: State, max_states: int | None = None) -> bool:
 
 
 def check_abstraction_possible(state: State, max_states: int | None = None) -> int:
-    """The least bound any method needs (the agent alone, every toy a wall); StateSpaceError when even that
-    exceeds ``max_states``. From cell counts alone: callers ask it before slow per-layout work."""
+    """Refuse (StateSpaceError, one line) a layout no method can plan in: the whole world's bound exceeds
+    ``max_states`` and so does the least abstraction (the agent alone, every toy a wall), or the layout has
+    more cells than goal masks can be tabulated over. From cell counts alone: callers ask it before slow
+    per-layout work (grounding a layout of 10^6 cells takes 20 s). Returns the least bound."""
     max_states = default_max_states() if max_states is None else max_states
+    cells, toys = _cells(state), len(state.toys)
+    exact = state_count_bound(cells, toys)
+    if exact <= max_states:
+        return exact
+    if cells > MAX_TABULATED_CELLS:
+        raise StateSpaceError(f"this layout could reach up to {exact:,} states ({cells} walkable cells, {toys} toy(s)), "
+                              f"more than max_states={max_states:,}, and its cells are more than the relevance "
+                              f"abstraction's PF tables are built for ({MAX_TABULATED_CELLS:,})")
     bound = abstraction_bound(state, ())
     if bound > max_states:
         raise StateSpaceError(f"even the agent alone could reach {bound:,} cells here, more than max_states="
