@@ -344,8 +344,11 @@ class Learner:
                min_confidence: float | None = None) -> FollowResult:
         """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act.
 
-        ``max_steps``: a positive integer. The state space is sized (and refused when too large)
-        before the command is interpreted, which on a large layout is the slow part.
+        ``max_steps``: a positive integer. The state space is sized (and refused when no method can
+        plan in it) before the command is interpreted, which on a large layout is the slow part; where
+        the whole world is too large, the plan is made in the goal's relevance abstraction
+        (:mod:`groundlang.model.relevance`) and ends, reason "scenery", before any move that would
+        push a toy the abstraction holds still.
         With ``min_confidence`` (0 to 1), a reading less confident than that is not acted on:
         the result has ``abstained=True``, the ``question`` to ask, its ``choices`` and the
         ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer.
