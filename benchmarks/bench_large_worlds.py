@@ -184,8 +184,9 @@ def million(library, repeats: int) -> None:
 
 
 def agreement(library) -> None:
-    folders = [(example_corpus_path(), "sokoban"), (ROOT / "tests" / "fixtures" / "sokoban2_corpus", "sokoban2"),
-               (ROOT / "tests" / "fixtures" / "sokoban2", "sokoban2"), (ROOT / "tests" / "fixtures" / "sokoban", "sokoban")]
+    shipped = ROOT / "tests" / "fixtures"
+    folders = [(example_corpus_path(), "sokoban"), (shipped / "sokoban2_corpus", "sokoban2"),
+               (shipped / "sokoban2", "sokoban2"), (shipped / "sokoban", "sokoban")]
     if CROWD.is_dir():
         folders.append((CROWD, "sokoban"))
     else:

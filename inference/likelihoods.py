@@ -9,10 +9,12 @@ array per instance, because instances have different candidate lists);
 padding and a mask, the shape Pyro's ``Vindex`` lookups want.
 
 Work is shared: the state space is enumerated once per distinct initial
-state (where the whole world is too large, once per set of objects that
-matter: :func:`groundlang.model.relevance.state_space_for`), the task is solved once per (initial state, goal), and every
+state, the task is solved once per (initial state, goal), and every
 demonstration starting there is scored against that one solution. (The
-commands-to-tasks corpus has 240 instances but 6 demonstrations.)
+commands-to-tasks corpus has 240 instances but 6 demonstrations.) Where the
+whole world is too large, each goal is solved in the relevance abstraction of
+the toys it names and its demonstrations move
+(:func:`groundlang.model.relevance.state_space_for`).
 
 Cache: one small JSON file per (layout, initial state, goal, demonstration,
 settings), named by the sha256 of a canonical JSON description of those, in

@@ -12,10 +12,10 @@ Soundness: a move that changes the abstraction's state has the same effect in
 the real dynamics, so every state a plan visits is a real state. A move into
 scenery is blocked in the abstraction but is a push in reality: such a move
 never helps a plan (it wastes a step), and :func:`pushes_scenery` finds it so
-that acting stops before it rather than report a state the world would not be in. What the abstraction loses is
-plans that must push scenery out of the way; when the goal cannot be reached
-without that, :func:`state_space_for` lets the scenery the agent can touch
-move too, as long as the space still fits.
+that acting stops before it rather than report a state the world would not
+be in. What the abstraction loses is plans that must push scenery out of the
+way; when the goal cannot be reached without that, :func:`state_space_for`
+lets the scenery the agent can touch move too, as long as the space fits.
 
 A state of the abstraction keeps every object's position (``positions`` is
 ``[S, 1 + k, 2]`` as for the exact space, scenery constant), so goal masks,
@@ -24,7 +24,9 @@ when its scenery stands where the abstraction put it.
 
 :func:`state_space_for` is the one place that chooses: the exact space when
 its bound fits ``max_states``, else the abstraction, with a log line saying
-which and why; it refuses, in one line, what neither fits.
+which and why; it refuses, in one line, what neither fits. Comparing goals by
+the states they hold in (confidence) needs no transitions: where the world is
+too large, :func:`placement_sample` gives a seeded sample of placements.
 """
 
 from __future__ import annotations
@@ -78,8 +80,8 @@ class AbstractStateSpace(StateSpace):
 
     def __repr__(self) -> str:
         names = self.layout.toy_names
-        return (f"AbstractStateSpace({self.num_states} states, moving {', '.join(['agent0'] + [names[i] for i in self.relevant])}"
-                f"; {len(self.scenery)} toy(s) as walls)")
+        moving = ", ".join(["agent0"] + [names[i] for i in self.relevant])
+        return f"AbstractStateSpace({self.num_states} states, moving {moving}; {len(self.scenery)} toy(s) as walls)"
 
     def indices_of(self, positions: np.ndarray) -> np.ndarray:
         """Indices of states given as full positions ``[n, 1 + k, 2]``; -1 where unreachable or where
@@ -140,9 +142,9 @@ def check_abstraction_possible(state: State, max_states: int | None = None) -> i
     if exact <= max_states:
         return exact
     if cells > MAX_TABULATED_CELLS:
-        raise StateSpaceError(f"this layout could reach up to {exact:,} states ({cells} walkable cells, {toys} toy(s)), "
-                              f"more than max_states={max_states:,}, and its cells are more than the relevance "
-                              f"abstraction's PF tables are built for ({MAX_TABULATED_CELLS:,})")
+        raise StateSpaceError(f"this layout could reach up to {exact:,} states ({cells} walkable cells, "
+                              f"{toys} toy(s)), more than max_states={max_states:,}, and its cells are more than "
+                              f"the relevance abstraction's PF tables are built for ({MAX_TABULATED_CELLS:,})")
     bound = abstraction_bound(state, ())
     if bound > max_states:
         raise StateSpaceError(f"even the agent alone could reach {bound:,} cells here, more than max_states="

@@ -208,7 +208,8 @@ def test_goals_are_compared_on_a_sample_of_placements(sixteen):
     cells = sample.positions.astype(np.int64) @ np.array([1, 1000])
     assert all(len(set(row)) == 4 for row in cells)  # no two objects on one cell
     # a static atom changes nothing; another room does
-    goals = [(parse_goal("agentInRoom(agent0, room2)"), 0.5), (parse_goal("agentInRoom(agent0, room2) roomIsBlue(room2)"), 0.3),
+    goals = [(parse_goal("agentInRoom(agent0, room2)"), 0.5),
+             (parse_goal("agentInRoom(agent0, room2) roomIsBlue(room2)"), 0.3),
              (parse_goal("agentInRoom(agent0, room1)"), 0.2)]
     groups = group_goals(goals, sample)
     assert [len(g.goals) for g in groups] == [2, 1] and groups[0].probability == pytest.approx(0.8)
