@@ -242,3 +242,25 @@ def test_the_williams_corpus_16x16_pairs_are_checked():
             assert replay(pair.start, actions)[-1] == pair.end
             found += 1
     assert found >= 0.9 * len(pairs)
+
+
+@pytest.mark.parametrize("goal", ["toyInRoom(block0, room2)",
+                                  "agentNextToToy(agent0, block2) agentInRoom(agent0, room1)"])
+def test_williams_goals_are_planned_for_in_a_16x16_layout_with_three_blocks(goal):
+    from importlib.resources import files
+
+    from groundlang.bdm import read_bdm
+    from groundlang.inference.acting import rollout, rollout_states
+    from groundlang.labels import goal_holds
+
+    library = TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
+    start = read_bdm(LARGE / "sixteen.bdm")[0].pairs[0].start
+    atoms = parse_goal(goal)
+    tables = pf_tables(start.layout, library.tabulation_program)
+    space = state_space_for(start, atoms, tables=tables)
+    assert isinstance(space, AbstractStateSpace) and len(space.scenery) == 2
+    mask = goal_mask(space, atoms, tables)
+    path = rollout(space.next_state, solve_task(space.next_state, mask, TaskSettings()), 0, goal_mask=mask)
+    states, actions = rollout_states(space, path)
+    assert path.reason == "goal" and replay(start, actions)[-1] == states[-1]
+    assert goal_holds(atoms, states[-1], library)
