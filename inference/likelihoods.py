@@ -47,7 +47,8 @@ from pathlib import Path
 
 import numpy as np
 
-from groundlang.inference.planning import TaskSettings, as_transitions, demonstration_log_likelihood, solve_task
+from groundlang.inference.planning import (TaskSettings, as_transitions, demonstration_log_likelihood, solve_task,
+                                          threads_for)
 from groundlang.logic.atoms import Atom, parse_atom
 from groundlang.model.storage import FileRefused, check_folder, read_limited, write_atomically
 
@@ -228,17 +229,21 @@ def behaviour_likelihood_table(
         # Where the whole world does not fit, each goal gets the relevance abstraction of the objects it
         # names and its demonstrations move (widened when the goal is out of its reach).
         shared = exact_fits(initial)
-        spaces: dict = {}
+        spaces: dict = {}  # goal (or () when shared) -> space; abstractions of the same toys are one object
+        converted: dict[int, tuple] = {}  # id(space) -> (space, transitions): converted once per space
         demo_indices: dict[tuple, np.ndarray] = {}
         for goal, entries in by_goal.items():
             demos = [] if shared else [instances[i].states for i, _ in entries]
             key = () if shared else goal
             if key not in spaces:
-                space = state_space_for(initial, goal, demos, tables=tables)
-                spaces[key] = (space, as_transitions(space.next_state))
-            space, transitions = spaces[key]
+                spaces[key] = state_space_for(initial, goal, demos, tables=tables)
+            space = spaces[key]
+            key = id(space)  # demonstration indices are per space
             mask = goal_mask(space, goal, tables)
-            result = solve_task(transitions, mask, settings)
+            with threads_for(space.num_states):  # small spaces: one thread (others may share the cores)
+                if key not in converted:
+                    converted[key] = (space, as_transitions(space.next_state))
+                result = solve_task(converted[key][1], mask, settings)
             if not result.converged:
                 logger.warning("goal %s: soft value iteration stopped after %d sweeps (residual %.3g)",
                                " ".join(map(str, goal)), result.sweeps, result.residual)
