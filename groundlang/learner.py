@@ -399,7 +399,8 @@ class Learner:
             trajectory = stop_before(trajectory, pushes_scenery(space, trajectory.states[:-1], trajectory.actions))
             states, actions = rollout_states(space, trajectory)
             reached = bool(mask[int(trajectory.states[-1])])
-            # The space holds only states reachable from ``state``: no goal state in it means no plan can succeed.
+            # The space holds only states reachable from ``state``: no goal state in it means no plan can succeed
+            # (in a relevance abstraction: none that leaves the toys it holds still where they are).
             reason = trajectory.reason if reached or bool(np.asarray(mask).any()) else "unreachable"
             self._plans[key] = (states, actions, reached, reason)
         states, actions, reached, reason = self._plans[key]
