@@ -62,7 +62,7 @@ def benchmark_layouts() -> list[tuple[str, State]]:
     """Named worlds of about 10^4 (one toy), 10^5 and 10^6 (two toys) reachable states.
 
     Exact counts: 9,312; 103,746; 1,157,490 (the last needs the default
-    max_states of 2,000,000 or more).
+    max_states of 2,000,000 or more; the default is 5,000,000).
     """
     star = ("yellow", "star")
     moon = ("magenta", "moon")

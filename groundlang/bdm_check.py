@@ -1,8 +1,8 @@
 """``groundlang check`` for the Williams et al. (2018) corpus: what is there, what is unusable, and why.
 
 Reports commands, (start, end) pairs and distinct layouts; every pair whose end state cannot be reached
-from its start state under the project's dynamics (file and line); pairs too large to check (the 16x16
-layouts with three blocks, about 10^9 states); and commands whose pairs show no task (nothing that
+from its start state under the project's dynamics (file and line); pairs that cannot be checked (too
+large even for the relevance abstraction, or not reached in it); and commands whose pairs show no task (nothing that
 changed holds in every end state: groundlang.pair_tasks). Exit 1 when a pair is unreachable, unless
 ``--skip-inconsistent``.
 """
@@ -50,7 +50,7 @@ def check_bdm(args: argparse.Namespace) -> int:
     print(f"pairs whose end state cannot be reached from the start: {len(unreachable)}")
     for command, pair in unreachable:
         print(f"  {command.path}, line {pair.line}: {command.text!r}")
-    print(f"pairs too large to check (state space estimate above the limit): {unchecked}")
+    print(f"pairs not checked (too large even for the relevance abstraction, or not reached in it): {unchecked}")
     empty = [c for c in commands if not pair_task([(p.start, p.end) for p in c.pairs], library)]
     print(f"commands whose pairs show no task: {len(empty)}")
     for c in empty[:20]:

@@ -297,9 +297,10 @@ def render_rgb(state: State, title: str | None = None, trajectory=None, dpi: int
 class CommandPolicy:
     """A closed-loop policy for one command: observation -> CleanupAction.
 
-    Plans once, on every state reachable from the initial state, for the most
-    probable grounded goal of the command; then each observation is looked up
-    in that state space. TERMINATE where the goal holds or when the observation
+    Plans once, on every state reachable from the initial state (or, in a
+    world too large for that, from its relevance abstraction for the goal),
+    for the most probable grounded goal of the command; then each observation
+    is looked up in that state space. TERMINATE where the goal holds or when the observation
     is outside the planned space (nothing sensible to do).
     """
 
@@ -340,7 +341,7 @@ def policy(learner, command: str, state) -> CommandPolicy:
     from groundlang.inference.planning import solve_task
     from groundlang.model.features import goal_mask
     from groundlang.model.pf_tables import pf_tables
-    from groundlang.model.statespace import enumerate_states
+    from groundlang.model.relevance import state_space_for
 
     if isinstance(state, gymnasium.Env):
         state = state.unwrapped.state
@@ -348,8 +349,9 @@ def policy(learner, command: str, state) -> CommandPolicy:
             raise ValueError("the environment has no state yet: call reset() first")
     post = learner.posterior(command, state)
     goal = post.best_goal
-    space = enumerate_states(state)
-    mask = goal_mask(space, goal, pf_tables(state.layout, learner.library.tabulation_program))
+    tables = pf_tables(state.layout, learner.library.tabulation_program)
+    space = state_space_for(state, goal, tables=tables)
+    mask = goal_mask(space, goal, tables)
     solved = solve_task(space.next_state, mask, learner.settings)
     return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask)
 

@@ -21,7 +21,7 @@ import torch
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, competing, question, unknown_words
 from groundlang.confidence import GoalGroup, group_goals
-from groundlang.inference.acting import rollout, rollout_states
+from groundlang.inference.acting import rollout, rollout_states, stop_before
 from groundlang.inference.joint import FitResult, fit_globals, posterior
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
@@ -35,7 +35,9 @@ from groundlang.model.features import goal_mask
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
-from groundlang.model.statespace import StateSpace, check_state_count, enumerate_states
+from groundlang.model.relevance import (check_abstraction_possible, exact_fits, placement_sample, pushes_scenery,
+                                        state_space_for)
+from groundlang.model.statespace import StateSpace
 from groundlang.model.vocabulary import Vocabulary, class_token
 from groundlang.model.world import State
 from groundlang.results import FollowResult, Posterior
@@ -336,19 +338,27 @@ class Learner:
         post.groups = group_goals(post.goals(), self._space(state), self.library)
         return post
 
-    def _space(self, state: State) -> StateSpace:
-        if state not in self._spaces:
+    def _space(self, state: State, goal: tuple[Atom, ...] | None = None) -> StateSpace:
+        """The exact state space where it fits; else, to plan for ``goal``, its relevance abstraction, and
+        to compare goals (``goal`` None), a sample of placements."""
+        key = state if exact_fits(state) else (state, goal)
+        if key not in self._spaces:
             if len(self._spaces) >= _SPACES_KEPT:
                 self._spaces.pop(next(iter(self._spaces)))
-            self._spaces[state] = enumerate_states(state)
-        return self._spaces[state]
+            tables = pf_tables(state.layout, self.library.tabulation_program)
+            self._spaces[key] = (placement_sample(state) if key != state and goal is None
+                                 else state_space_for(state, goal or (), tables=tables))
+        return self._spaces[key]
 
     def follow(self, command: str, state: State, max_steps: int = 200,
                min_confidence: float | None = None) -> FollowResult:
         """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act.
 
-        ``max_steps``: a positive integer. The state space is sized (and refused when too large)
-        before the command is interpreted, which on a large layout is the slow part.
+        ``max_steps``: a positive integer. The state space is sized (and refused when no method can
+        plan in it) before the command is interpreted, which on a large layout is the slow part; where
+        the whole world is too large, the plan is made in the goal's relevance abstraction
+        (:mod:`groundlang.model.relevance`) and ends, reason "scenery", before any move that would
+        push a toy the abstraction holds still.
         With ``min_confidence`` (0 to 1), a reading less confident than that is not acted on:
         the result has ``abstained=True``, the ``question`` to ask, its ``choices`` and the
         ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer.
@@ -356,7 +366,7 @@ class Learner:
         _check_count("follow", "max_steps", max_steps)
         self._require_fitted()
         self._check_state("follow", command, state)
-        check_state_count(state)
+        check_abstraction_possible(state)
         post = self.posterior(command, state)
         if min_confidence is not None and post.confidence < min_confidence:
             choices = competing(post.goal_groups())
@@ -404,13 +414,15 @@ class Learner:
     def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int) -> FollowResult:
         key = (state, goal, max_steps)
         if key not in self._plans:  # plans depend on the world only, never on the words
-            space = self._space(state)
+            space = self._space(state, goal)
             mask = goal_mask(space, goal, pf_tables(state.layout, self.library.tabulation_program))
             solved = solve_task(space.next_state, mask, self.settings)
             trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
+            trajectory = stop_before(trajectory, pushes_scenery(space, trajectory.states[:-1], trajectory.actions))
             states, actions = rollout_states(space, trajectory)
             reached = bool(mask[int(trajectory.states[-1])])
-            # The space holds only states reachable from ``state``: no goal state in it means no plan can succeed.
+            # The space holds only states reachable from ``state``: no goal state in it means no plan can succeed
+            # (in a relevance abstraction: none that leaves the toys it holds still where they are).
             reason = trajectory.reason if reached or bool(np.asarray(mask).any()) else "unreachable"
             self._plans[key] = (states, actions, reached, reason)
         states, actions, reached, reason = self._plans[key]

@@ -17,14 +17,21 @@ from itertools import product
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.logic.atoms import Atom
 from groundlang.model.pf_tables import PFTables, library_pf_tables
-from groundlang.model.statespace import StateSpaceError, enumerate_states
+from groundlang.model.relevance import AbstractStateSpace, state_space_for
+from groundlang.model.statespace import StateSpaceError
 from groundlang.model.world import State
 
 __all__ = ["lifted_facts", "pair_task", "satisfies", "reachable", "REACHABILITY_MAX_STATES"]
 
 # Upper bound (the enumerator's estimate) on the states a reachability check may enumerate: the 8x8
-# layouts with three blocks estimate 2.4 million and reach about 10^4; the 16x16 ones estimate 10^9.
+# layouts with three blocks estimate 2.4 million and reach about 10^4; the 16x16 ones estimate 10^9 and
+# are searched in their relevance abstraction (the blocks the pair moves; the others are walls).
 REACHABILITY_MAX_STATES = 5_000_000
+
+
+def _pair_space(start: State, end: State, max_states: int):
+    """The exact space where it fits, else the abstraction moving the toys that differ from start to end."""
+    return state_space_for(start, demonstrations=[(start, end)], max_states=max_states)
 
 
 def _said(tables: PFTables) -> dict[str, tuple[str, ...]]:
@@ -71,15 +78,16 @@ def satisfies(state: State, task: frozenset[Atom], library: TaskLibrary | None =
 
 def reachable(start: State, end: State, max_states: int = REACHABILITY_MAX_STATES) -> bool | None:
     """Whether ``end`` can be reached from ``start`` under the project's dynamics; None when the state
-    space is too large to enumerate (its estimate exceeds ``max_states``)."""
+    space is too large to enumerate (its estimate exceeds ``max_states``), or when only the relevance
+    abstraction fits and ``end`` is not in it (reaching it might need the other blocks pushed aside)."""
     try:
-        space = enumerate_states(start, max_states=max_states)
+        space = _pair_space(start, end, max_states)
     except StateSpaceError:
         return None
     try:
         space.index_of(end)
     except (KeyError, ValueError, StateSpaceError):
-        return False
+        return None if isinstance(space, AbstractStateSpace) else False
     return True
 
 
@@ -87,13 +95,15 @@ def shortest_actions(start: State, end: State, max_states: int = REACHABILITY_MA
     """A shortest action sequence from ``start`` to exactly ``end``: breadth-first over the enumerated
     state space, a layer at a time (vectorised over the layer's states). Of several shortest plans the
     first found is kept: states in index order, actions tried north, south, east, west; so the result is
-    deterministic. None when ``end`` is unreachable or the space is too large (see :func:`reachable`)."""
+    deterministic; in a layout only the relevance abstraction fits, shortest among plans that push no
+    block the pair leaves in place. None when ``end`` is unreachable or the space is too large (see
+    :func:`reachable`)."""
     import numpy as np
 
     from groundlang.model.world import Action
 
     try:
-        space = enumerate_states(start, max_states=max_states)
+        space = _pair_space(start, end, max_states)
         target = space.index_of(end)
     except (StateSpaceError, KeyError, ValueError):
         return None

@@ -15,7 +15,7 @@ import torch
 
 from groundlang.inference.planning import TERMINATE, PlanningError, SoftValueResult
 
-__all__ = ["Rollout", "rollout", "rollout_states"]
+__all__ = ["Rollout", "rollout", "rollout_states", "stop_before"]
 
 
 @dataclass(frozen=True)
@@ -72,6 +72,17 @@ def rollout(
         actions.append(a)
         states.append(int(ns[s, a]))
     return Rollout(np.array(states, dtype=np.int64), np.array(actions, dtype=np.int64), reason)
+
+
+def stop_before(trajectory: Rollout, forbidden, reason: str = "scenery") -> Rollout:
+    """The trajectory up to (not including) its first move flagged in ``forbidden`` ``[T]`` bool, ending
+    with ``reason``; unchanged when none is flagged (e.g. a move an abstraction blocks but the world
+    would make, :func:`groundlang.model.relevance.pushes_scenery`)."""
+    flagged = np.flatnonzero(np.asarray(forbidden, dtype=bool))
+    if not len(flagged):
+        return trajectory
+    t = int(flagged[0])
+    return Rollout(trajectory.states[: t + 1], trajectory.actions[:t], reason)
 
 
 def rollout_states(space, trajectory: Rollout):

@@ -256,10 +256,12 @@ def _fit_top_features(demo: _Demo, settings: DiscoverySettings) -> None:
     """MLIRL over every position PF; keep the top features true at the end as candidate goal atoms."""
     from groundlang.model.features import feature_matrix, position_atoms
     from groundlang.model.pf_tables import pf_tables
-    from groundlang.model.statespace import enumerate_states, trajectory_indices
+    from groundlang.model.relevance import state_space_for
+    from groundlang.model.statespace import trajectory_indices
 
     inst = demo.instance
-    space = enumerate_states(inst.initial_state)
+    # the exact space, or where it does not fit the toys the demonstration moves (the others as walls)
+    space = state_space_for(inst.initial_state, demonstrations=[inst.states])
     atoms = position_atoms(space.layout)
     features = feature_matrix(space, atoms, pf_tables(space.layout)).numpy()
     states = trajectory_indices(space, list(inst.states))

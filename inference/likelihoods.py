@@ -11,7 +11,10 @@ padding and a mask, the shape Pyro's ``Vindex`` lookups want.
 Work is shared: the state space is enumerated once per distinct initial
 state, the task is solved once per (initial state, goal), and every
 demonstration starting there is scored against that one solution. (The
-commands-to-tasks corpus has 240 instances but 6 demonstrations.)
+commands-to-tasks corpus has 240 instances but 6 demonstrations.) Where the
+whole world is too large, each goal is solved in the relevance abstraction of
+the toys it names and its demonstrations move
+(:func:`groundlang.model.relevance.state_space_for`).
 
 Cache: one small JSON file per (layout, initial state, goal, demonstration,
 settings), named by the sha256 of a canonical JSON description of those, in
@@ -44,7 +47,8 @@ from pathlib import Path
 
 import numpy as np
 
-from groundlang.inference.planning import TaskSettings, as_transitions, demonstration_log_likelihood, solve_task
+from groundlang.inference.planning import (TaskSettings, as_transitions, demonstration_log_likelihood, solve_task,
+                                          threads_for)
 from groundlang.logic.atoms import Atom, parse_atom
 from groundlang.model.storage import FileRefused, check_folder, read_limited, write_atomically
 
@@ -86,9 +90,10 @@ def _goal(goal) -> tuple[Atom, ...]:
 
 
 def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], settings: TaskSettings,
-              pfs: str | None = None) -> str:
+              pfs: str | None = None, abstraction: bool = False) -> str:
     """sha256 (hex) of the canonical description of one table entry; ``pfs``: a digest of PF rules
-    other than the package's (what the goal's PFs mean)."""
+    other than the package's (what the goal's PFs mean); ``abstraction``: computed in the relevance
+    abstraction rather than the exact space (a different number)."""
     description = {
         "version": CACHE_VERSION,
         "layout": _layout_description(initial_state.layout),
@@ -100,6 +105,8 @@ def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], setti
     }
     if pfs is not None:
         description["pfs"] = pfs
+    if abstraction:  # absent otherwise: entries of the exact space keep their keys
+        description["space"] = "relevance abstraction"
     text = json.dumps(description, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -173,7 +180,8 @@ def behaviour_likelihood_table(
     """
     from groundlang.model.features import goal_mask
     from groundlang.model.pf_tables import pf_tables, program_digest, tabulation_program
-    from groundlang.model.statespace import enumerate_states, trajectory_indices
+    from groundlang.model.relevance import exact_fits, state_space_for
+    from groundlang.model.statespace import trajectory_indices
 
     if len(candidates) != len(instances):
         raise ValueError(f"{len(instances)} instances but {len(candidates)} candidate lists")
@@ -189,7 +197,8 @@ def behaviour_likelihood_table(
     damaged: dict[Path, str] = {}  # path -> why; an entry shared by many instances is counted once
     for i, (inst, row) in enumerate(zip(instances, goals)):
         actions = [int(a) for a in inst.actions]
-        keys.append([entry_key(inst.initial_state, g, actions, settings, pfs) for g in row])
+        abstraction = not exact_fits(inst.initial_state)
+        keys.append([entry_key(inst.initial_state, g, actions, settings, pfs, abstraction) for g in row])
         for k, (g, key) in enumerate(zip(row, keys[i])):
             value = None
             if root is not None:
@@ -216,21 +225,33 @@ def behaviour_likelihood_table(
 
         bar = tqdm(total=solves, desc="behaviour likelihoods", unit="solve")
     for initial, by_goal in todo.items():
-        space = enumerate_states(initial)
-        transitions = as_transitions(space.next_state)
-        tables = pf_tables(space.layout, program)
-        demo_indices: dict[int, np.ndarray] = {}
+        tables = pf_tables(initial.layout, program)
+        # Where the whole world does not fit, each goal gets the relevance abstraction of the objects it
+        # names and its demonstrations move (widened when the goal is out of its reach).
+        shared = exact_fits(initial)
+        spaces: dict = {}  # goal (or () when shared) -> space; abstractions of the same toys are one object
+        converted: dict[int, tuple] = {}  # id(space) -> (space, transitions): converted once per space
+        demo_indices: dict[tuple, np.ndarray] = {}
         for goal, entries in by_goal.items():
+            demos = [] if shared else [instances[i].states for i, _ in entries]
+            key = () if shared else goal
+            if key not in spaces:
+                spaces[key] = state_space_for(initial, goal, demos, tables=tables)
+            space = spaces[key]
+            key = id(space)  # demonstration indices are per space
             mask = goal_mask(space, goal, tables)
-            result = solve_task(transitions, mask, settings)
+            with threads_for(space.num_states):  # small spaces: one thread (others may share the cores)
+                if key not in converted:
+                    converted[key] = (space, as_transitions(space.next_state))
+                result = solve_task(converted[key][1], mask, settings)
             if not result.converged:
                 logger.warning("goal %s: soft value iteration stopped after %d sweeps (residual %.3g)",
                                " ".join(map(str, goal)), result.sweeps, result.residual)
             for i, k in entries:
-                if i not in demo_indices:
-                    demo_indices[i] = trajectory_indices(space, list(instances[i].states))
+                if (key, i) not in demo_indices:
+                    demo_indices[key, i] = trajectory_indices(space, list(instances[i].states))
                 actions = [int(a) for a in instances[i].actions]
-                value = float(demonstration_log_likelihood(result.log_policy, demo_indices[i], actions))
+                value = float(demonstration_log_likelihood(result.log_policy, demo_indices[key, i], actions))
                 table[i][k] = value
                 if root is not None:
                     try:

@@ -135,6 +135,10 @@ class StateSpace:
             raise StateSpaceError(
                 f"positions of shape {tuple(pos.shape)} do not match [n, {self.positions.shape[1]}, 2]"
             )
+        return self._lookup(pos)
+
+    def _lookup(self, pos: np.ndarray) -> np.ndarray:
+        """Indices of the states whose encoded objects stand at ``pos`` ``[n, m, 2]``; -1 where unseen."""
         w, h = self._cell_of.shape
         x, y = pos[..., 0], pos[..., 1]
         on_grid = (x >= 0) & (x < w) & (y >= 0) & (y < h)
@@ -197,11 +201,9 @@ def _neighbour_table(walkable: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     return cell_xy, cell_of, neighbour
 
 
-def _initial_cells(state: State, cell_of: np.ndarray) -> np.ndarray:
-    """Cells of the initial state's objects; StateSpaceError when one is off the walkable cells."""
-    pos = state.positions
+def _initial_cells(pos: np.ndarray, names: Sequence[str], cell_of: np.ndarray) -> np.ndarray:
+    """Cells of the objects at ``pos`` ``[m, 2]``; StateSpaceError when one is off the walkable cells."""
     width, height = cell_of.shape
-    names = ["agent0"] + state.layout.toy_names
     cells = []
     for name, (x, y) in zip(names, pos):
         if not (0 <= x < width and 0 <= y < height) or cell_of[x, y] < 0:
@@ -283,11 +285,21 @@ def enumerate_states(state: State, max_states: int | None = None) -> StateSpace:
 
 
 def _enumerate(state: State, max_states: int, dense: bool | None) -> StateSpace:
-    walkable = state.layout.walkable
+    next_state, positions, keys, cell_of, sizes = search(
+        state.layout.walkable, state.positions, state.layout.movable_names, max_states, dense)
+    return StateSpace(state, next_state, positions, keys, cell_of, level_sizes=sizes)
+
+
+def search(walkable: np.ndarray, start: np.ndarray, names: Sequence[str], max_states: int,
+           dense: bool | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Breadth-first search over the cells ``walkable`` ``[width, height]`` of objects starting at ``start``
+    ``[m, 2]`` (the pusher first); returns ``(next_state [S, 4] int32, positions [S, m, 2] int16,
+    keys [S] int64, cell_of [width, height] int64, level_sizes [D] int64)``, states in breadth-first
+    order, ``level_sizes[d]`` of them first reached after ``d`` moves."""
     cell_xy, cell_of, neighbour = _neighbour_table(walkable)
     num_cells = len(cell_xy)
-    num_toys = len(state.toys)
-    start_cells = _initial_cells(state, cell_of)
+    num_toys = len(start) - 1
+    start_cells = _initial_cells(np.asarray(start), names, cell_of)
     bound = state_count_bound(num_cells, num_toys)
     if bound > max_states:
         raise StateSpaceError(_too_many(bound, num_cells, num_toys, max_states))
@@ -373,7 +385,7 @@ def _enumerate(state: State, max_states: int, dense: bool | None) -> StateSpace:
         count, len(level_next), "dense" if dense else "sorted",
     )
     sizes = np.array([len(k) for k in level_keys if len(k)], dtype=np.int64)
-    return StateSpace(state, next_state, positions, all_keys.astype(np.int64), cell_of, level_sizes=sizes)
+    return next_state, positions, all_keys.astype(np.int64), cell_of, sizes
 
 
 def _decode(keys: np.ndarray, num_cells: int, num_objects: int, cell_xy: np.ndarray) -> np.ndarray:

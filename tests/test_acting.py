@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from groundlang.inference.acting import rollout, rollout_states
+from groundlang.inference.acting import Rollout, rollout, rollout_states, stop_before
 from groundlang.inference.planning import PlanningError, soft_value_iteration, solve_task
 
 # The corridor of test_planning: 0-1-2-3, action 2 = east, 3 = west, 0 and 1 bump into walls.
@@ -54,3 +54,10 @@ def test_rollout_states_turns_a_trajectory_into_corpus_states_and_actions():
     for before, action, after in zip(states, actions, states[1:]):
         assert step(before, action) == after
     assert states[-1].positions[0, 1] == 4
+
+
+def test_stop_before_cuts_a_trajectory_at_its_first_flagged_move():
+    path = Rollout(np.array([0, 1, 1, 2]), np.array([2, 0, 2]), "goal")
+    cut = stop_before(path, [False, True, True])
+    assert cut.states.tolist() == [0, 1] and cut.actions.tolist() == [2] and cut.reason == "scenery"
+    assert stop_before(path, [False] * 3) is path

@@ -164,6 +164,10 @@ class Row:
     env: dict = field(default_factory=dict)
 
 
+def _has(out: str, piece: str) -> None:
+    assert piece in out, out
+
+
 def _follow(command: str, env: Path | str = NOVEL, *extra: str) -> tuple[str, ...]:
     return ("follow", command, "--env", str(env), "--palette", "sokoban", "--model", "{model}", *extra)
 
@@ -281,11 +285,15 @@ ROWS += [
     Row("environment/state space too large: refused up front",
         _follow("push the star into the red room", BAD / "huge_grid.state", "--out", "{tmp}/picture.png"),
         pieces=("this layout could reach up to 26,501,398,056 states (162793 walkable cells, 1 toy(s))",
-                "more than max_states=5,000,000", "set GROUNDLANG_MAX_STATES=26501398056 in the environment"),
+                "more than max_states=5,000,000", "more than the relevance abstraction's PF tables are built for"),
         absent=("{tmp}/picture.png",)),
-    Row("environment/limit lowered with GROUNDLANG_MAX_STATES",
-        _follow("go to the red room", NOVEL), env={"GROUNDLANG_MAX_STATES": "1000"},
-        pieces=("more than max_states=1,000", "set GROUNDLANG_MAX_STATES=")),
+    Row("environment/limit lowered with GROUNDLANG_MAX_STATES: the relevance abstraction plans (works)",
+        _follow("go to the red room", NOVEL), env={"GROUNDLANG_MAX_STATES": "1000"}, code=0,
+        check=lambda out: _has(out, "reached (goal)")),
+    Row("environment/limit lowered below the agent's cells",
+        _follow("go to the red room", NOVEL), env={"GROUNDLANG_MAX_STATES": "50"},
+        pieces=("even the agent alone could reach 86 cells here, more than max_states=50",
+                "set GROUNDLANG_MAX_STATES=86")),
     Row("environment/GROUNDLANG_MAX_STATES not a number",
         _follow("go to the red room", NOVEL), env={"GROUNDLANG_MAX_STATES": "lots"},
         pieces=("GROUNDLANG_MAX_STATES='lots': expected a positive integer",)),

@@ -40,11 +40,12 @@ def fit_file(path, palette) -> dict:
     from groundlang.inference.mlirl import mlirl
     from groundlang.model.features import feature_matrix, position_atoms
     from groundlang.model.pf_tables import pf_tables
-    from groundlang.model.statespace import enumerate_states, trajectory_indices
+    from groundlang.model.relevance import state_space_for
+    from groundlang.model.statespace import trajectory_indices
 
     start = time.perf_counter()
     instance = read_instance(path, palette)
-    space = enumerate_states(instance.initial_state)
+    space = state_space_for(instance.initial_state, demonstrations=[instance.states])
     atoms = position_atoms(space.layout)
     features = feature_matrix(space, atoms, pf_tables(space.layout))
     states = trajectory_indices(space, list(instance.states))
