@@ -30,7 +30,7 @@ from groundlang.logic.atoms import Atom
 from groundlang.logic.schema import domain_schema
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
-from groundlang.model.encoding import Batch, Observation, encode, entity_words, machine_string
+from groundlang.model.encoding import Batch, Observation, bare_preposition, encode, entity_words, machine_string
 from groundlang.model.features import goal_mask
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
@@ -222,7 +222,9 @@ class Learner:
             vocab.add_words(obs.words)
             counts.update(obs.words)
             for reading in obs.readings:
-                preps.extend(p for p, _, _ in entity_words(reading.logical_form, self.word_lexicon) if p is not None)
+                keys = [p for p, _, _ in entity_words(reading.logical_form, self.word_lexicon) if p is not None]
+                preps.extend(keys)
+                preps.extend(b for p in keys if (b := bare_preposition(p)) is not None)  # what the parse model generates
             for interp in obs.interpretations:
                 tokens.extend(machine_string(interp))
                 for rb in interp.roles:

@@ -29,7 +29,7 @@ from groundlang.model.vocabulary import DIRECT_OBJECT, NULL, Vocabulary, class_t
 from groundlang.model.world import object_class
 
 __all__ = ["Observation", "Batch", "encode", "entity_words", "is_mentionable", "is_referring", "machine_string",
-           "backoff_key", "backoff_prep_ids", "PAD_LOGIT"]
+           "backoff_key", "backoff_prep_ids", "bare_preposition", "PAD_LOGIT"]
 
 CLAUSE_ARITY_BINS = 5  # clauses with 4 or more noun phrases share the last bin
 
@@ -94,6 +94,7 @@ class Batch:
     role_head_mix: torch.Tensor  # [I, J, V] mixture the head noun comes from: the object's class
     type_refers: torch.Tensor  # [I, K] bool: a phrase of the type can name an object (is_referring)
     type_base_prep: torch.Tensor  # [I, K] the preposition key the type's key backs off to (backoff_key)
+    type_preposition: torch.Tensor  # [I, K] the phrase's bare preposition (bare_preposition), -1 for a direct object
 
     @property
     def num_instances(self) -> int:
@@ -163,6 +164,13 @@ def backoff_key(key: str) -> str:
     ``<dobj>``); a negated or noun-attached phrase keeps its mark (``not:to``, ``to@np``)."""
     base = key.removesuffix("|last").replace("+obj", "")
     return DIRECT_OBJECT if base == "dobj" else base
+
+
+def bare_preposition(key: str) -> str | None:
+    """The preposition a phrase's key was made from, without the marks of its clause, place and
+    attachment (``to+obj|last``, ``to@np``, ``not:to`` -> ``to``); None for a direct object."""
+    bare = key.removeprefix("not:").removesuffix("|last").replace("+obj", "").removesuffix("@np")
+    return None if bare in ("dobj", DIRECT_OBJECT) else bare
 
 
 def backoff_prep_ids(vocab: Vocabulary) -> list[int]:
@@ -400,11 +408,15 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     reading_group = _pad([groups for _, _, groups in structures], -1, torch.long)
     type_refers = torch.zeros(I, K, dtype=torch.bool)
     type_base_prep = torch.zeros(I, K, dtype=torch.long)
+    type_preposition = torch.full((I, K), -1, dtype=torch.long)
     base_of = backoff_prep_ids(vocab)
     for i, (types, merged, _) in enumerate(structures):
         for (prep, mods, head, refers), k in types.items():
             type_prep[i, k] = prep
             type_base_prep[i, k] = base_of[prep]
+            bare = bare_preposition(vocab.preps[prep])
+            if bare is not None:
+                type_preposition[i, k] = vocab.prep_id(bare)
             type_mask[i, k] = True
             type_refers[i, k] = refers
             for u in mods:
@@ -432,4 +444,5 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
         task_token=task_token, task_index=task_index, align_context=align_context, cover_slot=cover_slot,
         cover_mask=cover_mask, role=role, role_mask=role_mask, role_logw=role_logw, role_mix=role_mix,
         role_head_mix=role_head_mix, type_refers=type_refers, type_base_prep=type_base_prep,
+        type_preposition=type_preposition,
     )

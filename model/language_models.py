@@ -12,109 +12,24 @@ table, and the interpretation itself is enumerated by the model in
   reward function and no ``NULL``).
 - ``ibm2``: IBM Model 2 over the machine string of (L, C), with a learned
   distortion that prefers words and tokens at the same relative position.
-- ``parse``: words are generated through the logical form. Each noun phrase
-  aligns with a role of the interpretation (the toy, the goal room, the
-  agent's start room, ...) or with nothing, with a learned table
-  ``P(role | preposition, L)`` per lifted task ("go *into* the tan room" names
-  the goal of "go somewhere" but, in a command that then pushes the star, the
-  room the star is in); its words come from the tokens of the object in
-  that role, the remaining words from L or ``NULL``. Readings are weighted by
-  the parser's probabilities. Two more parts of the logical form depend on
-  the task: which objects it names (a learned ``P(named | role)`` for every
-  toy and every object the task binds, see ``encoding.is_mentionable``: a
-  command that never mentions a toy speaks against "take the toy somewhere",
-  one that names a bystander toy speaks against the tasks that leave it alone,
-  and one whose only unknown phrase is "the skin coloured room" names its goal;
-  only a referring phrase names what it aligns with, ``encoding.is_referring``:
-  "on right" does not name the star) and how many noun phrases each of its
-  clauses has (``P(arity | L)``, per clause: counted per command, a long
-  command of several clauses read as "move the toy", since toy commands are
-  longer; measured on the crowd
-  corpus, leave-one-out 226 and 219 of 240 against 226 and 218 per command,
-  in novel layouts 647 and 626 of 720 against 644 and 623; 227 and 650 for
-  the simplified commands once the mention factor is summed in double
-  precision). The number of clauses is not modelled: a reading that splits
-  a command into more clauses pays one more arity factor, as it pays for
-  more phrase-free words; the parser's reading probabilities weigh in too.
-  The prior over
-  alignments favours the task's own roles (``argument_bonus``), which is what
-  decides for prepositions training never saw: "go *with* the star to green".
-  Each task's table spans only the roles its interpretations can offer
-  (``Vocabulary.task_roles``): with every task's roles in every table, "go
-  somewhere" kept a third of its mass for the toy's roles, and in a layout
-  with a toy an agent command read cheaper as moving it (measured: novel
-  layouts 626 -> 635 of 720 original commands, 650 -> 653 simplified;
-  leave-one-out 219 and 227 -> 226, a coin flip on "cyan").
+- ``parse``: words are generated through the logical form (``model.parse_aligned``).
 """
 
 from __future__ import annotations
 
 import inspect
-import itertools
 import math
 
 import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import CLAUSE_ARITY_BINS, PAD_LOGIT, Batch
-from groundlang.model.vocabulary import is_task_role
+from groundlang.model.encoding import Batch
+from groundlang.model.language_model_base import NULL_MIXTURE, LanguageModel, gather_mixtures, mixture_log_emissions
+from groundlang.model.parse_aligned import ParseAligned
 
 __all__ = ["LanguageModel", "BagOfWords", "IBMModel2", "ParseAligned", "LANGUAGE_MODELS", "get_language_model",
-           "setting_names"]
-
-
-class LanguageModel:
-    """Base: Dirichlet word distributions per semantic token."""
-
-    name = "base"
-    # Whether interpretations enumerate binding constraints C (see model.interpretations).
-    enumerates_constraints = True
-
-    def __init__(self, word_concentration: float = 1.05, null_token: bool = True):
-        # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
-        _require_positive(self.name, "word_concentration", word_concentration)
-        self.word_concentration = word_concentration
-        self.null_token = null_token
-
-    def settings(self) -> dict:
-        return {"word_concentration": self.word_concentration, "null_token": self.null_token}
-
-    def sample_globals(
-        self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),
-        num_tasks: int = 0, offered: tuple[tuple[bool, ...], ...] = (),
-    ) -> dict:
-        with pyro.plate("tokens", num_tokens, dim=-1):
-            phi = pyro.sample(
-                "phi", dist.Dirichlet(torch.full((num_words,), self.word_concentration))
-            )
-        return {"phi": phi}
-
-    def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
-        raise NotImplementedError
-
-
-def _require_positive(model: str, name: str, value: float) -> None:
-    if not value > 0:  # also refuses NaN
-        raise ValueError(f"language model {model}: {name} must be > 0 (a Dirichlet concentration), not {value!r}")
-
-
-NULL_MIXTURE = 0  # encode() interns the {NULL} mixture first
-
-
-def mixture_log_emissions(g: dict, batch: Batch) -> torch.Tensor:
-    """``log P(word u of instance i | mixture x)`` as ``[X, I, U]``."""
-    emit = batch.mixtures @ g["phi"]  # [X, W]
-    return emit[:, batch.uniq].clamp_min(1e-30).log()
-
-
-def _gather_mixtures(log_emit: torch.Tensor, mix_ids: torch.Tensor) -> torch.Tensor:
-    """``log_emit [X, I, U]`` at ``mix_ids [I, ...]`` -> ``[I, ..., U]``."""
-    I, U = log_emit.shape[1], log_emit.shape[2]
-    flat = mix_ids.reshape(I, -1)  # [I, Q]
-    per_instance = log_emit.permute(1, 0, 2)  # [I, X, U]
-    out = torch.gather(per_instance, 1, flat[..., None].expand(-1, -1, U))
-    return out.reshape(*mix_ids.shape, U)
+           "setting_names", "NULL_MIXTURE", "mixture_log_emissions"]
 
 
 class BagOfWords(LanguageModel):
@@ -122,7 +37,7 @@ class BagOfWords(LanguageModel):
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
         mix = batch.bow_mix if self.null_token else batch.bow_mix_no_null
-        per_word = _gather_mixtures(mixture_log_emissions(g, batch), mix)  # [I, J, U]
+        per_word = gather_mixtures(mixture_log_emissions(g, batch), mix)  # [I, J, U]
         return (per_word * batch.word_counts[:, None, :]).sum(-1)
 
 
@@ -168,262 +83,6 @@ class IBMModel2(LanguageModel):
         return (p.clamp_min(1e-30).log() * wmask[:, None, :]).sum(-1)
 
 
-class ParseAligned(LanguageModel):
-    name = "parse"
-    enumerates_constraints = False
-
-    def __init__(
-        self,
-        word_concentration: float = 1.05,
-        align_concentration: float = 1.5,
-        argument_bonus: float = 3.0,
-        mention_concentration: float | None = 1.05,
-        arity_concentration: float | None = 1.05,
-        align_by_task: bool = True,
-        mention_phrases: str = "referring",
-        align_backoff: bool = False,
-        relation_words: bool = False,
-        preposition_concentration: float | None = None,
-    ):
-        """``argument_bonus`` is added to the alignment prior's concentration of
-        the task's own roles (a phrase names an argument of the task more often
-        than a bystander; it decides for prepositions training never saw).
-        ``mention_concentration`` turns on the mention model (None: off),
-        ``arity_concentration`` the number of noun phrases of a clause given L (None: off);
-        both are Dirichlet concentrations, so EM stays exact. ``align_by_task``:
-        one alignment table ``P(role | preposition, L)`` per lifted task (False:
-        one ``P(role | preposition)`` shared by all tasks). ``mention_phrases``: which phrases name
-        the object they align with for the mention model, ``"referring"`` (a head noun, a colour
-        word or an open-class word, see ``encoding.is_referring``) or ``"any"``. ``align_backoff``: each
-        alignment context reads roles from a mixture of its own table and that of the key it backs off to
-        (``encoding.backoff_key``: ``onto+obj|last`` -> ``onto``), weights learned per context, so a rare
-        key ("onto ..." as the last phrase) is no longer read by its prior alone. Off by default:
-        measured on the crowd corpus before the start room's role (``interpretations.START_ROLE``), it was
-        the better model by 10-fold held-out likelihood of words and demonstrations (-13538 against -13577
-        nats, original commands; -9364 against -9373, simplified), but leave-one-out gave 221 and 225 of
-        240 against 220 and 228, novel layouts 643 and 658 of 720 against 635 and 662 (original and
-        simplified commands): "|last" says where things go, and a rare "with ...|last" backed off to
-        "with" read "to one with orange floor" as a room passed. With the start room's role it gives 226
-        and 228 of 240, 637 and 659 of 720: what it fixed, that role fixes too (after the grammar and
-        lexicon fixes of the seventh session: 227 and 228 of 240, 639 and 658 of 720, against 227 and 229,
-        643 and 659 without it; since "|last" passes over "from" and "with" phrases
-        (``encoding.entity_words``): 227 and 228 of 240, 645 and 657 of 720, against 227 and 230, 648 and
-        662). ``relation_words``: a phrase aligned with an argument of the task may say the goal's relation
-        ("the *left side* of the chair", "*inside* the red room"): the goal PFs join the tokens its
-        modifiers and head noun come from (``interpretations.interpretations``). ``preposition_concentration``
-        turns on a model of each phrase's preposition key given L (None: off; a Dirichlet concentration):
-        a preposition says the relation ("to the right of the chair", "into the room"), which the
-        alignment table, conditioned on the key, cannot. Measured: ABLATIONS.md."""
-        if mention_phrases not in ("referring", "any"):
-            raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
-                             f"not {mention_phrases!r}")
-        _require_positive(self.name, "align_concentration", align_concentration)
-        for name, value in (("mention_concentration", mention_concentration),
-                            ("arity_concentration", arity_concentration),
-                            ("preposition_concentration", preposition_concentration)):
-            if value is not None:
-                _require_positive(self.name, name, value)
-        if not argument_bonus >= 0:
-            raise ValueError(f"language model {self.name}: argument_bonus must be >= 0, not {argument_bonus!r}")
-        super().__init__(word_concentration)
-        self.align_concentration = align_concentration
-        self.argument_bonus = argument_bonus
-        self.mention_concentration = mention_concentration
-        self.arity_concentration = arity_concentration
-        self.align_by_task = align_by_task
-        self.mention_phrases = mention_phrases
-        self.align_backoff = align_backoff
-        self.relation_words = relation_words
-        self.preposition_concentration = preposition_concentration
-
-    def settings(self) -> dict:
-        return {
-            "word_concentration": self.word_concentration,
-            "align_concentration": self.align_concentration,
-            "argument_bonus": self.argument_bonus,
-            "mention_concentration": self.mention_concentration,
-            "arity_concentration": self.arity_concentration,
-            "align_by_task": self.align_by_task,
-            "mention_phrases": self.mention_phrases,
-            "align_backoff": self.align_backoff,
-            "relation_words": self.relation_words,
-            "preposition_concentration": self.preposition_concentration,
-        }
-
-    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
-        g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
-        if num_tasks < 1:
-            raise ValueError("the parse model needs the lifted tasks of the vocabulary (Vocabulary.add_tasks)")
-        task_role = torch.tensor([is_task_role(name) for name in role_names], dtype=torch.bool)
-        if task_role.numel() != num_roles:  # no names given: every role is a bystander's
-            task_role = torch.zeros(num_roles, dtype=torch.bool)
-        concentration = torch.full((num_roles,), self.align_concentration) + self.argument_bonus * task_role
-        share = torch.full((2,), self.align_concentration)
-        g["frame_source"] = pyro.sample("frame_source", dist.Dirichlet(share))
-        g["verb_source"] = pyro.sample("verb_source", dist.Dirichlet(share))
-        # One table per (lifted task, preposition) when aligning by task, kept flat
-        # (one plate); reading_table views it as [tasks, preps, roles].
-        if self.align_by_task:
-            # A task's table spans only the roles its interpretations can offer: the roles of another
-            # task's variables get concentration 1, a flat prior that adds no pseudo-count, so the MAP
-            # gives them exactly nothing (they never have counts). With the bonus of every task's
-            # roles in every table, a "go somewhere" table kept a third of its mass for the toy's
-            # roles, and in a layout with a toy an agent command read cheaper as moving it.
-            own = torch.tensor(offered, dtype=torch.bool) if offered else torch.ones(num_tasks, num_roles, dtype=torch.bool)
-            per_task = torch.where(own, concentration, torch.ones(()))  # [tasks, roles]
-            concentration = per_task[:, None, :].expand(num_tasks, num_preps, num_roles).reshape(-1, num_roles)
-        contexts = concentration.shape[0] if self.align_by_task else num_preps
-        with pyro.plate("align_contexts", contexts, dim=-1):
-            g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
-            if self.align_backoff:
-                # Per context: the share of its own table and of its back-off key's (encoding.backoff_key).
-                g["backoff"] = pyro.sample("backoff", dist.Dirichlet(share))
-        if self.mention_concentration is not None:
-            # Per role: P(an object in this role is named by some phrase), P(it is not).
-            # A priori a task's object is named and a bystander is not, by as many
-            # pseudo-counts as the alignment prior's argument bonus.
-            mention = torch.full((num_roles, 2), self.mention_concentration)
-            mention += self.argument_bonus * torch.stack([task_role, ~task_role], dim=-1)
-            with pyro.plate("mention_roles", num_roles, dim=-1):
-                g["mention"] = pyro.sample("mention", dist.Dirichlet(mention))
-        if self.arity_concentration is not None:
-            # Per lifted task: how many noun phrases a clause of a command of the task has.
-            with pyro.plate("arity_tasks", num_tasks, dim=-1):
-                g["arity"] = pyro.sample(
-                    "arity", dist.Dirichlet(torch.full((CLAUSE_ARITY_BINS,), self.arity_concentration))
-                )
-        if self.preposition_concentration is not None:
-            # Per lifted task: the preposition key of each noun phrase.
-            with pyro.plate("preposition_tasks", num_tasks, dim=-1):
-                g["preposition"] = pyro.sample(
-                    "preposition", dist.Dirichlet(torch.full((num_preps,), self.preposition_concentration))
-                )
-        return g
-
-    def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
-        return self.reading_table(g, batch)[0]
-
-    def reading_table(self, g: dict, batch: Batch):
-        """``(log P(words | j) [I, J], per reading [I, J, R], per type and role [I, J, V, K])``.
-
-        A noun phrase of type k aligns with role v with probability
-        ``align[prep_k, role_v]`` (with ``align_backoff``, a mixture of that and
-        the back-off key's row, the component one more latent choice); a role
-        that interpretation j does not offer cannot be chosen, so its share of
-        the probability is lost (the model stays a sum of products of
-        categoricals, which keeps EM exact). The phrase's words then come from
-        that role's mixture.
-        """
-        log_emit = mixture_log_emissions(g, batch)  # [X, I, U]
-        modifiers = _gather_mixtures(log_emit, batch.role_mix)  # [I, J, V, U]
-        heads = _gather_mixtures(log_emit, batch.role_head_mix)  # [I, J, V, U]
-        type_ll = torch.einsum("ijvu,iku->ijvk", modifiers, batch.type_counts) + torch.einsum(
-            "ijvu,iku->ijvk", heads, batch.type_head_counts
-        )  # [I, J, V, K]
-        # Row of the alignment table per phrase type: (task, key) when aligning by task, else the key.
-        if self.align_by_task:
-            context = batch.align_context  # [I, J, K]
-        else:
-            context = batch.type_prep[:, None, :].expand(-1, batch.role.shape[1], -1)
-        roles = batch.role[:, :, :, None]
-        if "backoff" in g:
-            base = context - batch.type_prep[:, None, :] + batch.type_base_prep[:, None, :]  # same task, back-off key
-            own = g["align"][context[:, :, None, :], roles]  # [I, J, V, K]
-            backed = g["align"][base[:, :, None, :], roles]
-            # A mixture of the key's own table and its back-off key's, with learned weights per context:
-            # one more latent choice, so EM stays exact (weights * gradient = expected counts).
-            weights = g["backoff"][context][:, :, None, :, :]  # [I, J, 1, K, 2]
-            log_align = (weights[..., 0] * own + weights[..., 1] * backed).clamp_min(1e-30).log()
-        else:
-            log_align = g["align"].clamp_min(1e-30).log()[context[:, :, None, :], roles]  # [I, J, V, K]
-        log_align = (log_align + batch.role_logw[..., None]).masked_fill(~batch.role_mask[..., None], PAD_LOGIT)
-        joint = type_ll + log_align
-        per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]
-        entities = torch.einsum("ijk,irk->ijr", per_type, batch.reading_types)
-        if "mention" in g:
-            entities = entities + self._mentions(g, batch, joint, entities, self.mention_phrases == "referring")
-        # Words outside noun phrases come from the lifted task's token or NULL
-        # with learned shares, one pair for verbs and one for the other words:
-        # a verb says more about the task than "to" or "the" does. A negated clause's verb
-        # ("do not enter it") is one of the other words (see encoding._reading_structure).
-        phi = g["phi"]
-        task_words = phi[batch.task_token[:, :, None], batch.uniq[:, None, :]].clamp_min(1e-30).log()  # [I, J, U]
-        null_words = log_emit[NULL_MIXTURE][:, None, :].expand_as(task_words)  # [I, J, U]
-        both = torch.stack([task_words, null_words], dim=-1)  # [I, J, U, 2]
-        frame_words = torch.logsumexp(both + g["frame_source"].log(), dim=-1)
-        verb_words = torch.logsumexp(both + g["verb_source"].log(), dim=-1)
-        frame = torch.einsum("iju,iru->ijr", frame_words, batch.frame_counts)
-        verbs = torch.einsum("iju,iru->ijr", verb_words, batch.verb_counts)
-        per_reading = entities + frame + verbs + batch.reading_logp[:, None, :]
-        if "arity" in g:
-            arity = g["arity"].clamp_min(1e-30).log()
-            # Each clause's number of noun phrases given L: a command's length is its number of clauses,
-            # which says little about the task (see ``arity_concentration``).
-            per_reading = per_reading + torch.einsum("ijb,irb->ijr", arity[batch.task_index], batch.clause_arity)
-        if "preposition" in g:
-            # Each phrase's preposition key given L, then its role given (L, key), then its words.
-            # The preposition itself, without the marks of the phrase's place (``encoding.backoff_key``:
-            # "|last", "+obj"), which the alignment table is conditioned on already.
-            keys = g["preposition"].clamp_min(1e-30).log()[batch.task_index[:, :, None], batch.type_base_prep[:, None, :]]
-            keys = keys * batch.type_mask[:, None, :]  # [I, J, K]
-            per_reading = per_reading + torch.einsum("ijk,irk->ijr", keys, batch.reading_types)
-        return torch.logsumexp(per_reading, dim=-1), per_reading, joint
-
-    @staticmethod
-    def _mentions(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.Tensor,
-                  referring_only: bool = True) -> torch.Tensor:
-        """``log`` of the mention model's factor per ``[I, J, R]``.
-
-        Each mentionable object g of the interpretation (every toy, every object
-        the task binds but the agent) is named by some phrase ("covered")
-        with probability ``mention[role_g, 0]`` and not with ``mention[role_g, 1]``.
-        With ``referring_only``, only a referring phrase (``batch.type_refers``)
-        aligned with g names it; the others align as freely but name nothing.
-        The alignments in which exactly the objects W go unnamed carry the mass
-        ``E(W)``; with ``P(U)`` the mass of alignments avoiding the objects U
-        (phrases choose roles independently, so it is a product over phrases),
-        inclusion-exclusion gives ``sum_W E(W) prod_{W} m1 prod_{not W} m0 =
-        sum_U P(U) prod_{U} (m1 - m0) prod_{not U} m0``, a polynomial in the
-        mention parameters with non-negative coefficients in the E(W) form:
-        ``phi * grad`` still gives EM's expected counts. Returned relative to
-        ``P({})`` (= ``entities``), to which it is added.
-        """
-        G = batch.cover_slot.shape[-1]
-        role_of_slot = torch.gather(batch.role, 2, batch.cover_slot)  # [I, J, G]
-        # In double precision: the terms alternate in sign and nearly cancel when a task's object
-        # is almost surely named, so float32 would leave errors of 1e-3 nats that depend on padding.
-        mention = g["mention"].double()[role_of_slot]  # [I, J, G, 2]
-        joint = joint.double()
-        named = torch.where(batch.cover_mask, mention[..., 0], torch.ones_like(mention[..., 0]))
-        unnamed_minus_named = torch.where(
-            batch.cover_mask, mention[..., 1] - mention[..., 0], torch.zeros_like(named)
-        )
-        # Each slot is its own role binding, so the roles avoiding U carry the mass of all roles
-        # less the slots' own: one subtraction per subset instead of a masked logsumexp.
-        K = joint.shape[3]
-        top = joint.max(dim=2, keepdim=True).values  # [I, J, 1, K]
-        mass = (joint - top).exp()  # [I, J, V, K]
-        all_roles = mass.sum(2)  # [I, J, K]
-        slot_mass = torch.gather(mass, 2, batch.cover_slot[..., None].expand(-1, -1, -1, K))
-        slot_mass = slot_mass * batch.cover_mask[..., None]  # [I, J, G, K]
-        # Subsets U of the slots, a block at a time: chosen[u, g] says whether slot g is in subset u.
-        # One block holds them all for the few slots of the Cleanup World (2^4 here); blocks bound
-        # the memory of [I, J, subsets, K] when a layout has many toys.
-        subsets = torch.tensor(list(itertools.product((False, True), repeat=G)), dtype=torch.bool)  # [2^G, G]
-        naming = batch.type_mask & batch.type_refers if referring_only else batch.type_mask
-        types = naming[:, None, None, :]
-        readings = batch.reading_types.double()
-        total = torch.zeros(entities.shape, dtype=torch.float64)
-        for chosen in subsets.split(MENTION_SUBSETS_PER_BLOCK):
-            weight = torch.where(chosen, unnamed_minus_named[:, :, None, :], named[:, :, None, :]).prod(-1)  # [I, J, U]
-            avoided = torch.einsum("ijgk,ug->ijuk", slot_mass, chosen.to(slot_mass.dtype))  # [I, J, U, K]
-            share = ((all_roles[:, :, None, :] - avoided) / all_roles[:, :, None, :]).clamp_min(1e-30).log()
-            share = torch.einsum("ijuk,irk->ijur", share * types, readings)
-            total = total + (weight[..., None] * share.exp()).sum(2)  # [I, J, R]
-        return total.clamp_min(1e-30).log().to(entities.dtype)
-
-
-MENTION_SUBSETS_PER_BLOCK = 64  # parse: subsets of mentionable objects summed at once by the mention factor
 POSITION_BINS = 4  # IBM Model 2: word positions coarsened to quarters of the command
 MAX_MACHINE = 24  # IBM Model 2: longest machine string (NULL included)
 
