@@ -1,4 +1,4 @@
-"""``groundlang follow "COMMAND" --env FILE --palette NAME --model MODEL_DIR [--ask [--learn] | --guess] [--out PNG] [--json]``.
+"""``groundlang follow "COMMAND" --env FILE [--palette NAME] --model MODEL_DIR [--ask [--learn] | --guess] [--out PNG] [--json]``.
 
 Exit codes: 0 the goal was reached; 1 it was not; 2 bad input; 3 the command
 was read with confidence below ``--min-confidence`` and nothing was done (the
@@ -33,7 +33,7 @@ def register(subparsers) -> None:
     p.add_argument("command_text", metavar="COMMAND", help="the command, in quotes")
     p.add_argument("--env", required=True, metavar="FILE",
                    help="the initial state: a corpus file (its first state) or a one-line .state file")
-    p.add_argument("--palette", required=True, help=PALETTE_HELP)
+    p.add_argument("--palette", help=PALETTE_HELP + " (default: the model's, when it was trained on one)")
     p.add_argument("--model", required=True, metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
     p.add_argument("--out", metavar="PNG", help="draw the executed trajectory here (.png, .svg or .pdf; default: no picture)")
     p.add_argument("--top", type=positive_int, default=5, help="how many goals to list with their probabilities (default 5)")
@@ -121,8 +121,15 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.render import check_picture_destination
 
         check_picture_destination(args.out)
-    state = read_initial_state(args.env, args.palette)
     learner = Learner.load(args.model)
+    palette = args.palette
+    if palette is None:
+        trained = [p["name"] for p in learner.palettes or ()]
+        if len(trained) != 1:
+            raise ValueError(f"--palette is needed: the model was trained on {len(trained)} palettes "
+                             f"({', '.join(trained) or 'none recorded'})")
+        palette = trained[0]
+    state = read_initial_state(args.env, palette)
     if args.lexicon:
         learner.add_words(args.lexicon)
     threshold = None if args.guess else args.min_confidence

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
+from groundlang.bdm import bdm_files
 from groundlang.corpus import read_corpus
 from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
                                  add_lexicon_option, language_model_settings, seed)
@@ -12,8 +13,9 @@ from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_languag
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("train", help="learn word meanings from a corpus and save the model")
-    p.add_argument("corpus", metavar="CORPUS", help="folder of corpus files")
-    p.add_argument("--palette", required=True, help=PALETTE_HELP)
+    p.add_argument("corpus", metavar="CORPUS", help="folder of corpus files (*.txt), or a .bdm file or folder of them "
+                   "(Williams et al. 2018: (start, end) pairs, learned from as evaluate does)")
+    p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
     p.add_argument("-o", "--output", required=True, metavar="MODEL_DIR", help="folder to write the model to")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
     add_language_model_settings(p)
@@ -34,19 +36,41 @@ def run(args: argparse.Namespace) -> int:
 
     check_model_destination(args.output, "-o")  # before training, not after it
     words = extra_words(args.lexicon)  # a malformed word file stops here, before the corpus is read
-    corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
-    if corpus.skipped:
-        print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
-    library = TaskLibrary.load(args.library) if args.library else None
     started = time.perf_counter()
+    instances, library = _pairs(args) if bdm_files(args.corpus) else (None, None)
+    if instances is None:
+        if not args.palette:
+            raise ValueError("--palette is required for a *.txt corpus (e.g. --palette sokoban)")
+        corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
+        if corpus.skipped:
+            print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
+        instances = corpus.instances
+        library = TaskLibrary.load(args.library) if args.library else None
     lm = get_language_model(args.language_model, **language_model_settings(args.lm_settings))
     learner = Learner(lm, library=library, seed=args.seed, lexicon=words)
-    learner.fit(corpus.instances, progress=args.progress)
+    learner.fit(instances, progress=args.progress)
     learner.save(args.output)
     fit = learner.fit_result
     print(
-        f"trained {args.language_model} on {len(corpus)} instances in {time.perf_counter() - started:.1f} s "
+        f"trained {args.language_model} on {len(instances)} instances in {time.perf_counter() - started:.1f} s "
         f"({fit.steps} optimiser rounds, {'converged' if fit.converged else 'not converged'}); "
         f"model written to {args.output}"
     )
     return 0
+
+
+def _pairs(args: argparse.Namespace):
+    """The training instances of a .bdm corpus (one per command, its pairs sharing one meaning) and its
+    library (the package's williams2018 domain unless --library)."""
+    from groundlang.bdm import DEFAULT_PALETTE
+    from groundlang.bdm_check import default_library
+    from groundlang.logic.tasks import TaskLibrary
+    from groundlang.pair_corpus import read_pair_corpus, training_instances
+
+    library = TaskLibrary.load(args.library) if args.library else default_library()
+    commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE).commands
+    made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent)
+    skipped = ", ".join(f"{made.skipped_by(why)} {why}" for why in ("too large", "unreachable") if made.skipped_by(why))
+    print(f"{len(commands)} commands, {sum(len(i.pairs) for i in made.instances)} pairs used"
+          + (f"; pairs skipped: {skipped}" if skipped else ""))
+    return made.instances, library
