@@ -129,7 +129,7 @@ def test_cli_asks_with_exit_code_3_and_guess_acts(model_dir, capsys, tmp_path):
     assert "goal the agent in the red room \u2014 agentInRoom(agent0, room0): reached (goal)" in capsys.readouterr().out
     assert _follow(model_dir, "take the star to the red room") == 0
     out = capsys.readouterr().out
-    assert "0.9850  the yellow star in the red room \u2014 toyInRoom(block0, room0)" in out
+    assert "0.9851  the yellow star in the red room \u2014 toyInRoom(block0, room0)" in out
 
 
 def test_cli_ask_reads_the_answer_from_stdin(model_dir, capsys, monkeypatch):
