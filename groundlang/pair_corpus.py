@@ -8,8 +8,9 @@ Such a corpus shows no trajectory, so a pair becomes evidence in one of two ways
   plan from the start to exactly the end state (``pair_tasks.shortest_actions``; of several shortest
   plans the first in a fixed order), scored by MLIRL's behaviour likelihood like a recorded one.
 
-Which is better was measured on a development split (ABLATIONS.md). A pair whose state space is too
-large to enumerate is skipped and counted; one whose end state cannot be reached from its start is an
+Which is better was measured on a development split (ABLATIONS.md). A pair too large to enumerate is
+scored, with end-state evidence, in the relevance abstraction where the toys it moves move
+(``inference.shared_meaning``); one too large even for that is skipped and counted; one whose end state cannot be reached from its start is an
 inconsistent demonstration (an error naming file and line, or skipped with ``skip_inconsistent``).
 """
 
@@ -24,7 +25,8 @@ from groundlang.corpus import CorpusError, InconsistentDemonstration, Instance
 from groundlang.inference.end_states import EndStateNoise
 from groundlang.inference.shared_meaning import LayoutEvidence
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.statespace import StateSpaceError, check_state_count
+from groundlang.model.relevance import abstraction_bound, exact_fits, relevant_toys
+from groundlang.model.statespace import StateSpaceError
 from groundlang.model.world import State, replay
 from groundlang.pair_tasks import REACHABILITY_MAX_STATES, shortest_actions
 
@@ -146,9 +148,7 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
     for index, command in enumerate(commands):
         usable = []
         for pair in command.pairs:
-            try:
-                check_state_count(pair.start, max_states)
-            except StateSpaceError:
+            if not _fits(pair, demonstrations, max_states):
                 out.skipped.append((command, pair, "too large"))
                 continue
             if demonstrations == "shortest-plan":
@@ -179,3 +179,12 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
         out.instances.extend(usable)
         out.commands.extend([index] * len(usable))
     return out
+
+
+def _fits(pair, demonstrations: str, max_states: int) -> bool:
+    """Whether a pair can be scored: its whole state space within ``max_states`` or, for end-state
+    evidence, the relevance abstraction in which only the toys the pair moves move (shared_meaning)."""
+    if exact_fits(pair.start, max_states):
+        return True
+    moved = relevant_toys(pair.start, (), [(pair.start, pair.end)])
+    return demonstrations == "end-state" and abstraction_bound(pair.start, moved) <= max_states

@@ -28,6 +28,7 @@ from groundlang.inference.end_states import EndStateNoise, distances, end_state_
 from groundlang.logic.tasks import GroundedTask, TaskLibrary
 from groundlang.model.features import goal_mask
 from groundlang.model.pf_tables import pf_tables
+from groundlang.model.relevance import abstract_space, exact_fits, relevant_toys
 from groundlang.model.statespace import enumerate_states
 from groundlang.model.tasks import candidate_tasks
 from groundlang.model.world import State
@@ -52,21 +53,24 @@ class LayoutEvidence:
     def __init__(self, start: State, end: State, library: TaskLibrary, noise: EndStateNoise,
                  max_states: int | None = None):
         found = candidate_tasks(start, library)
-        space = enumerate_states(start, max_states=max_states)
-        end_index = space.index_of(end)  # StateSpaceError when the end cannot be reached
-        dist = distances(space)
-        tables = pf_tables(space.layout, library.tabulation_program)
         goals = list(dict.fromkeys(task.goal for task, _ in found))
-        masks = np.stack([goal_mask(space, goal, tables) for goal in goals]) if goals else None
-        values = end_state_log_likelihood(dist, end_index, masks, noise) if goals else np.zeros(0)
+        tables = pf_tables(start.layout, library.tabulation_program)
+        self.by_goal: dict[tuple, float] = {}
+        floors = []
+        for space, group in _spaces(start, end, goals, max_states):
+            end_index = space.index_of(end)  # StateSpaceError when the end cannot be reached
+            dist = distances(space)
+            masks = np.stack([goal_mask(space, goal, tables) for goal in group]) if group else None
+            values = end_state_log_likelihood(dist, end_index, masks, noise) if group else np.zeros(0)
+            self.by_goal.update((goal, float(v)) for goal, v in zip(group, values))
+            floors.append(math.log(noise.anywhere / int((dist >= 0).sum())))
         self.library = library
         self.noise = noise.key()
-        self.by_goal: dict[tuple, float] = {goal: float(v) for goal, v in zip(goals, values)}
         self.by_task: dict[str, list[tuple[dict[str, frozenset[str]], float]]] = {}
         for task, constraints in found:
             largest = constraints[0].atoms if constraints else ()
             self.by_task.setdefault(task.task, []).append((properties_of(task, largest), self.by_goal[task.goal]))
-        self.floor = math.log(noise.anywhere / int((dist >= 0).sum()))
+        self.floor = min(floors)
 
     def goal_value(self, goal: tuple) -> float:
         """log P(e | g) for a grounded goal of this layout (the noise floor for one no task has)."""
@@ -81,6 +85,16 @@ class LayoutEvidence:
             return self.floor
         top = max(values)
         return top + math.log(sum(math.exp(v - top) for v in values) / len(values))
+
+
+def _spaces(start: State, end: State, goals: list, max_states: int | None):
+    """``(space, goals scored in it)`` pairs: the exact space when it fits ``max_states``, else the relevance
+    abstraction in which the toys the pair moves move and the others are walls. A toy the pair leaves
+    where it stands is where every goal must be reached around it, so fixing it changes no goal's
+    nearest states but by routes that would push it (model.relevance)."""
+    if exact_fits(start, max_states):
+        return [(enumerate_states(start, max_states=max_states), goals)]
+    return [(abstract_space(start, relevant_toys(start, (), [(start, end)]), max_states), goals)]
 
 
 def layout_evidence(pairs: Sequence[tuple[State, State]], library: TaskLibrary, noise: EndStateNoise | None = None,

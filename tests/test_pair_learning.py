@@ -202,3 +202,15 @@ def test_train_on_pairs_then_follow_with_the_models_palette(tmp_path):
     assert run.returncode == 0, run.stderr
     result = json.loads(run.stdout)
     assert result["goal"].startswith("agentNextToToy(agent0, block0)") and result["reached"]
+
+
+def test_a_pair_of_a_billion_states_is_scored_in_its_relevance_abstraction(library):
+    (command,) = read_bdm(Path(__file__).parent / "fixtures" / "large" / "sixteen.bdm")
+    made = training_instances([command], library)
+    assert not made.skipped and len(made.instances[0].evidence) == len(command.pairs)
+    evidence = made.instances[0].evidence[0]
+    best = max(evidence.by_goal, key=evidence.by_goal.get)
+    pair = command.pairs[0]
+    from groundlang.model.pf_tables import library_pf_tables
+    holding = library_pf_tables(pair.end.layout, library).position_holding(pair.end.positions)
+    assert set(best) <= set(holding)  # the likeliest goal holds in the end state
