@@ -10,7 +10,6 @@
 from __future__ import annotations
 
 import logging
-from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from importlib.resources import files
 from pathlib import Path
@@ -27,20 +26,20 @@ from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.logic.atoms import Atom
-from groundlang.logic.schema import domain_schema
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
-from groundlang.model.encoding import Batch, Observation, bare_preposition, encode, entity_words, machine_string
+from groundlang.model.encoding import Batch, Observation, encode
 from groundlang.model.features import goal_mask
 from groundlang.model.pf_tables import pf_tables
-from groundlang.model.interpretations import OTHER_ROLES, Interpretation, alignable_roles, interpretations
+from groundlang.model.interpretations import Interpretation, interpretations
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
 from groundlang.model.relevance import (check_abstraction_possible, exact_fits, placement_sample, pushes_scenery,
                                         state_space_for)
 from groundlang.model.statespace import StateSpace
-from groundlang.model.vocabulary import Vocabulary, class_token
+from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
 from groundlang.results import FollowResult, Posterior
+from groundlang.training_vocabulary import build_vocabulary, palette_schema
 from groundlang.wording import goal_phrase
 
 __all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError", "AnswerError", "DEFAULT_MIN_CONFIDENCE"]
@@ -207,45 +206,10 @@ class Learner:
 
     # ----------------------------------------------------------------- training
     def _schema(self, palette):
-        """The domain's schema with ``palette``'s values (its colour and shape families depend on them)."""
-        return domain_schema(self.library, (palette.name, (("colour", palette.colours), ("shape", palette.shapes))))
+        return palette_schema(self.library, palette)
 
     def _build_vocabulary(self, observations: Iterable[Observation], palettes: Iterable) -> Vocabulary:
-        vocab = Vocabulary(lexicon=self.word_lexicon)
-        vocab.add_tasks((task.name for task in self.library.tasks),
-                        roles={task.name: alignable_roles(task) for task in self.library.tasks})
-        tokens: list[str] = []
-        roles: list[str] = []
-        preps: list[str] = []
-        counts: Counter = Counter()
-        for obs in observations:
-            vocab.add_words(obs.words)
-            counts.update(obs.words)
-            for reading in obs.readings:
-                keys = [p for p, _, _ in entity_words(reading.logical_form, self.word_lexicon) if p is not None]
-                preps.extend(keys)
-                preps.extend(b for p in keys if (b := bare_preposition(p)) is not None)  # what the parse model generates
-            for interp in obs.interpretations:
-                tokens.extend(machine_string(interp))
-                for rb in interp.roles:
-                    roles.append(rb.role)
-                    tokens.append(class_token(rb.cls))
-                    tokens.extend(rb.constraint_tokens + rb.kind_tokens)  # a user's PF may describe only bystanders
-        # Every property PF the domain declares for the palettes seen (colours, shapes, a user's
-        # sizes...) and every class: a layout of the test may have values training never saw.
-        classes: list[str] = []
-        for palette in palettes:
-            schema = self._schema(palette)
-            tokens.extend(d.name for d in schema.pfs.values() if len(d.signature) == 1
-                          and d.pf_class not in ("position", "spatial"))
-            classes.extend(schema.classes)
-        tokens.extend(class_token(c) for c in dict.fromkeys(classes))
-        tokens.extend(self.library.spatial_pfs)  # a layout of the test may have sides training never saw
-        vocab.add_tokens(tokens)
-        vocab.add_roles(roles + list(OTHER_ROLES))
-        vocab.add_preps(preps)
-        vocab.read_misspellings(counts)
-        return vocab
+        return build_vocabulary(observations, palettes, self.library, self.word_lexicon)
 
     def fit(self, instances: Sequence, progress: bool = False, init: dict | None = None,
             observations: list[Observation] | None = None, batch: Batch | None = None) -> "Learner":

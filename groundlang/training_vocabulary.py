@@ -1,0 +1,62 @@
+"""The vocabulary a learner is trained with: what it reads of its observations and of the domain's schema."""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Iterable
+
+from groundlang.logic.schema import domain_schema
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.encoding import Observation, bare_preposition, entity_words, machine_string
+from groundlang.model.interpretations import OTHER_ROLES, alignable_roles
+from groundlang.model.vocabulary import Vocabulary, class_token
+
+__all__ = ["build_vocabulary", "palette_schema"]
+
+
+def palette_schema(library: TaskLibrary, palette):
+    """The domain's schema with ``palette``'s values (its colour and shape families depend on them)."""
+    return domain_schema(library, (palette.name, (("colour", palette.colours), ("shape", palette.shapes))))
+
+
+def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, library: TaskLibrary,
+                     word_lexicon) -> Vocabulary:
+    """The vocabulary of a training set: its words, the preposition keys of its readings (and the bare
+    prepositions the parse model generates), the tokens and roles of its interpretations, and every
+    property PF and class the domain declares for ``palettes`` (a test layout may show values training
+    never did)."""
+    vocab = Vocabulary(lexicon=word_lexicon)
+    vocab.add_tasks((task.name for task in library.tasks),
+                    roles={task.name: alignable_roles(task) for task in library.tasks})
+    tokens: list[str] = []
+    roles: list[str] = []
+    preps: list[str] = []
+    counts: Counter = Counter()
+    for obs in observations:
+        vocab.add_words(obs.words)
+        counts.update(obs.words)
+        for reading in obs.readings:
+            keys = [p for p, _, _ in entity_words(reading.logical_form, word_lexicon) if p is not None]
+            preps.extend(keys)
+            preps.extend(b for p in keys if (b := bare_preposition(p)) is not None)  # what the parse model generates
+        for interp in obs.interpretations:
+            tokens.extend(machine_string(interp))
+            for rb in interp.roles:
+                roles.append(rb.role)
+                tokens.append(class_token(rb.cls))
+                tokens.extend(rb.constraint_tokens + rb.kind_tokens)  # a user's PF may describe only bystanders
+    # Every property PF the domain declares for the palettes seen (colours, shapes, a user's
+    # sizes...) and every class: a layout of the test may have values training never saw.
+    classes: list[str] = []
+    for palette in palettes:
+        schema = palette_schema(library, palette)
+        tokens.extend(d.name for d in schema.pfs.values() if len(d.signature) == 1
+                      and d.pf_class not in ("position", "spatial"))
+        classes.extend(schema.classes)
+    tokens.extend(class_token(c) for c in dict.fromkeys(classes))
+    tokens.extend(library.spatial_pfs)  # a layout of the test may have sides training never saw
+    vocab.add_tokens(tokens)
+    vocab.add_roles(roles + list(OTHER_ROLES))
+    vocab.add_preps(preps)
+    vocab.read_misspellings(counts)
+    return vocab
