@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass, field
 from groundlang.bdm import Command, format_bdm_state
 from groundlang.evaluation import wilson_interval
 from groundlang.learner import Learner
-from groundlang.logic.atoms import format_goal
+from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.statespace import StateSpaceError
 from groundlang.pair_corpus import training_instances
 from groundlang.pair_tasks import REACHABILITY_MAX_STATES, pair_task, satisfies
@@ -132,7 +132,9 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                 hit = False
                 skipped += 1
             else:
-                row.update(goal=format_goal(result.goal), final_state=format_bdm_state(result.final_state, pair.toy_names))
+                names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
+                goal = tuple(Atom(a.predicate, tuple(names.get(x, x) for x in a.args)) for a in result.goal)
+                row.update(goal=format_goal(goal), final_state=format_bdm_state(result.final_state, pair.toy_names))
                 hit = satisfies(result.final_state, task, library)
             if task:
                 row["correct"] = hit

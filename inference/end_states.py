@@ -16,20 +16,15 @@ search per start state gives every distance; a goal then costs one mask over the
 
 from __future__ import annotations
 
-import logging
 import math
-from collections.abc import Sequence
 
 import numpy as np
 
-from groundlang.model.features import goal_mask
-from groundlang.model.pf_tables import pf_tables
-from groundlang.model.statespace import StateSpace, enumerate_states
+from groundlang.model.statespace import StateSpace
 from groundlang.model.world import Action
 
-__all__ = ["EndStateNoise", "distances", "end_state_log_likelihood", "end_state_likelihood_table"]
+__all__ = ["EndStateNoise", "distances", "end_state_log_likelihood"]
 
-logger = logging.getLogger(__name__)
 
 
 class EndStateNoise:
@@ -82,30 +77,3 @@ def end_state_log_likelihood(dist: np.ndarray, end: int, masks: np.ndarray, nois
             p += (1 - noise.anywhere) * math.exp(-noise.beta * (dist[end] - nearest)) / z
         out[g] = math.log(p)
     return out
-
-
-def end_state_likelihood_table(instances: Sequence, goals: Sequence[Sequence[tuple]], program,
-                               noise: EndStateNoise | None = None, max_states: int | None = None) -> list[np.ndarray]:
-    """``table[i][k] = log P(end state of instances[i] | goals[i][k])``. Instances need
-    ``initial_state`` and ``final_state`` in one layout; ``program`` is the task library's tabulation
-    program (PF meanings). An end state not reachable from its start raises StateSpaceError."""
-    noise = noise or EndStateNoise()
-    table = []
-    for inst, row in zip(instances, goals):
-        space = enumerate_states(inst.initial_state, max_states=max_states)
-        end = space.index_of(inst.final_state)
-        dist = distances(space)
-        tables = pf_tables(space.layout, program)
-        masks = np.stack([goal_mask(space, g, tables) for g in row]) if row else np.zeros((0, space.num_states), bool)
-        table.append(end_state_log_likelihood(dist, end, masks, noise))
-    if table:
-        logger.info("end-state likelihoods: %d pairs, %d goals", len(table), sum(len(r) for r in table))
-    return table
-
-
-def log_mean_exp(values: np.ndarray) -> float:
-    """log of the mean of exp(values); -inf for no values."""
-    if len(values) == 0:
-        return -math.inf
-    top = float(np.max(values))
-    return top + math.log(float(np.mean(np.exp(np.asarray(values) - top))))

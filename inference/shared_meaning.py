@@ -55,22 +55,19 @@ class LayoutEvidence:
         found = candidate_tasks(start, library)
         goals = list(dict.fromkeys(task.goal for task, _ in found))
         tables = pf_tables(start.layout, library.tabulation_program)
-        self.by_goal: dict[tuple, float] = {}
-        floors = []
-        for space, group in _spaces(start, end, goals, max_states):
-            end_index = space.index_of(end)  # StateSpaceError when the end cannot be reached
-            dist = distances(space)
-            masks = np.stack([goal_mask(space, goal, tables) for goal in group]) if group else None
-            values = end_state_log_likelihood(dist, end_index, masks, noise) if group else np.zeros(0)
-            self.by_goal.update((goal, float(v)) for goal, v in zip(group, values))
-            floors.append(math.log(noise.anywhere / int((dist >= 0).sum())))
+        space = _space(start, end, max_states)
+        end_index = space.index_of(end)  # StateSpaceError when the end cannot be reached
+        dist = distances(space)
+        masks = np.stack([goal_mask(space, goal, tables) for goal in goals]) if goals else None
+        values = end_state_log_likelihood(dist, end_index, masks, noise) if goals else np.zeros(0)
+        self.by_goal: dict[tuple, float] = {goal: float(v) for goal, v in zip(goals, values)}
         self.library = library
         self.noise = noise.key()
         self.by_task: dict[str, list[tuple[dict[str, frozenset[str]], float]]] = {}
         for task, constraints in found:
             largest = constraints[0].atoms if constraints else ()
             self.by_task.setdefault(task.task, []).append((properties_of(task, largest), self.by_goal[task.goal]))
-        self.floor = min(floors)
+        self.floor = math.log(noise.anywhere / int((dist >= 0).sum()))
 
     def goal_value(self, goal: tuple) -> float:
         """log P(e | g) for a grounded goal of this layout (the noise floor for one no task has)."""
@@ -87,14 +84,14 @@ class LayoutEvidence:
         return top + math.log(sum(math.exp(v - top) for v in values) / len(values))
 
 
-def _spaces(start: State, end: State, goals: list, max_states: int | None):
-    """``(space, goals scored in it)`` pairs: the exact space when it fits ``max_states``, else the relevance
-    abstraction in which the toys the pair moves move and the others are walls. A toy the pair leaves
-    where it stands is where every goal must be reached around it, so fixing it changes no goal's
-    nearest states but by routes that would push it (model.relevance)."""
+def _space(start: State, end: State, max_states: int | None):
+    """The exact space when it fits ``max_states``, else the relevance abstraction in which the toys the
+    pair moves move and the others are walls: a toy the pair leaves where it stands is where every goal
+    must be reached around it, so fixing it changes no goal's nearest states but by routes that would
+    push it (model.relevance)."""
     if exact_fits(start, max_states):
-        return [(enumerate_states(start, max_states=max_states), goals)]
-    return [(abstract_space(start, relevant_toys(start, (), [(start, end)]), max_states), goals)]
+        return enumerate_states(start, max_states=max_states)
+    return abstract_space(start, relevant_toys(start, (), [(start, end)]), max_states)
 
 
 def layout_evidence(pairs: Sequence[tuple[State, State]], library: TaskLibrary, noise: EndStateNoise | None = None,

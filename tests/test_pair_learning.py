@@ -132,7 +132,8 @@ def test_evaluate_with_a_test_file_writes_one_row_per_execution(tmp_path):
     assert [(r["index"], r["pair"]) for r in rows] == [(i, k) for i in range(2) for k in range(3)]
     assert rows[3]["command"] == "go next to the chair" and rows[3]["goal"].startswith("agentNextToToy(agent0, ")
     final, names = parse_bdm_state(rows[3]["final_state"])
-    assert names == ("block0", "block3")  # the file's names for the toys
+    assert names == ("block0", "block3")  # the file's names for the toys, in the goal too
+    assert rows[3]["goal"].split(", ")[1].rstrip(")") in names
     commands = read_bdm(FIXTURE / "small.bdm")
     library = TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
     assert satisfies(final, pair_task([(p.start, p.end) for p in commands[1].pairs], library), library)
@@ -141,11 +142,23 @@ def test_evaluate_with_a_test_file_writes_one_row_per_execution(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (["--test", "tests/fixtures/williams2018/small.bdm", "--palette", "sokoban", "--labels", "x.csv"], "--test takes a .bdm"),
     (["--palette", "sokoban"], "needs --palette and --labels"),
+    (["--palette", "sokoban", "--labels", "x.csv", "--holdout", "0.2", "--layouts", "separate"],
+     "--holdout, --layouts: for a .bdm corpus"),
 ])
 def test_evaluate_refuses_a_test_file_for_a_text_corpus_in_one_line(args, message):
     run = _cli("evaluate", "--corpus", "groundlang/examples", *args)
     assert run.returncode != 0 and message in run.stderr and "Traceback" not in run.stderr
     assert len(run.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--holdout", "0.2", "--limit", "1"], "--limit: for a *.txt corpus"),
+    (["--holdout", "0.2", "--protocol", "loo"], "--protocol: for a *.txt corpus"),
+    (["--test", str(FIXTURE / "small.bdm"), "--holdout", "0.5"], "pass one of --test"),
+])
+def test_evaluate_on_pairs_refuses_what_it_would_ignore(args, message):
+    run = _cli("evaluate", "--corpus", str(FIXTURE / "small.bdm"), *args)
+    assert run.returncode != 0 and message in run.stderr and "Traceback" not in run.stderr
 
 
 def test_evaluate_on_pairs_needs_a_test_file_or_a_split():

@@ -50,6 +50,14 @@ def positive_seconds(text: str) -> float:
     return _real(text, 0, 10**6, False, "seconds above 0 and at most 1000000")
 
 
+def open_fraction(text: str) -> float:
+    """An argparse type: a number strictly between 0 and 1 (a share to hold out)."""
+    value = _real(text, 0, 1, False, "a number strictly between 0 and 1")
+    if value >= 1:
+        raise argparse.ArgumentTypeError(f"expected a number strictly between 0 and 1, not {text!r}")
+    return value
+
+
 def fraction(text: str) -> float:
     """An argparse type: a number from 0 to 1."""
     return _real(text, 0, 1, True, "a number from 0 to 1")

@@ -7,7 +7,8 @@ import json
 from pathlib import Path
 
 from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
-                                 add_lexicon_option, fraction, language_model_settings, positive_int)
+                                 add_lexicon_option, fraction, language_model_settings, open_fraction,
+                                 positive_int)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
@@ -22,7 +23,7 @@ def register(subparsers) -> None:
     p.add_argument("--layouts", choices=["shared", "separate"], default="shared",
                    help="a .bdm command's pairs as one instance of one lifted meaning grounded in each layout "
                         "(shared, the default; needs end-state) or each pair as an instance of its own (separate)")
-    p.add_argument("--holdout", type=fraction, metavar="F",
+    p.add_argument("--holdout", type=open_fraction, metavar="F",
                    help="instead of --test: hold out the .bdm corpus's commands whose text hashes into a fraction "
                         "F (a development split disjoint by text, the same on every machine)")
     p.add_argument("--format", choices=["commands-to-tasks", "williams2018"],
@@ -32,7 +33,7 @@ def register(subparsers) -> None:
     p.add_argument("--demonstrations", choices=["end-state", "shortest-plan"], default="end-state",
                    help="how a (start, end) pair without a trajectory is evidence (default end-state: the end "
                         "state's likelihood under each task; shortest-plan: a synthesised shortest plan)")
-    p.add_argument("--protocol", default="loo", choices=["loo", "train"])
+    p.add_argument("--protocol", choices=["loo", "train"], help="for a *.txt corpus (default loo)")
     p.add_argument("--novel-envs", metavar="DIR", help="folder of *.state files to execute each command in too")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
     add_language_model_settings(p)
@@ -79,6 +80,9 @@ def run(args: argparse.Namespace) -> int:
     if args.test:
         raise ValueError("--test takes a .bdm test file for a .bdm training corpus; a *.txt corpus is "
                          "evaluated by --protocol loo or train")
+    given = [f"--{name}" for name, default in _PAIR_OPTIONS.items() if getattr(args, name) != default]
+    if given:
+        raise ValueError(f"{', '.join(given)}: for a .bdm corpus of (start, end) pairs; {args.corpus} is a *.txt corpus")
     if not args.palette or not args.labels:
         raise ValueError("a *.txt corpus needs --palette and --labels (the gold labels it is scored against)")
     # read here, before any work: a malformed word file is one error line, and workers get the words
@@ -88,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     check_label_prefixes(corpus, labels)  # as check does: labels of another corpus are refused, not ignored
     novel = read_novel_states(args.novel_envs, args.palette) if args.novel_envs else []
     result = evaluate(
-        corpus, labels, protocol=args.protocol, language_model=args.language_model,
+        corpus, labels, protocol=args.protocol or "loo", language_model=args.language_model,
         novel_states=novel, workers=args.workers, ray_address=args.ray,
         progress=args.progress, limit=args.limit, warm_start=not args.cold_folds,
         language_model_settings=language_model_settings(args.lm_settings),
@@ -111,6 +115,11 @@ def run(args: argparse.Namespace) -> int:
     return 0 if not result.failed_folds else 1
 
 
+# Options of one corpus format only (name -> default): refused, not ignored, with the other.
+_PAIR_OPTIONS = {"holdout": None, "layouts": "shared", "demonstrations": "end-state"}
+_TEXT_OPTIONS = ("labels", "novel_envs", "protocol", "limit", "cold_folds", "ray")
+
+
 def _is_pairs(args) -> bool:
     from groundlang.bdm import bdm_files
 
@@ -127,12 +136,13 @@ def run_pairs(args: argparse.Namespace) -> int:
     from groundlang.pair_corpus import held_out_by_text, read_pair_corpus
     from groundlang.pair_evaluation import evaluate_pairs
 
-    if bool(args.test) == bool(args.holdout):
+    if (args.test is None) == (args.holdout is None):
         raise ValueError(f"{args.corpus}: a corpus of (start, end) pairs is evaluated against a test file or a "
                          "held-out split: pass one of --test TEST.bdm and --holdout F")
-    if args.labels or args.novel_envs or args.protocol != "loo":
-        raise ValueError("--labels, --novel-envs and --protocol are for a *.txt corpus; a .bdm corpus is scored "
-                         "by what its test pairs show")
+    given = [f"--{name.replace('_', '-')}" for name in _TEXT_OPTIONS if getattr(args, name)]
+    if given:
+        raise ValueError(f"{', '.join(given)}: for a *.txt corpus with labels; a .bdm corpus is scored by what its "
+                         "test pairs show")
     palette = args.palette or DEFAULT_PALETTE
     words = extra_words(args.lexicon)
     library = TaskLibrary.load(args.library) if args.library else default_library()
