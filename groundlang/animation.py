@@ -54,7 +54,9 @@ def save_animation(path: str | Path, states: Sequence[State], title: str | None 
     def draw(i: int):
         ax.clear()
         label = f"step {i}/{len(states) - 1}"
-        draw_state(states[i], ax=ax, trajectory=states[: i + 1], title=f"{title}\n{label}" if title else label)
+        # No legend: frames keep one size, and a key below the map would be cut off at the figure's edge.
+        draw_state(states[i], ax=ax, trajectory=states[: i + 1], title=f"{title}\n{label}" if title else label,
+                   legend=False)
         return []
 
     draw(0)
@@ -69,8 +71,10 @@ def save_animation(path: str | Path, states: Sequence[State], title: str | None 
 
 def animate_follow(path: str | Path, result, fps: float = 4.0, dpi: int = 60) -> Path:
     """GIF of what :meth:`groundlang.Learner.follow` did, titled with the command and the goal it chose."""
+    from groundlang.render import picture_title
+
     outcome = "reached" if result.reached else f"not reached ({result.reason})"
-    title = f"{result.command!r}\n{format_goal(result.goal)}: {outcome}"
+    title = picture_title(result.command, result.goal_words, format_goal(result.goal), outcome)
     return save_animation(path, result.states, title=title, fps=fps, dpi=dpi)
 
 

@@ -288,7 +288,7 @@ def render_rgb(state: State, title: str | None = None, trajectory=None, dpi: int
     fig = Figure(figsize=(0.5 * lay.width + 1.5, 0.5 * lay.height + 1.5), dpi=dpi)
     canvas = FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
-    draw_state(state, ax=ax, trajectory=trajectory, title=title)
+    draw_state(state, ax=ax, trajectory=trajectory, title=title, legend=False)  # an observation: the map only
     fig.tight_layout()
     canvas.draw()
     return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()

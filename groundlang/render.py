@@ -12,7 +12,7 @@ import numpy as np
 
 from groundlang.model.world import State
 
-__all__ = ["glyph", "cell_inches", "draw_state", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
+__all__ = ["glyph", "cell_inches", "draw_state", "picture_title", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
 
 # Half an inch a cell up to this many inches a side, then smaller cells: a 1000 x 1000 room at half an
 # inch a cell was a 50,000-pixel-square canvas (75 GiB). Ticks are labelled only on small grids.
@@ -71,10 +71,61 @@ def cell_inches(state: State) -> float:
     return min(0.5, MAX_FIGURE_INCHES / max(state.layout.width, state.layout.height))
 
 
-def draw_state(state: State, ax=None, trajectory=None, title: str | None = None):
+# Where a marker of the end of a trajectory sits in its cell, and how large, against one of the start:
+# a toy that ends on the agent's start cell, or the agent on a toy's start cell, leaves both visible.
+# Toys end up and to the right of the cell's centre, the agent down and to the left: the agent ends beside
+# the toy it pushed, and the two end markers never meet.
+END_OFFSET = 0.27  # cells
+END_SCALE = 0.55
+AGENT_END_SCALE = 0.7  # of the agent's start circle: a cross this size still shows the toy glyph around it
+# Drawing order, bottom to top: paths, then start markers, then end markers (smaller, so they never hide them).
+_Z_PATH, _Z_TOY, _Z_AGENT, _Z_TOY_END, _Z_AGENT_END = 3, 5, 6, 8, 9
+
+
+def _mathtext(text: str) -> str:
+    """A glyph as a mathtext marker (``$★$``), its special characters escaped."""
+    return "$" + "".join("\\backslash " if c == "\\" else "\\" + c if c in "$_^{}%#&~" else c for c in text) + "$"
+
+
+def _legend(ax, state: State, moved: list[int], has_path: bool, cell: float) -> None:
+    """A legend below the map: the agent and each toy by id and in words, what start, end and paths look
+    like, and each room's id and colour (two rooms of one colour are told apart by the ids drawn in them)."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    lay, palette = state.layout, state.layout.palette
+    agent = lay.movable_names[0]
+    size = 9
+    handles = [Line2D([], [], marker="o", ls="none", ms=size, mfc="white", mec="black",
+                      label=f"{agent}{' at the start' if has_path else ''}")]
+    if has_path:
+        handles += [Line2D([], [], color="black", lw=2, alpha=0.7, label=f"{agent}'s path"),
+                    Line2D([], [], marker="X", ls="none", ms=size * AGENT_END_SCALE, mfc="black", mec="white",
+                           label=f"{agent} at the end (lower left)")]
+    for k, (name, toy) in enumerate(zip(lay.toy_names, state.toys), start=1):
+        colour, mark = _rgb(toy.colour, palette), _mathtext(glyph(toy.shape, palette))
+        start = " at the start" if k in moved else ""
+        handles.append(Line2D([], [], marker=mark, ls="none", ms=size * 1.2, color=colour, mec="black", mew=0.3,
+                              label=f"{name} ({toy.colour} {toy.shape}){start}"))
+        if k in moved:
+            handles += [Line2D([], [], ls="--", lw=2, color=colour, label=f"{name}'s path"),
+                        Line2D([], [], marker=mark, ls="none", ms=size * 1.2 * END_SCALE, color=colour,
+                               mec="black", mew=0.3, label=f"{name} at the end (small, upper right)")]
+    handles += [Patch(facecolor=0.45 * _rgb(r.colour, palette) + 0.55, edgecolor="black", lw=0.5,
+                      label=f"{name} ({r.colour})") for name, r in zip(lay.room_names, lay.rooms)]
+    handles += [Patch(facecolor=_DOOR, edgecolor="black", lw=0.5, label="door"),
+                Patch(facecolor=_WALL, edgecolor="black", lw=0.5, label="wall")]
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.04 if cell >= 0.3 else -0.02),
+              ncol=3 if lay.width >= 9 else 2, fontsize=7, frameon=False, handlelength=2.2)
+
+
+def draw_state(state: State, ax=None, trajectory=None, title: str | None = None, legend: bool = True):
     """Draw a state (and optionally a trajectory as paths) on a matplotlib Axes; returns the Axes.
 
-    ``trajectory``: sequence of States or positions ``[T, 1 + num_toys, 2]``.
+    ``trajectory``: sequence of States or positions ``[T, 1 + num_toys, 2]``. The state's own positions
+    are the start; where the trajectory ends is drawn on top, smaller and off the cell's centre, so no
+    marker hides another. ``legend``: a key below the map (the agent, toys and rooms by id and in words,
+    the start, end and path markers); animation frames and gym observations leave it out.
     Without ``ax`` a new Agg figure is made (no pyplot, no display needed).
     """
     import matplotlib.patheffects as pe
@@ -85,35 +136,43 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None)
         lay = state.layout
         fig = Figure(figsize=(cell * lay.width + 1, cell * lay.height + 1))
         ax = fig.add_subplot(1, 1, 1)
-    lay = state.layout
+    lay, palette = state.layout, state.layout.palette
     glyph_size = 32 * cell  # points: 16 at half an inch a cell, as before; smaller with the cells
     marker_size = 26 * cell
     ax.imshow(
         _cell_colours(state), origin="lower", interpolation="nearest",
         extent=(-0.5, lay.width - 0.5, -0.5, lay.height - 0.5),
     )
+    # Each room's id in its upper-left corner: titles and printed goals name rooms by id.
+    for name, r in zip(lay.room_names, lay.rooms):
+        ax.text(r.left + 0.55, r.top - 0.55, name, ha="left", va="top", fontsize=max(4.0, 12 * cell),
+                color=(0.15, 0.15, 0.15), alpha=0.75, zorder=2)
     outline = [pe.withStroke(linewidth=2.5, foreground="black")]
     pos = trajectory_positions(trajectory)
+    moved: list[int] = []
     if len(pos) > 1:
-        ax.plot(pos[:, 0, 0], pos[:, 0, 1], "-", color="black", lw=2, alpha=0.7, zorder=3, label="agent path")
-        for k, toy in enumerate(state.toys, start=1):
-            if k < pos.shape[1] and (pos[:, k] != pos[0, k]).any():
-                ax.plot(pos[:, k, 0], pos[:, k, 1], "--", color=_rgb(toy.colour, state.layout.palette), lw=2.5,
-                        path_effects=outline, zorder=3)
-        ax.plot(pos[-1, 0, 0], pos[-1, 0, 1], "x", color="black", ms=10, mew=2, zorder=4)
-        for k, toy in enumerate(state.toys, start=1):
-            if k < pos.shape[1] and (pos[-1, k] != pos[0, k]).any():
-                # Where the toy ends up, faint, so start and end both show.
-                ax.text(pos[-1, k, 0], pos[-1, k, 1], glyph(toy.shape, state.layout.palette),
-                        ha="center", va="center", fontsize=glyph_size, color=_rgb(toy.colour, state.layout.palette),
-                        alpha=0.5, family="DejaVu Sans", zorder=4)
+        moved = [k for k in range(1, min(pos.shape[1], len(state.toys) + 1)) if (pos[:, k] != pos[0, k]).any()]
+        ax.plot(pos[:, 0, 0], pos[:, 0, 1], "-", color="black", lw=2, alpha=0.7, zorder=_Z_PATH)
+        for k in moved:
+            toy = state.toys[k - 1]
+            ax.plot(pos[:, k, 0], pos[:, k, 1], "--", color=_rgb(toy.colour, palette), lw=2.5,
+                    path_effects=outline, zorder=_Z_PATH)
+            ax.text(pos[-1, k, 0] + END_OFFSET, pos[-1, k, 1] + END_OFFSET, glyph(toy.shape, palette),
+                    ha="center", va="center", fontsize=glyph_size * END_SCALE, color=_rgb(toy.colour, palette),
+                    family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1, foreground="black")],
+                    zorder=_Z_TOY_END)
+        # Above every start marker: the agent often ends where a toy started (it pushed the toy on).
+        ax.plot(pos[-1, 0, 0] - END_OFFSET, pos[-1, 0, 1] - END_OFFSET, "X", ms=marker_size * AGENT_END_SCALE,
+                mfc="black", mec="white",
+                mew=min(1.5, 3 * cell), zorder=_Z_AGENT_END)
     for toy in state.toys:
-        ax.text(toy.x, toy.y, glyph(toy.shape, state.layout.palette), ha="center", va="center", fontsize=glyph_size,
-                color=_rgb(toy.colour, state.layout.palette),
-                family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1.5, foreground="black")], zorder=5)
+        ax.text(toy.x, toy.y, glyph(toy.shape, palette), ha="center", va="center", fontsize=glyph_size,
+                color=_rgb(toy.colour, palette),
+                family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1.5, foreground="black")], zorder=_Z_TOY)
     ax.plot(state.agent.x, state.agent.y, "o", ms=marker_size, color="white", mec="black", mew=min(2, 4 * cell),
-            zorder=6)
-    ax.text(state.agent.x, state.agent.y, "A", ha="center", va="center", fontsize=18 * cell, weight="bold", zorder=7)
+            zorder=_Z_AGENT)
+    ax.text(state.agent.x, state.agent.y, "A", ha="center", va="center", fontsize=18 * cell, weight="bold",
+            zorder=_Z_AGENT)
     ax.set_xlim(-0.5, lay.width - 0.5)
     ax.set_ylim(-0.5, lay.height - 0.5)
     if max(lay.width, lay.height) <= MAX_TICKED_CELLS:
@@ -123,7 +182,16 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None)
     ax.set_aspect("equal")
     if title:
         ax.set_title(title, fontsize=9, wrap=True)
+    if legend:
+        _legend(ax, state, moved, len(pos) > 1, cell)
     return ax
+
+
+def picture_title(command: str, goal_words: str, goal_ids: str, outcome: str | None = None) -> str:
+    """A picture's title a person reads: the command quoted, then the goal in words with its ids beside
+    ("the yellow star in the red room \u2014 toyInRoom(block0, room2)") and, if given, the outcome."""
+    goal = f"{goal_words} \u2014 {goal_ids}" if goal_words else goal_ids
+    return f"\u201c{command}\u201d\n\u2192 {goal}" + (f": {outcome}" if outcome else "")
 
 
 def picture_format(path: str | Path) -> str:
@@ -157,11 +225,11 @@ def save_picture(path: str | Path, state: State, trajectory=None, title: str | N
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
     draw_state(state, ax=ax, trajectory=trajectory, title=title)
-    fig.tight_layout()
     from groundlang.model.storage import atomic_path
 
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format=fmt, dpi=100)
+        # "tight" grows the canvas to take in the legend below the map and a long title.
+        fig.savefig(tmp, format=fmt, dpi=100, bbox_inches="tight", pad_inches=0.15)
     return path
 
 

@@ -8,22 +8,27 @@ the value of its ``shape`` PF as the head noun when it has one, else its class
 name; spatial PFs (``doorWestOfAgent`` gives "west of the agent") only where
 two objects would otherwise read alike. A goal atom is read from its
 predicate's camel-case words, each class word replaced by its object's
-phrase (``toyInRoom`` gives "<the toy> in <the room>"). When the domain
-schema moves into data files this is the one place to re-point.
+phrase (``toyInRoom`` gives "<the toy> in <the room>"). The model's
+semantic tokens are explained from the domain's schema the same way
+(:func:`token_meanings`: ``roomIsRed`` is "a room's colour is red", read from
+its declaration ``pf(colour, roomIs(red), (room,))``). When the domain schema
+moves into data files this is the one place to re-point.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 from groundlang.logic.atoms import Atom, format_goal
-from groundlang.logic.tasks import TaskLibrary
+from groundlang.logic.schema import Domain, PFDeclaration
+from groundlang.logic.tasks import LiftedTask, TaskLibrary
 from groundlang.model.interpretations import OTHER_ROLES, object_names
 from groundlang.model.tasks import attribute_pfs, object_descriptions
+from groundlang.model.vocabulary import NULL, class_token
 from groundlang.model.world import State, object_class
 
-__all__ = ["object_phrase", "goal_phrase", "labelled_goal", "choice_list", "DASH"]
+__all__ = ["object_phrase", "goal_phrase", "labelled_goal", "choice_list", "token_meanings", "DASH"]
 
 DASH = "\u2014"  # between words and ids: "the red room — room0"
 HEAD_CLASS = "shape"  # the PF class whose value names the thing ("the star"), as model.interpretations reads it
@@ -115,3 +120,66 @@ def choice_list(phrases: Sequence[str]) -> str:
     if len(phrases) <= 1:
         return "".join(phrases)
     return ", ".join(phrases[:-1]) + " or " + phrases[-1]
+
+
+def _a(noun: str) -> str:
+    return ("an " if noun[:1] in "aeiou" else "a ") + noun
+
+
+def _pf_meaning(d: PFDeclaration, classes: Sequence[str]) -> str:
+    """``roomIsRed`` -> "a room's colour is red"; ``agentInRoom`` -> "an agent in a room";
+    ``doorWestOfAgent`` -> "a door west of the agent"."""
+    value = _value(d.term)
+    if value is not None and len(d.signature) == 1:
+        # A member of a family declared over values (roomIs(C)): the PF class names what the value is of.
+        return f"{_a(d.signature[0])}'s {d.pf_class} is {value}"
+    out, used = [], 0
+    for word in _camel_words(d.name):
+        if used < len(d.signature) and word == d.signature[used]:
+            out.append(_a(word))
+            used += 1
+        else:  # a class the name spells but the PF does not take (the agent of doorWestOfAgent): the one there is
+            out.append(f"the {word}" if word in classes else word)
+    return " ".join(out) if used == len(d.signature) else str(d)
+
+
+def _task_meaning(task: LiftedTask) -> str:
+    """``agentToRoom`` -> "a task ending with agent A in room R"; variables named as the task declares them
+    (a task of two rooms has two variables, which may be bound to one room)."""
+    cls = {v.name: v.cls for v in task.variables}
+    atoms = []
+    for predicate, args in task.goal:
+        out, used = [], 0
+        for word in _camel_words(predicate):
+            if used < len(args) and word == cls.get(args[used]):
+                out.append(f"{word} {args[used]}")
+                used += 1
+            else:
+                out.append(word)
+        atoms.append(" ".join(out) if used == len(args) else f"{predicate}({', '.join(args)})")
+    where = [f"{v} is {_value(term) or term}" for v, term in task.restrictions]
+    return "a task ending with " + " and ".join(atoms) + (f", where {' and '.join(where)}" if where else "")
+
+
+def token_meanings(tokens: Iterable[str], schemas: Iterable[Domain]) -> dict[str, str]:
+    """What each of ``tokens`` (the model's semantic tokens, as ``Learner.lexicon`` names them) means,
+    read from the domain's schemas: ``{"roomIsRed": "a room's colour is red", "CLASS:room": "names a
+    room", ...}``. A token no schema declares is left out rather than guessed at."""
+    pfs: dict[str, PFDeclaration] = {}
+    tasks: dict[str, LiftedTask] = {}
+    classes: list[str] = []
+    for schema in schemas:
+        pfs.update(schema.pfs)
+        tasks.update((t.name, t) for t in schema.tasks)
+        classes.extend(c for c in schema.classes if c not in classes)
+    known = {NULL: "no meaning in the domain (a word such as \"the\")"}
+    known.update((class_token(c), f"names {_a(c)}") for c in classes)
+    out = {}
+    for token in dict.fromkeys(tokens):
+        if token in known:
+            out[token] = known[token]
+        elif token in tasks:
+            out[token] = _task_meaning(tasks[token])
+        elif token in pfs:
+            out[token] = _pf_meaning(pfs[token], classes)
+    return out

@@ -19,7 +19,8 @@ def test_irl_ranks_the_gold_atom_first(shared_corpus, prefix, capsys):
         gold = {row["prefix"]: parse_goal(row["goal"]) for row in csv.DictReader(f)}
     assert main(["irl", str(shared_corpus / "allTurkTrain" / f"{prefix}0.txt"), "--palette", "sokoban", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert set(out) >= {"weights", "ranking", "log_likelihood", "states", "seconds"}
+    assert set(out) >= {"weights", "words", "ranking", "log_likelihood", "states", "seconds"}
+    assert list(out["words"]) == list(out["weights"])  # every atom said in words, in the same order
     # star2teal: the block ends on (3,3), both a door0 cell and inside room2, so toyInDoor and
     # toyInRoom first hold together and their weights tie within 1%; the ranking breaks the tie by
     # each atom's behaviour likelihood as a goal.
@@ -32,9 +33,29 @@ def test_irl_ranks_the_gold_atom_first(shared_corpus, prefix, capsys):
 def test_irl_table_output(shared_corpus, capsys):
     assert main(["irl", str(shared_corpus / "allTurkTrain" / "agent2orange_0.txt"), "--palette", "sokoban"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0] == "most likely goal: agentInRoom(agent0, room1)"
-    assert lines[1].startswith("agentInRoom(agent0, room1) ")
+    # the file's palette index 1 is the sokoban palette's red (the corpus's folder names say orange)
+    assert lines[0] == "most likely goal: the agent in the red room \u2014 agentInRoom(agent0, room1)"
+    assert lines[2].split() == ["weight", "proposition", "atom"]
+    assert lines[3].split()[1:] == "the agent in the red room agentInRoom(agent0, room1)".split()
     assert any(line.startswith("states: 70") for line in lines)
+
+
+def test_irl_table_on_the_shipped_examples_has_headings_words_and_ids(capsys):
+    from groundlang.corpus import example_corpus_path
+
+    assert main(["irl", str(example_corpus_path() / "star2red_0.txt"), "--palette", "sokoban"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "most likely goal: the yellow star in the red room \u2014 toyInRoom(block0, room1)"
+    heading = lines[2]
+    assert heading.split() == ["weight", "proposition", "atom"]
+    rows = lines[3:lines.index("", 3)]
+    assert len(rows) == 13  # every grounded position PF of the layout
+    # columns line up under their headings: words start under "proposition", atoms under "atom"
+    words_at, atom_at = heading.index("proposition"), heading.index("atom")
+    assert rows[0][words_at:atom_at].strip() == "the yellow star in the red room"
+    assert rows[0][atom_at:] == "toyInRoom(block0, room1)"
+    assert all(row[atom_at - 2:atom_at] == "  " and row[atom_at] != " " for row in rows)
+    assert float(rows[0][:words_at]) > float(rows[1][:words_at])
 
 
 def test_irl_missing_file_is_exit_code_2(tmp_path, capsys):

@@ -162,6 +162,15 @@ def test_cli_train_follow_lexicon(tmp_path, capsys):
     assert (tmp_path / "f.png").stat().st_size > 1000
     assert main(["--quiet", "lexicon", str(model), "--words", "red", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["red"][0][0] == "roomIsRed"
+    assert main(["--quiet", "lexicon", str(model), "--words", "red", "purple", "--top", "1"]) == 0
+    assert capsys.readouterr().out.splitlines() == [
+        "word             meanings, most probable first",
+        "red              roomIsRed 0.96",
+        "purple           (unknown word)",
+        "",
+        "what the meanings are:",  # each name the table shows, once, in words from the schema
+        "  roomIsRed  a room's colour is red",
+    ]
 
 
 @pytest.mark.slow

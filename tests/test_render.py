@@ -101,3 +101,63 @@ def test_render_import_does_not_load_matplotlib():
     code = "import sys, groundlang.render, groundlang.corpus; print('matplotlib' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def _pushed_star(fixtures):
+    """The first push of star2green_0: the agent ends on the star's start cell, the star one cell west."""
+    inst = read_instance(fixtures / "sokoban" / "star2green_0.txt", "sokoban")
+    states = inst.states[:2]
+    assert (states[-1].positions[0] == inst.initial_state.positions[1]).all()
+    return inst.initial_state, states
+
+
+def test_the_legend_names_every_object_by_id_and_in_words(fixtures):
+    start, states = _pushed_star(fixtures)
+    ax = draw_state(start, trajectory=states)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == [
+        "agent0 at the start", "agent0's path", "agent0 at the end (lower left)",
+        "block0 (yellow star) at the start", "block0's path", "block0 at the end (small, upper right)",
+        "room0 (green)", "room1 (red)", "door", "wall",
+    ]
+    # the rooms' ids are written in them too: two rooms of one colour are told apart
+    assert {"room0", "room1"} <= {t.get_text() for t in ax.texts}
+
+
+def test_without_a_trajectory_the_legend_has_no_start_or_end(fixtures):
+    state = read_state_file(fixtures / "small.state", "sokoban")
+    ax = draw_state(state)
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["agent0", "room0 (green)", "room1 (red)",
+                                                                   "door", "wall"]
+    assert draw_state(state, legend=False).get_legend() is None
+
+
+def test_end_markers_are_drawn_over_start_markers_smaller_and_off_centre(fixtures):
+    from groundlang.render import END_OFFSET
+
+    start, states = _pushed_star(fixtures)
+    ax = draw_state(start, trajectory=states)
+    star = glyph("star", get_palette("sokoban"))
+    start_x, start_y = start.positions[1]
+    end_x, end_y = states[-1].positions[1]
+    toy_start = next(t for t in ax.texts if t.get_text() == star and t.get_position() == (start_x, start_y))
+    toy_end = next(t for t in ax.texts if t.get_text() == star and t.get_position() != (start_x, start_y))
+    assert toy_end.get_position() == (end_x + END_OFFSET, end_y + END_OFFSET)
+    assert toy_end.get_fontsize() < toy_start.get_fontsize() and toy_end.get_zorder() > toy_start.get_zorder()
+    # the agent ends on the star's start cell: its cross sits off the star's centre and above it
+    agent_end = next(line for line in ax.get_lines() if line.get_marker() == "X")
+    assert (agent_end.get_xdata()[0], agent_end.get_ydata()[0]) == (start_x - END_OFFSET, start_y - END_OFFSET)
+    assert agent_end.get_zorder() > toy_start.get_zorder()
+    agent_start = next(line for line in ax.get_lines() if line.get_marker() == "o")
+    assert agent_end.get_zorder() > agent_start.get_zorder() and agent_end.get_markersize() < agent_start.get_markersize()
+
+
+def test_picture_titles_quote_the_command_and_give_the_goal_in_words_with_its_ids():
+    from groundlang.render import picture_title
+
+    assert picture_title("take the star to the red room", "the yellow star in the red room",
+                         "toyInRoom(block0, room2)") == (
+        "\u201ctake the star to the red room\u201d\n"
+        "\u2192 the yellow star in the red room \u2014 toyInRoom(block0, room2)")
+    assert picture_title("go", "", "agentInRoom(agent0, room1)", "reached").endswith(
+        "\u2192 agentInRoom(agent0, room1): reached")

@@ -27,7 +27,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.labels import label_coverage, read_labels
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
-    from groundlang.render import ascii_state, check_picture_destination, save_picture
+    from groundlang.render import ascii_state, check_picture_destination, picture_title, save_picture
 
     check_picture_destination(args.out)
     folder = example_corpus_path()
@@ -48,6 +48,6 @@ def run(args: argparse.Namespace) -> int:
     print(f"executed {len(result.actions)} steps; goal {format_goal(result.goal)} "
           f"{'reached' if result.reached else 'NOT reached'}")
     save_picture(args.out, state, trajectory=result.states,
-                 title=f"{args.demo_command!r} -> {format_goal(result.goal)}")
+                 title=picture_title(args.demo_command, result.goal_words, format_goal(result.goal)))
     print(f"picture written to {args.out}")
     return 0 if result.reached else 1

@@ -146,10 +146,10 @@ def run(args: argparse.Namespace) -> int:
         result = answered
     goals = result.posterior.goals()[: args.top]
     if args.out and not result.abstained:
-        from groundlang.render import save_picture
+        from groundlang.render import picture_title, save_picture
 
         save_picture(args.out, state, trajectory=result.states,
-                     title=f"{args.command_text}\n-> {result.goal_words}")
+                     title=picture_title(args.command_text, result.goal_words, format_goal(result.goal)))
     if args.json:
         data = {
             "interpretations": [{"goal": format_goal(g), "words": goal_phrase(g, state, learner.library),

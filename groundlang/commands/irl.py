@@ -6,8 +6,12 @@ reward they define is paid on terminating (see
 :mod:`groundlang.inference.mlirl`), so the largest weight names the
 proposition the demonstrator most wanted to hold when it stopped. Prints the
 weights largest first, the log-likelihood, the number of states and the
-seconds taken; ``--json`` prints one object
-``{"weights": {"toyInRoom(block0, room2)": 1.9, ...}, "log_likelihood": ...,
+seconds taken. The table has a heading and says each proposition in words
+beside its atom ("the star in the red room" next to ``toyInRoom(block0,
+room0)``), the words read from the file's initial state as ``follow`` reads
+goals (:mod:`groundlang.wording`). ``--json`` prints one object
+``{"weights": {"toyInRoom(block0, room2)": 1.9, ...}, "words": {"toyInRoom(block0,
+room2)": "the yellow star in the red room", ...}, "log_likelihood": ...,
 "states": ..., "seconds": ...}`` (keys in the same order, atoms written as
 groundlang names them: compare with labels after ``parse_atom``).
 """
@@ -19,8 +23,6 @@ import json
 import time
 
 from groundlang.commands import PALETTE_HELP
-
-
 
 
 def register(subparsers) -> None:
@@ -38,10 +40,12 @@ def fit_file(path, palette) -> dict:
     # let the whole path pick the proposition; a fixed temperature keeps it from driving T to 0).
     from groundlang.inference.discovery import DISCOVERY_IRL
     from groundlang.inference.mlirl import mlirl
+    from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.features import feature_matrix, position_atoms
     from groundlang.model.pf_tables import pf_tables
     from groundlang.model.relevance import state_space_for
     from groundlang.model.statespace import trajectory_indices
+    from groundlang.wording import goal_phrase
 
     start = time.perf_counter()
     instance = read_instance(path, palette)
@@ -51,8 +55,10 @@ def fit_file(path, palette) -> dict:
     states = trajectory_indices(space, list(instance.states))
     fit = mlirl(space.next_state, features, [(states, [int(a) for a in instance.actions])], **DISCOVERY_IRL)
     ranked = sorted(zip(atoms, fit.weights.tolist()), key=lambda aw: -aw[1])
+    library = TaskLibrary.load()  # the package's PFs: what the words of the objects are read from
     return {
         "weights": {str(a): round(w, 6) for a, w in ranked},
+        "words": {str(a): goal_phrase((a,), instance.initial_state, library) for a, _ in ranked},
         "ranking": [str(a) for a in _break_near_ties(space, ranked, states, instance.actions)],
         "log_likelihood": fit.log_likelihood,
         "temperature": fit.temperature,
@@ -60,6 +66,9 @@ def fit_file(path, palette) -> dict:
         "seconds": time.perf_counter() - start,
     }
 
+
+# The table's column headings (the weight is the reward paid for the atom holding on termination).
+WEIGHT_HEADING, WORDS_HEADING, ATOM_HEADING = "weight", "proposition", "atom"
 
 # Weights within this fraction of the largest count as tied.
 NEAR_TIE = 0.05
@@ -89,14 +98,22 @@ def _break_near_ties(space, ranked, states, actions) -> list:
 
 
 def run(args: argparse.Namespace) -> int:
+    from groundlang.wording import DASH
+
     result = fit_file(args.file, args.palette)
     if args.json:
         print(json.dumps(result))
         return 0
-    width = max(len(a) for a in result["weights"])
-    print(f"most likely goal: {result['ranking'][0]}")
+    words = result["words"]
+    best = result["ranking"][0]
+    print(f"most likely goal: {words[best]} {DASH} {best}")
+    print()
+    # Columns a person scans: the weight, the proposition in words, then its atom for the ids.
+    said = max(len(WORDS_HEADING), *(len(w) for w in words.values()))
+    print(f"{WEIGHT_HEADING:>8}  {WORDS_HEADING:<{said}}  {ATOM_HEADING}")
     for atom, weight in result["weights"].items():
-        print(f"{atom:<{width}}  {weight:8.3f}")
+        print(f"{weight:8.3f}  {words[atom]:<{said}}  {atom}")
+    print()
     print(f"log-likelihood: {result['log_likelihood']:.4f}")
     print(f"temperature: {result['temperature']:.4f}")
     print(f"states: {result['states']}")

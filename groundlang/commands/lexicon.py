@@ -1,4 +1,11 @@
-"""``groundlang lexicon MODEL_DIR``: each word's most probable meanings."""
+"""``groundlang lexicon MODEL_DIR``: each word's most probable meanings.
+
+The table gives each word its meanings, most probable first, as the model's
+semantic tokens (``roomIsRed``, ``toyToRoom``, ``CLASS:room``, ``NULL``);
+below it each token shown is explained once, in words read from the domain's
+schema (:func:`groundlang.wording.token_meanings`), so a reader need not know
+the names. ``--json`` prints ``{word: [[token, probability], ...]}`` only.
+"""
 
 from __future__ import annotations
 
@@ -10,23 +17,53 @@ from groundlang.commands import positive_int
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("lexicon", help="print the learned meanings of words")
-    p.add_argument("model", metavar="MODEL_DIR")
-    p.add_argument("--top", type=positive_int, default=3, help="meanings per word")
-    p.add_argument("--words", nargs="*", help="only these words")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("model", metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
+    p.add_argument("--top", type=positive_int, default=3, help="meanings per word (default 3)")
+    p.add_argument("--words", nargs="*", metavar="WORD", help="only these words (default: every word the model knows)")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object {word: [[meaning, probability], ...]} instead of a table")
     p.set_defaults(func=run)
+
+
+# The table's column headings.
+WORD_HEADING, MEANINGS_HEADING = "word", "meanings, most probable first"
+
+
+def _schemas(learner) -> list:
+    """The schemas of the palettes the model was trained on (a model saved without them: the default's)."""
+    from types import SimpleNamespace
+
+    from groundlang.logic.schema import domain_schema
+    from groundlang.training_vocabulary import palette_schema
+
+    if not learner.palettes:
+        return [domain_schema(learner.library)]
+    # The model keeps each palette as JSON (lists); the schema reader caches by value, so tuples.
+    return [palette_schema(learner.library, SimpleNamespace(**{k: tuple(v) if isinstance(v, list) else v
+                                                               for k, v in p.items()}))
+            for p in learner.palettes]
 
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
+    from groundlang.wording import token_meanings
 
-    lexicon = Learner.load(args.model).lexicon(top=args.top)
+    learner = Learner.load(args.model)
+    lexicon = learner.lexicon(top=args.top)
     if args.words:
         lexicon = {w: lexicon.get(w, []) for w in args.words}
     if args.json:
         print(json.dumps({w: [[t, p] for t, p in m] for w, m in lexicon.items()}))
         return 0
+    print(f"{WORD_HEADING:<16} {MEANINGS_HEADING}")
     for word, meanings in lexicon.items():
         text = ", ".join(f"{token} {p:.2f}" for token, p in meanings) or "(unknown word)"
         print(f"{word:<16} {text}")
+    # Each name once, in the order the table first shows it: the table stays compact and scannable.
+    explained = token_meanings((t for meanings in lexicon.values() for t, _ in meanings), _schemas(learner))
+    if explained:
+        width = max(len(t) for t in explained)
+        print("\nwhat the meanings are:")
+        for token, text in explained.items():
+            print(f"  {token:<{width}}  {text}")
     return 0
