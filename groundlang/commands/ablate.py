@@ -27,9 +27,9 @@ def _sizes(text: str) -> list[int]:
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("ablate", help="accuracy over language models x task libraries x training sizes")
-    p.add_argument("--corpus", required=True, metavar="DIR")
+    p.add_argument("--corpus", required=True, metavar="DIR", help="folder of corpus files (*.txt)")
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
-    p.add_argument("--labels", required=True, metavar="CSV")
+    p.add_argument("--labels", required=True, metavar="CSV", help="gold labels (prefix,goal) the corpus is scored against")
     p.add_argument("--language-models", type=_names, default=["bow", "ibm2", "parse"], metavar="LIST",
                    help="comma-separated: bow,ibm2,parse (default: all three)")
     p.add_argument("--libraries", type=_names, default=["authored", "discovered"], metavar="LIST",
@@ -41,7 +41,7 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=seed, default=0, help="seed of the training subsets")
     p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes)")
     p.add_argument("--ray", metavar="ADDRESS", help="run cells on Ray ('local', 'auto' or host:port)")
-    p.add_argument("--skip-inconsistent", action="store_true")
+    p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
     p.add_argument("--limit", type=positive_int, help="score only the first N instances of each cell")
     add_language_model_settings(p)
     add_lexicon_option(p)

@@ -16,9 +16,10 @@ DEMO_LAYOUT = "novel_a.state"
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("demo", help="train on the shipped example corpus and follow a command in a new layout")
-    p.add_argument("--out", default="demo.png", metavar="PNG")
-    p.add_argument("--command", dest="demo_command", default=DEMO_COMMAND)
-    p.add_argument("--language-model", default="parse")
+    p.add_argument("--out", default="demo.png", metavar="PNG", help="picture to write (default demo.png)")
+    p.add_argument("--command", dest="demo_command", default=DEMO_COMMAND,
+                   help=f"the command to follow (default {DEMO_COMMAND!r})")
+    p.add_argument("--language-model", default="parse", help="language model: bow, ibm2 or parse (default parse)")
     p.set_defaults(func=run)
 
 

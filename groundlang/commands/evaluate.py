@@ -35,12 +35,12 @@ def register(subparsers) -> None:
                         "state's likelihood under each task; shortest-plan: a synthesised shortest plan)")
     p.add_argument("--protocol", choices=["loo", "train"], help="for a *.txt corpus (default loo)")
     p.add_argument("--novel-envs", metavar="DIR", help="folder of *.state files to execute each command in too")
-    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
+    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES), help="language model: bow, ibm2 or parse (default parse)")
     add_language_model_settings(p)
     add_lexicon_option(p)
     p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes)")
     p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
-    p.add_argument("--skip-inconsistent", action="store_true")
+    p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
     p.add_argument("--limit", type=positive_int, help="score only the first N held-out instances")
     p.add_argument("--cold-folds", action="store_true",
                    help="fit every leave-one-out fold from scratch instead of from the full model "

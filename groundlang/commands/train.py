@@ -17,12 +17,12 @@ def register(subparsers) -> None:
                    "(Williams et al. 2018: (start, end) pairs, learned from as evaluate does)")
     p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
     p.add_argument("-o", "--output", required=True, metavar="MODEL_DIR", help="folder to write the model to")
-    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES))
+    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES), help="language model: bow, ibm2 or parse (default parse)")
     add_language_model_settings(p)
     add_lexicon_option(p)
     p.add_argument("--library", metavar="LP", action="append", help="task library .lp file(s) instead of the default")
-    p.add_argument("--skip-inconsistent", action="store_true")
-    p.add_argument("--seed", type=seed, default=0)
+    p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the fit (default 0; training is deterministic)")
     p.set_defaults(func=run)
 
 
