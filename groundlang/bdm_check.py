@@ -21,8 +21,11 @@ from groundlang.pair_tasks import pair_task, reachable
 __all__ = ["check_bdm", "default_library"]
 
 
-def default_library() -> TaskLibrary:
-    """The relations, superlatives and tasks of the corpus (``logic/domains/williams2018.lp``)."""
+def default_library(files_given=None) -> TaskLibrary:
+    """The task library of ``files_given`` (a ``--library`` list) or, without them, the relations,
+    superlatives and tasks of the corpus (``logic/domains/williams2018.lp``)."""
+    if files_given:
+        return TaskLibrary.load(files_given)
     return TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
 
 
@@ -31,7 +34,7 @@ def check_bdm(args: argparse.Namespace) -> int:
     if not paths:
         raise ValueError(f"{args.directory}: no .bdm file there")
     palette = args.palette or DEFAULT_PALETTE
-    library = TaskLibrary.load(args.library) if args.library else default_library()
+    library = default_library(args.library)
     commands = [c for path in paths for c in read_bdm(path, palette)]
     pairs = [(c, p) for c in commands for p in c.pairs]
     layouts = {p.start.layout for _, p in pairs}

@@ -17,6 +17,7 @@ inconsistent demonstration (an error naming file and line, or skipped with ``ski
 from __future__ import annotations
 
 import hashlib
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -127,6 +128,10 @@ class TrainingPairs:
 
     def skipped_by(self, reason: str) -> int:
         return sum(1 for _, _, why in self.skipped if why == reason)
+
+    def skipped_counts(self) -> dict[str, int]:
+        """Reason -> how many pairs were skipped for it."""
+        return dict(Counter(why for _, _, why in self.skipped))
 
 
 def training_instances(commands: list[Command], library: TaskLibrary, demonstrations: str = "end-state",

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections import Counter, defaultdict
+from collections import defaultdict
 from dataclasses import asdict, dataclass, field
 
 from groundlang.bdm import Command, format_bdm_state
@@ -155,7 +155,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     finished = time.perf_counter()
     return PairEvaluation(
         train_commands=len(train), train_pairs=sum(len(getattr(i, "pairs", (i,))) for i in made.instances),
-        train_skipped=dict(Counter(why for _, _, why in made.skipped)),
+        train_skipped=made.skipped_counts(),
         test_commands=len(test), scored_commands=scored, no_task_commands=no_task,
         executions_n=n, executions_correct=correct, commands_correct=commands_correct,
         unseen_n=unseen_n, unseen_correct=unseen_correct, skipped_executions=skipped,

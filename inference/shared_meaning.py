@@ -36,6 +36,12 @@ from groundlang.model.world import State
 __all__ = ["LayoutEvidence", "properties_of", "layout_evidence", "shared_meaning_terms", "end_state_behaviour"]
 
 
+def _log_mean_exp(values) -> float:
+    """log of the mean of exp(values) (values not empty): a uniform prior over what they score."""
+    top = max(values)
+    return top + math.log(sum(math.exp(v - top) for v in values) / len(values))
+
+
 def properties_of(task: GroundedTask, atoms) -> dict[str, frozenset[str]]:
     """Variable -> the property PFs of its object among ``atoms`` (a binding constraint's)."""
     variable = {obj: var for var, obj in task.binding}
@@ -80,8 +86,7 @@ class LayoutEvidence:
                   if all(p is None or p in props[var] for var, p in description.items())]
         if not values:
             return self.floor
-        top = max(values)
-        return top + math.log(sum(math.exp(v - top) for v in values) / len(values))
+        return _log_mean_exp(values)
 
 
 def _space(start: State, end: State, max_states: int | None):
@@ -117,8 +122,7 @@ def shared_meaning_terms(tasks: Sequence[GroundedTask], constraints: Sequence, o
             options = [(None, *sorted(props[var])) for var in variables]
             terms = [sum(layout.value(task.task, dict(zip(variables, choice))) for layout in others)
                      for choice in product(*options)]
-            top = max(terms)
-            cache[key] = top + math.log(sum(math.exp(t - top) for t in terms) / len(terms))
+            cache[key] = _log_mean_exp(terms)
         out[i] = cache[key]
     return out
 

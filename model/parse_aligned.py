@@ -68,23 +68,15 @@ class ParseAligned(LanguageModel):
         word or an open-class word, see ``encoding.is_referring``) or ``"any"``. ``align_backoff``: each
         alignment context reads roles from a mixture of its own table and that of the key it backs off to
         (``encoding.backoff_key``: ``onto+obj|last`` -> ``onto``), weights learned per context, so a rare
-        key ("onto ..." as the last phrase) is no longer read by its prior alone. Off by default:
-        measured on the crowd corpus before the start room's role (``interpretations.START_ROLE``), it was
-        the better model by 10-fold held-out likelihood of words and demonstrations (-13538 against -13577
-        nats, original commands; -9364 against -9373, simplified), but leave-one-out gave 221 and 225 of
-        240 against 220 and 228, novel layouts 643 and 658 of 720 against 635 and 662 (original and
-        simplified commands): "|last" says where things go, and a rare "with ...|last" backed off to
-        "with" read "to one with orange floor" as a room passed. With the start room's role it gives 226
-        and 228 of 240, 637 and 659 of 720: what it fixed, that role fixes too (after the grammar and
-        lexicon fixes of the seventh session: 227 and 228 of 240, 639 and 658 of 720, against 227 and 229,
-        643 and 659 without it; since "|last" passes over "from" and "with" phrases
-        (``encoding.entity_words``): 227 and 228 of 240, 645 and 657 of 720, against 227 and 230, 648 and
-        662). ``relation_words``: a phrase aligned with an argument of the task may say the goal's relation
-        ("the *left side* of the chair", "*inside* the red room"): the goal PFs join the tokens its
-        modifiers and head noun come from (``interpretations.interpretations``). ``preposition_concentration``
-        turns on a model of each phrase's preposition key given L (None: off; a Dirichlet concentration):
-        a preposition says the relation ("to the right of the chair", "into the room"), which the
-        alignment table, conditioned on the key, cannot. Measured: ABLATIONS.md."""
+        key ("onto ..." as the last phrase) is no longer read by its prior alone. Off by default: it
+        explains the words better, but "|last" says where things go, and a rare "with ...|last" backed off
+        to "with" read "to one with orange floor" as a room passed. ``relation_words``: a phrase aligned
+        with an argument of the task may say the goal's relation ("the *left side* of the chair"): the
+        goal PFs join the tokens its modifiers and head noun come from (``interpretations.interpretations``).
+        ``preposition_concentration`` turns on a model of each phrase's bare preposition given L (None:
+        off; a Dirichlet concentration): a preposition says the relation ("to the right of the chair",
+        "into the room"), which the alignment table, conditioned on it, cannot. What each measured:
+        ABLATIONS.md."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")

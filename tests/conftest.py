@@ -27,6 +27,22 @@ def shared_corpus() -> Path:
     return SHARED_CORPUS
 
 
+@pytest.fixture(scope="session")
+def williams_library():
+    """The package's Williams et al. (2018) domain (relations, superlatives, tasks)."""
+    from groundlang.bdm_check import default_library
+
+    return default_library()
+
+
+@pytest.fixture(scope="session")
+def williams_commands():
+    """The project's own two-command .bdm fixture, three pairs each."""
+    from groundlang.bdm import read_bdm
+
+    return read_bdm(FIXTURES / "williams2018" / "small.bdm")
+
+
 @pytest.fixture(autouse=True)
 def _pyro_state():
     """Pyro validation on and an empty parameter store for every test."""

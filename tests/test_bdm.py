@@ -4,14 +4,12 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from importlib.resources import files
 from pathlib import Path
 
 import pytest
 
 from groundlang.bdm import format_bdm_state, parse_bdm_state, read_bdm
 from groundlang.corpus import CorpusError, read_initial_state
-from groundlang.logic.tasks import TaskLibrary
 from groundlang.logic.atoms import Atom
 from groundlang.pair_tasks import pair_task, reachable, satisfies
 
@@ -19,28 +17,20 @@ FIXTURE = Path(__file__).parent / "fixtures" / "williams2018"
 SHARED = Path(__file__).parent.parent.parent / "shared" / "data" / "williams2018" / "train"
 
 
-@pytest.fixture(scope="module")
-def library():
-    return TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
 
 
-@pytest.fixture(scope="module")
-def commands():
-    return read_bdm(FIXTURE / "small.bdm")
-
-
-def test_the_fixture_reads_as_two_commands_of_three_pairs(commands):
-    assert [c.text for c in commands] == ["go to the largest room", "go next to the chair"]
-    assert [len(c.pairs) for c in commands] == [3, 3] and [c.line for c in commands] == [1, 14]
-    pair = commands[1].pairs[0]
+def test_the_fixture_reads_as_two_commands_of_three_pairs(williams_commands):
+    assert [c.text for c in williams_commands] == ["go to the largest room", "go next to the chair"]
+    assert [len(c.pairs) for c in williams_commands] == [3, 3] and [c.line for c in williams_commands] == [1, 14]
+    pair = williams_commands[1].pairs[0]
     assert pair.toy_names == ("block0", "block3")  # the file's names; the state's are block0, block1
     assert pair.start.layout.toy_attributes == (("blue", "chair"), ("large", "box"))
     assert [r.colour for r in pair.start.layout.rooms] == ["red", "green", "blue"]
     assert (pair.start.agent.x, pair.start.agent.y, pair.end.agent.x, pair.end.agent.y) == (2, 6, 5, 2)
 
 
-def test_a_state_string_round_trips(commands):
-    pair = commands[1].pairs[0]
+def test_a_state_string_round_trips(williams_commands):
+    pair = williams_commands[1].pairs[0]
     again, names = parse_bdm_state(format_bdm_state(pair.start, pair.toy_names))
     assert again == pair.start and names == pair.toy_names
 
@@ -50,20 +40,20 @@ def test_a_one_line_bdm_state_file_is_a_state_file():
     assert state.layout.toy_attributes == (("green", "chair"),) and (state.agent.x, state.agent.y) == (2, 2)
 
 
-def test_the_tasks_pairs_show_are_lifted_facts(commands, library):
-    largest, chair = (pair_task([(p.start, p.end) for p in c.pairs], library) for c in commands)
+def test_the_tasks_pairs_show_are_lifted_facts(williams_commands, williams_library):
+    largest, chair = (pair_task([(p.start, p.end) for p in c.pairs], williams_library) for c in williams_commands)
     assert Atom("agentInRoom", ("agent", "roomIsLargest")) in largest
     assert not any("Green" in f.args[1] or "Red" in f.args[1] for f in largest)  # colours differ across pairs
     assert Atom("agentNextToToy", ("agent", "toyIsChair")) in chair
     assert not any(f.predicate == "agentInRoom" for f in chair)  # the agent ends in different kinds of room
-    for c, task in zip(commands, (largest, chair)):
-        assert all(satisfies(p.end, task, library) and not satisfies(p.start, task, library) for p in c.pairs)
+    for c, task in zip(williams_commands, (largest, chair)):
+        assert all(satisfies(p.end, task, williams_library) and not satisfies(p.start, task, williams_library) for p in c.pairs)
 
 
-def test_reachability(commands, tmp_path):
-    assert all(reachable(p.start, p.end) for c in commands for p in c.pairs)
+def test_reachability(williams_commands, tmp_path):
+    assert all(reachable(p.start, p.end) for c in williams_commands for p in c.pairs)
     # A block in a room's corner cannot be pushed north: the agent would have to stand in the wall.
-    pair = commands[1].pairs[1]  # green room x 0..4, y 0..8 in layout B; the red chair at (2, 2)
+    pair = williams_commands[1].pairs[1]  # green room x 0..4, y 0..8 in layout B; the red chair at (2, 2)
     start = parse_bdm_state(format_bdm_state(pair.start).replace("x: {2} y: {2} shape", "x: {1} y: {1} shape"))[0]
     end = parse_bdm_state(format_bdm_state(pair.start).replace("x: {2} y: {2} shape", "x: {1} y: {2} shape"))[0]
     assert reachable(start, end) is False
@@ -108,7 +98,7 @@ def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
 
 
 @pytest.mark.slow
-def test_the_shared_corpus_reads_and_every_command_shows_a_task(library):
+def test_the_shared_corpus_reads_and_every_command_shows_a_task(williams_library):
     if not (SHARED / "part1.bdm").is_file():
         pytest.skip(f"Williams et al. 2018 corpus not found at {SHARED} (it is not part of the repository)")
     part1, part2 = read_bdm(SHARED / "part1.bdm"), read_bdm(SHARED / "part2.bdm")
@@ -118,22 +108,22 @@ def test_the_shared_corpus_reads_and_every_command_shows_a_task(library):
     large = [p for c in part2 for p in c.pairs if p.start.layout.width == 17]
     assert len(large) == 63 and all(len(p.start.toys) == 3 for p in large)
     sample = part2[::25]
-    assert all(pair_task([(p.start, p.end) for p in c.pairs], library) for c in sample)
+    assert all(pair_task([(p.start, p.end) for p in c.pairs], williams_library) for c in sample)
 
 
-def test_synthesised_demonstrations_end_in_the_end_state_by_a_shortest_path(commands):
+def test_synthesised_demonstrations_end_in_the_end_state_by_a_shortest_path(williams_commands):
     from groundlang.model.world import replay
     from groundlang.pair_tasks import shortest_actions
 
     lengths = []
-    for c in commands:
+    for c in williams_commands:
         for p in c.pairs:
             actions = shortest_actions(p.start, p.end)
             assert replay(p.start, actions)[-1] == p.end
             lengths.append(len(actions))
     # Manhattan distance is a lower bound, reached when no wall is in the way.
     assert lengths == [7, 5, 5, 7, 7, 9]
-    assert shortest_actions(commands[0].pairs[0].start, commands[0].pairs[0].start) == ()
+    assert shortest_actions(williams_commands[0].pairs[0].start, williams_commands[0].pairs[0].start) == ()
 
 
 def test_a_fifo_or_device_is_refused_by_name(tmp_path):

@@ -7,7 +7,6 @@ import json
 import math
 import subprocess
 import sys
-from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
@@ -16,8 +15,6 @@ import pytest
 from groundlang.bdm import parse_bdm_state, read_bdm
 from groundlang.inference.end_states import EndStateNoise, distances, end_state_log_likelihood
 from groundlang.inference.shared_meaning import LayoutEvidence, shared_meaning_terms
-from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.interpretations import interpretations
 from groundlang.model.statespace import enumerate_states
 from groundlang.model.tasks import candidate_tasks
 from groundlang.pair_corpus import PairedCommand, PairInstance, held_out_by_text, training_instances
@@ -26,14 +23,6 @@ from groundlang.pair_tasks import pair_task, satisfies
 FIXTURE = Path(__file__).parent / "fixtures" / "williams2018"
 
 
-@pytest.fixture(scope="module")
-def library():
-    return TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
-
-
-@pytest.fixture(scope="module")
-def commands():
-    return read_bdm(FIXTURE / "small.bdm")
 
 
 def _bfs(next_state: np.ndarray) -> np.ndarray:
@@ -48,8 +37,8 @@ def _bfs(next_state: np.ndarray) -> np.ndarray:
     return dist
 
 
-def test_distances_are_the_breadth_first_levels(commands):
-    space = enumerate_states(commands[1].pairs[0].start)
+def test_distances_are_the_breadth_first_levels(williams_commands):
+    space = enumerate_states(williams_commands[1].pairs[0].start)
     assert space.level_sizes is not None and space.level_sizes.sum() == space.num_states
     expected = _bfs(np.asarray(space.next_state))
     assert np.array_equal(distances(space), expected)
@@ -74,39 +63,39 @@ def test_the_end_state_likelihood_falls_with_the_steps_beyond_the_nearest_goal_s
         EndStateNoise(beta=-1.0)
 
 
-def test_the_shared_meaning_prefers_what_the_largest_room_is_in_every_layout(commands, library):
-    largest = commands[0]  # "go to the largest room": a different room, of another colour, in each layout
+def test_the_shared_meaning_prefers_what_the_largest_room_is_in_every_layout(williams_commands, williams_library):
+    largest = williams_commands[0]  # "go to the largest room": a different room, of another colour, in each layout
     pairs = [(p.start, p.end) for p in largest.pairs]
-    others = [LayoutEvidence(s, e, library, EndStateNoise()) for s, e in pairs[1:]]
-    found = [(t, cs[0]) for t, cs in candidate_tasks(pairs[0][0], library) if t.task == "agentToRoom"]
+    others = [LayoutEvidence(s, e, williams_library, EndStateNoise()) for s, e in pairs[1:]]
+    found = [(t, cs[0]) for t, cs in candidate_tasks(pairs[0][0], williams_library) if t.task == "agentToRoom"]
     terms = dict(zip((t.goal for t, _ in found), shared_meaning_terms([t for t, _ in found], [c for _, c in found], others)))
-    gold = pair_task(pairs, library)
+    gold = pair_task(pairs, williams_library)
     best = max(terms, key=terms.get)
-    assert satisfies(pairs[0][1], gold, library)
+    assert satisfies(pairs[0][1], gold, williams_library)
     # the room the first pair ends in is the room the other layouts' ends confirm
     from groundlang.model.pf_tables import library_pf_tables
-    holding = library_pf_tables(pairs[0][1].layout, library).position_holding(pairs[0][1].positions)
+    holding = library_pf_tables(pairs[0][1].layout, williams_library).position_holding(pairs[0][1].positions)
     assert best[0] in holding
     # by a margin the description "a room" (its class alone, true of every room) bounds: it explains
     # every room's pairs alike, a third of the time
     assert sorted(terms.values())[-1] - sorted(terms.values())[-2] > 0.5
 
 
-def test_training_instances_share_one_meaning_or_stand_apart(commands, library):
-    shared = training_instances(commands, library)
+def test_training_instances_share_one_meaning_or_stand_apart(williams_commands, williams_library):
+    shared = training_instances(williams_commands, williams_library)
     assert [type(i) for i in shared.instances] == [PairedCommand, PairedCommand]
     assert [len(i.pairs) for i in shared.instances] == [3, 3] and len(shared.instances[0].evidence) == 3
-    separate = training_instances(commands, library, layouts="separate")
+    separate = training_instances(williams_commands, williams_library, layouts="separate")
     assert len(separate.instances) == 6 and all(isinstance(i, PairInstance) for i in separate.instances)
     assert separate.commands == [0, 0, 0, 1, 1, 1]
-    plans = training_instances(commands, library, demonstrations="shortest-plan", layouts="separate")
-    assert all(i.states[-1] == p.end for i, p in zip(plans.instances, [p for c in commands for p in c.pairs]))
+    plans = training_instances(williams_commands, williams_library, demonstrations="shortest-plan", layouts="separate")
+    assert all(i.states[-1] == p.end for i, p in zip(plans.instances, [p for c in williams_commands for p in c.pairs]))
     with pytest.raises(ValueError, match="shortest-plan"):
-        training_instances(commands, library, demonstrations="shortest-plan", layouts="shared")
+        training_instances(williams_commands, williams_library, demonstrations="shortest-plan", layouts="shared")
 
 
-def test_the_development_split_is_disjoint_by_text_and_stable(commands):
-    many = commands * 10
+def test_the_development_split_is_disjoint_by_text_and_stable(williams_commands):
+    many = williams_commands * 10
     train, test = held_out_by_text(many, 0.5)
     assert len(train) + len(test) == len(many)
     assert not {c.text for c in train} & {c.text for c in test}
@@ -119,7 +108,7 @@ def _cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "groundlang.cli", *args], capture_output=True, text=True, timeout=600)
 
 
-def test_evaluate_with_a_test_file_writes_one_row_per_execution(tmp_path):
+def test_evaluate_with_a_test_file_writes_one_row_per_execution(tmp_path, williams_commands, williams_library):
     out = tmp_path / "result.json"
     small = str(FIXTURE / "small.bdm")
     run = _cli("evaluate", "--corpus", small, "--test", small, "--layouts", "separate", "--json", str(out))
@@ -134,9 +123,7 @@ def test_evaluate_with_a_test_file_writes_one_row_per_execution(tmp_path):
     final, names = parse_bdm_state(rows[3]["final_state"])
     assert names == ("block0", "block3")  # the file's names for the toys, in the goal too
     assert rows[3]["goal"].split(", ")[1].rstrip(")") in names
-    commands = read_bdm(FIXTURE / "small.bdm")
-    library = TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
-    assert satisfies(final, pair_task([(p.start, p.end) for p in commands[1].pairs], library), library)
+    assert satisfies(final, pair_task([(p.start, p.end) for p in williams_commands[1].pairs], williams_library), williams_library)
 
 
 @pytest.mark.parametrize("args, message", [
@@ -179,13 +166,13 @@ def _shared_or_skip() -> Path:
 
 
 @pytest.mark.slow
-def test_synthesised_demonstrations_of_the_shared_corpus_end_in_their_end_states(library):
+def test_synthesised_demonstrations_of_the_shared_corpus_end_in_their_end_states(williams_library):
     from groundlang.model.world import replay
 
-    commands = read_bdm(_shared_or_skip() / "part2.bdm")[::40]
-    made = training_instances(commands, library, demonstrations="shortest-plan", layouts="separate")
-    ends = [p.end for c in commands for p in c.pairs if p.start.layout.width < 17]
-    assert len(made.instances) == len(ends) and made.skipped_by("too large") == 3 * len(commands) - len(ends)
+    williams_commands = read_bdm(_shared_or_skip() / "part2.bdm")[::40]
+    made = training_instances(williams_commands, williams_library, demonstrations="shortest-plan", layouts="separate")
+    ends = [p.end for c in williams_commands for p in c.pairs if p.start.layout.width < 17]
+    assert len(made.instances) == len(ends) and made.skipped_by("too large") == 3 * len(williams_commands) - len(ends)
     assert all(replay(i.initial_state, i.actions)[-1] == end for i, end in zip(made.instances, ends))
 
 
@@ -217,13 +204,13 @@ def test_train_on_pairs_then_follow_with_the_models_palette(tmp_path):
     assert result["goal"].startswith("agentNextToToy(agent0, block0)") and result["reached"]
 
 
-def test_a_pair_of_a_billion_states_is_scored_in_its_relevance_abstraction(library):
+def test_a_pair_of_a_billion_states_is_scored_in_its_relevance_abstraction(williams_library):
     (command,) = read_bdm(Path(__file__).parent / "fixtures" / "large" / "sixteen.bdm")
-    made = training_instances([command], library)
+    made = training_instances([command], williams_library)
     assert not made.skipped and len(made.instances[0].evidence) == len(command.pairs)
     evidence = made.instances[0].evidence[0]
     best = max(evidence.by_goal, key=evidence.by_goal.get)
     pair = command.pairs[0]
     from groundlang.model.pf_tables import library_pf_tables
-    holding = library_pf_tables(pair.end.layout, library).position_holding(pair.end.positions)
+    holding = library_pf_tables(pair.end.layout, williams_library).position_holding(pair.end.positions)
     assert set(best) <= set(holding)  # the likeliest goal holds in the end state

@@ -130,7 +130,6 @@ def run_pairs(args: argparse.Namespace) -> int:
     """``evaluate`` on a corpus of (start, end) pairs against a test file (groundlang.pair_evaluation)."""
     from groundlang.bdm import DEFAULT_PALETTE
     from groundlang.bdm_check import default_library
-    from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.domain_words import extra_words
     from groundlang.model.storage import write_atomically
     from groundlang.pair_corpus import held_out_by_text, read_pair_corpus
@@ -145,7 +144,7 @@ def run_pairs(args: argparse.Namespace) -> int:
                          "test pairs show")
     palette = args.palette or DEFAULT_PALETTE
     words = extra_words(args.lexicon)
-    library = TaskLibrary.load(args.library) if args.library else default_library()
+    library = default_library(args.library)
     train = read_pair_corpus(args.corpus, palette).commands
     if args.test:
         test = read_pair_corpus(args.test, palette).commands

@@ -64,13 +64,12 @@ def _pairs(args: argparse.Namespace):
     library (the package's williams2018 domain unless --library)."""
     from groundlang.bdm import DEFAULT_PALETTE
     from groundlang.bdm_check import default_library
-    from groundlang.logic.tasks import TaskLibrary
     from groundlang.pair_corpus import read_pair_corpus, training_instances
 
-    library = TaskLibrary.load(args.library) if args.library else default_library()
+    library = default_library(args.library)
     commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE).commands
     made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent)
-    skipped = ", ".join(f"{made.skipped_by(why)} {why}" for why in ("too large", "unreachable") if made.skipped_by(why))
+    skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
     print(f"{len(commands)} commands, {sum(len(i.pairs) for i in made.instances)} pairs used"
           + (f"; pairs skipped: {skipped}" if skipped else ""))
     return made.instances, library
