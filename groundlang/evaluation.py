@@ -130,6 +130,8 @@ class EvaluationResult:
     novel_calibration: dict = field(default_factory=dict)
     # layout-free goal -> the same goal in words (from the first command with it)
     goal_words: dict = field(default_factory=dict)
+    # number of atoms of the gold goal -> n, correct, novel_n, novel_correct (one goal against conjunctions)
+    per_goal_size: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -144,6 +146,10 @@ class EvaluationResult:
             lines.append(f"novel environments: {self.novel_accuracy:.2%} ({self.novel_correct}/{self.novel_n})")
         if self.skipped:
             lines.append(f"skipped inconsistent demonstrations: {self.skipped}")
+        lines.append("by size of the gold goal: " + "; ".join(
+            f"{size} atom{'s' * (size > 1)} {row['correct']}/{row['n']}"
+            + (f" (novel {row['novel_correct']}/{row['novel_n']})" if row["novel_n"] else "")
+            for size, row in sorted(self.per_goal_size.items())))
         lines.append("per gold task:")
         for task, row in self.per_task.items():
             lines.append(f"  {task:<32} {row['accuracy']:.2%} ({row['correct']}/{row['n']})")
@@ -178,6 +184,7 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
         "instance": instance.name,
         "command": instance.command,
         "gold": format_goal(gold),
+        "gold_size": len(gold),
         "gold_task": describe_goal(gold, instance.initial_state),
         "predicted": format_goal(result.goal),
         "predicted_task": describe_goal(result.goal, instance.initial_state),
@@ -362,6 +369,13 @@ def evaluate(
         confusion[r["gold_task"]][r["predicted_task"]] += 1
     for row in per_task.values():
         row["accuracy"] = row["correct"] / row["n"]
+    per_goal_size: dict = defaultdict(lambda: {"n": 0, "correct": 0, "novel_n": 0, "novel_correct": 0})
+    for r in scored:
+        row = per_goal_size[r["gold_size"]]
+        row["n"] += 1
+        row["correct"] += int(r["correct"])
+        row["novel_n"] += len(r["novel"])
+        row["novel_correct"] += sum(x["correct"] for x in r["novel"])
     novel = [x["correct"] for r in scored for x in r["novel"]]
     goal_words: dict = {}
     for r in scored:
@@ -397,4 +411,5 @@ def evaluate(
         calibration=calibration,
         novel_calibration=novel_calibration,
         goal_words=goal_words,
+        per_goal_size=dict(sorted(per_goal_size.items())),
     )

@@ -30,8 +30,8 @@ from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
 from groundlang.model.encoding import Batch, Observation, encode
 from groundlang.model.features import goal_mask
-from groundlang.model.pf_tables import pf_tables
-from groundlang.model.interpretations import Interpretation, interpretations
+from groundlang.model.pf_tables import library_pf_tables, pf_tables
+from groundlang.model.interpretations import Interpretation, interpretations, unbroken_held_parts
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
 from groundlang.model.relevance import (check_abstraction_possible, exact_fits, placement_sample, pushes_scenery,
                                         state_space_for)
@@ -83,6 +83,17 @@ def schema_words(schema) -> dict[str, list[str]]:
 def _check_count(method: str, name: str, value) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise ValueError(f"{method}: {name} must be a positive integer, got {value!r}")
+
+
+def _rule_out_unbroken_parts(instances, interps, behaviour, library):
+    """Each instance's interpretations and behaviour values without the readings whose held part its
+    demonstration never breaks (:func:`unbroken_held_parts`): the demonstration is evidence against them."""
+    kept_interps, kept_values = [], []
+    for inst, group, values in zip(instances, interps, behaviour):
+        out = unbroken_held_parts(group, inst.states, library_pf_tables(inst.initial_state.layout, library))
+        kept_interps.append([i for i, o in zip(group, out) if not o])
+        kept_values.append([v for v, o in zip(values, out) if not o])
+    return kept_interps, kept_values
 
 
 class Learner:
@@ -159,6 +170,7 @@ class Learner:
             self._interp_cache[state] = interpretations(
                 state, self.library, enumerate_constraints=self.lm.enumerates_constraints,
                 relation_words=getattr(self.lm, "relation_words", False),
+                held_parts=getattr(self.lm, "held_parts", False),
             )
         return self._interp_cache[state]
 
@@ -187,6 +199,8 @@ class Learner:
         else:
             raise ValueError("observe: instances with demonstrations and (start, end) pairs without them "
                              "cannot be mixed in one corpus")
+        if all(shown) and getattr(self.lm, "held_parts", False):
+            interps, behaviour = _rule_out_unbroken_parts(instances, interps, behaviour, self.library)
         observations = []
         for inst, group, values in zip(instances, interps, behaviour):
             readings = tuple(parse(inst.command, word_lexicon=self.word_lexicon))

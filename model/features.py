@@ -23,7 +23,7 @@ from .pf_tables import PFTables, TabulationError
 from .statespace import StateSpace
 from .world import Layout
 
-__all__ = ["FeatureError", "position_atoms", "feature_matrix", "goal_mask", "atoms_hold"]
+__all__ = ["FeatureError", "position_atoms", "feature_matrix", "goal_mask", "atoms_hold", "atoms_hold_along"]
 
 # An atom that is not a PF of the layout (unknown predicate, object or arity).
 FeatureError = TabulationError
@@ -69,3 +69,10 @@ def goal_mask(space: StateSpace, goal_atoms: Iterable[Atom | str], tables: PFTab
 def atoms_hold(state, atoms: Sequence[Atom | str], tables: PFTables) -> np.ndarray:
     """``[F]`` bool: which of ``atoms`` hold in one ``model.world.State`` (as in feature_matrix)."""
     return _boolean_matrix(state.layout, state.positions[None], list(atoms), tables)[0]
+
+
+def atoms_hold_along(layout: Layout, positions: np.ndarray, atoms: Sequence[Atom | str],
+                     tables: PFTables) -> np.ndarray:
+    """``[N, F]`` bool: which of ``atoms`` hold at each of ``positions`` ``[N, ...]`` (the states of a
+    demonstration, say) in ``layout``."""
+    return _boolean_matrix(layout, positions, list(atoms), tables)

@@ -42,12 +42,16 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+
+import numpy as np
 
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, LiftedTask, TaskLibrary
+from groundlang.model.features import atoms_hold_along
 from groundlang.model.geometry import cell_tables
+from groundlang.model.pf_tables import PFTables
 from groundlang.model.tasks import candidate_tasks, object_descriptions
 from groundlang.model.vocabulary import NO_ROLE
 from groundlang.logic.classes import domain_classes
@@ -57,6 +61,7 @@ __all__ = [
     "Interpretation",
     "RoleBinding",
     "interpretations",
+    "unbroken_held_parts",
     "object_names",
     "task_roles",
     "alignable_roles",
@@ -181,7 +186,7 @@ def start_rooms(state: State) -> tuple[frozenset[str], bool]:
 
 
 def interpretations(state: State, library: TaskLibrary, enumerate_constraints: bool = True,
-                    relation_words: bool = False) -> list[Interpretation]:
+                    relation_words: bool = False, held_parts: bool = False) -> list[Interpretation]:
     """Every (L, T, C) of ``state`` with its log prior, in a deterministic order.
 
     With ``enumerate_constraints=False`` each grounding appears once, with C
@@ -195,17 +200,19 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     With ``relation_words`` the goal's PFs join what words may say of each argument of the task
     (the parse model's setting of that name).
 
+    With ``held_parts`` a conjunctive grounding one of whose parts already holds is offered too: "put
+    the bag in the blue room and come back to the green room", said in the green room, asks for a
+    part the plan must break and restore. Without it such groundings are left out: they then ask
+    no more than the smaller task unless the plan breaks the part, and, kept where nothing breaks it,
+    they duplicate that task (:func:`unbroken_held_parts` says which a demonstration rules out).
+
     Raises ValueError when no lifted task has a grounding that is not already
     true in ``state`` (nothing could be asked of the agent).
     """
-    # A conjunctive grounding one of whose parts already holds asks no more
-    # than the smaller task; kept, it duplicated that task in the prior and
-    # its lifted-task token learned the smaller task's words ("walk into the
-    # red room" became toy-and-agent whenever the toy already sat somewhere).
     candidates = [
         (task, constraints)
         for task, constraints in candidate_tasks(state, library)
-        if len(task.goal) == 1 or not task.holding
+        if len(task.goal) == 1 or not task.holding or held_parts
     ]
     if not candidates:
         raise ValueError(
@@ -234,3 +241,21 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
                 )
             )
     return result
+
+
+def unbroken_held_parts(interps: Sequence[Interpretation], states: Sequence[State],
+                        tables: PFTables) -> np.ndarray:
+    """``[J]`` bool: interpretations with a goal part that holds at the start and in every state of
+    the demonstration ``states``. Such a part explains nothing the demonstration shows (nobody asks
+    for what already holds and is never at stake), so a learner scores the reading out; the part
+    the plan breaks and restores ("... and come back to the green room") is what is kept."""
+    held = sorted({a for i in interps for a in i.task.holding}, key=str)
+    out = np.zeros(len(interps), dtype=bool)
+    if not held or not states:
+        return out
+    positions = np.stack([s.positions for s in states])
+    always = atoms_hold_along(states[0].layout, positions, held, tables).all(axis=0)
+    unbroken = {a for a, kept in zip(held, always) if kept}
+    for j, interp in enumerate(interps):
+        out[j] = any(a in unbroken for a in interp.task.holding)
+    return out

@@ -1,7 +1,7 @@
 """The harder corpus (palette sokoban2): two toys picked by colour or shape, conjunctive goals.
 
 ``tests/fixtures/sokoban2_corpus`` is written by ``tests/fixtures/build_sokoban2_corpus.py``
-(three layouts, 18 tasks, 72 hand-written commands, shortest-path demonstrations).
+(three layouts, 30 tasks, 120 hand-written commands, shortest-path demonstrations).
 The numbers asserted here were measured with this code (the runs are
 deterministic: the same counts with 1 or 2 torch threads).
 """
@@ -12,6 +12,7 @@ import importlib.util
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from groundlang.logic.atoms import parse_goal
@@ -19,7 +20,11 @@ from groundlang.logic.atoms import parse_goal
 from groundlang.cli import main
 from groundlang.corpus import Corpus, read_corpus, read_state_file
 from groundlang.evaluation import NovelEnvironmentError, evaluate
-from groundlang.labels import read_labels
+from groundlang.labels import goal_holds, read_labels
+from groundlang.learner import Learner
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.interpretations import interpretations, unbroken_held_parts
+from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.statespace import enumerate_states
 
 FIXTURES = Path(__file__).parent / "fixtures"
@@ -83,7 +88,7 @@ def _records(result) -> dict[str, dict]:
 
 def test_generator_reproduces_the_fixture_byte_for_byte(tmp_path):
     paths = _load_builder().build(tmp_path)
-    assert len(paths) == 72 + 1 + 3
+    assert len(paths) == 120 + 1 + 3
     for path in paths:
         assert path.read_bytes() == (CORPUS / path.name).read_bytes(), path.name
     assert sorted(p.name for p in CORPUS.iterdir()) == sorted(p.name for p in paths)
@@ -93,12 +98,12 @@ def test_the_corpus_checks_clean(capsys):
     code = main(["check", str(CORPUS), "--palette", "sokoban2", "--labels", str(CORPUS / "labels.csv")])
     out = capsys.readouterr().out
     assert code == 0
-    assert "instances: 72" in out
+    assert "instances: 120" in out
     assert "distinct layouts: 3" in out
-    assert "distinct demonstrations: 18" in out
+    assert "distinct demonstrations: 30" in out
     assert "inconsistent demonstrations: 0" in out
-    assert "labelled: 72/72 files (18 prefixes" in out
-    assert "goal holds in final state: 72/72" in out
+    assert "labelled: 120/120 files (30 prefixes" in out
+    assert "goal holds in final state: 120/120" in out
 
 
 def test_the_corpus_has_two_toys_and_conjunctions_with_distinct_rooms(corpus, labels):
@@ -112,7 +117,7 @@ def test_the_corpus_has_two_toys_and_conjunctions_with_distinct_rooms(corpus, la
         kinds[kind] = kinds.get(kind, 0) + 1
         if len(goal) == 2:  # toy in one room, agent in another
             assert goal[0].args[1] != goal[1].args[1]
-    assert kinds == {"agentInRoom": 6, "toyInRoom": 6, "agentInRoom+toyInRoom": 6}
+    assert kinds == {"agentInRoom": 6, "toyInRoom": 9, "agentInRoom+toyInRoom": 15}
     # L2's toys share their colour (shape picks), L3's their shape (colour picks).
     attrs = {i.prefix[:2]: i.initial_state.layout.toy_attributes for i in corpus.instances}
     assert attrs["L1"] == (("red", "chair"), ("blue", "bag"))
@@ -132,9 +137,10 @@ def test_state_spaces_stay_small(corpus):
 
 def test_train_protocol(train_result, corpus, labels):
     result = train_result
-    assert result.n == 72 and not result.failed_folds
-    # Measured: 70/72 (59/72 before a toy's head noun could name its shape).
-    assert result.correct >= 70
+    assert result.n == 120 and not result.failed_folds
+    # Measured: 120/120 (59/72 of the first 72 commands before a toy's head noun could name its shape).
+    assert result.correct >= 118
+    assert result.per_goal_size[1]["n"] == 60 and result.per_goal_size[2]["n"] == 60
     per_task = result.per_task
     assert per_task["toyInRoom(chair, blue) agentInRoom(agent, magenta)"]["correct"] == 4
     assert per_task["toyInRoom(chair, green) agentInRoom(agent, blue)"]["correct"] == 4
@@ -145,17 +151,64 @@ def test_train_protocol(train_result, corpus, labels):
     assert all(records[i.name]["correct"] for i in corpus.instances if i.prefix.startswith("L3"))
 
 
+def test_conjunctions_whose_agent_part_holds_at_the_start(train_result, corpus, labels):
+    # The agent starts inside the room it must end in: that part holds at the start and the plan breaks
+    # it ("take the bag to the blue room and then come back to the green room"). Read as the toy goal
+    # alone, the agent would be left wherever the push ends.
+    records = _records(train_result)
+    held = [i for i in corpus.instances
+            if len(labels[i.prefix]) == 2 and any(goal_holds((a,), i.initial_state) for a in labels[i.prefix])]
+    assert len(held) == 12
+    assert [i.name for i in held if not records[i.name]["correct"]] == []
+    assert all(records[i.name]["predicted"] == records[i.name]["gold"] for i in held)
+
+
+@pytest.mark.parametrize("command", [
+    "push the blue bag into the blue room and then come back to the green room",  # toy clause first
+    "come back to the green room after you take the bag to the blue room",  # agent clause first
+])
+def test_a_conjunction_held_out_is_followed_so_both_parts_hold(corpus, labels, options, command):
+    # Trained on layout L1 without the commands of this task, the learner meets the task's start state
+    # (the agent in the green room, the bag in the red one) and a command it never saw, in either order.
+    held_out = "L1bag2blue_agent2green_"
+    learner = Learner(cache_dir=options["cache_dir"]).fit(
+        [i for i in corpus.instances if i.prefix.startswith("L1") and i.prefix != held_out])
+    start = next(i for i in corpus.instances if i.prefix == held_out).initial_state
+    gold = labels[held_out]
+    assert any(goal_holds((a,), start) for a in gold) and not goal_holds(gold, start)
+    result = learner.follow(command, start)
+    assert set(result.goal) == set(gold)
+    assert result.reached and goal_holds(gold, result.states[-1])
+    assert not goal_holds(gold[1:], result.states[len(result.states) // 2])  # the agent left the room on the way
+
+
+def test_unbroken_held_parts_rule_readings_out_of_training(corpus):
+    # A conjunction whose held part the demonstration never breaks explains nothing it shows (the chair
+    # sits in the green room throughout "push the bag ... then go back to the green room"); the gold
+    # reading, whose held part the agent breaks and restores, stays.
+    inst = next(i for i in corpus.instances if i.prefix == "L1bag2blue_agent2green_")
+    library = TaskLibrary.load()
+    interps = interpretations(inst.initial_state, library, enumerate_constraints=False, held_parts=True)
+    assert len(interps) > len(interpretations(inst.initial_state, library, enumerate_constraints=False))
+    out = unbroken_held_parts(interps, inst.states, library_pf_tables(inst.initial_state.layout, library))
+    goals = {frozenset(i.goal): o for i, o in zip(interps, out)}
+    gold = frozenset(parse_goal("toyInRoom(block1, room2) agentInRoom(agent0, room0)"))
+    chair_stays = frozenset(parse_goal("toyInRoom(block0, room0) agentInRoom(agent0, room1)"))
+    assert goals[gold] is np.False_ and goals[chair_stays] is np.True_
+    assert not any(o for i, o in zip(interps, out) if not i.task.holding)
+
+
 def test_toys_named_by_colour_are_picked_right(train_result, corpus, labels):
     records = _records(train_result)
     by_colour = [i for i in corpus.instances if _toy_reference(i, labels) == "colour"]
-    assert len(by_colour) == 24  # L1 'red chair'/'blue bag', all of L3
+    assert len(by_colour) == 48  # L1 'red chair'/'blue bag', all of L3
     assert [i.name for i in by_colour if not records[i.name]["correct"]] == []
 
 
 def test_toys_named_by_shape_alone_are_picked_right(train_result, corpus, labels):
     records = _records(train_result)
     by_shape = [i for i in corpus.instances if _toy_reference(i, labels) == "shape"]
-    assert len(by_shape) == 24
+    assert len(by_shape) == 48
     # A head noun may name a toy's shape PF ("bag" -> toyIsBag), so shape alone picks the toy:
     # the toy of the executed goal is the gold toy (the room may still be misread, as in
     # "push the chair in to the blue room", measured a near tie with a conjunctive reading).
@@ -168,28 +221,32 @@ def test_toys_named_by_shape_alone_are_picked_right(train_result, corpus, labels
 @pytest.mark.slow
 def test_leave_one_out(corpus, labels, options):
     result = evaluate(corpus, labels, protocol="loo", learner_options=options)
-    assert result.n == 72 and not result.failed_folds
-    # Measured: 68/72.
-    assert result.correct >= 68
+    assert result.n == 120 and not result.failed_folds
+    # Measured: 120/120; without held parts (held_parts=false) 108/120, every conjunction whose agent
+    # part holds at the start (12) read as the toy goal alone.
+    assert result.correct >= 118
     records = _records(result)
     by_colour = [i for i in corpus.instances if _toy_reference(i, labels) == "colour"]
     assert [i.name for i in by_colour if not records[i.name]["correct"]] == []
-    conjunctions = {k: v for k, v in result.per_task.items() if "agentInRoom" in k and "toyInRoom" in k}
-    assert sum(v["n"] for v in conjunctions.values()) == 24
-    assert sum(v["correct"] for v in conjunctions.values()) >= 18
+    single, conjunction = result.per_goal_size[1], result.per_goal_size[2]
+    assert single["n"] == 60 and conjunction["n"] == 60
+    assert single["correct"] >= 59  # the goal of issue 25: no loss on single goals
+    assert conjunction["correct"] >= 57  # and at least 95% of conjunctions
 
 
 # ---------------------------------------------------------------- novel layouts
 
 
-@pytest.mark.parametrize("layout, train, novel", [("L1", 24, 24), ("L2", 23, 22), ("L3", 24, 24)])
+@pytest.mark.slow
+@pytest.mark.parametrize("layout, train, novel", [("L1", 40, 40), ("L2", 39, 37), ("L3", 40, 40)])
 def test_novel_layouts(corpus, labels, options, layout, train, novel):
     # A novel layout carries the goals of one training layout only (its room colours and toys), so
-    # each is evaluated with that layout's 24 instances.
+    # each is evaluated with that layout's 40 instances. Measured: 40/40, 39/37, 40/40 (L2's novel misses
+    # read a conjunction as its agent part alone, "put the bag in the magenta room then go to the blue room").
     sub = Corpus(corpus.directory, corpus.palette, [i for i in corpus.instances if i.prefix.startswith(layout)])
     state = read_state_file(CORPUS / f"{layout}_novel.state", "sokoban2")
     result = evaluate(sub, labels, protocol="train", novel_states=[(f"{layout}_novel", state)], learner_options=options)
-    assert result.n == 24 and result.novel_n == 24 and not result.failed_folds
+    assert result.n == 40 and result.novel_n == 40 and not result.failed_folds
     assert result.correct >= train
     assert result.novel_correct >= novel
 
