@@ -2,6 +2,8 @@
 
     python notebooks/run_notebooks.py [NAME ...] [--full] [--timeout SECONDS]
 
+The .ipynb files are executed; they are written from the percent-format .py
+beside them (``make notebooks``), and tests/test_notebooks.py checks the two agree.
 Each notebook runs in a fresh kernel in a temporary working directory (files
 it writes do not land in the repository) and must show at least one figure.
 The notebooks on disk are not modified. Exit code 0 when all pass, 1 otherwise.
