@@ -38,6 +38,7 @@ from groundlang.model.relevance import (check_abstraction_possible, exact_fits, 
 from groundlang.model.statespace import StateSpace
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
+from groundlang.model_io import read_model, write_model
 from groundlang.results import FollowResult, Posterior
 from groundlang.training_vocabulary import build_vocabulary, palette_schema
 from groundlang.wording import goal_phrase
@@ -416,13 +417,65 @@ class Learner:
         return out
 
     # ----------------------------------------------------------------- persistence
-    def save(self, directory: str | Path) -> Path:
-        from groundlang.model_io import save_learner
+    def state_dict(self) -> dict:
+        """The trained model as plain values: JSON-ready settings, vocabulary, words, palettes and task
+        library (as ASP text), and ``globals``, its tensors by name. NotFittedError before training."""
+        if self.globals is None or self.vocab is None:
+            raise NotFittedError("cannot save a learner that has not been trained")
+        if not self.palettes:
+            raise ValueError("cannot save a learner whose training palettes are unknown (train it with fit())")
+        return {
+            "language_model": self.lm.name,
+            "language_model_settings": self.lm.settings(),
+            "vocabulary": self.vocab.to_json(),
+            # the words themselves, not the files' paths: the model parses alike where the files are not
+            "lexicon": self.lexicon_words,
+            "palettes": self.palettes,
+            "task_library": self.library.source_text(),
+            "planning": self.settings.as_dict(),
+            "training": {"steps": self.steps, "lr": self.lr, "seed": self.seed},
+            "globals": self.globals,
+        }
 
-        return save_learner(self, directory)
+    @classmethod
+    def from_state_dict(cls, state: dict, where: str = "state_dict") -> "Learner":
+        """The learner :meth:`state_dict` describes; without ``globals`` in ``state`` it has its
+        vocabulary but no tensors yet (a loader reads them once it knows their shapes). ``where`` names
+        the source in messages. KeyError, TypeError or ValueError for malformed values."""
+        if not isinstance(state["lexicon"], dict):  # never a path: loading a model reads no other file
+            raise ValueError(f"lexicon is {type(state['lexicon']).__name__}, expected words by category")
+        learner = cls(
+            get_language_model(state["language_model"], **state["language_model_settings"]),
+            library=TaskLibrary.from_text(state["task_library"], f"{where}:task_library"),
+            steps=state["training"]["steps"], lr=state["training"]["lr"], seed=state["training"]["seed"],
+            settings=TaskSettings(**state["planning"]), lexicon=[state["lexicon"]],
+        )
+        learner.vocab = Vocabulary.from_json(state["vocabulary"], learner.word_lexicon)
+        learner.palettes = _checked_palettes(state["palettes"])
+        missing = {t.name for t in learner.library.tasks} - set(learner.vocab.tasks)
+        if missing:
+            raise ValueError(f"the vocabulary lacks the lifted tasks {sorted(missing)} of the saved task library")
+        if state.get("globals") is not None:
+            learner.globals = dict(state["globals"])
+        return learner
+
+    def save(self, directory: str | Path) -> Path:
+        """Write the model to ``directory`` as JSON and tensors (see :mod:`groundlang.model_io`)."""
+        return write_model(self.state_dict(), directory)
 
     @classmethod
     def load(cls, directory: str | Path) -> "Learner":
-        from groundlang.model_io import load_learner
+        """Read a model :meth:`save` wrote; ModelFormatError on anything amiss."""
+        return read_model(directory, cls.from_state_dict)
 
-        return load_learner(directory)
+
+def _checked_palettes(palettes) -> list[dict]:
+    """The palettes a model was trained on, as written: a list of {name, colours, shapes}."""
+    if not isinstance(palettes, list) or not palettes:
+        raise ValueError("palettes must be a non-empty list")
+    for p in palettes:
+        if (not isinstance(p, dict) or not isinstance(p.get("name"), str)
+                or not all(isinstance(v, list) and all(isinstance(x, str) for x in v)
+                           for v in (p.get("colours"), p.get("shapes")))):
+            raise ValueError("each palette must be {name: str, colours: [str], shapes: [str]}")
+    return palettes
