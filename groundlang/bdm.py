@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from groundlang.corpus import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError
-from groundlang.model.storage import FileRefused, read_limited
+from groundlang.logic.storage import FileRefused, read_limited
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
 __all__ = ["Pair", "Command", "DEFAULT_PALETTE", "parse_bdm_state", "read_bdm", "is_bdm", "bdm_files",

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
-from groundlang.model.storage import read_limited, write_atomically
+from groundlang.logic.storage import read_limited, write_atomically
 from groundlang.model.world import (
     Action,
     Agent,

@@ -36,7 +36,7 @@ import numpy as np
 import torch
 
 from groundlang.interrupt import deferred_interrupts
-from groundlang.model import storage
+from groundlang.logic import storage
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "write_model", "read_model"]
 

@@ -66,7 +66,7 @@ from groundlang.inference.lifting import (  # noqa: F401
 )
 from groundlang.logic.program import Source
 from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary, format_lifted_task
-from groundlang.model.storage import write_atomically
+from groundlang.logic.storage import write_atomically
 
 __all__ = ["DISCOVERY_IRL", "DiscoverySettings", "DemonstrationReport", "Discovery", "discover_tasks",
            "lift_goal", "structure_key", "task_name", "singling_out", "write_library"]

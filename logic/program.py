@@ -102,8 +102,8 @@ MAX_PROGRAM_BYTES = 4 * 2**20
 
 
 def _read_regular(path: Path) -> bytes:
-    """A regular file of at most MAX_PROGRAM_BYTES (model.storage.read_limited does the same for the layers
-    above; logic imports none of them). Opened non-blocking: a FIFO must not hang the open."""
+    """A regular file of at most MAX_PROGRAM_BYTES (storage.read_limited's twin, raising AspError for an ASP
+    program). Opened non-blocking: a FIFO must not hang the open."""
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     try:
         mode = os.fstat(fd).st_mode

@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from groundlang.model.storage import write_atomically
+from groundlang.logic.storage import write_atomically
 
 HERE = Path(__file__).resolve().parent
 

@@ -76,7 +76,7 @@ def learner():
 
 def test_save_interrupted_between_its_two_files_still_writes_both(learner, tmp_path, monkeypatch):
     """Ctrl-C after the tensors are renamed: the JSON naming them is still written, then the interrupt."""
-    from groundlang.model import storage
+    from groundlang.logic import storage
     from groundlang.learner import Learner
 
     real = storage.write_atomically
@@ -253,7 +253,7 @@ def test_evaluate_interrupted_writes_no_result_and_keeps_cache(tmp_path):
 
 def test_nested_deferral_waits_for_the_outermost_block(tmp_path):
     """An inner deferral inside an outer one (save's, around its two files) must not raise at its own end."""
-    from groundlang.model.storage import write_atomically
+    from groundlang.logic.storage import write_atomically
 
     with pytest.raises(KeyboardInterrupt):
         with deferred_interrupts():

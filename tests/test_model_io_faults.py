@@ -26,7 +26,7 @@ import torch
 from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
 from groundlang.learner import Learner
-from groundlang.model import storage
+from groundlang.logic import storage
 from groundlang.model_io import ModelFormatError
 
 EXAMPLES = example_corpus_path()
@@ -115,7 +115,7 @@ _KILLER = textwrap.dedent("""
     import os, signal, sys
     from groundlang.corpus import example_corpus_path, read_corpus
     from groundlang.learner import Learner
-    from groundlang.model import storage
+    from groundlang.logic import storage
     where, target = sys.argv[1], sys.argv[2]
     learner = Learner(steps=20, seed=1, cache_dir=False).fit(read_corpus(example_corpus_path(), "sokoban").instances[6:12])
     real_write, real_replace = storage.write_atomically, os.replace
