@@ -4,20 +4,16 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from groundlang.logic.storage import write_atomically
 from groundlang.logic.tasks import TaskLibrary, format_lifted_task
 
-if TYPE_CHECKING:
-    from groundlang.inference.discovery import Discovery, DiscoverySettings
-
 __all__ = ["library_text", "write_library"]
 
 
-def library_text(tasks, reports, score, settings: DiscoverySettings, num_instances: int,
-                 pfs: TaskLibrary | None = None) -> str:
-    """The discovered tasks as ASP facts (tasks.lp's format) with a comment header and per-task evidence."""
+def library_text(tasks, reports, score, settings, num_instances: int, pfs: TaskLibrary | None = None) -> str:
+    """The discovered tasks as ASP facts (tasks.lp's format) with a comment header and per-task evidence;
+    ``reports`` are discovery's DemonstrationReports, ``settings`` its DiscoverySettings."""
     lines = [
         "% Lifted tasks discovered from demonstrations by groundlang (inference/discovery.py).",
         "%",
@@ -56,6 +52,7 @@ def describe_pick(conjunction) -> str:
     return "by " + " ∧ ".join(map(str, conjunction))
 
 
-def write_library(discovery: Discovery, path: str | os.PathLike) -> Path:
-    """Write the discovered library's ASP text to ``path`` atomically (temporary file + os.replace)."""
+def write_library(discovery, path: str | os.PathLike) -> Path:
+    """Write a :class:`~groundlang.inference.discovery.Discovery`'s ASP text to ``path`` atomically
+    (temporary file + os.replace)."""
     return write_atomically(path, discovery.text)
