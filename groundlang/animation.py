@@ -62,7 +62,7 @@ def save_animation(path: str | Path, states: Sequence[State], title: str | None 
     draw(0)
     fig.tight_layout()
     animation = FuncAnimation(fig, draw, frames=frames, blit=False, repeat=False)
-    from groundlang.model.storage import atomic_path
+    from groundlang.logic.storage import atomic_path
 
     with atomic_path(path, suffix=".gif") as tmp:
         animation.save(str(tmp), writer=PillowWriter(fps=fps), dpi=dpi)

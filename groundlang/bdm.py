@@ -16,7 +16,7 @@ palette (``logic/palettes/williams2018.lp`` by default), not indices. Attributes
 dynamics (an agent's ``direction``, a door's ``locked`` and ``canbelocked``) are read and ignored.
 Toys are renamed ``block0, block1, ...`` in the order of their names' numbers (the corpus skips numbers:
 ``block0, block1, block3``); :attr:`Pair.toy_names` keeps the file's names. Every problem is a
-:class:`~groundlang.corpus.CorpusError` naming the file, the line and the object.
+:class:`~groundlang.state_line.CorpusError` naming the file, the line and the object.
 """
 
 from __future__ import annotations
@@ -25,8 +25,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from groundlang.corpus import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError
-from groundlang.model.storage import FileRefused, read_limited
+from groundlang.state_line import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError
+from groundlang.logic.storage import FileRefused, read_limited
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
 __all__ = ["Pair", "Command", "DEFAULT_PALETTE", "parse_bdm_state", "read_bdm", "is_bdm", "bdm_files",

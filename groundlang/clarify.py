@@ -27,7 +27,7 @@ from groundlang.model.world import object_class
 from groundlang.model.world import State
 from groundlang.wording import choice_list, goal_phrase, object_phrase
 
-__all__ = ["AnswerError", "competing", "unknown_words", "question", "choose"]
+__all__ = ["AnswerError", "competing", "unknown_words", "question", "choose", "clear_choice"]
 
 # A group is offered when it has at least this share of the most probable group's probability.
 RELATIVE_FLOOR = 0.1
@@ -128,3 +128,13 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
         raise AnswerError(f"{text!r} names none of the choices ({choice_list(phrases)}): "
                           f"answer with their number, 1 to {len(choices)}, or their words")
     return chosen
+
+
+def clear_choice(goals: dict, choices: Sequence[GoalGroup]) -> GoalGroup | None:
+    """The choice at least twice as probable as any other, where ``goals`` maps each goal to its
+    probability (the model's reading of the command followed by the answer), or None."""
+    mass = [sum(goals.get(g, 0.0) for g in c.goals) for c in choices]
+    order = sorted(range(len(choices)), key=lambda k: -mass[k])
+    if len(order) > 1 and mass[order[0]] < 2 * mass[order[1]]:
+        return None
+    return choices[order[0]]

@@ -18,21 +18,20 @@ from __future__ import annotations
 
 import logging
 import math
-import multiprocessing
 import time
 from collections import Counter, defaultdict
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
 from groundlang.confidence import calibration_report, format_calibration
-from groundlang.corpus import Corpus, Instance
-from groundlang.labels import goal_holds, label_for
+from groundlang.corpus import Corpus
+from groundlang.folds import run_folds
+from groundlang.goal_translation import NovelEnvironmentError, describe_goal, translate_goal
+from groundlang.labels import label_for
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
 from groundlang.model.encoding import encode
 from groundlang.model.language_models import get_language_model
-from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.world import State
-from groundlang.wording import goal_phrase
 
 __all__ = [
     "EvaluationResult",
@@ -46,10 +45,6 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class NovelEnvironmentError(ValueError):
-    """A novel layout where the gold goal cannot be carried over unambiguously."""
-
-
 def wilson_interval(correct: int, n: int, z: float = 1.96) -> tuple[float, float]:
     """95% Wilson score interval for a binomial proportion."""
     if n == 0:
@@ -59,49 +54,6 @@ def wilson_interval(correct: int, n: int, z: float = 1.96) -> tuple[float, float
     centre = (p + z * z / (2 * n)) / denom
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
     return (max(0.0, centre - half), min(1.0, centre + half))
-
-
-def _properties(state: State, obj: str) -> tuple:
-    """What an object is, whatever its place: its class and attribute values (a room's colour; a
-    toy's colour and shape), from the layout's facts that name values rather than coordinates."""
-    for cls, name, facts in state.layout.objects:
-        if name == obj:
-            return (cls,) + tuple(v for _, args in facts for v in args if isinstance(v, str))
-    raise NovelEnvironmentError(f"{obj} is no object of the layout")
-
-
-def translate_goal(goal: tuple[Atom, ...], source: State, target: State, where: str = "novel layout",
-                   library=None) -> tuple[Atom, ...]:
-    """Carry a goal over by the objects' properties (room colour; toy colour and shape).
-
-    Raises NovelEnvironmentError when an object has no unique counterpart in
-    ``target`` or when the translated goal already holds in ``target``.
-    """
-    names = {}
-    for obj in {a for atom in goal for a in atom.args}:
-        want = _properties(source, obj)
-        matches = [o for _, o, _ in target.layout.objects if _properties(target, o) == want]
-        if len(matches) != 1:
-            raise NovelEnvironmentError(
-                f"{where}: the goal's {obj} ({' '.join(want)}) has {len(matches)} counterparts; exactly one is needed"
-            )
-        names[obj] = matches[0]
-    translated = tuple(Atom(a.predicate, tuple(names[x] for x in a.args)) for a in goal)
-    if goal_holds(translated, target, library):
-        raise NovelEnvironmentError(f"{where}: the goal {format_goal(translated)} already holds at the start")
-    return translated
-
-
-def describe_goal(goal: tuple[Atom, ...], state: State) -> str:
-    """A goal in layout-free words, e.g. ``toyInRoom(star, red)``, for confusion tables."""
-    parts = []
-    for atom in goal:
-        args = []
-        for a in atom.args:
-            props = _properties(state, a)
-            args.append(props[-1])  # a toy by its shape, a room by its colour, the agent by its class
-        parts.append(f"{atom.predicate}({', '.join(args)})")
-    return " ".join(parts)
 
 
 @dataclass
@@ -171,107 +123,6 @@ class EvaluationResult:
             lines.append(f"time in {name}: {secs:.2f} s")
         lines.append(f"wall time {self.seconds:.1f} s")
         return "\n".join(lines)
-
-
-# ---------------------------------------------------------------- folds
-
-_CONTEXT: dict = {}
-
-
-def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
-    result = learner.follow(instance.command, instance.initial_state)
-    record = {
-        "instance": instance.name,
-        "command": instance.command,
-        "gold": format_goal(gold),
-        "gold_size": len(gold),
-        "gold_task": describe_goal(gold, instance.initial_state),
-        "predicted": format_goal(result.goal),
-        "predicted_task": describe_goal(result.goal, instance.initial_state),
-        "gold_words": goal_phrase(gold, instance.initial_state, learner.library),
-        "predicted_words": result.goal_words,
-        "correct": goal_holds(gold, result.final_state, learner.library),
-        "confidence": result.posterior.confidence,
-        "margin": result.posterior.margin,
-        "novel": [],
-    }
-    for name, state in novel_states:
-        translated = translate_goal(gold, instance.initial_state, state, name, learner.library)
-        novel = learner.follow(instance.command, state)
-        record["novel"].append(
-            {
-                "environment": name,
-                "gold": format_goal(translated),
-                "predicted": format_goal(novel.goal),
-                "predicted_task": describe_goal(novel.goal, state),
-                "correct": goal_holds(translated, novel.final_state, learner.library),
-                "confidence": novel.posterior.confidence,
-            }
-        )
-    return record
-
-
-def _fold(index: int) -> dict:
-    ctx = _CONTEXT
-    learner: Learner = ctx["learner"]
-    instance = ctx["instances"][index]
-    started = time.perf_counter()
-    try:
-        if ctx["protocol"] == "loo":
-            keep = [k for k in range(len(ctx["instances"])) if k != index]
-            learner.fit(
-                [ctx["instances"][k] for k in keep],
-                batch=ctx["batch"].subset(keep),
-                init=ctx["globals"] if ctx["warm_start"] else None,
-            )
-        record = _score(learner, instance, ctx["golds"][index], ctx["novel_states"])
-    except (ValueError, RuntimeError) as exc:
-        return {"instance": instance.name, "error": f"{type(exc).__name__}: {exc}", "seconds": time.perf_counter() - started}
-    record["seconds"] = time.perf_counter() - started
-    return record
-
-
-def _init_worker(context: dict) -> None:
-    import signal
-
-    import torch
-
-    # Forked workers inherit the CLI's SIGTERM-as-Ctrl-C handler; the pool
-    # stops them with SIGTERM when it closes, which must stay silent. Ctrl-C
-    # goes to the parent, which reports the interruption once.
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    torch.set_num_threads(1)
-    _CONTEXT.clear()
-    _CONTEXT.update(context)
-
-
-def _run_folds(context: dict, indices: list[int], workers: int, ray_address: str | None, progress: bool) -> list[dict]:
-    if ray_address is not None:
-        from groundlang.distributed import run_on_ray
-
-        return run_on_ray(_init_worker, _fold, context, indices, ray_address)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=len(indices), desc="folds", unit="fold", leave=False)
-    records = []
-    if workers <= 1:
-        _init_worker(context)
-        for i in indices:
-            records.append(_fold(i))
-            if bar is not None:
-                bar.update(1)
-    else:
-        with multiprocessing.get_context("fork").Pool(workers, _init_worker, (context,)) as pool:
-            for record in pool.imap(_fold, indices, chunksize=max(1, len(indices) // (8 * workers))):
-                records.append(record)
-                if bar is not None:
-                    bar.update(1)
-    if bar is not None:
-        bar.close()
-    return records
 
 
 def evaluate(
@@ -354,7 +205,7 @@ def evaluate(
     else:
         indices = training[: limit or None]
     t = time.perf_counter()
-    records = _run_folds(context, indices, workers, ray_address, progress)
+    records = run_folds(context, indices, workers, ray_address, progress)
     timings["folds" if context["protocol"] == "loo" else "following commands"] = time.perf_counter() - t
 
     failed = [r for r in records if "error" in r]

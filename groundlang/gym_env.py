@@ -36,7 +36,7 @@ import numpy as np
 from gymnasium import spaces
 
 from groundlang.logic.atoms import Atom, parse_goal
-from groundlang.model.world import State, step
+from groundlang.model.world import Action, State, step
 
 __all__ = [
     "ENV_ID",
@@ -62,14 +62,10 @@ MAX_COMMAND_LENGTH = 1024
 _ASCII = str.maketrans({"\u2018": "'", "\u2019": "'", "\u201c": '"', "\u201d": '"', "\u2013": "-", "\u2014": "-"})
 
 
-class CleanupAction(enum.IntEnum):
-    """The four moves (same values as :class:`groundlang.model.world.Action`) and TERMINATE."""
-
-    NORTH = 0
-    SOUTH = 1
-    EAST = 2
-    WEST = 3
-    TERMINATE = 4
+# The moves are model.world.Action's, written there once; TERMINATE follows them, as the planner's stop column
+# does (inference.planning.TERMINATE), so that a policy's argmax column is the action it names.
+CleanupAction = enum.IntEnum("CleanupAction", [(a.name, a.value) for a in Action] + [("TERMINATE", len(Action))])
+CleanupAction.__doc__ = "The moves of :class:`groundlang.model.world.Action` (same names and values) and TERMINATE."
 
 
 def command_text(command: str) -> str:

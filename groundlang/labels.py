@@ -19,7 +19,7 @@ from groundlang.logic.atoms import Atom, AtomError, parse_goal
 from groundlang.logic.program import AspError
 from groundlang.model.features import atoms_hold
 from groundlang.model.pf_tables import library_pf_tables
-from groundlang.model.storage import read_limited
+from groundlang.logic.storage import read_limited
 from groundlang.model.world import State
 
 __all__ = [

@@ -11,35 +11,34 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Iterable, Mapping, Sequence
-from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
 import torch
 
 from groundlang.grammar.parser import parse
-from groundlang.clarify import AnswerError, choose, competing, question, unknown_words
-from groundlang.confidence import GoalGroup, group_goals
-from groundlang.inference.acting import rollout, rollout_states, stop_before
+from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
+from groundlang.confidence import group_goals
+from groundlang.goal_plans import plan_for_goal, planning_space
 from groundlang.inference.joint import FitResult, fit_globals, posterior
 from groundlang.inference.likelihoods import behaviour_likelihood_table
-from groundlang.inference.planning import TaskSettings, solve_task
+from groundlang.inference.planning import TaskSettings
 from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
 from groundlang.model.encoding import Batch, Observation, encode
-from groundlang.model.features import goal_mask
-from groundlang.model.pf_tables import library_pf_tables, pf_tables
-from groundlang.model.interpretations import Interpretation, interpretations, unbroken_held_parts
+from groundlang.model.interpretations import Interpretation, interpretations, without_unbroken_held_parts
+from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
-from groundlang.model.relevance import (check_abstraction_possible, exact_fits, placement_sample, pushes_scenery,
-                                        state_space_for)
+from groundlang.model.relevance import check_abstraction_possible, exact_fits
 from groundlang.model.statespace import StateSpace
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
+from groundlang.learner_state import learner_from_state, learner_state
+from groundlang.model_io import read_model, write_model
 from groundlang.results import FollowResult, Posterior
-from groundlang.training_vocabulary import build_vocabulary, palette_schema
+from groundlang.training_vocabulary import build_vocabulary, palette_schema, schema_words, word_files_beside
 from groundlang.wording import goal_phrase
 
 __all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError", "AnswerError", "DEFAULT_MIN_CONFIDENCE"]
@@ -56,44 +55,9 @@ class NotFittedError(ValueError):
     """A learner was asked to interpret a command before it was trained or loaded."""
 
 
-def word_files_beside(library: TaskLibrary) -> list[Path]:
-    """The word file of each library file that has one: ``mine.words`` beside ``mine.lp`` (the package's
-    own files too: ``logic/domains/williams2018.words``)."""
-    out = []
-    for source in library.sources:
-        if source.name.startswith("groundlang.logic/"):
-            path = Path(str(files("groundlang.logic"))) / source.name.removeprefix("groundlang.logic/")
-        else:
-            path = Path(source.name)
-        words = path.with_suffix(".words")
-        if path.suffix == ".lp" and words.is_file():
-            out.append(words)
-    return out
-
-
-def schema_words(schema) -> dict[str, list[str]]:
-    """The words a domain's schema names: its classes and shapes are nouns, its colours hues (values
-    written in camelCase, ``darkGray``, are not words anyone types and are left out)."""
-    nouns = [c for c in schema.classes] + list(schema.values.get("shape", ()))
-    hues = list(schema.values.get("colour", ()))
-    return {category: [w for w in words if w.isalpha() and w.islower()]
-            for category, words in (("NOUN", nouns), ("HUE", hues))}
-
-
 def _check_count(method: str, name: str, value) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise ValueError(f"{method}: {name} must be a positive integer, got {value!r}")
-
-
-def _rule_out_unbroken_parts(instances, interps, behaviour, library):
-    """Each instance's interpretations and behaviour values without the readings whose held part its
-    demonstration never breaks (:func:`unbroken_held_parts`): the demonstration is evidence against them."""
-    kept_interps, kept_values = [], []
-    for inst, group, values in zip(instances, interps, behaviour):
-        out = unbroken_held_parts(group, inst.states, library_pf_tables(inst.initial_state.layout, library))
-        kept_interps.append([i for i, o in zip(group, out) if not o])
-        kept_values.append([v for v, o in zip(values, out) if not o])
-    return kept_interps, kept_values
 
 
 class Learner:
@@ -200,7 +164,8 @@ class Learner:
             raise ValueError("observe: instances with demonstrations and (start, end) pairs without them "
                              "cannot be mixed in one corpus")
         if all(shown) and getattr(self.lm, "held_parts", False):
-            interps, behaviour = _rule_out_unbroken_parts(instances, interps, behaviour, self.library)
+            tables = [library_pf_tables(inst.initial_state.layout, self.library) for inst in instances]
+            interps, behaviour = without_unbroken_held_parts(interps, behaviour, [i.states for i in instances], tables)
         observations = []
         for inst, group, values in zip(instances, interps, behaviour):
             readings = tuple(parse(inst.command, word_lexicon=self.word_lexicon))
@@ -319,15 +284,13 @@ class Learner:
         return post
 
     def _space(self, state: State, goal: tuple[Atom, ...] | None = None) -> StateSpace:
-        """The exact state space where it fits; else, to plan for ``goal``, its relevance abstraction, and
-        to compare goals (``goal`` None), a sample of placements."""
+        """The state space to plan for ``goal`` in, or to compare goals in (``goal`` None); see
+        :func:`groundlang.goal_plans.planning_space`. The last few are kept."""
         key = state if exact_fits(state) else (state, goal)
         if key not in self._spaces:
             if len(self._spaces) >= _SPACES_KEPT:
                 self._spaces.pop(next(iter(self._spaces)))
-            tables = pf_tables(state.layout, self.library.tabulation_program)
-            self._spaces[key] = (placement_sample(state) if key != state and goal is None
-                                 else state_space_for(state, goal or (), tables=tables))
+            self._spaces[key] = planning_space(state, goal, self.library)
         return self._spaces[key]
 
     def follow(self, command: str, state: State, max_steps: int = 200,
@@ -363,7 +326,8 @@ class Learner:
             raise ValueError("clarify() takes a result that abstained; this one acted already")
         state = result.states[0]
         chosen = choose(answer, result.choices, state, self.library,
-                        read=lambda text, choices: self._read_answer(result.command, text, choices, state))
+                        read=lambda text, choices: clear_choice(
+                            dict(self.posterior(f"{result.command}, {text}", state).goals()), choices))
         return self._act(result.command, state, result.posterior, chosen.goal, max_steps)
 
     def update(self, command: str, state: State, demonstration=None, goal=None) -> "Learner":
@@ -381,30 +345,11 @@ class Learner:
     def _knows(self, word: str) -> bool:
         return self.vocab is not None and self.vocab.word_id(word) != 0
 
-    def _read_answer(self, command: str, answer: str, choices: list[GoalGroup], state: State) -> GoalGroup | None:
-        """The model's reading of the command followed by the answer, among ``choices``: the choice at
-        least twice as probable as any other, or None."""
-        goals = dict(self.posterior(f"{command}, {answer}", state).goals())
-        mass = [sum(goals.get(g, 0.0) for g in c.goals) for c in choices]
-        order = sorted(range(len(choices)), key=lambda k: -mass[k])
-        if len(order) > 1 and mass[order[0]] < 2 * mass[order[1]]:
-            return None
-        return choices[order[0]]
-
     def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int) -> FollowResult:
         key = (state, goal, max_steps)
         if key not in self._plans:  # plans depend on the world only, never on the words
-            space = self._space(state, goal)
-            mask = goal_mask(space, goal, pf_tables(state.layout, self.library.tabulation_program))
-            solved = solve_task(space.next_state, mask, self.settings)
-            trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
-            trajectory = stop_before(trajectory, pushes_scenery(space, trajectory.states[:-1], trajectory.actions))
-            states, actions = rollout_states(space, trajectory)
-            reached = bool(mask[int(trajectory.states[-1])])
-            # The space holds only states reachable from ``state``: no goal state in it means no plan can succeed
-            # (in a relevance abstraction: none that leaves the toys it holds still where they are).
-            reason = trajectory.reason if reached or bool(np.asarray(mask).any()) else "unreachable"
-            self._plans[key] = (states, actions, reached, reason)
+            self._plans[key] = plan_for_goal(self._space(state, goal), state, goal, self.library, self.settings,
+                                             max_steps)
         states, actions, reached, reason = self._plans[key]
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library))
@@ -430,13 +375,27 @@ class Learner:
         return out
 
     # ----------------------------------------------------------------- persistence
-    def save(self, directory: str | Path) -> Path:
-        from groundlang.model_io import save_learner
+    def state_dict(self) -> dict:
+        """The trained model as plain values: JSON-ready settings, vocabulary, words, palettes and task
+        library (as ASP text), and ``globals``, its tensors by name (:mod:`groundlang.learner_state`).
+        NotFittedError before training."""
+        if self.globals is None or self.vocab is None:
+            raise NotFittedError("cannot save a learner that has not been trained")
+        return learner_state(self)
 
-        return save_learner(self, directory)
+    @classmethod
+    def from_state_dict(cls, state: dict, where: str = "state_dict") -> "Learner":
+        """The learner :meth:`state_dict` describes; without ``globals`` in ``state`` it has its
+        vocabulary but no tensors yet (a loader reads them once it knows their shapes). ``where`` names
+        the source in messages. KeyError, TypeError or ValueError for malformed values."""
+        return learner_from_state(cls, state, where)
+
+    def save(self, directory: str | Path) -> Path:
+        """Write the model to ``directory`` as JSON and tensors (see :mod:`groundlang.model_io`)."""
+        return write_model(self.state_dict(), directory)
 
     @classmethod
     def load(cls, directory: str | Path) -> "Learner":
-        from groundlang.model_io import load_learner
+        """Read a model :meth:`save` wrote; ModelFormatError on anything amiss."""
+        return read_model(directory, cls.from_state_dict)
 
-        return load_learner(directory)

@@ -28,19 +28,22 @@ import math
 import os
 import re
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 import torch
 
 from groundlang.interrupt import deferred_interrupts
-from groundlang.model import storage
+from groundlang.logic import storage
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "save_learner", "load_learner"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "write_model", "read_model"]
 
 FORMAT = "groundlang-model"
 FORMAT_VERSION = 14  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases; 13: the words added to the lexicon (``lexicon``), multiword prepositions joined into one token; 14: content-named tensor file, palettes recorded
 log = logging.getLogger(__name__)
+T = TypeVar("T")
 
 MODEL_JSON = "model.json"
 # The tensor file; plain "globals.npz" is its name before format 13, removed by the next save.
@@ -85,33 +88,19 @@ def check_model_destination(directory: str | Path, option: str = "") -> Path:
     return directory
 
 
-def save_learner(learner, directory: str | Path) -> Path:
-    """Write a fitted learner to ``directory`` (created if needed; see :func:`check_model_destination`);
-    returns the directory."""
-    from groundlang.learner import NotFittedError
-
-    if learner.globals is None or learner.vocab is None:
-        raise NotFittedError("cannot save a learner that has not been trained")
-    if not learner.palettes:
-        raise ValueError("cannot save a learner whose training palettes are unknown (train it with fit())")
+def write_model(state: dict, directory: str | Path) -> Path:
+    """Write a learner's ``state_dict()`` to ``directory`` (created if needed; see
+    :func:`check_model_destination`); returns the directory."""
     directory = check_model_destination(directory)
     buffer = io.BytesIO()
-    np.savez(buffer, **{k: v.detach().cpu().numpy() for k, v in learner.globals.items()})
+    np.savez(buffer, **{k: v.detach().cpu().numpy() for k, v in state["globals"].items()})
     tensors = buffer.getvalue()
     digest = hashlib.sha256(tensors).hexdigest()
     tensor_name = f"globals-{digest[:16]}.npz"
     meta = {
         "format": FORMAT,
         "version": FORMAT_VERSION,
-        "language_model": learner.lm.name,
-        "language_model_settings": learner.lm.settings(),
-        "vocabulary": learner.vocab.to_json(),
-        # the words themselves, not the files' paths: the model parses alike where the files are not
-        "lexicon": learner.lexicon_words,
-        "palettes": learner.palettes,
-        "task_library": learner.library.source_text(),
-        "planning": learner.settings.as_dict(),
-        "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed},
+        **{k: v for k, v in state.items() if k != "globals"},
         "globals_file": tensor_name,
         "globals_sha256": digest,
     }
@@ -173,30 +162,16 @@ def _read_json(directory: Path, any_version: bool = False) -> dict:
     return meta
 
 
-def load_learner(directory: str | Path):
-    """Read a learner written by :func:`save_learner`; raises ModelFormatError on anything amiss."""
-    from groundlang.learner import Learner
-    from groundlang.inference.planning import TaskSettings
-    from groundlang.logic.tasks import TaskLibrary
-    from groundlang.model.language_models import get_language_model
-    from groundlang.model.vocabulary import Vocabulary
-
+def read_model(directory: str | Path, from_state_dict: Callable[[dict], T]) -> T:
+    """Read a model written by :func:`write_model`: ``from_state_dict`` (``Learner.from_state_dict``) builds
+    the learner from ``model.json``'s fields, and its ``globals`` are then read from the tensor file, each
+    checked against the shape the learner's vocabulary implies before it is read. Raises ModelFormatError
+    on anything amiss."""
     directory = Path(directory)
     meta = _read_json(directory)
     try:
-        if not isinstance(meta["lexicon"], dict):  # never a path: loading a model reads no other file
-            raise ValueError(f"lexicon is {type(meta['lexicon']).__name__}, expected words by category")
-        learner = Learner(
-            get_language_model(meta["language_model"], **meta["language_model_settings"]),
-            library=TaskLibrary.from_text(meta["task_library"], f"{directory / MODEL_JSON}:task_library"),
-            steps=meta["training"]["steps"], lr=meta["training"]["lr"], seed=meta["training"]["seed"],
-            settings=TaskSettings(**meta["planning"]), lexicon=[meta["lexicon"]],
-        )
-        learner.vocab = Vocabulary.from_json(meta["vocabulary"], learner.word_lexicon)
-        learner.palettes = _checked_palettes(meta["palettes"])
-        missing = {t.name for t in learner.library.tasks} - set(learner.vocab.tasks)
-        if missing:
-            raise ValueError(f"the vocabulary lacks the lifted tasks {sorted(missing)} of the saved task library")
+        fields = {k: v for k, v in meta.items() if k not in ("format", "version", "globals_file", "globals_sha256")}
+        learner = from_state_dict(fields, where=f"{directory / MODEL_JSON}")
         tensor_name = meta["globals_file"]
         if not isinstance(tensor_name, str) or not _TENSOR_FILE.fullmatch(tensor_name):
             raise ValueError(f"globals_file is {tensor_name!r}; expected globals-<16 hex digits>.npz")
@@ -224,18 +199,6 @@ def _reason(exc: BaseException) -> str:
     if isinstance(exc, KeyError):
         return f"no field {exc.args[0]!r}"
     return " ".join(f"{type(exc).__name__}: {exc}".split())[:300]
-
-
-def _checked_palettes(palettes) -> list[dict]:
-    """The palettes a model was trained on, as written: a list of {name, colours, shapes}."""
-    if not isinstance(palettes, list) or not palettes:
-        raise ValueError("palettes must be a non-empty list")
-    for p in palettes:
-        if (not isinstance(p, dict) or not isinstance(p.get("name"), str)
-                or not all(isinstance(v, list) and all(isinstance(x, str) for x in v)
-                           for v in (p.get("colours"), p.get("shapes")))):
-            raise ValueError("each palette must be {name: str, colours: [str], shapes: [str]}")
-    return palettes
 
 
 def _expected_globals(learner) -> dict:

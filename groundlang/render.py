@@ -206,7 +206,7 @@ def picture_format(path: str | Path) -> str:
 
 def check_picture_destination(path: str | Path, option: str = "--out") -> Path:
     """A picture's path, refused before any work if its format is unsupported or it cannot be written."""
-    from groundlang.model.storage import check_destination
+    from groundlang.logic.storage import check_destination
 
     picture_format(path)
     return check_destination(path, option)
@@ -225,7 +225,7 @@ def save_picture(path: str | Path, state: State, trajectory=None, title: str | N
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
     draw_state(state, ax=ax, trajectory=trajectory, title=title)
-    from groundlang.model.storage import atomic_path
+    from groundlang.logic.storage import atomic_path
 
     with atomic_path(path) as tmp:
         # "tight" grows the canvas to take in the legend below the map and a long title.

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterable
+from importlib.resources import files
+from pathlib import Path
 
 from groundlang.logic.schema import domain_schema
 from groundlang.logic.tasks import TaskLibrary
@@ -11,7 +13,7 @@ from groundlang.model.encoding import Observation, bare_preposition, entity_word
 from groundlang.model.interpretations import OTHER_ROLES, alignable_roles
 from groundlang.model.vocabulary import Vocabulary, class_token
 
-__all__ = ["build_vocabulary", "palette_schema"]
+__all__ = ["build_vocabulary", "palette_schema", "schema_words", "word_files_beside"]
 
 
 def palette_schema(library: TaskLibrary, palette):
@@ -60,3 +62,27 @@ def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, li
     vocab.add_preps(preps)
     vocab.read_misspellings(counts)
     return vocab
+
+
+def word_files_beside(library: TaskLibrary) -> list[Path]:
+    """The word file of each library file that has one: ``mine.words`` beside ``mine.lp`` (the package's
+    own files too: ``logic/domains/williams2018.words``)."""
+    out = []
+    for source in library.sources:
+        if source.name.startswith("groundlang.logic/"):
+            path = Path(str(files("groundlang.logic"))) / source.name.removeprefix("groundlang.logic/")
+        else:
+            path = Path(source.name)
+        words = path.with_suffix(".words")
+        if path.suffix == ".lp" and words.is_file():
+            out.append(words)
+    return out
+
+
+def schema_words(schema) -> dict[str, list[str]]:
+    """The words a domain's schema names: its classes and shapes are nouns, its colours hues (values
+    written in camelCase, ``darkGray``, are not words anyone types and are left out)."""
+    nouns = [c for c in schema.classes] + list(schema.values.get("shape", ()))
+    hues = list(schema.values.get("colour", ()))
+    return {category: [w for w in words if w.isalpha() and w.islower()]
+            for category, words in (("NOUN", nouns), ("HUE", hues))}

@@ -47,11 +47,12 @@ import math
 import os
 from dataclasses import dataclass, field, replace
 from itertools import combinations
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
+from groundlang.inference.library_search import select_library
+from groundlang.inference.library_text import library_text, write_library
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.mlirl import mlirl
 from groundlang.inference.planning import TaskSettings
@@ -65,8 +66,7 @@ from groundlang.inference.lifting import (  # noqa: F401
     task_name,
 )
 from groundlang.logic.program import Source
-from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary, format_lifted_task
-from groundlang.model.storage import write_atomically
+from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary
 
 __all__ = ["DISCOVERY_IRL", "DiscoverySettings", "DemonstrationReport", "Discovery", "discover_tasks",
            "lift_goal", "structure_key", "task_name", "singling_out", "write_library"]
@@ -76,10 +76,6 @@ logger = logging.getLogger(__name__)
 # Same MLIRL settings as ``groundlang irl``: non-negative weights with a sparsity prior let the
 # whole path, not only where it stopped, pick the proposition that was wanted.
 DISCOVERY_IRL = dict(temperature=0.5, l1=0.1, nonnegative=True)
-# Exhaustive library search when it has at most this many subsets; backward elimination beyond.
-MAX_EXHAUSTIVE_SUBSETS = 200_000
-# How many of the best libraries the result lists (to show the winning margin).
-RANKED_LIBRARIES = 5
 
 
 @dataclass(frozen=True)
@@ -173,46 +169,6 @@ class Discovery:
             "alternatives": [{"tasks": list(names), "score": s} for names, s in self.alternatives],
             "demonstrations": [r.to_json() for r in self.demonstrations],
         }
-
-
-# ---------------------------------------------------------------- lifting
-
-
-def _library_score(table: np.ndarray, chosen: Sequence[int], sizes: np.ndarray, atom_cost: float) -> float:
-    """``J`` of the module docstring. ``table``: ``[D, L]`` per-demonstration scores (-inf: not applicable)."""
-    best = table[:, list(chosen)].max(axis=1)
-    if not np.isfinite(best).all():
-        return -math.inf
-    return float(best.sum() - len(table) * math.log(len(chosen)) - atom_cost * sizes[list(chosen)].sum())
-
-
-def _select_library(table: np.ndarray, sizes: np.ndarray, atom_cost: float,
-                    max_tasks: int) -> list[tuple[tuple[int, ...], float]]:
-    """Candidate-task index sets with their ``J``, best first (at most RANKED_LIBRARIES of them).
-
-    Exhaustive over subsets of up to ``max_tasks`` tasks; ties go to fewer tasks, then earlier
-    candidates. With too many subsets: backward elimination from all candidates (one result).
-    """
-    n = table.shape[1]
-    total = sum(math.comb(n, k) for k in range(1, min(max_tasks, n) + 1))
-    if total <= MAX_EXHAUSTIVE_SUBSETS:
-        scored = [(subset, _library_score(table, subset, sizes, atom_cost))
-                  for k in range(1, min(max_tasks, n) + 1) for subset in combinations(range(n), k)]
-        scored = [item for item in scored if math.isfinite(item[1])]
-        # Stable sort: among equal scores, smaller and earlier subsets (generation order) come first.
-        scored.sort(key=lambda item: -round(item[1], 9))
-        return scored[:RANKED_LIBRARIES]
-    logger.info("discovery: %d candidate tasks, searching the library by backward elimination", n)
-    best = list(range(n))
-    best_score = _library_score(table, best, sizes, atom_cost)
-    while len(best) > 1:
-        trials = [(_library_score(table, [j for j in best if j != i], sizes, atom_cost), i) for i in best]
-        score, drop = max(trials, key=lambda si: (si[0], -si[1]))
-        if score < best_score - 1e-9 and len(best) <= max_tasks:
-            break
-        best.remove(drop)
-        best_score = score
-    return [(tuple(best), best_score)] if math.isfinite(best_score) else []
 
 
 # ---------------------------------------------------------------- the pipeline
@@ -361,7 +317,7 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
     scores, best = _score_table(demos, candidates, settings, cache_dir, progress)
     sizes = np.array([len(t.goal) for t in candidates.tasks])
     usable = np.isfinite(scores).any(axis=1)
-    ranked = _select_library(scores[usable], sizes, settings.atom_cost, settings.max_tasks) if usable.any() else []
+    ranked = select_library(scores[usable], sizes, settings.atom_cost, settings.max_tasks) if usable.any() else []
     if not ranked:
         raise ValueError(f"no library of at most {settings.max_tasks} candidate tasks explains every "
                          "demonstration that has a candidate goal")
@@ -382,7 +338,7 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
     tasks = tuple(candidates.tasks[j] for j in chosen)
     if settings.restrict:
         tasks = tuple(_restricted(t, reports, demos, attributes) for t in tasks)
-    text = _library_text(tasks, reports, score, settings, len(instances), pfs)
+    text = library_text(tasks, reports, score, settings, len(instances), pfs)
     # Loaded back beside the PF files its restrictions may name, so that they are checked now.
     library = TaskLibrary([Source("<discovered tasks>", text), *(pfs.sources if pfs else ())])
     logger.info("discovery: library %s (score %.3f)", ", ".join(t.name for t in tasks), score)
@@ -442,49 +398,3 @@ def _smallest_exclusion(names: Sequence[str], cases) -> tuple[str, ...]:
             if not any(set(subset) <= peer for _, peers in cases for peer in peers):
                 return subset
     return ()
-
-
-def _library_text(tasks, reports, score, settings: DiscoverySettings, num_instances: int,
-                  pfs: TaskLibrary | None = None) -> str:
-    """The discovered tasks as ASP facts (tasks.lp's format) with a comment header and per-task evidence."""
-    lines = [
-        "% Lifted tasks discovered from demonstrations by groundlang (inference/discovery.py).",
-        "%",
-        "% Format as in groundlang's tasks.lp: task(Name), var(Name, \"V\", Class), goal(Name, Pf, (\"V\", ...)).",
-        f"% Evidence: {num_instances} instances, {len(reports)} distinct demonstrations. Each task below was",
-        "% lifted from MLIRL's top-weighted position PFs (objects -> typed variables) and kept because it",
-        f"% shortens the description of the demonstrations (score J = {score:.3f} nats; weight margin",
-        f"% {settings.weight_margin}, up to {settings.max_conjuncts} atoms per goal, "
-        f"{settings.atom_cost:.3f} nats per atom).",
-        ("% Edit freely: this file loads with TaskLibrary.load([path])." if pfs is None else
-         f"% Edit freely: this file loads with TaskLibrary.load([path, ...]) beside the PFs it names: "
-         f"{pfs.program.user_names}."),
-        "",
-    ]
-    for task in tasks:
-        explained = [r for r in reports if r.task == task.name]
-        lines.append(f"% {task}")
-        lines.append(f"%   explains {len(explained)} demonstration(s):")
-        for r in explained:
-            picks = ", ".join(f"{v} {_describe_pick(c)}" for v, c in r.singled_out)
-            more = f" (+{len(r.instances) - 1} more)" if len(r.instances) > 1 else ""
-            lines.append(f"%   - {r.instances[0]}{more}: {r.grounding.goal_text}, "
-                         f"log-likelihood {r.log_likelihood:.3f}; {picks}")
-        lines.append(format_lifted_task(task))
-    unexplained = [r for r in reports if r.task is None]
-    if unexplained:
-        lines.append("% Not explained by any task: " + ", ".join(r.instances[0] for r in unexplained))
-    return "\n".join(lines).rstrip("\n") + "\n"
-
-
-def _describe_pick(conjunction) -> str:
-    if conjunction is None:
-        return "not singled out by colour/shape"
-    if not conjunction:
-        return "the only one of its class"
-    return "by " + " ∧ ".join(map(str, conjunction))
-
-
-def write_library(discovery: Discovery, path: str | os.PathLike) -> Path:
-    """Write the discovered library's ASP text to ``path`` atomically (temporary file + os.replace)."""
-    return write_atomically(path, discovery.text)

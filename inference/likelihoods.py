@@ -50,7 +50,7 @@ import numpy as np
 from groundlang.inference.planning import (TaskSettings, as_transitions, demonstration_log_likelihood, solve_task,
                                           threads_for)
 from groundlang.logic.atoms import Atom, parse_atom
-from groundlang.model.storage import FileRefused, check_folder, read_limited, write_atomically
+from groundlang.logic.storage import FileRefused, check_folder, read_limited, write_atomically
 
 __all__ = ["CACHE_VERSION", "behaviour_likelihood_table", "cache_directory", "entry_key", "pad_table"]
 

@@ -1,8 +1,8 @@
 """Loading and grounding ASP programs safely: package rules, user rules, clear errors.
 
 A :class:`Program` is a checked, parsed set of sources (the package's ``.lp``
-files, read with ``importlib.resources``, and any user ``.lp`` files). It is
-parsed once; each environment then gets one ``clingo.Control`` with the
+files, read with ``importlib.resources``, and any user ``.lp`` files; both are
+read and parsed by :mod:`groundlang.logic.sources`). It is parsed once; each environment then gets one ``clingo.Control`` with the
 program plus that environment's facts, grounded once.
 
 Safety and errors (all ``AspError``, a ``ValueError``, so the CLI prints one line):
@@ -22,23 +22,29 @@ Safety and errors (all ``AspError``, a ``ValueError``, so the CLI prints one lin
 
 from __future__ import annotations
 
-import errno
 import json
 import logging
 import numbers
 import os
-import re
-import stat
 import subprocess
 import sys
 import threading
 from dataclasses import dataclass, field
-from importlib.resources import files
-from pathlib import Path
 from typing import Iterable, Sequence
 
 import clingo
 import clingo.ast as ast
+
+from groundlang.logic.sources import (
+    AspError,
+    AspScriptRefused,
+    AspSyntaxError,
+    Source,
+    file_source,
+    one_line,
+    package_source,
+    parse_source,
+)
 
 __all__ = [
     "AspError",
@@ -63,142 +69,12 @@ CHILD_MEMORY_LIMIT = 2 << 30
 _CHILD_GRACE = 5.0
 
 
-class AspError(ValueError):
-    """An ASP program that cannot be used; the message names the file and line."""
-
-
-class AspSyntaxError(AspError):
-    """A source that clingo cannot parse."""
-
-
-class AspScriptRefused(AspError):
-    """A source with ``#script`` (without opt-in) or ``#include``."""
-
-
 class AspGroundingError(AspError):
     """clingo refused to ground (unsafe variables, undefined operations that are errors...)."""
 
 
 class AspTimeout(AspError):
     """Grounding or solving took longer than the time limit."""
-
-
-@dataclass(frozen=True)
-class Source:
-    """ASP text and the name its errors are reported under (a path or ``groundlang.logic/x.lp``)."""
-
-    name: str
-    text: str
-
-
-def package_source(filename: str) -> Source:
-    """A ``.lp`` file shipped in ``groundlang.logic``."""
-    resource = files("groundlang.logic") / filename
-    return Source(f"groundlang.logic/{filename}", resource.read_text(encoding="utf-8"))
-
-
-# A task library is a few KB; a wrong path (a log, /dev/zero) must not be read whole.
-MAX_PROGRAM_BYTES = 4 * 2**20
-
-
-def _read_regular(path: Path) -> bytes:
-    """A regular file of at most MAX_PROGRAM_BYTES (model.storage.read_limited does the same for the layers
-    above; logic imports none of them). Opened non-blocking: a FIFO must not hang the open."""
-    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-    try:
-        mode = os.fstat(fd).st_mode
-    except BaseException:
-        os.close(fd)
-        raise
-    if not stat.S_ISREG(mode):  # checked before fdopen, which refuses a folder naming only the descriptor
-        os.close(fd)
-        if stat.S_ISDIR(mode):
-            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
-        raise AspError(f"{path}: not a regular file (a FIFO or device); expected an ASP program (.lp)")
-    with os.fdopen(fd, "rb") as handle:
-        data = handle.read(MAX_PROGRAM_BYTES + 1)
-    if len(data) > MAX_PROGRAM_BYTES:
-        raise AspError(f"{path}: more than the {MAX_PROGRAM_BYTES:,} bytes allowed for an ASP program")
-    return data
-
-
-def file_source(path: str | Path) -> Source:
-    """A user's ``.lp`` file; raises OSError when unreadable and AspError when not UTF-8."""
-    path = Path(path)
-    data = _read_regular(path)
-    try:
-        return Source(str(path), data.decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        line = data[: exc.start].count(b"\n") + 1
-        raise AspSyntaxError(f"{path}:{line}: not UTF-8 text (byte {exc.start})") from None
-
-
-# Comments and strings are removed before looking for directives, so that "% no #include here" is fine.
-_COMMENT_OR_STRING = re.compile(r'%\*.*?\*%|%[^\n]*|"(?:\\.|[^"\\])*"', re.DOTALL)
-_INCLUDE = re.compile(r"#include\b")
-_NON_ASCII = re.compile(r"[^\x00-\x7f]")
-
-
-def _blank(match: re.Match) -> str:
-    return re.sub(r"[^\n]", " ", match.group(0))
-
-
-def _one_line(text: str) -> str:
-    return " ".join(text.split())
-
-
-def _relocate(node, name: str) -> None:
-    """Give every location in an AST the source's name (clingo says ``<string>``)."""
-    if isinstance(node, ast.AST):
-        if "location" in node.keys():
-            b, e = node.location.begin, node.location.end
-            node.location = ast.Location(
-                ast.Position(name, b.line, b.column), ast.Position(name, e.line, e.column)
-            )
-        for key in node.child_keys:
-            _relocate(getattr(node, key), name)
-    elif isinstance(node, (ast.ASTSequence, list, tuple)):
-        for child in node:
-            _relocate(child, name)
-
-
-def _parse(source: Source, allow_scripts: bool) -> list:
-    """Parse one source into AST statements, refusing scripts and includes."""
-    scrubbed = _COMMENT_OR_STRING.sub(_blank, source.text)
-    m = _INCLUDE.search(scrubbed)
-    if m:
-        line = scrubbed.count("\n", 0, m.start()) + 1
-        raise AspScriptRefused(
-            f"{source.name}:{line}: #include is not allowed; pass the included file as another source"
-        )
-    # clingo's lexer reports a non-ASCII character one byte at a time, and the
-    # half character in its message aborts the process (a decode error inside
-    # a C callback): refuse such text here, with the position.
-    m = _NON_ASCII.search(scrubbed)
-    if m:
-        line = scrubbed.count("\n", 0, m.start()) + 1
-        column = m.start() - scrubbed.rfind("\n", 0, m.start())
-        raise AspSyntaxError(
-            f"{source.name}:{line}:{column}: unexpected character {m.group(0)!r}; "
-            "names and operators are ASCII (other text only in comments and strings)"
-        )
-    messages: list[str] = []
-    statements: list = []
-    try:
-        ast.parse_string(
-            source.text, statements.append, logger=lambda code, msg: messages.append(msg)
-        )
-    except RuntimeError:
-        text = _one_line(" ".join(messages)) or "syntax error"
-        raise AspSyntaxError(text.replace("<string>", source.name)) from None
-    for stm in statements:
-        if stm.ast_type == ast.ASTType.Script and not allow_scripts:
-            raise AspScriptRefused(
-                f"{source.name}:{stm.location.begin.line}: #script blocks are refused; "
-                "pass allow_scripts=True only for programs you trust"
-            )
-        _relocate(stm, source.name)
-    return statements
 
 
 MAX_TIME_LIMIT = 10**6  # seconds (11 days); longer waits overflow the platform's timeouts
@@ -249,7 +125,7 @@ class Program:
     def __post_init__(self) -> None:
         statements = []
         for source in self.sources:
-            statements.extend(_parse(source, self.allow_scripts))
+            statements.extend(parse_source(source, self.allow_scripts))
         object.__setattr__(self, "_statements", tuple(statements))
 
     @classmethod
@@ -294,7 +170,7 @@ class Program:
 
         def logger(code: clingo.MessageCode, msg: str) -> None:
             messages.append(msg)
-            log.debug("clingo: %s", _one_line(msg))
+            log.debug("clingo: %s", one_line(msg))
 
         ctl = clingo.Control(list(arguments), logger=logger)
         try:
@@ -303,13 +179,13 @@ class Program:
                     builder.add(stm)
         except RuntimeError as exc:
             # e.g. an allowed #script in a language this clingo build cannot run
-            raise AspGroundingError(_one_line(" ".join(messages) or str(exc))) from None
+            raise AspGroundingError(one_line(" ".join(messages) or str(exc))) from None
         try:
             if facts:
                 ctl.add("base", [], facts)
         except RuntimeError:
             raise AspSyntaxError(
-                "environment facts: " + _one_line(" ".join(messages)).replace("<block>", "facts")
+                "environment facts: " + one_line(" ".join(messages)).replace("<block>", "facts")
             ) from None
 
         def ground() -> None:
@@ -317,7 +193,7 @@ class Program:
                 ctl.ground([("base", [])])
             except RuntimeError:
                 errors = [m for m in messages if "error" in m] or messages
-                raise AspGroundingError(_one_line(" ".join(errors)) or "grounding failed") from None
+                raise AspGroundingError(one_line(" ".join(errors)) or "grounding failed") from None
 
         _run_with_limit(ground, time_limit, f"grounding {self.names}")
         return ctl
@@ -368,7 +244,7 @@ def _solve_in_child(program: Program, facts: str, models: int, time_limit: float
     try:
         reply = json.loads(done.stdout)
     except ValueError:
-        reason = (_one_line(done.stderr)[-300:] or f"exit code {done.returncode}")
+        reason = (one_line(done.stderr)[-300:] or f"exit code {done.returncode}")
         if done.returncode < 0 or "MemoryError" in reason or "bad_alloc" in reason:
             reason = f"it ran out of memory ({CHILD_MEMORY_LIMIT >> 30} GiB) or crashed: {reason}"
         raise AspGroundingError(f"grounding {program.names} failed: {reason}") from None

@@ -62,6 +62,7 @@ __all__ = [
     "RoleBinding",
     "interpretations",
     "unbroken_held_parts",
+    "without_unbroken_held_parts",
     "object_names",
     "task_roles",
     "alignable_roles",
@@ -259,3 +260,15 @@ def unbroken_held_parts(interps: Sequence[Interpretation], states: Sequence[Stat
     for j, interp in enumerate(interps):
         out[j] = any(a in unbroken for a in interp.task.holding)
     return out
+
+
+def without_unbroken_held_parts(groups: Sequence[Sequence[Interpretation]], behaviour: Sequence[Sequence[float]],
+                                demonstrations: Sequence[Sequence[State]], tables: Sequence[PFTables]):
+    """Each instance's interpretations and behaviour values without the readings its demonstration
+    rules out (:func:`unbroken_held_parts`): ``(groups, behaviour)`` as lists of lists."""
+    kept_groups, kept_values = [], []
+    for group, values, states, table in zip(groups, behaviour, demonstrations, tables):
+        out = unbroken_held_parts(group, states, table)
+        kept_groups.append([i for i, o in zip(group, out) if not o])
+        kept_values.append([v for v, o in zip(values, out) if not o])
+    return kept_groups, kept_values

@@ -40,16 +40,8 @@ import numpy as np
 from groundlang.logic.atoms import Atom, parse_atom
 
 from .pf_tables import MAX_TABULATED_CELLS
-from .statespace import (
-    MAX_STATES_VARIABLE,
-    StateSpace,
-    StateSpaceError,
-    _powers,
-    default_max_states,
-    enumerate_states,
-    search,
-    state_count_bound,
-)
+from .state_search import MAX_STATES_VARIABLE, default_max_states, key_powers, search, state_count_bound
+from .statespace import StateSpace, StateSpaceError, enumerate_states
 from .world import ACTION_DELTAS, State
 
 __all__ = ["AbstractStateSpace", "abstract_space", "exact_fits", "relevant_toys", "state_space_for",
@@ -76,7 +68,7 @@ class AbstractStateSpace(StateSpace):
         self._moving = np.array([0] + [1 + i for i in self.relevant], dtype=np.int64)
         self._still = np.array([1 + i for i in self.scenery], dtype=np.int64)
         self._fixed = initial.positions[self._still]  # [k - m, 2]
-        self._powers = _powers(int(cell_of.max()) + 1, len(self._moving))
+        self._powers = key_powers(int(cell_of.max()) + 1, len(self._moving))
 
     def __repr__(self) -> str:
         names = self.layout.toy_names

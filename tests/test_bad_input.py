@@ -29,7 +29,8 @@ from hypothesis import strategies as st
 
 from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus
-from groundlang.model_io import FORMAT_VERSION, ModelFormatError, load_learner
+from groundlang.learner import Learner
+from groundlang.model_io import FORMAT_VERSION, ModelFormatError
 from test_corpus import MALFORMED  # the corpus-file rows and their messages, shared with test_corpus
 
 TESTS = Path(__file__).parent
@@ -48,8 +49,6 @@ PNG = bytes.fromhex(
 @pytest.fixture(scope="session")
 def trained_model(tmp_path_factory) -> Path:
     """A model trained once per session on the example corpus (24 instances, about 3 s)."""
-    from groundlang.learner import Learner
-
     root = tmp_path_factory.mktemp("trained")
     learner = Learner(cache_dir=root / "cache").fit(read_corpus(EXAMPLES, "sokoban").instances)
     return learner.save(root / "model")
@@ -529,7 +528,7 @@ def _fresh_copy(trained_model: Path, tmp_path_factory) -> Path:
 
 def _loads_or_refuses(d: Path) -> None:
     try:
-        learner = load_learner(d)
+        learner = Learner.load(d)
     except ModelFormatError as exc:
         assert "\n" not in str(exc)
         assert str(exc).startswith(str(d))

@@ -15,7 +15,6 @@ from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus
 from groundlang.inference.discovery import (
     DiscoverySettings,
-    _select_library,
     discover_tasks,
     lift_goal,
     lifted_key,
@@ -24,6 +23,7 @@ from groundlang.inference.discovery import (
     task_name,
     write_library,
 )
+from groundlang.inference.library_search import select_library
 from groundlang.logic.atoms import Atom, parse_atom, parse_goal
 from groundlang.logic.tasks import AspError, TaskLibrary, Variable
 from groundlang.model.tasks import candidate_tasks
@@ -91,7 +91,7 @@ def test_library_search_prefers_a_shared_structure_over_a_near_tie():
                       [-50.0, -2.0, -30.0],
                       [-50.0, -3.0, -25.0],
                       [-60.0, -12.1, -12.0]])
-    ranked = _select_library(table, np.array([1, 1, 1]), math.log(5), max_tasks=3)
+    ranked = select_library(table, np.array([1, 1, 1]), math.log(5), max_tasks=3)
     (best, score), (runner_up, second) = ranked[0], ranked[1]
     assert best == (0, 1)
     assert score == pytest.approx(-1 - 2 - 3 - 12.1 - 4 * math.log(2) - 2 * math.log(5))
@@ -101,8 +101,8 @@ def test_library_search_prefers_a_shared_structure_over_a_near_tie():
 
 def test_library_search_refuses_what_no_library_covers():
     table = np.array([[-1.0, -np.inf], [-np.inf, -1.0]])
-    assert _select_library(table, np.array([1, 1]), 1.0, max_tasks=1) == []
-    assert _select_library(table, np.array([1, 1]), 1.0, max_tasks=2)[0][0] == (0, 1)
+    assert select_library(table, np.array([1, 1]), 1.0, max_tasks=1) == []
+    assert select_library(table, np.array([1, 1]), 1.0, max_tasks=2)[0][0] == (0, 1)
 
 
 def test_settings_are_checked():

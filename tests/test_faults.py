@@ -116,7 +116,7 @@ def test_an_unwritable_cache_is_one_warning_and_the_run_goes_on(instances, tmp_p
 
 
 def test_cli_train_with_a_full_cache_folder_trains_and_warns(tmp_path, monkeypatch, capsys, caplog):
-    from groundlang.model import storage
+    from groundlang.logic import storage
 
     monkeypatch.setenv("GROUNDLANG_CACHE", str(tmp_path / "cache"))
     real = storage.write_atomically

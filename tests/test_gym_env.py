@@ -146,3 +146,10 @@ def test_a_learned_policy_carries_out_a_command_in_a_novel_layout():
     followed = learner.follow("take the star to the red room", novel)
     assert [int(a) for a in actions] == [int(a) for a in followed.actions]
     assert states == followed.states
+
+
+def test_actions_are_the_worlds_moves_then_the_planners_terminate():
+    from groundlang.inference.planning import TERMINATE
+
+    assert [(a.name, int(a)) for a in CleanupAction][:-1] == [(a.name, int(a)) for a in Action]
+    assert CleanupAction.TERMINATE == TERMINATE == len(Action)

@@ -76,8 +76,8 @@ def learner():
 
 def test_save_interrupted_between_its_two_files_still_writes_both(learner, tmp_path, monkeypatch):
     """Ctrl-C after the tensors are renamed: the JSON naming them is still written, then the interrupt."""
-    from groundlang.model import storage
-    from groundlang.model_io import load_learner
+    from groundlang.logic import storage
+    from groundlang.learner import Learner
 
     real = storage.write_atomically
     calls = []
@@ -93,7 +93,7 @@ def test_save_interrupted_between_its_two_files_still_writes_both(learner, tmp_p
         learner.save(tmp_path / "model")
     assert len(calls) == 2 and calls[0].startswith("globals-") and calls[1] == "model.json"
     monkeypatch.undo()
-    loaded = load_learner(tmp_path / "model")
+    loaded = Learner.load(tmp_path / "model")
     assert loaded.vocab.words == learner.vocab.words
 
 
@@ -227,9 +227,9 @@ def test_train_interrupted_keeps_nothing_then_resumes_and_protects_the_previous_
     assert "Traceback" not in err
     assert _last_line(err) == f"groundlang train: interrupted; {model} left as it was (the previous complete model)"
     assert {p.name: p.read_bytes() for p in model.iterdir()} == before
-    from groundlang.model_io import load_learner
+    from groundlang.learner import Learner
 
-    assert load_learner(model).lexicon()
+    assert Learner.load(model).lexicon()
 
 
 @pytest.mark.slow
@@ -253,7 +253,7 @@ def test_evaluate_interrupted_writes_no_result_and_keeps_cache(tmp_path):
 
 def test_nested_deferral_waits_for_the_outermost_block(tmp_path):
     """An inner deferral inside an outer one (save's, around its two files) must not raise at its own end."""
-    from groundlang.model.storage import write_atomically
+    from groundlang.logic.storage import write_atomically
 
     with pytest.raises(KeyboardInterrupt):
         with deferred_interrupts():

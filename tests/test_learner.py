@@ -92,6 +92,18 @@ def test_saved_model_loads_back_with_the_same_posteriors(learner, corpus, tmp_pa
         assert torch.allclose(torch.as_tensor(a), torch.as_tensor(b), atol=1e-6)
 
 
+def test_state_dict_round_trips_without_files(learner, corpus):
+    state = learner.state_dict()
+    assert json.loads(json.dumps({k: v for k, v in state.items() if k != "globals"}))  # JSON-ready
+    copy = Learner.from_state_dict(state)
+    assert sorted(copy.globals) == sorted(learner.globals)
+    command, initial = "go to the red room", corpus.instances[5].initial_state
+    assert copy.posterior(command, initial).probabilities.tolist() == \
+        learner.posterior(command, initial).probabilities.tolist()
+    with pytest.raises(NotFittedError):
+        Learner().state_dict()
+
+
 def test_foreign_and_corrupt_model_directories_are_refused(learner, tmp_path):
     with pytest.raises(ModelFormatError, match="no model.json"):
         Learner.load(tmp_path)

@@ -26,8 +26,8 @@ import torch
 from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
 from groundlang.learner import Learner
-from groundlang.model import storage
-from groundlang.model_io import ModelFormatError, load_learner
+from groundlang.logic import storage
+from groundlang.model_io import ModelFormatError
 
 EXAMPLES = example_corpus_path()
 REPO = Path(__file__).parent.parent
@@ -76,7 +76,7 @@ def test_a_full_disk_keeps_the_previous_model_and_names_the_file(learners, tmp_p
     assert caught.value.errno == errno.ENOSPC
     assert Path(caught.value.filename) == {1: model / f"globals-{_digest(new)}.npz", 2: model,
                                            3: model / "model.json"}[failing_write]
-    loaded = load_learner(model)
+    loaded = Learner.load(model)
     assert _same_globals(loaded, old)
     assert json.loads(before["model.json"]) == json.loads((model / "model.json").read_bytes())
     assert not [p for p in model.iterdir() if p.name.startswith(".")]  # the temporary file was removed
@@ -92,7 +92,7 @@ def test_cli_train_on_a_full_disk_says_which_file_and_keeps_the_model(tmp_path, 
     monkeypatch.setenv("GROUNDLANG_CACHE", str(tmp_path / "cache"))
     assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "m"),
                  "--seed", "0"]) == 0
-    before = load_learner(tmp_path / "m")
+    before = Learner.load(tmp_path / "m")
     real_fsync = os.fsync
 
     def full_disk(fd):
@@ -108,14 +108,14 @@ def test_cli_train_on_a_full_disk_says_which_file_and_keeps_the_model(tmp_path, 
     err = capsys.readouterr().err
     assert code == 2
     assert err == f"groundlang train: error: {tmp_path / 'm' / 'model.json'}: No space left on device\n"
-    assert _same_globals(load_learner(tmp_path / "m"), before)
+    assert _same_globals(Learner.load(tmp_path / "m"), before)
 
 
 _KILLER = textwrap.dedent("""
     import os, signal, sys
     from groundlang.corpus import example_corpus_path, read_corpus
     from groundlang.learner import Learner
-    from groundlang.model import storage
+    from groundlang.logic import storage
     where, target = sys.argv[1], sys.argv[2]
     learner = Learner(steps=20, seed=1, cache_dir=False).fit(read_corpus(example_corpus_path(), "sokoban").instances[6:12])
     real_write, real_replace = storage.write_atomically, os.replace
@@ -142,10 +142,10 @@ def test_kill_9_between_the_steps_of_a_save_keeps_the_previous_model(learners, t
     assert done.returncode == -9, done.stderr
     leftovers = _tensor_files(model)
     assert len(leftovers) == (2 if where == "after the tensors" else 3)  # new tensors (and a temporary model.json)
-    assert _same_globals(load_learner(model), old)  # the old model.json still names the old tensors
+    assert _same_globals(Learner.load(model), old)  # the old model.json still names the old tensors
     new.save(model)  # the next save removes what the killed one left
     assert len(_tensor_files(model)) == 1 and not [p for p in model.iterdir() if p.name.startswith(".")]
-    assert _same_globals(load_learner(model), new)
+    assert _same_globals(Learner.load(model), new)
 
 
 def test_a_save_removes_temporary_files_of_interrupted_saves_and_keeps_others(learners, tmp_path):
@@ -236,7 +236,8 @@ def test_hostile_model_files_are_refused_in_one_line(learners, tmp_path, capsys,
 _FUZZ = textwrap.dedent("""
     import json, random, resource, shutil, sys, hashlib, traceback
     from pathlib import Path
-    from groundlang.model_io import ModelFormatError, load_learner
+    from groundlang.learner import Learner
+    from groundlang.model_io import ModelFormatError
     good, work, cases = Path(sys.argv[1]), Path(sys.argv[2]), int(sys.argv[3])
     rng = random.Random(24)
     values = [None, True, -1, 0, 1, 2**31, 10**6, 10**12, -1e308, 1e308, float("nan"), "", "x" * 50,
@@ -270,7 +271,7 @@ _FUZZ = textwrap.dedent("""
             meta["globals_sha256"] = hashlib.sha256(bytes(data)).hexdigest()
         (work / "model.json").write_text(json.dumps(meta))
         try:
-            load_learner(work)
+            Learner.load(work)
             loaded += 1
         except ModelFormatError as exc:
             assert "\\n" not in str(exc), str(exc)
@@ -309,7 +310,7 @@ def test_a_model_records_its_palette_and_refuses_a_state_of_another(learners, tm
     other = tmp_path / "other.state"
     other.write_text("room,0,0,6,4,0 room,3,4,6,8,0 door,4,3,4,3 block,1,0,1,1 agent,6,2\n")
     state = read_state_file(other, "sokoban2")
-    for learner in (old, load_learner(model)):
+    for learner in (old, Learner.load(model)):
         with pytest.raises(ValueError, match=r"^posterior: the state is of palette 'sokoban2'; this model was "
                                              r"trained on palette sokoban \(colours and shapes must be the same"):
             learner.posterior("go to the red room", state)

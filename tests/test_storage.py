@@ -1,4 +1,4 @@
-"""model.storage: atomic writes leave the old file or the new one, never a temporary file, whatever interrupts them."""
+"""logic.storage: atomic writes leave the old file or the new one, never a temporary file, whatever interrupts them."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import stat
 
 import pytest
 
-from groundlang.model import storage
-from groundlang.model.storage import atomic_path, write_atomically
+from groundlang.logic import storage
+from groundlang.logic.storage import atomic_path, write_atomically
 
 
 def _previous(tmp_path):

@@ -60,7 +60,7 @@ def write_plot(result, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     from groundlang.ablation import plot_ablation
-    from groundlang.model.storage import write_atomically
+    from groundlang.logic.storage import write_atomically
     from groundlang.render import picture_format
 
     fig, ax = plt.subplots(figsize=(7, 4.2))
@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import read_corpus
     from groundlang.labels import read_labels
     from groundlang.model.domain_words import extra_words
-    from groundlang.model.storage import check_destination, write_atomically
+    from groundlang.logic.storage import check_destination, write_atomically
 
     if args.json:
         check_destination(args.json, "--json")

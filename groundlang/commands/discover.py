@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import read_corpus
     from groundlang.inference.discovery import DiscoverySettings, discover_tasks, write_library
     from groundlang.logic.tasks import TaskLibrary
-    from groundlang.model.storage import check_destination
+    from groundlang.logic.storage import check_destination
 
     start = time.perf_counter()
     check_destination(args.output, "-o")

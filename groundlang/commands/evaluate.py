@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.evaluation import evaluate
     from groundlang.labels import check_label_prefixes, read_labels
     from groundlang.model.domain_words import extra_words
-    from groundlang.model.storage import check_destination, write_atomically
+    from groundlang.logic.storage import check_destination, write_atomically
     from groundlang.published import comparison, format_comparison
 
     if args.json:
@@ -131,7 +131,7 @@ def run_pairs(args: argparse.Namespace) -> int:
     from groundlang.bdm import DEFAULT_PALETTE
     from groundlang.bdm_check import default_library
     from groundlang.model.domain_words import extra_words
-    from groundlang.model.storage import write_atomically
+    from groundlang.logic.storage import write_atomically
     from groundlang.pair_corpus import held_out_by_text, read_pair_corpus
     from groundlang.pair_evaluation import evaluate_pairs
 

@@ -17,7 +17,7 @@ from pathlib import Path
 from groundlang.commands import add_lexicon_option, positive_int
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import parse
-from groundlang.model.storage import read_limited
+from groundlang.logic.storage import read_limited
 
 
 def register(subparsers) -> None:

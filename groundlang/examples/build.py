@@ -20,7 +20,7 @@ from groundlang.corpus import Instance, format_state, parse_state, write_instanc
 from groundlang.labels import goal_holds
 from groundlang.logic.atoms import format_goal, parse_goal
 from groundlang.model.world import Action, State, replay, step
-from groundlang.model.storage import write_atomically
+from groundlang.logic.storage import write_atomically
 
 PALETTE = "sokoban"
 

@@ -1,0 +1,114 @@
+"""The folds of an evaluation: refit (leave-one-out) and follow each held-out command, in this process,
+in forked worker processes or on a Ray cluster. :func:`groundlang.evaluation.evaluate` builds the context."""
+
+from __future__ import annotations
+
+import multiprocessing
+import time
+
+from groundlang.corpus import Instance
+from groundlang.goal_translation import describe_goal, translate_goal
+from groundlang.labels import goal_holds
+from groundlang.learner import Learner
+from groundlang.logic.atoms import format_goal
+from groundlang.wording import goal_phrase
+
+__all__ = ["run_folds"]
+
+_CONTEXT: dict = {}
+
+
+def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
+    result = learner.follow(instance.command, instance.initial_state)
+    record = {
+        "instance": instance.name,
+        "command": instance.command,
+        "gold": format_goal(gold),
+        "gold_size": len(gold),
+        "gold_task": describe_goal(gold, instance.initial_state),
+        "predicted": format_goal(result.goal),
+        "predicted_task": describe_goal(result.goal, instance.initial_state),
+        "gold_words": goal_phrase(gold, instance.initial_state, learner.library),
+        "predicted_words": result.goal_words,
+        "correct": goal_holds(gold, result.final_state, learner.library),
+        "confidence": result.posterior.confidence,
+        "margin": result.posterior.margin,
+        "novel": [],
+    }
+    for name, state in novel_states:
+        translated = translate_goal(gold, instance.initial_state, state, name, learner.library)
+        novel = learner.follow(instance.command, state)
+        record["novel"].append(
+            {
+                "environment": name,
+                "gold": format_goal(translated),
+                "predicted": format_goal(novel.goal),
+                "predicted_task": describe_goal(novel.goal, state),
+                "correct": goal_holds(translated, novel.final_state, learner.library),
+                "confidence": novel.posterior.confidence,
+            }
+        )
+    return record
+
+
+def _fold(index: int) -> dict:
+    ctx = _CONTEXT
+    learner: Learner = ctx["learner"]
+    instance = ctx["instances"][index]
+    started = time.perf_counter()
+    try:
+        if ctx["protocol"] == "loo":
+            keep = [k for k in range(len(ctx["instances"])) if k != index]
+            learner.fit(
+                [ctx["instances"][k] for k in keep],
+                batch=ctx["batch"].subset(keep),
+                init=ctx["globals"] if ctx["warm_start"] else None,
+            )
+        record = _score(learner, instance, ctx["golds"][index], ctx["novel_states"])
+    except (ValueError, RuntimeError) as exc:
+        return {"instance": instance.name, "error": f"{type(exc).__name__}: {exc}", "seconds": time.perf_counter() - started}
+    record["seconds"] = time.perf_counter() - started
+    return record
+
+
+def _init_worker(context: dict) -> None:
+    import signal
+
+    import torch
+
+    # Forked workers inherit the CLI's SIGTERM-as-Ctrl-C handler; the pool
+    # stops them with SIGTERM when it closes, which must stay silent. Ctrl-C
+    # goes to the parent, which reports the interruption once.
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    torch.set_num_threads(1)
+    _CONTEXT.clear()
+    _CONTEXT.update(context)
+
+
+def run_folds(context: dict, indices: list[int], workers: int, ray_address: str | None, progress: bool) -> list[dict]:
+    if ray_address is not None:
+        from groundlang.distributed import run_on_ray
+
+        return run_on_ray(_init_worker, _fold, context, indices, ray_address)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(indices), desc="folds", unit="fold", leave=False)
+    records = []
+    if workers <= 1:
+        _init_worker(context)
+        for i in indices:
+            records.append(_fold(i))
+            if bar is not None:
+                bar.update(1)
+    else:
+        with multiprocessing.get_context("fork").Pool(workers, _init_worker, (context,)) as pool:
+            for record in pool.imap(_fold, indices, chunksize=max(1, len(indices) // (8 * workers))):
+                records.append(record)
+                if bar is not None:
+                    bar.update(1)
+    if bar is not None:
+        bar.close()
+    return records

@@ -1,0 +1,66 @@
+"""A learner's state as plain values, what a saved model holds, and the checks when it is read back.
+
+:meth:`groundlang.learner.Learner.state_dict` and :meth:`~groundlang.learner.Learner.from_state_dict`
+are the public face; :mod:`groundlang.model_io` writes and reads the values as files. A state read from
+a file is untrusted: every field is checked here before anything is built from it.
+"""
+
+from __future__ import annotations
+
+from groundlang.inference.planning import TaskSettings
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.language_models import get_language_model
+from groundlang.model.vocabulary import Vocabulary
+
+__all__ = ["learner_state", "learner_from_state"]
+
+
+def learner_state(learner) -> dict:
+    """The fields of a trained learner's state dict (JSON-ready values and ``globals``, tensors by name)."""
+    if not learner.palettes:
+        raise ValueError("cannot save a learner whose training palettes are unknown (train it with fit())")
+    return {
+        "language_model": learner.lm.name,
+        "language_model_settings": learner.lm.settings(),
+        "vocabulary": learner.vocab.to_json(),
+        # the words themselves, not the files' paths: the model parses alike where the files are not
+        "lexicon": learner.lexicon_words,
+        "palettes": learner.palettes,
+        "task_library": learner.library.source_text(),
+        "planning": learner.settings.as_dict(),
+        "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed},
+        "globals": learner.globals,
+    }
+
+
+def learner_from_state(cls, state: dict, where: str):
+    """A ``cls`` (:class:`~groundlang.learner.Learner`) built from a state dict's values; see
+    ``Learner.from_state_dict``."""
+    if not isinstance(state["lexicon"], dict):  # never a path: loading a model reads no other file
+        raise ValueError(f"lexicon is {type(state['lexicon']).__name__}, expected words by category")
+    learner = cls(
+        get_language_model(state["language_model"], **state["language_model_settings"]),
+        library=TaskLibrary.from_text(state["task_library"], f"{where}:task_library"),
+        steps=state["training"]["steps"], lr=state["training"]["lr"], seed=state["training"]["seed"],
+        settings=TaskSettings(**state["planning"]), lexicon=[state["lexicon"]],
+    )
+    learner.vocab = Vocabulary.from_json(state["vocabulary"], learner.word_lexicon)
+    learner.palettes = _checked_palettes(state["palettes"])
+    missing = {t.name for t in learner.library.tasks} - set(learner.vocab.tasks)
+    if missing:
+        raise ValueError(f"the vocabulary lacks the lifted tasks {sorted(missing)} of the saved task library")
+    if state.get("globals") is not None:
+        learner.globals = dict(state["globals"])
+    return learner
+
+
+def _checked_palettes(palettes) -> list[dict]:
+    """The palettes a model was trained on, as written: a list of {name, colours, shapes}."""
+    if not isinstance(palettes, list) or not palettes:
+        raise ValueError("palettes must be a non-empty list")
+    for p in palettes:
+        if (not isinstance(p, dict) or not isinstance(p.get("name"), str)
+                or not all(isinstance(v, list) and all(isinstance(x, str) for x in v)
+                           for v in (p.get("colours"), p.get("shapes")))):
+            raise ValueError("each palette must be {name: str, colours: [str], shapes: [str]}")
+    return palettes

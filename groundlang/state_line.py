@@ -1,0 +1,131 @@
+"""One state as a line of the commands-to-tasks corpus: parse it, check it is a valid world, write it.
+
+A state line is space-separated objects ``room,COLOUR,LEFT,TOP,RIGHT,BOTTOM``,
+``door,LEFT,TOP,RIGHT,BOTTOM``, ``block,COLOUR,SHAPE,X,Y`` (``toy`` is
+accepted too) and ``agent,X,Y``; COLOUR and SHAPE index a palette chosen by
+name. Every problem is a :class:`CorpusError` (a ``ValueError``) whose message
+names the place and what was expected. :mod:`groundlang.corpus` reads whole
+files of them; :mod:`groundlang.bdm` shares the error and the limits.
+"""
+
+from __future__ import annotations
+
+import re
+
+from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
+
+__all__ = ["CorpusError", "MAX_COORDINATE", "MAX_FILE_BYTES", "parse_state", "format_state", "shared_cell"]
+
+# Coordinates beyond this are refused: a layout's grids are allocated densely,
+# so one absurd number in a file must not become a gigabyte array.
+MAX_COORDINATE = 1000
+# A corpus or state file: a demonstration of 10^4 steps takes about 1 MB.
+MAX_FILE_BYTES = 16 * 2**20
+_INTEGER = re.compile(r"-?[0-9]{1,7}")
+
+# kind -> (field names after the kind, format shown in messages)
+_FIELDS = {
+    "room": (("COLOUR", "LEFT", "TOP", "RIGHT", "BOTTOM"), "room,COLOUR,LEFT,TOP,RIGHT,BOTTOM"),
+    "door": (("LEFT", "TOP", "RIGHT", "BOTTOM"), "door,LEFT,TOP,RIGHT,BOTTOM"),
+    "block": (("COLOUR", "SHAPE", "X", "Y"), "block,COLOUR,SHAPE,X,Y"),
+    "agent": (("X", "Y"), "agent,X,Y"),
+}
+_KIND_ALIASES = {"toy": "block"}
+
+
+class CorpusError(ValueError):
+    """A corpus file, folder or labels file that cannot be used; the message says where and why."""
+
+
+def _integer(text: str, where: str, name: str, obj: str) -> int:
+    if not _INTEGER.fullmatch(text):
+        raise CorpusError(f"{where}: field {name} of {obj!r} is {text!r}; expected an integer")
+    value = int(text)
+    if abs(value) > MAX_COORDINATE:
+        raise CorpusError(
+            f"{where}: field {name} of {obj!r} is {value}; expected at most {MAX_COORDINATE} in size"
+        )
+    return value
+
+
+def parse_state(line: str, palette: str | Palette, where: str = "state", shared_cells_ok: bool = False) -> State:
+    """Parse one state line and check it is a valid world; ``where`` prefixes error messages.
+
+    Raises CorpusError naming the object and field that is wrong. ``shared_cells_ok`` lets two objects
+    share a cell (a later state of a demonstration: :func:`read_instance` reports it as inconsistent).
+    """
+    palette = get_palette(palette)
+    tokens = line.split()
+    if not tokens:
+        raise CorpusError(f"{where}: empty state line; expected objects like room,5,0,10,6,4 agent,8,6")
+    rooms, doors, toys, agents = [], [], [], []
+    for token in tokens:
+        parts = token.split(",")
+        kind = _KIND_ALIASES.get(parts[0], parts[0])
+        if kind not in _FIELDS:
+            raise CorpusError(
+                f"{where}: unknown object kind {parts[0]!r} in {token!r}; "
+                "expected room, door, block (or toy) or agent"
+            )
+        names, shown = _FIELDS[kind]
+        if len(parts) != len(names) + 1:
+            raise CorpusError(
+                f"{where}: {token!r} has {len(parts)} comma-separated fields; expected "
+                f"{len(names) + 1} ({shown})"
+            )
+        v = {n: _integer(t, where, n, token) for n, t in zip(names, parts[1:])}
+        try:
+            if kind == "room":
+                rooms.append(Room(palette.colour(v["COLOUR"]), v["LEFT"], v["TOP"], v["RIGHT"], v["BOTTOM"]))
+            elif kind == "door":
+                doors.append(Door(v["LEFT"], v["TOP"], v["RIGHT"], v["BOTTOM"]))
+            elif kind == "block":
+                toys.append(Toy(palette.colour(v["COLOUR"]), palette.shape(v["SHAPE"]), v["X"], v["Y"]))
+            else:
+                agents.append(Agent(v["X"], v["Y"]))
+        except WorldError as exc:
+            raise CorpusError(f"{where}: {token!r}: {exc}") from None
+    if len(agents) != 1:
+        raise CorpusError(f"{where}: found {len(agents)} agents; expected exactly one agent,X,Y")
+    layout = Layout(tuple(rooms), tuple(doors), tuple((t.colour, t.shape) for t in toys), palette)
+    state = State(layout, agents[0], tuple(toys))
+    try:
+        if shared_cells_ok and shared_cell(state):
+            _validate_positions(state)
+        else:
+            state.validate()
+    except WorldError as exc:
+        raise CorpusError(f"{where}: {exc}") from None
+    return state
+
+
+def shared_cell(state: State) -> str | None:
+    """Which two objects share a cell, or None."""
+    seen: dict[tuple[int, int], str] = {}
+    for name, (x, y) in zip(["agent0"] + state.layout.toy_names, state.positions.tolist()):
+        if (x, y) in seen:
+            return f"{seen[(x, y)]} and {name} share the cell ({x},{y})"
+        seen[(x, y)] = name
+    return None
+
+
+def _validate_positions(state: State) -> None:
+    """State.validate without its shared-cell check: the layout, and every object on a walkable cell."""
+    state.layout.validate()
+    walk = state.layout.walkable
+    for name, (x, y) in zip(["agent0"] + state.layout.toy_names, state.positions.tolist()):
+        if not (0 <= x < walk.shape[0] and 0 <= y < walk.shape[1]) or not walk[x, y]:
+            raise WorldError(f"{name} at ({x},{y}) is inside a wall or outside every room")
+
+
+def format_state(state: State) -> str:
+    """Write a state as one corpus line: rooms, doors, blocks, agent (round-trips with parse_state)."""
+    lay = state.layout
+    pal = lay.palette
+    objs = [f"room,{pal.colour_index(r.colour)},{r.left},{r.top},{r.right},{r.bottom}" for r in lay.rooms]
+    objs += [f"door,{d.left},{d.top},{d.right},{d.bottom}" for d in lay.doors]
+    objs += [
+        f"block,{pal.colour_index(t.colour)},{pal.shape_index(t.shape)},{t.x},{t.y}" for t in state.toys
+    ]
+    objs.append(f"agent,{state.agent.x},{state.agent.y}")
+    return " ".join(objs)

@@ -1,0 +1,156 @@
+"""ASP sources: the package's ``.lp`` files and a user's, read safely and parsed into checked statements.
+
+What :class:`groundlang.logic.program.Program` is built from. Errors are ``AspError`` (a ``ValueError``):
+
+- syntax errors name the file, line and column (``AspSyntaxError``);
+- ``#script`` blocks are refused unless ``allow_scripts=True``, and
+  ``#include`` is refused always: list the file among the sources instead
+  (``AspScriptRefused``);
+- a user's file is read only when it is a regular file of at most
+  ``MAX_PROGRAM_BYTES`` in UTF-8.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import re
+import stat
+from dataclasses import dataclass
+from importlib.resources import files
+from pathlib import Path
+
+import clingo.ast as ast
+
+__all__ = ["AspError", "AspSyntaxError", "AspScriptRefused", "Source", "package_source", "file_source",
+           "MAX_PROGRAM_BYTES", "parse_source", "one_line"]
+
+
+class AspError(ValueError):
+    """An ASP program that cannot be used; the message names the file and line."""
+
+
+class AspSyntaxError(AspError):
+    """A source that clingo cannot parse."""
+
+
+class AspScriptRefused(AspError):
+    """A source with ``#script`` (without opt-in) or ``#include``."""
+
+
+@dataclass(frozen=True)
+class Source:
+    """ASP text and the name its errors are reported under (a path or ``groundlang.logic/x.lp``)."""
+
+    name: str
+    text: str
+
+
+def package_source(filename: str) -> Source:
+    """A ``.lp`` file shipped in ``groundlang.logic``."""
+    resource = files("groundlang.logic") / filename
+    return Source(f"groundlang.logic/{filename}", resource.read_text(encoding="utf-8"))
+
+
+# A task library is a few KB; a wrong path (a log, /dev/zero) must not be read whole.
+MAX_PROGRAM_BYTES = 4 * 2**20
+
+
+def _read_regular(path: Path) -> bytes:
+    """A regular file of at most MAX_PROGRAM_BYTES (storage.read_limited's twin, raising AspError for an ASP
+    program). Opened non-blocking: a FIFO must not hang the open."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    try:
+        mode = os.fstat(fd).st_mode
+    except BaseException:
+        os.close(fd)
+        raise
+    if not stat.S_ISREG(mode):  # checked before fdopen, which refuses a folder naming only the descriptor
+        os.close(fd)
+        if stat.S_ISDIR(mode):
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        raise AspError(f"{path}: not a regular file (a FIFO or device); expected an ASP program (.lp)")
+    with os.fdopen(fd, "rb") as handle:
+        data = handle.read(MAX_PROGRAM_BYTES + 1)
+    if len(data) > MAX_PROGRAM_BYTES:
+        raise AspError(f"{path}: more than the {MAX_PROGRAM_BYTES:,} bytes allowed for an ASP program")
+    return data
+
+
+def file_source(path: str | Path) -> Source:
+    """A user's ``.lp`` file; raises OSError when unreadable and AspError when not UTF-8."""
+    path = Path(path)
+    data = _read_regular(path)
+    try:
+        return Source(str(path), data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise AspSyntaxError(f"{path}:{line}: not UTF-8 text (byte {exc.start})") from None
+
+
+# Comments and strings are removed before looking for directives, so that "% no #include here" is fine.
+_COMMENT_OR_STRING = re.compile(r'%\*.*?\*%|%[^\n]*|"(?:\\.|[^"\\])*"', re.DOTALL)
+_INCLUDE = re.compile(r"#include\b")
+_NON_ASCII = re.compile(r"[^\x00-\x7f]")
+
+
+def _blank(match: re.Match) -> str:
+    return re.sub(r"[^\n]", " ", match.group(0))
+
+
+def one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _relocate(node, name: str) -> None:
+    """Give every location in an AST the source's name (clingo says ``<string>``)."""
+    if isinstance(node, ast.AST):
+        if "location" in node.keys():
+            b, e = node.location.begin, node.location.end
+            node.location = ast.Location(
+                ast.Position(name, b.line, b.column), ast.Position(name, e.line, e.column)
+            )
+        for key in node.child_keys:
+            _relocate(getattr(node, key), name)
+    elif isinstance(node, (ast.ASTSequence, list, tuple)):
+        for child in node:
+            _relocate(child, name)
+
+
+def parse_source(source: Source, allow_scripts: bool) -> list:
+    """Parse one source into AST statements, refusing scripts and includes."""
+    scrubbed = _COMMENT_OR_STRING.sub(_blank, source.text)
+    m = _INCLUDE.search(scrubbed)
+    if m:
+        line = scrubbed.count("\n", 0, m.start()) + 1
+        raise AspScriptRefused(
+            f"{source.name}:{line}: #include is not allowed; pass the included file as another source"
+        )
+    # clingo's lexer reports a non-ASCII character one byte at a time, and the
+    # half character in its message aborts the process (a decode error inside
+    # a C callback): refuse such text here, with the position.
+    m = _NON_ASCII.search(scrubbed)
+    if m:
+        line = scrubbed.count("\n", 0, m.start()) + 1
+        column = m.start() - scrubbed.rfind("\n", 0, m.start())
+        raise AspSyntaxError(
+            f"{source.name}:{line}:{column}: unexpected character {m.group(0)!r}; "
+            "names and operators are ASCII (other text only in comments and strings)"
+        )
+    messages: list[str] = []
+    statements: list = []
+    try:
+        ast.parse_string(
+            source.text, statements.append, logger=lambda code, msg: messages.append(msg)
+        )
+    except RuntimeError:
+        text = one_line(" ".join(messages)) or "syntax error"
+        raise AspSyntaxError(text.replace("<string>", source.name)) from None
+    for stm in statements:
+        if stm.ast_type == ast.ASTType.Script and not allow_scripts:
+            raise AspScriptRefused(
+                f"{source.name}:{stm.location.begin.line}: #script blocks are refused; "
+                "pass allow_scripts=True only for programs you trust"
+            )
+        _relocate(stm, source.name)
+    return statements
