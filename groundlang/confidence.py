@@ -48,6 +48,24 @@ class GoalGroup:
         return self.goals[0]
 
 
+TIE = 1e-5  # posterior masses closer than this are float32 noise of one value
+
+
+def most_probable_first(items: Sequence, probability) -> list:
+    """``items`` most probable first; masses within float32 noise of each other (1e-5) count as tied
+    and keep their given order, so equal readings ("go to the purple room": three rooms at 1/3) are
+    offered in the layout's order whatever the rounding of the sums that made them."""
+    ranked = sorted(range(len(items)), key=lambda k: -probability(items[k]))
+    runs, run = [], []
+    for k in ranked:
+        if run and probability(items[run[-1]]) - probability(items[k]) > TIE:
+            runs.append(run)
+            run = []
+        run.append(k)
+    runs.append(run)
+    return [items[k] for run in runs for k in sorted(run)]
+
+
 def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpace,
                 library=None) -> list[GoalGroup]:
     """Merge goals (most probable first, as :meth:`Posterior.goals` gives them) whose goal masks
@@ -67,7 +85,7 @@ def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpa
         by_mask[key][0].append(goal)
         by_mask[key][1] += p
     groups = [GoalGroup(tuple(by_mask[k][0]), by_mask[k][1]) for k in order]
-    return sorted(groups, key=lambda g: -g.probability)  # stable: equal masses keep the goals' order
+    return most_probable_first(groups, lambda g: g.probability)
 
 
 # ---------------------------------------------------------------- calibration measures

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from groundlang.confidence import GoalGroup
+from groundlang.confidence import GoalGroup, most_probable_first
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.interpretations import Interpretation
 from groundlang.model.world import Action, State
@@ -48,7 +48,7 @@ class Posterior:
         totals: dict[tuple[Atom, ...], float] = {}
         for p, interp in zip(self.probabilities, self.interpretations):
             totals[interp.goal] = totals.get(interp.goal, 0.0) + float(p)
-        return sorted(totals.items(), key=lambda kv: -kv[1])
+        return most_probable_first(list(totals.items()), lambda kv: kv[1])
 
     def goal_groups(self) -> list[GoalGroup]:
         """:attr:`groups`, or one group per goal when the layout was not consulted."""
