@@ -30,7 +30,7 @@ from groundlang.model.domain_words import WordSource, domain_lexicon, extra_word
 from groundlang.model.encoding import Batch, Observation, encode
 from groundlang.model.interpretations import Interpretation, interpretations, without_unbroken_held_parts
 from groundlang.model.pf_tables import library_pf_tables
-from groundlang.model.language_models import BagOfWords, LanguageModel, ParseAligned, get_language_model
+from groundlang.model.language_models import BagOfWords, LanguageModel, get_language_model
 from groundlang.model.relevance import check_abstraction_possible, exact_fits
 from groundlang.model.statespace import StateSpace
 from groundlang.model.vocabulary import Vocabulary
@@ -133,8 +133,8 @@ class Learner:
         if state not in self._interp_cache:
             self._interp_cache[state] = interpretations(
                 state, self.library, enumerate_constraints=self.lm.enumerates_constraints,
-                relation_words=getattr(self.lm, "relation_words", False),
-                held_parts=getattr(self.lm, "held_parts", False),
+                relation_words=self.lm.relation_words,
+                held_parts=self.lm.held_parts,
             )
         return self._interp_cache[state]
 
@@ -163,7 +163,7 @@ class Learner:
         else:
             raise ValueError("observe: instances with demonstrations and (start, end) pairs without them "
                              "cannot be mixed in one corpus")
-        if all(shown) and getattr(self.lm, "held_parts", False):
+        if all(shown) and self.lm.held_parts:
             tables = [library_pf_tables(inst.initial_state.layout, self.library) for inst in instances]
             interps, behaviour = without_unbroken_held_parts(interps, behaviour, [i.states for i in instances], tables)
         observations = []
@@ -222,11 +222,8 @@ class Learner:
             batch = encode(observations, self.vocab)
         elif self.vocab is None:
             raise ValueError("fit(batch=...) needs the vocabulary the batch was encoded with")
-        if init is None and not isinstance(self.lm, BagOfWords):
-            # Alignment models start from the bag of words' word distributions,
-            # as IBM Model 2 is classically started from Model 1: the MAP of an
-            # alignment model from a flat start lands in poor local optima
-            # (measured: "star" learned as a room word on the crowd corpus).
+        if init is None and self.lm.starts_from_bag_of_words:
+            # (From a flat start "star" was learned as a room word on the crowd corpus.)
             start = fit_globals(batch, BagOfWords(self.lm.word_concentration), self.vocab,
                                 steps=self.steps, seed=self.seed)
             init = {"phi": start.globals["phi"]}
@@ -267,17 +264,7 @@ class Learner:
         batch = encode([obs], self.vocab)
         probs = posterior(batch, self.lm, self.globals, use_behaviour=False)[0]
         J = len(obs.interpretations)
-        reading_probs = None
-        if isinstance(self.lm, ParseAligned):
-            with torch.no_grad():
-                # per_reading[j, s] = log P(words, s | j) for merged reading structures s.
-                _, per_reading, _ = self.lm.reading_table(self.globals, batch)  # [1, J, S]
-                joint = per_reading[0, :J] + batch.log_prior[0, :J, None]
-                structure = torch.softmax(torch.logsumexp(joint, 0), 0).numpy()  # P(s | words)
-            group = batch.reading_group[0, : len(obs.readings)].numpy()
-            prior = np.array([r.probability for r in obs.readings])
-            share = prior / np.bincount(group, weights=prior)[group]  # a reading's share of its structure
-            reading_probs = structure[group] * share  # P(reading | words), one per reading
+        reading_probs = self.lm.reading_probabilities(self.globals, batch, [r.probability for r in obs.readings])
         post = Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
                          list(obs.readings), reading_probs)
         post.groups = group_goals(post.goals(), self._space(state), self.library)

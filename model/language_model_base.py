@@ -3,6 +3,9 @@ mixtures of tokens words are emitted from (``model.language_models`` lists the m
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
+import numpy as np
 import pyro
 import pyro.distributions as dist
 import torch
@@ -18,6 +21,13 @@ class LanguageModel:
     name = "base"
     # Whether interpretations enumerate binding constraints C (see model.interpretations).
     enumerates_constraints = True
+    # Whether training starts from the bag of words' word distributions: an alignment model's MAP from a
+    # flat start lands in poor local optima, as IBM Model 2 is classically started from Model 1.
+    starts_from_bag_of_words = True
+    # What the interpretations offer (model.interpretations.interpretations); the parse model has both
+    # as settings.
+    relation_words = False
+    held_parts = False
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True):
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
@@ -39,7 +49,13 @@ class LanguageModel:
         return {"phi": phi}
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
+        """``log P(words_i | interpretation j)`` as ``[I, J]``, readings and alignments summed out."""
         raise NotImplementedError
+
+    def reading_probabilities(self, g: dict, batch: Batch, prior: Sequence[float]) -> np.ndarray | None:
+        """``P(reading | words)`` for the one command of ``batch``, whose parser readings have prior
+        probabilities ``prior``; None for a model that reads no parse."""
+        return None
 
 
 def require_positive(model: str, name: str, value: float) -> None:

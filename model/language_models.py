@@ -29,11 +29,12 @@ from groundlang.model.language_model_base import NULL_MIXTURE, LanguageModel, ga
 from groundlang.model.parse_aligned import ParseAligned
 
 __all__ = ["LanguageModel", "BagOfWords", "IBMModel2", "ParseAligned", "LANGUAGE_MODELS", "get_language_model",
-           "setting_names", "NULL_MIXTURE", "mixture_log_emissions"]
+           "register_language_model", "setting_names", "NULL_MIXTURE", "mixture_log_emissions"]
 
 
 class BagOfWords(LanguageModel):
     name = "bow"
+    starts_from_bag_of_words = False
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
         mix = batch.bow_mix if self.null_token else batch.bow_mix_no_null
@@ -87,6 +88,20 @@ POSITION_BINS = 4  # IBM Model 2: word positions coarsened to quarters of the co
 MAX_MACHINE = 24  # IBM Model 2: longest machine string (NULL included)
 
 LANGUAGE_MODELS = {"bow": BagOfWords, "ibm2": IBMModel2, "parse": ParseAligned}
+
+
+def register_language_model(model: type[LanguageModel]) -> type[LanguageModel]:
+    """Make a language model available by its ``name`` (``Learner("mine")``, saved models, ablations);
+    usable as a class decorator. A model is a :class:`LanguageModel` subclass: its globals as Pyro
+    sites (``sample_globals``), ``log P(words | interpretation)`` (``log_likelihood``) and, if it
+    reads parses, ``reading_probabilities``. ValueError for a name taken by another model."""
+    if not (isinstance(model, type) and issubclass(model, LanguageModel)) or model is LanguageModel:
+        raise TypeError(f"register_language_model: expected a LanguageModel subclass, got {model!r}")
+    known = LANGUAGE_MODELS.get(model.name)
+    if known is not None and known is not model:
+        raise ValueError(f"a language model called {model.name!r} exists already ({known.__qualname__})")
+    LANGUAGE_MODELS[model.name] = model
+    return model
 
 
 def get_language_model(name: str, **settings) -> LanguageModel:

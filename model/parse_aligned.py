@@ -24,6 +24,9 @@ roles its interpretations can offer (``Vocabulary.task_roles``). What each part 
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
+
+import numpy as np
 
 import pyro
 import pyro.distributions as dist
@@ -170,6 +173,17 @@ class ParseAligned(LanguageModel):
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
         return self.reading_table(g, batch)[0]
+
+    def reading_probabilities(self, g: dict, batch: Batch, prior: Sequence[float]) -> np.ndarray:
+        with torch.no_grad():
+            _, per_reading, _ = self.reading_table(g, batch)  # [1, J, S]: log P(words, s | j), merged structures s
+            J = int(batch.mask[0].sum())
+            joint = per_reading[0, :J] + batch.log_prior[0, :J, None]
+            structure = torch.softmax(torch.logsumexp(joint, 0), 0).numpy()  # P(s | words)
+        group = batch.reading_group[0, : len(prior)].numpy()
+        prior = np.asarray(prior, dtype=float)
+        share = prior / np.bincount(group, weights=prior)[group]  # a reading's share of its structure
+        return structure[group] * share
 
     def reading_table(self, g: dict, batch: Batch):
         """``(log P(words | j) [I, J], per reading [I, J, R], per type and role [I, J, V, K])``.
