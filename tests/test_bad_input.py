@@ -181,8 +181,9 @@ def _works(expect_goal_words: tuple[str, ...] = ()) -> Callable[[str], None]:
         assert probs == sorted(probs, reverse=True)
         assert answer["reached"] is True and answer["reason"] == "goal"
         assert all(a in ("north", "south", "east", "west") for a in answer["actions"])
-        for word in expect_goal_words:
-            assert all(word in i["goal"] for i in answer["interpretations"]), answer["interpretations"]
+        for word in expect_goal_words:  # every reading with any weight says it (the tail is noise)
+            assert all(word in i["goal"] for i in answer["interpretations"] if i["probability"] > 0.01), \
+                answer["interpretations"]
 
     return check
 
