@@ -159,6 +159,7 @@ class Learner:
             self._interp_cache[state] = interpretations(
                 state, self.library, enumerate_constraints=self.lm.enumerates_constraints,
                 relation_words=getattr(self.lm, "relation_words", False),
+                relational=getattr(self.lm, "relational_descriptions", False),
             )
         return self._interp_cache[state]
 
@@ -209,7 +210,8 @@ class Learner:
         return palette_schema(self.library, palette)
 
     def _build_vocabulary(self, observations: Iterable[Observation], palettes: Iterable) -> Vocabulary:
-        return build_vocabulary(observations, palettes, self.library, self.word_lexicon)
+        return build_vocabulary(observations, palettes, self.library, self.word_lexicon,
+                                relational=getattr(self.lm, "relational_descriptions", False))
 
     def fit(self, instances: Sequence, progress: bool = False, init: dict | None = None,
             observations: list[Observation] | None = None, batch: Batch | None = None) -> "Learner":

@@ -55,6 +55,7 @@ class ParseAligned(LanguageModel):
         align_backoff: bool = False,
         relation_words: bool = False,
         preposition_concentration: float | None = 1.05,
+        relational_descriptions: bool = False,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -75,8 +76,10 @@ class ParseAligned(LanguageModel):
         goal PFs join the tokens its modifiers and head noun come from (``interpretations.interpretations``).
         ``preposition_concentration`` turns on a model of each phrase's bare preposition given L (None:
         off; a Dirichlet concentration): a preposition says the relation ("to the right of the chair",
-        "into the room"), which the alignment table, conditioned on it, cannot. What each measured:
-        ABLATIONS.md."""
+        "into the room"), which the alignment table, conditioned on it, cannot. ``relational_descriptions``:
+        a bystander related to an object the task binds by a PF of two objects (a toy in the goal room)
+        is offered in a role named by that relation, so "the room *with the red chair*" can say which
+        room (``model.relational``). What each measured: ABLATIONS.md."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")
@@ -98,6 +101,7 @@ class ParseAligned(LanguageModel):
         self.align_backoff = align_backoff
         self.relation_words = relation_words
         self.preposition_concentration = preposition_concentration
+        self.relational_descriptions = relational_descriptions
 
     def settings(self) -> dict:
         return {
@@ -111,6 +115,7 @@ class ParseAligned(LanguageModel):
             "align_backoff": self.align_backoff,
             "relation_words": self.relation_words,
             "preposition_concentration": self.preposition_concentration,
+            "relational_descriptions": self.relational_descriptions,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
