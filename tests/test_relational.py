@@ -145,3 +145,18 @@ def test_follows_the_room_with_the_chair_in_a_new_layout(trained, library, colou
     start = parse_state(layout(colours, chair, bag, agent), PALETTE)
     result = trained.follow("go to the room with the chair", start)
     assert result.reached and goal_holds(parse_goal(goal), result.final_state, library), result.goal
+
+
+def test_tasks_lists_the_relations_that_describe_objects(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    env = tmp_path / "a.state"
+    env.write_text(layout((0, 1, 3), (10, 2), (2, 1), (6, 2)) + "\n", encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "tasks", str(env), "--palette", PALETTE, "--json"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    described = json.loads(done.stdout)["described_by_relation"]
+    assert described == {"room0": ["toyInRoom(block1, room0)"], "room2": ["toyInRoom(block0, room2)"],
+                         "block0": ["toyInRoom(block0, room2)"], "block1": ["toyInRoom(block1, room0)"]}
