@@ -160,3 +160,20 @@ def test_tasks_lists_the_relations_that_describe_objects(tmp_path):
     described = json.loads(done.stdout)["described_by_relation"]
     assert described == {"room0": ["toyInRoom(block1, room0)"], "room2": ["toyInRoom(block0, room2)"],
                          "block0": ["toyInRoom(block0, room2)"], "block1": ["toyInRoom(block1, room0)"]}
+
+
+def test_a_users_pf_of_two_objects_relates_them_with_no_python(tmp_path, start):
+    mine = tmp_path / "near.lp"
+    mine.write_text(
+        "pf(position, toyNearDoor, (toy, door)).\n"
+        "holds(toyNearDoor, (T, D)) :- toy(T), door(D), at(T, X, Y), rect(D, L, _, _, B), |X - L| + |Y - B| <= 2.\n"
+        'task(toyToDoor). var(toyToDoor, "T", toy). var(toyToDoor, "D", door).\n'
+        'goal(toyToDoor, toyInDoor, ("T", "D")).\n', encoding="utf-8")
+    library = TaskLibrary.load([mine])
+    assert ("toyNearDoor", ("toy", "door")) in library.relational_pfs
+    related = object_relations(start, library)  # the chair at (10, 2), the door at (8, 2)
+    assert ("toyNearDoor", 1, "block0") in related["door1"] and ("toyNearDoor", 0, "door1") in related["block0"]
+    # "the chair next to the door": the chair, bound by toyToDoor, describes the door in a relational role
+    roles = {rb.obj: rb.role for i in interpretations(start, library, enumerate_constraints=False, relational=True)
+             if i.goal == parse_goal("toyInDoor(block0, door0)") for rb in i.roles}
+    assert roles["door1"] == "other:toyNearDoor.1@toyInDoor.0"
