@@ -177,3 +177,24 @@ def test_a_users_pf_of_two_objects_relates_them_with_no_python(tmp_path, start):
     roles = {rb.obj: rb.role for i in interpretations(start, library, enumerate_constraints=False, relational=True)
              if i.goal == parse_goal("toyInDoor(block0, door0)") for rb in i.roles}
     assert roles["door1"] == "other:toyNearDoor.1@toyInDoor.0"
+
+
+@pytest.mark.parametrize("command", ["go to the room that has the chair", "move to the room that contains the chair",
+                                     "go to the room with the chair"])
+def test_a_clause_of_having_about_a_noun_is_keyed_as_its_with_phrase(command):
+    from groundlang.grammar.parser import parse
+    from groundlang.model.encoding import entity_words
+    from groundlang.model.domain_words import domain_lexicon
+
+    keys = [[key for key, _, head in entity_words(r.logical_form, domain_lexicon()) if head == ("chair",)]
+            for r in parse(command, word_lexicon=domain_lexicon())]
+    assert ["with@np|last"] in keys
+
+
+def test_a_clause_of_being_is_not_read_as_having():
+    from groundlang.grammar.parser import parse
+    from groundlang.model.encoding import entity_words
+    from groundlang.model.domain_words import domain_lexicon
+
+    for reading in parse("take the chair that is in the red room to the blue room", word_lexicon=domain_lexicon()):
+        assert not any(key and key.startswith("with@np") for key, _, _ in entity_words(reading.logical_form))
