@@ -132,7 +132,7 @@ def alignable_roles(lifted: LiftedTask, relational_pfs=()) -> tuple[str, ...]:
     own = (role for var, role in zip(lifted.variables, task_roles(lifted)) if var.cls not in UNALIGNED_CLASSES)
     others = (role for role in OTHER_ROLES if role.removeprefix("other:") not in UNALIGNED_CLASSES)
     related = relational_roles([(role, var.cls) for var, role in zip(lifted.variables, task_roles(lifted))],
-                               relational_pfs, UNALIGNED_CLASSES)
+                               relational_pfs, UNALIGNED_CLASSES, domain_classes().mentioned)
     return (NO_ROLE, *dict.fromkeys(own), *others, *related)
 
 
@@ -162,9 +162,9 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())
         bindings.append(RoleBinding(role, obj, var.cls, said + relation, about.get("shape", ()) + relation))
     bound = set(binding.values())
-    links = relational_links([(binding[v.name], r) for v, r in zip(lifted.variables, task_roles(lifted))],
-                             relations) if relations is not None else {}
     classes = {name: cls for cls, name, _ in state.layout.objects}
+    links = relational_links([(binding[v.name], r) for v, r in zip(lifted.variables, task_roles(lifted))], relations,
+                             {o for o, c in classes.items() if c in domain_classes().mentioned}) if relations is not None else {}
     start_set, start_known = starts
     for obj in object_names(state):
         if obj not in bound:

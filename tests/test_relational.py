@@ -82,7 +82,8 @@ def test_the_relational_roles_of_a_task_are_bounded(library):
     relational = [r for r in roles if is_relational_role(r)]
     assert relational == ["other:toyInRoom.0@agentInRoom.1"]  # toyInDoor relates no room
     assert alignable_roles(agent_to_room) == tuple(r for r in roles if not is_relational_role(r))
-    both = relational_roles([("toyInRoom.0", "toy"), ("toyInRoom.1", "room")], library.relational_pfs, {"agent"})
+    both = relational_roles([("toyInRoom.0", "toy"), ("toyInRoom.1", "room")], library.relational_pfs, {"agent"},
+                            {"toy", "room", "door"})
     assert set(both) == {"other:toyInRoom.1@toyInRoom.0", "other:toyInDoor.1@toyInRoom.0",
                          "other:toyInRoom.0@toyInRoom.1"}
     assert len(both) <= 2 * 2 * len(library.relational_pfs)
@@ -91,7 +92,7 @@ def test_the_relational_roles_of_a_task_are_bounded(library):
 def test_an_object_related_to_two_bound_objects_takes_the_first_relation():
     relations = {"room2": (("toyInRoom", 1, "block0"), ("toyInRoom", 1, "block1"))}
     links = relational_links([("room2", "agentInRoom.1"), ("block1", "toyInRoom.0")],
-                             {**relations, "block1": (("toyInRoom", 0, "room2"),)})
+                             {**relations, "block1": (("toyInRoom", 0, "room2"),)}, {"block0", "block1"})
     assert links == {"block0": "other:toyInRoom.0@agentInRoom.1"}  # block1 is bound; room2 too
 
 
@@ -167,16 +168,26 @@ def test_a_users_pf_of_two_objects_relates_them_with_no_python(tmp_path, start):
     mine.write_text(
         "pf(position, toyNearDoor, (toy, door)).\n"
         "holds(toyNearDoor, (T, D)) :- toy(T), door(D), at(T, X, Y), rect(D, L, _, _, B), |X - L| + |Y - B| <= 2.\n"
-        'task(toyToDoor). var(toyToDoor, "T", toy). var(toyToDoor, "D", door).\n'
-        'goal(toyToDoor, toyInDoor, ("T", "D")).\n', encoding="utf-8")
+        'task(agentToDoor). var(agentToDoor, "A", agent). var(agentToDoor, "D", door).\n'
+        'goal(agentToDoor, agentInDoor, ("A", "D")).\n', encoding="utf-8")
     library = TaskLibrary.load([mine])
     assert ("toyNearDoor", ("toy", "door")) in library.relational_pfs
     related = object_relations(start, library)  # the chair at (10, 2), the door at (8, 2)
     assert ("toyNearDoor", 1, "block0") in related["door1"] and ("toyNearDoor", 0, "door1") in related["block0"]
-    # "the chair next to the door": the chair, bound by toyToDoor, describes the door in a relational role
+    # "the door next to the chair": the door the task binds describes the chair in a relational role
     roles = {rb.obj: rb.role for i in interpretations(start, library, enumerate_constraints=False, relational=True)
-             if i.goal == parse_goal("toyInDoor(block0, door0)") for rb in i.roles}
-    assert roles["door1"] == "other:toyNearDoor.1@toyInDoor.0"
+             if i.goal == parse_goal("agentInDoor(agent0, door1)") for rb in i.roles}
+    assert roles["block0"] == "other:toyNearDoor.0@agentInDoor.1"
+    assert roles["block1"] == "other:toy" and roles["door0"] == "other:door"
+
+
+def test_rooms_and_doors_keep_their_own_descriptions(start, library):
+    # the chair's room, related to the chair a task moves, is not described by it (model.relational)
+    for interp in interpretations(start, library, enumerate_constraints=False, relational=True):
+        for rb in interp.roles:
+            assert not is_relational_role(rb.role) or rb.cls == "toy", (interp.goal, rb)
+    roles = alignable_roles(library.task("toyToRoom"), library.relational_pfs)
+    assert [r for r in roles if is_relational_role(r)] == ["other:toyInRoom.0@toyInRoom.1"]
 
 
 @pytest.mark.parametrize("command", ["go to the room that has the chair", "move to the room that contains the chair",
