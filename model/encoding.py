@@ -131,8 +131,8 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None) -> list[tuple[
     :func:`domain_lexicon`) never says where things end, so ``|last`` passes
     over it to the phrase before. The object of a relative or participial clause about a noun phrase
     whose verb says what it holds ("the room *that has the chair*", "the room *containing the chair*";
-    ``VERB_HAVING`` of the word files) is keyed as a noun-attached "with" phrase (``with@np``): it
-    describes the noun phrase as "the room *with the chair*" does. What each of these measured:
+    ``VERB_HAVING`` of the word files) is keyed as a noun-attached phrase of ``PREP_HAVING`` ("with":
+    ``with@np``): it describes the noun phrase as "the room *with the chair*" does. What each of these measured:
     ABLATIONS.md.
     """
     lexicon = lexicon or domain_lexicon()
@@ -145,7 +145,7 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None) -> list[tuple[
         if entity.role == "npp":
             key = f"{entity.prep}@np"
         elif entity.role == "dobj" and entity.clause in having:
-            key = f"{HAVING_PREPOSITION}@np"
+            key = f"{lexicon.having_preposition}@np"
         elif entity.prep is not None:
             key = entity.prep + ("+obj" if entity.clause in transitive else "")
         else:
@@ -166,13 +166,12 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None) -> list[tuple[
     return result
 
 
-# The preposition a clause of having reads as ("the room that has the chair" = "the room with the chair").
-HAVING_PREPOSITION = "with"
-
-
 def _having_clauses(lf: LogicalForm, lexicon: Lexicon) -> set[int]:
     """Indices of the clauses of ``lf`` that describe a noun phrase by what it holds: a relative
-    (``that``, ``which``, ...) or participial (``-ing``) clause about it whose verb is a verb of having."""
+    (``that``, ``which``, ...) or participial (``-ing``) clause about it whose verb is a verb of having
+    (none when the word files name no preposition such a clause reads as)."""
+    if lexicon.having_preposition is None:
+        return set()
     return {i for i, clause in enumerate(lf.clauses)
             if clause.subject is not None and clause.verb in lexicon.having_verbs and not clause.negated
             and (clause.connective == "ing" or "REL" in lexicon.listed(clause.connective or ""))}

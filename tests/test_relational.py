@@ -209,3 +209,12 @@ def test_a_clause_of_being_is_not_read_as_having():
 
     for reading in parse("take the chair that is in the red room to the blue room", word_lexicon=domain_lexicon()):
         assert not any(key and key.startswith("with@np") for key, _, _ in entity_words(reading.logical_form))
+
+
+def test_a_saved_model_keeps_the_switch_and_the_relational_roles(trained, tmp_path):
+    again = Learner.load(trained.save(tmp_path / "model"))
+    assert again.lm.relational_descriptions is True
+    assert ROLE in again.vocab.task_roles["agentToRoom"]
+    start = parse_state(layout((4, 2, 0), (10, 1), (2, 2), (6, 2)), PALETTE)
+    assert again.posterior("go to the room with the chair", start).best_goal == trained.posterior(
+        "go to the room with the chair", start).best_goal == parse_goal("agentInRoom(agent0, room2)")
