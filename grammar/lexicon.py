@@ -34,9 +34,11 @@ CATEGORIES = (
 )
 # Categories of a word file that tag their words with a lexical category and give them a role the
 # parser or the model reads (see english.words); VERB lists lemmas, IRREGULAR form=lemma pairs.
-_TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP"}
+_TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP", "PREP_HAVING": "PREP"}
+# VERB_HAVING marks verb lemmas (listed under VERB) whose relative clause about a noun phrase reads as
+# "with" ("the room that has the chair"); it tags nothing itself.
 FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB")) + (
-    "VERB", "IRREGULAR", *_TAGGING,
+    "VERB", "IRREGULAR", *_TAGGING, "VERB_HAVING",
 )
 # A multiword entry's first word that may head or modify a noun phrase ("left" of "left of") does,
 # rather than open the preposition, after a word of these categories: "the left of the room",
@@ -161,6 +163,9 @@ class Lexicon:
         self.hues = words["HUE"]
         self.negating_prepositions = words["PREP_NEGATING"]
         self.source_and_comitative_prepositions = words["PREP_SOURCE"]
+        self.having_verbs = words["VERB_HAVING"]
+        # The preposition a clause of having reads as ("with"); None when no word file names one.
+        self.having_preposition = min(words["PREP_HAVING"], default=None)
         # Multiword entries by first word, longest first (the tokeniser joins the longest that fits).
         multiword: dict[str, list[tuple[str, ...]]] = {}
         for word in sorted(table, key=lambda w: (-w.count("_"), w)):

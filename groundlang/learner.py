@@ -135,6 +135,7 @@ class Learner:
                 state, self.library, enumerate_constraints=self.lm.enumerates_constraints,
                 relation_words=self.lm.relation_words,
                 held_parts=self.lm.held_parts,
+                relational=self.lm.relational_descriptions,
             )
         return self._interp_cache[state]
 
@@ -188,7 +189,8 @@ class Learner:
         return palette_schema(self.library, palette)
 
     def _build_vocabulary(self, observations: Iterable[Observation], palettes: Iterable) -> Vocabulary:
-        return build_vocabulary(observations, palettes, self.library, self.word_lexicon)
+        return build_vocabulary(observations, palettes, self.library, self.word_lexicon,
+                                relational=self.lm.relational_descriptions)
 
     def fit(self, instances: Sequence, progress: bool = False, init: dict | None = None,
             observations: list[Observation] | None = None, batch: Batch | None = None) -> "Learner":

@@ -22,14 +22,16 @@ def palette_schema(library: TaskLibrary, palette):
 
 
 def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, library: TaskLibrary,
-                     word_lexicon) -> Vocabulary:
+                     word_lexicon, relational: bool = False) -> Vocabulary:
     """The vocabulary of a training set: its words, the preposition keys of its readings (and the bare
     prepositions the parse model generates), the tokens and roles of its interpretations, and every
     property PF and class the domain declares for ``palettes`` (a test layout may show values training
-    never did)."""
+    never did). ``relational``: the tasks' tables span their relational roles too
+    (``model.relational``; the parse model's ``relational_descriptions``)."""
     vocab = Vocabulary(lexicon=word_lexicon)
     vocab.add_tasks((task.name for task in library.tasks),
-                    roles={task.name: alignable_roles(task) for task in library.tasks})
+                    roles={task.name: alignable_roles(task, library.relational_pfs if relational else ())
+                           for task in library.tasks})
     tokens: list[str] = []
     roles: list[str] = []
     preps: list[str] = []

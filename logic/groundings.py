@@ -13,7 +13,7 @@ from .atoms import Atom
 from .program import AspError
 from .tasks import CLASS_ORDER, BindingConstraint, GroundedTask, TaskLibrary, _natural_key, _text, _tuple_args, pf_name
 
-__all__ = ["binding_constraints", "enumerate_groundings", "ground_environment", "Descriptions", "PFTerms"]
+__all__ = ["binding_constraints", "enumerate_groundings", "ground_environment", "Descriptions", "PFTerms", "Relations"]
 
 
 def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
@@ -31,6 +31,10 @@ Descriptions = dict[str, dict[str, tuple[str, ...]]]
 # A described PF's name -> its term as the library writes it (restrict/3 takes the term):
 # {"roomIsGreen": "roomIs(green)", "doorWestOfAgent": "doorWestOfAgent"}.
 PFTerms = dict[str, str]
+# Object -> the PFs of two objects that hold of it at the start, as (PF name, its argument index, the
+# other object), e.g. {"block0": (("toyInRoom", 0, "room2"),), "room2": (("toyInRoom", 1, "block0"),)};
+# neither object is the addressee (related/4 of groundings.lp).
+Relations = dict[str, tuple[tuple[str, int, str], ...]]
 
 
 def enumerate_groundings(
@@ -43,11 +47,12 @@ def enumerate_groundings(
 
 def ground_environment(
     library: TaskLibrary, facts: str, *, time_limit: float | None = None, environment: str | None = None
-) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions, PFTerms]:
+) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions, PFTerms, Relations]:
     """Every permissible grounding not true initially, with its binding constraints; the
     unary PFs of every class but position true of each object, by class
     (``{"door1": {"spatial": ("doorWestOfAgent",)}}``; objects none holds of are left out); and
-    the term of each of those PFs as a library writes it (``{"roomIsGreen": "roomIs(green)"}``).
+    the term of each of those PFs as a library writes it (``{"roomIsGreen": "roomIs(green)"}``); and
+    the PFs of two objects that hold of each object at the start (:data:`Relations`).
 
     ``facts``: one environment in the vocabulary of ``domain.lp`` (object names as constants).
     ``time_limit``: seconds, default the library's. One Control, one grounding, one solve
@@ -66,6 +71,7 @@ def ground_environment(
     found = []
     described: dict[str, dict[str, set[str]]] = {}
     terms: PFTerms = {}
+    related: dict[str, set[tuple[str, int, str]]] = {}
     # The same atoms recur in many answer sets; decoding clingo symbols is the costly part.
     decoded: dict[clingo.Symbol, tuple[str, object]] = {}
 
@@ -77,6 +83,8 @@ def ground_environment(
             return kind, (_text(args[0]), _text(args[1]))
         if kind == "described" and len(args) == 3:
             return kind, (_text(args[0]), pf_name(args[1]), _text(args[2]), str(args[1]))
+        if kind == "related" and len(args) == 4:
+            return kind, (_text(args[2]), (pf_name(args[0]), args[1].number, _text(args[3])))
         if kind == "unusable_restriction" and len(args) == 3:
             return kind, (_text(args[0]), _text(args[1]), args[2])
         if kind == "restrictable" and len(args) == 2:
@@ -112,6 +120,8 @@ def ground_environment(
                 if terms.setdefault(name, term) != term:
                     raise AspError(f"{library.program.user_names}: PFs {terms[name]} and {term} are both called "
                                    f"{name} in groundlang; rename one of them")
+            elif kind == "related":
+                related.setdefault(value[0], set()).add(value[1])
             elif kind == "unusable_restriction":
                 unusable.add(value)
             elif kind == "restrictable":
@@ -145,7 +155,9 @@ def ground_environment(
         o: {cls: tuple(sorted(names)) for cls, names in sorted(described[o].items())}
         for o in sorted(described, key=_natural_key)
     }
-    return [(g, c) for _, g, c in found], descriptions, dict(sorted(terms.items()))
+    relations = {o: tuple(sorted(related[o], key=lambda r: (r[0], r[1], _natural_key(r[2]))))
+                 for o in sorted(related, key=_natural_key)}
+    return [(g, c) for _, g, c in found], descriptions, dict(sorted(terms.items())), relations
 
 
 def _unusable_restriction_message(library: TaskLibrary, restriction: tuple[str, str, clingo.Symbol],

@@ -216,9 +216,12 @@ def _restriction_problem(term: clingo.Symbol, var: str, cls: str,
     return None
 
 
-def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tuple[LiftedTask, ...], tuple[str, ...]]:
+def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tuple[LiftedTask, ...], tuple[str, ...],
+                                                                            tuple[tuple[str, tuple[str, str]], ...]]:
     """Solve the library without an environment: the lifted tasks (task/1, var/3, goal/3,
-    restrict/3) and the names of the unary spatial PFs (pf/3 of class spatial), sorted.
+    restrict/3), the names of the unary spatial PFs (pf/3 of class spatial), sorted, and the PFs of
+    two objects but the spatial ones with their signatures, sorted (what ``related/4`` of
+    ``groundings.lp`` may relate objects by).
 
     Checked here, each a one-line AspError naming the sources and the task: variables, goal PFs
     and their argument classes, and that every restrict/3 whose PF the library declares (alone or
@@ -237,6 +240,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     restrictions: dict[str, list[tuple[str, clingo.Symbol]]] = {n: [] for n in names}
     signatures: dict[str, tuple[str, ...]] = {}
     spatial = set()
+    relational = set()
     movable = set()  # PFs the agent's moves change: what a goal may be
     declared: _Declarations = {}
     for a in by_signature.get(("pf", 3), []):
@@ -251,6 +255,8 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
             signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
         elif cls_.name == "spatial" and len(_tuple_args(sig)) == 1:
             spatial.add(pf_name(name))  # groundings.lp describes objects by unary spatial PFs only
+        if cls_.name != "spatial" and len(_tuple_args(sig)) == 2:
+            relational.add((pf_name(name), tuple(_text(s) for s in _tuple_args(sig))))
         if cls_.name in ("position", "spatial"):
             movable.add(pf_name(name))
     for a in by_signature.get(("var", 3), []):
@@ -313,7 +319,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
                 raise AspError(f"{program.user_names}: task {n}: restrict({n}, \"{v}\", {term}): {problem}")
         kept = {(v, str(term)) for v, term in restrictions[n]}
         tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n]))), tuple(sorted(kept))))
-    return tuple(tasks), tuple(sorted(spatial))
+    return tuple(tasks), tuple(sorted(spatial)), tuple(sorted(relational))
 
 
 def _source(path: str | Path) -> Source:
@@ -346,7 +352,8 @@ class TaskLibrary:
         self.tabulation_program = Program(
             domain + self.sources + (package_source("tabulate.lp"),), allow_scripts, isolated
         )
-        self.tasks, self.spatial_pfs = _read_lifted_tasks(self.program, time_limit)
+        # relational_pfs: ((name, (class, class)), ...), the PFs of two objects that may describe one by the other.
+        self.tasks, self.spatial_pfs, self.relational_pfs = _read_lifted_tasks(self.program, time_limit)
 
     @classmethod
     def load(cls, paths: Iterable[str | Path] | None = None, allow_scripts: bool = False,

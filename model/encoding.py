@@ -129,15 +129,23 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None) -> list[tuple[
     starts or what goes along ("from the blue room", "... go to the beige room
     *with the star*"; ``PREP_SOURCE`` of the word files; ``lexicon``, default
     :func:`domain_lexicon`) never says where things end, so ``|last`` passes
-    over it to the phrase before. What each of these measured: ABLATIONS.md.
+    over it to the phrase before. The object of a relative or participial clause about a noun phrase
+    whose verb says what it holds ("the room *that has the chair*", "the room *containing the chair*";
+    ``VERB_HAVING`` of the word files) is keyed as a noun-attached phrase of ``PREP_HAVING`` ("with":
+    ``with@np``): it describes the noun phrase as "the room *with the chair*" does. What each of these measured:
+    ABLATIONS.md.
     """
-    passed_over = (lexicon or domain_lexicon()).source_and_comitative_prepositions
+    lexicon = lexicon or domain_lexicon()
+    passed_over = lexicon.source_and_comitative_prepositions
+    having = _having_clauses(lf, lexicon)
     negated = {i for i, clause in enumerate(lf.clauses) if getattr(clause, "negated", False)}
     transitive = {entity.clause for entity in lf.entities if entity.role == "dobj"}
     result = []
     for entity in lf.entities:
         if entity.role == "npp":
             key = f"{entity.prep}@np"
+        elif entity.role == "dobj" and entity.clause in having:
+            key = f"{lexicon.having_preposition}@np"
         elif entity.prep is not None:
             key = entity.prep + ("+obj" if entity.clause in transitive else "")
         else:
@@ -156,6 +164,17 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None) -> list[tuple[
             result[n] = (f"{key or 'dobj'}|last", modifiers, head)
             break
     return result
+
+
+def _having_clauses(lf: LogicalForm, lexicon: Lexicon) -> set[int]:
+    """Indices of the clauses of ``lf`` that describe a noun phrase by what it holds: a relative
+    (``that``, ``which``, ...) or participial (``-ing``) clause about it whose verb is a verb of having
+    (none when the word files name no preposition such a clause reads as)."""
+    if lexicon.having_preposition is None:
+        return set()
+    return {i for i, clause in enumerate(lf.clauses)
+            if clause.subject is not None and clause.verb in lexicon.having_verbs and not clause.negated
+            and (clause.connective == "ing" or "REL" in lexicon.listed(clause.connective or ""))}
 
 
 def backoff_key(key: str) -> str:

@@ -36,6 +36,10 @@ Every object, bound or not, may also be described by the spatial PFs
 object keeps in another layout. What each object is described by comes from
 clingo (``groundings.lp`` shows ``described/3``), so a PF class a user's
 library declares describes bystanders as it constrains bound objects.
+
+With ``relational`` (the parse model's ``relational_descriptions``), a bystander related to a bound
+object by a PF of two objects ("the room *with the chair*") takes a role named by that relation
+instead of ``other:<class>`` (:mod:`groundlang.model.relational`, which says how it is bounded).
 """
 
 from __future__ import annotations
@@ -52,7 +56,8 @@ from groundlang.logic.tasks import BindingConstraint, GroundedTask, LiftedTask, 
 from groundlang.model.features import atoms_hold_along
 from groundlang.model.geometry import cell_tables
 from groundlang.model.pf_tables import PFTables
-from groundlang.model.tasks import candidate_tasks, object_descriptions
+from groundlang.model.relational import relational_links, relational_roles
+from groundlang.model.tasks import candidate_tasks, object_descriptions, object_relations
 from groundlang.model.vocabulary import NO_ROLE
 from groundlang.logic.classes import domain_classes
 from groundlang.model.world import WORLD_CLASSES, State
@@ -124,13 +129,17 @@ def task_roles(lifted: LiftedTask) -> tuple[str, ...]:
     )
 
 
-def alignable_roles(lifted: LiftedTask) -> tuple[str, ...]:
+def alignable_roles(lifted: LiftedTask, relational_pfs=()) -> tuple[str, ...]:
     """Every role a noun phrase may align with in an interpretation of ``lifted``: nothing, the
     roles of its own variables and those of bystanders, but never the agent's (UNALIGNED_CLASSES)
-    nor another task's variables. What the parse model's per-task alignment tables span."""
+    nor another task's variables. What the parse model's per-task alignment tables span.
+    ``relational_pfs`` (``TaskLibrary.relational_pfs``, when relational descriptions are on): the
+    relational roles of its variables too."""
     own = (role for var, role in zip(lifted.variables, task_roles(lifted)) if var.cls not in UNALIGNED_CLASSES)
     others = (role for role in OTHER_ROLES if role.removeprefix("other:") not in UNALIGNED_CLASSES)
-    return (NO_ROLE, *dict.fromkeys(own), *others)
+    related = relational_roles([(role, var.cls) for var, role in zip(lifted.variables, task_roles(lifted))],
+                               relational_pfs, UNALIGNED_CLASSES, domain_classes().mentioned)
+    return (NO_ROLE, *dict.fromkeys(own), *others, *related)
 
 
 def object_names(state: State) -> list[str]:
@@ -140,11 +149,14 @@ def object_names(state: State) -> list[str]:
 
 def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary,
            described: Mapping[str, Mapping[str, tuple[str, ...]]],
-           starts: tuple[frozenset[str], bool], relation_words: bool = False) -> tuple[RoleBinding, ...]:
+           starts: tuple[frozenset[str], bool], relation_words: bool = False,
+           relations: Mapping[str, tuple] | None = None) -> tuple[RoleBinding, ...]:
     """The roles of an interpretation: the task's variables (what words may say of a bound object:
     its PFs in C, then its spatial PFs), then every other object (all its unary PFs, as clingo
     describes it: colours, shapes, spatial PFs, any class a user's library adds). A head noun may
-    also say an object's shape PF. ``starts``: :func:`start_rooms` of ``state``."""
+    also say an object's shape PF. ``starts``: :func:`start_rooms` of ``state``. ``relations``
+    (:func:`~groundlang.model.tasks.object_relations`, when relational descriptions are on): a bystander
+    related to a bound object takes its relational role instead of ``other:<class>``."""
     lifted = library.task(task.task)
     binding = dict(task.binding)
     bindings = []
@@ -157,6 +169,8 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         bindings.append(RoleBinding(role, obj, var.cls, said + relation, about.get("shape", ()) + relation))
     bound = set(binding.values())
     classes = {name: cls for cls, name, _ in state.layout.objects}
+    links = relational_links([(binding[v.name], r) for v, r in zip(lifted.variables, task_roles(lifted))], relations,
+                             {o for o, c in classes.items() if c in domain_classes().mentioned}) if relations is not None else {}
     start_set, start_known = starts
     for obj in object_names(state):
         if obj not in bound:
@@ -167,7 +181,7 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
                 bindings.append(RoleBinding(START_ROLE, obj, cls, said, about.get("shape", ())))
                 if start_known:
                     continue
-            bindings.append(RoleBinding(f"other:{cls}", obj, cls, said, about.get("shape", ())))
+            bindings.append(RoleBinding(links.get(obj, f"other:{cls}"), obj, cls, said, about.get("shape", ())))
     return tuple(bindings)
 
 
@@ -187,7 +201,8 @@ def start_rooms(state: State) -> tuple[frozenset[str], bool]:
 
 
 def interpretations(state: State, library: TaskLibrary, enumerate_constraints: bool = True,
-                    relation_words: bool = False, held_parts: bool = False) -> list[Interpretation]:
+                    relation_words: bool = False, relational: bool = False,
+                    held_parts: bool = False) -> list[Interpretation]:
     """Every (L, T, C) of ``state`` with its log prior, in a deterministic order.
 
     With ``enumerate_constraints=False`` each grounding appears once, with C
@@ -199,7 +214,8 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     orange room" as a room other than the goal).
 
     With ``relation_words`` the goal's PFs join what words may say of each argument of the task
-    (the parse model's setting of that name).
+    (the parse model's setting of that name). With ``relational`` a bystander related to a bound
+    object is offered in a relational role (the parse model's ``relational_descriptions``).
 
     With ``held_parts`` a conjunctive grounding one of whose parts already holds is offered too: "put
     the bag in the blue room and come back to the green room", said in the green room, asks for a
@@ -223,6 +239,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     # Once per state, shared by every interpretation.
     described = object_descriptions(state, library)
     starts = start_rooms(state)
+    relations = object_relations(state, library) if relational else None
     per_lifted = Counter(task.task for task, _ in candidates)
     n_lifted = len(per_lifted)
     result = []
@@ -230,7 +247,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
         log_prior_t = -math.log(n_lifted) - math.log(per_lifted[task.task])
         if not enumerate_constraints:
             largest = max(constraints, key=lambda c: len(c.atoms))
-            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, described, starts, relation_words)))
+            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, described, starts, relation_words, relations)))
             continue
         for constraint in constraints:
             result.append(
@@ -238,7 +255,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
                     task,
                     constraint,
                     log_prior_t - math.log(len(constraints)),
-                    _roles(task, constraint, state, library, described, starts, relation_words),
+                    _roles(task, constraint, state, library, described, starts, relation_words, relations),
                 )
             )
     return result

@@ -28,6 +28,7 @@ class LanguageModel:
     # as settings.
     relation_words = False
     held_parts = False
+    relational_descriptions = False
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True):
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).

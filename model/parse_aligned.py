@@ -59,6 +59,7 @@ class ParseAligned(LanguageModel):
         relation_words: bool = False,
         preposition_concentration: float | None = 1.05,
         held_parts: bool = True,
+        relational_descriptions: bool = False,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -82,7 +83,9 @@ class ParseAligned(LanguageModel):
         "into the room"), which the alignment table, conditioned on it, cannot. ``held_parts``: a
         conjunction may name a part that holds at the start, which the plan breaks and restores ("... and
         come back to the green room"); a demonstration that never breaks it rules the reading out
-        (``interpretations.unbroken_held_parts``). What each measured: ABLATIONS.md."""
+        (``interpretations.unbroken_held_parts``). ``relational_descriptions``: a bystander related to an object the task binds by a PF of two objects (a toy in the goal room)
+        is offered in a role named by that relation, so "the room *with the red chair*" can say which
+        room (``model.relational``). What each measured: ABLATIONS.md."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")
@@ -105,6 +108,7 @@ class ParseAligned(LanguageModel):
         self.relation_words = relation_words
         self.preposition_concentration = preposition_concentration
         self.held_parts = held_parts
+        self.relational_descriptions = relational_descriptions
 
     def settings(self) -> dict:
         return {
@@ -119,6 +123,7 @@ class ParseAligned(LanguageModel):
             "relation_words": self.relation_words,
             "preposition_concentration": self.preposition_concentration,
             "held_parts": self.held_parts,
+            "relational_descriptions": self.relational_descriptions,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):

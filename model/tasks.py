@@ -22,7 +22,7 @@ from .geometry import state_facts
 from .world import State
 
 __all__ = [
-    "Candidate", "candidate_tasks", "object_descriptions", "attribute_pfs", "spatial_descriptions",
+    "Candidate", "candidate_tasks", "object_descriptions", "object_relations", "attribute_pfs", "spatial_descriptions",
     "narrow_by_known", "NarrowedCandidate",
 ]
 
@@ -32,9 +32,10 @@ Candidate = tuple[GroundedTask, list[BindingConstraint]]
 @lru_cache(maxsize=64)
 def _environment(state: State, library: TaskLibrary) -> tuple:
     palette = state.layout.palette.name
-    found, described, terms = ground_environment(library, state_facts(state), environment=f"palette {palette}")
+    found, described, terms, related = ground_environment(library, state_facts(state),
+                                                          environment=f"palette {palette}")
     frozen = MappingProxyType({obj: MappingProxyType(by_class) for obj, by_class in described.items()})
-    return tuple((g, tuple(c)) for g, c in found), frozen, MappingProxyType(terms)
+    return tuple((g, tuple(c)) for g, c in found), frozen, MappingProxyType(terms), MappingProxyType(related)
 
 
 def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
@@ -56,6 +57,14 @@ def object_descriptions(state: State, library: TaskLibrary) -> Mapping[str, Mapp
     objects no such PF holds of are absent. Raises AspError.
     """
     return _environment(state, library)[1]
+
+
+def object_relations(state: State, library: TaskLibrary) -> Mapping[str, tuple[tuple[str, int, str], ...]]:
+    """Object -> the PFs of two objects that hold of it in ``state``, as ``(PF, its argument index, the
+    other object)``: ``{"block0": (("toyInRoom", 0, "room2"),), "room2": (("toyInRoom", 1, "block0"),)}``
+    (``related/4`` of ``groundings.lp``; spatial PFs and the addressee left out). From the same cached
+    solve as :func:`candidate_tasks`; objects with none are absent. Raises AspError."""
+    return _environment(state, library)[3]
 
 
 def attribute_pfs(state: State, library: TaskLibrary) -> Mapping[str, tuple[tuple[str, str], ...]]:

@@ -460,7 +460,7 @@ def test_descriptions_survive_a_user_constraint_that_rules_out_the_answer_set_of
     the descriptions and the restriction check come with every answer set all the same."""
     every_toy_moves = ":- toy(O), not bind(_, O).\n"
     library = TaskLibrary.from_text(_TOY_TO_ROOM + _AGENT_TO_ROOM + every_toy_moves, "moves.lp")
-    found, described, _ = ground_environment(library, ONE_TOY)
+    found, described, _, _ = ground_environment(library, ONE_TOY)
     assert found and all(g.task == "toyToRoom" for g, _ in found)
     assert described["block0"] == {"colour": ("toyIsYellow",), "shape": ("toyIsStar",)}
     mauve = TaskLibrary.from_text(_TOY_TO_ROOM + _AGENT_TO_ROOM + every_toy_moves
@@ -496,7 +496,7 @@ def test_every_restriction_the_environment_cannot_honour_is_counted():
 def test_an_environment_where_nothing_can_be_asked_is_still_described():
     """The answer set that chooses no task carries the descriptions: here the only task is already done."""
     done = TaskLibrary.from_text(_AGENT_TO_ROOM + 'restrict(agentToRoom, "R", roomIs(green)).\n')
-    found, described, _ = ground_environment(done, TWO_TOYS)
+    found, described, _, _ = ground_environment(done, TWO_TOYS)
     assert found == []
     assert described["room0"] == {"colour": ("roomIsGreen",)}
     assert described["block1"] == {"colour": ("toyIsRed",), "shape": ("toyIsMoon",)}

@@ -1,5 +1,7 @@
 """``groundlang tasks FILE --palette NAME [--library LP] [--json]``: lifted tasks, groundings, constraints,
-and the unary PFs that describe each object (colours, shapes, spatial PFs where the agent stands)."""
+the unary PFs that describe each object (colours, shapes, spatial PFs where the agent stands), the
+relations by which one object may describe another ("the room with the chair"), and every PF of two
+or more objects that holds."""
 
 from __future__ import annotations
 
@@ -30,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
     from groundlang.model.pf_tables import TabulationError, library_pf_tables
-    from groundlang.model.tasks import candidate_tasks, object_descriptions
+    from groundlang.model.tasks import candidate_tasks, object_descriptions, object_relations
 
     state = read_initial_state(args.file, args.palette)
     library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
@@ -38,6 +40,12 @@ def run(args: argparse.Namespace) -> int:
     by_name = object_descriptions(state, library)
     # The layout's order (rooms, doors, toys), as the corpus writes a state, not the names' alphabetical order.
     described = {obj: by_name[obj] for obj in object_names(state) if obj in by_name}
+    # What words may say of an object through another (related/4 of groundings.lp; the language model's
+    # relational descriptions), written as the PF's atom: "block0: toyInRoom(block0, room2)".
+    related = object_relations(state, library)
+    by_relation = {obj: [f"{pf}({', '.join((obj, other) if index == 0 else (other, obj))})"
+                         for pf, index, other in related[obj]]
+                   for obj in object_names(state) if obj in related}
     # Relations (toyInRoom, a user's agentNextToToy, ...) as the PF tables planning uses say they hold.
     try:
         holding = [a for a in library_pf_tables(state.layout, library).holding(state.positions)
@@ -59,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
             ],
             "descriptions": {obj: {cls: list(pfs) for cls, pfs in by_class.items()}
                              for obj, by_class in described.items()},
+            "described_by_relation": by_relation,
             "relations": {obj: [str(a) for a in atoms] for obj, atoms in relations.items()},
         }
         print(json.dumps(out, indent=1))
@@ -74,6 +83,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"unary PFs of each object in the initial state, by class ({len(described)} objects):")
     for obj, by_class in described.items():
         print(f"  {obj}: " + "; ".join(f"{cls} {', '.join(pfs)}" for cls, pfs in by_class.items()))
+    print(f"relations that may describe an object by another, in the initial state ({len(by_relation)} objects):")
+    for obj, atoms in by_relation.items():
+        print(f"  {obj}: " + ", ".join(atoms))
     if untabulated:
         print(f"PFs of two or more objects: not listed ({untabulated})")
         return 0
