@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from groundlang.inference.end_states import distances
 from groundlang.logic.atoms import Atom
 from groundlang.model.features import goal_mask
 from groundlang.model.pf_tables import library_pf_tables
@@ -66,19 +67,46 @@ def most_probable_first(items: Sequence, probability) -> list:
     return [items[k] for run in runs for k in sorted(run)]
 
 
+def _outcome_key(goal, space: StateSpace, tables) -> bytes:
+    return hashlib.sha1(np.packbits(goal_mask(space, goal, tables)).tobytes()).digest()
+
+
+def _asked(goal: tuple[Atom, ...], space: StateSpace, tables, dist: np.ndarray | None) -> tuple[Atom, ...]:
+    """What ``goal`` asks beyond what already holds: without its parts that hold at the start when the
+    nearest states where the rest holds keep them too (a plan for the rest need not break them, so
+    "the bag stays in the red room and the agent goes to the blue room" is "go to the blue room")."""
+    if dist is None or len(goal) < 2:
+        return goal
+    held = [a for a in goal if goal_mask(space, (a,), tables)[0]]
+    rest = tuple(a for a in goal if a not in held)
+    if not held or not rest:
+        return goal
+    reach = dist >= 0
+
+    def nearest(mask: np.ndarray) -> int | None:
+        hits = dist[mask & reach]
+        return int(hits.min()) if hits.size else None
+
+    whole, part = nearest(goal_mask(space, goal, tables)), nearest(goal_mask(space, rest, tables))
+    return rest if whole is not None and whole == part else goal
+
+
 def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpace,
                 library=None) -> list[GoalGroup]:
     """Merge goals (most probable first, as :meth:`Posterior.goals` gives them) whose goal masks
-    over ``space`` are equal; returns the groups, most probable first (ties: the first goal's order).
+    over ``space`` are equal, a conjunction counted as its rest where its parts that hold at the start
+    need not be broken (:func:`_asked`); returns the groups, most probable first (ties: the first goal's order).
     ``library``: the TaskLibrary whose PF rules say what the goals mean (default: the package's)."""
     tables = library_pf_tables(space.layout, library)
+    # From the initial state of an enumerated space (not a sample of placements): how far each state is.
+    dist = distances(space) if space.level_sizes is not None else None
     by_mask: dict[bytes, list] = {}
     order: list[bytes] = []
     for k, (goal, p) in enumerate(goals):
         if p < NEGLIGIBLE:
             key = f"#{k}".encode()  # kept apart: comparing it could not matter
         else:
-            key = hashlib.sha1(np.packbits(goal_mask(space, goal, tables)).tobytes()).digest()
+            key = _outcome_key(_asked(goal, space, tables, dist), space, tables)
         if key not in by_mask:
             by_mask[key] = [[], 0.0]
             order.append(key)
