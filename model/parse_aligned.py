@@ -10,7 +10,7 @@ form depend on the task:
 - which objects it names: a learned ``P(named | role)`` for every toy and every object the task binds
   (``encoding.is_mentionable``): a command that never mentions a toy speaks against "take the toy
   somewhere", one that names a bystander toy against the tasks that leave it alone; only a referring
-  phrase names what it aligns with (``encoding.is_referring``: "on right" does not name the star);
+  phrase names what it aligns with (``phrase_keys.is_referring``: "on right" does not name the star);
 - how many noun phrases each of its clauses has (``P(arity | L)``, per clause; the number of clauses
   is not modelled: a reading that splits a command into more clauses pays one more arity factor);
 - each phrase's preposition (``P(preposition | L)``): "to the right of the chair" says the relation
@@ -70,9 +70,9 @@ class ParseAligned(LanguageModel):
         one alignment table ``P(role | preposition, L)`` per lifted task (False:
         one ``P(role | preposition)`` shared by all tasks). ``mention_phrases``: which phrases name
         the object they align with for the mention model, ``"referring"`` (a head noun, a colour
-        word or an open-class word, see ``encoding.is_referring``) or ``"any"``. ``align_backoff``: each
+        word or an open-class word, see ``phrase_keys.is_referring``) or ``"any"``. ``align_backoff``: each
         alignment context reads roles from a mixture of its own table and that of the key it backs off to
-        (``encoding.backoff_key``: ``onto+obj|last`` -> ``onto``), weights learned per context, so a rare
+        (``phrase_keys.backoff_key``: ``onto+obj|last`` -> ``onto``), weights learned per context, so a rare
         key ("onto ..." as the last phrase) is no longer read by its prior alone. Off by default: it
         explains the words better, but "|last" says where things go, and a rare "with ...|last" backed off
         to "with" read "to one with orange floor" as a room passed. ``relation_words``: a phrase aligned
@@ -152,7 +152,7 @@ class ParseAligned(LanguageModel):
         with pyro.plate("align_contexts", contexts, dim=-1):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
             if self.align_backoff:
-                # Per context: the share of its own table and of its back-off key's (encoding.backoff_key).
+                # Per context: the share of its own table and of its back-off key's (phrase_keys.backoff_key).
                 g["backoff"] = pyro.sample("backoff", dist.Dirichlet(share))
         if self.mention_concentration is not None:
             # Per role: P(an object in this role is named by some phrase), P(it is not).
@@ -249,7 +249,7 @@ class ParseAligned(LanguageModel):
             per_reading = per_reading + torch.einsum("ijb,irb->ijr", arity[batch.task_index], batch.clause_arity)
         if "preposition" in g:
             # Each phrase's preposition key given L, then its role given (L, key), then its words.
-            # The preposition itself (``encoding.bare_preposition``): the marks of the phrase's place and
+            # The preposition itself (``phrase_keys.bare_preposition``): the marks of the phrase's place and
             # attachment are the reading's, which the alignment table is conditioned on already, and a
             # direct object has none, so nothing is generated for it.
             said = batch.type_preposition >= 0  # [I, K]
