@@ -24,7 +24,7 @@ from pathlib import Path
 from groundlang.bdm import DEFAULT_PALETTE, Command, bdm_files, read_bdm
 from groundlang.corpus import CorpusError, InconsistentDemonstration, Instance
 from groundlang.inference.end_states import EndStateNoise
-from groundlang.inference.shared_meaning import LayoutEvidence
+from groundlang.inference.evidence_cache import EvidenceCache
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.relevance import abstraction_bound, exact_fits, relevant_toys
 from groundlang.model.statespace import StateSpaceError
@@ -136,11 +136,13 @@ class TrainingPairs:
 
 def training_instances(commands: list[Command], library: TaskLibrary, demonstrations: str = "end-state",
                        skip_inconsistent: bool = False, max_states: int = REACHABILITY_MAX_STATES,
-                       layouts: str = "shared") -> TrainingPairs:
+                       layouts: str = "shared", cache_dir=None) -> TrainingPairs:
     """The instances of ``commands``' pairs (see the module docstring); pairs too large to enumerate are
     skipped as ``"too large"``, unreachable ones raise InconsistentDemonstration unless
     ``skip_inconsistent`` (then skipped as ``"unreachable"``). With ``layouts="shared"`` (end-state
-    evidence only) a command's usable pairs make one :class:`PairedCommand`."""
+    evidence only) a command's usable pairs make one :class:`PairedCommand`. End-state evidence is read
+    from and written to the cache folder ``cache_dir`` (``inference.evidence_cache``; None: the
+    default, False: none)."""
     if demonstrations not in DEMONSTRATIONS:
         raise ValueError(f"demonstrations={demonstrations!r}: expected one of {', '.join(DEMONSTRATIONS)}")
     if layouts not in LAYOUTS:
@@ -150,6 +152,7 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
                          "use layouts='separate'")
     out = TrainingPairs()
     noise = EndStateNoise()
+    cache = EvidenceCache(library, noise, cache_dir) if demonstrations == "end-state" else None
     for index, command in enumerate(commands):
         usable = []
         for pair in command.pairs:
@@ -162,7 +165,7 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
                     Path(f"{command.path}:{pair.line}"), command.text, actions, tuple(replay(pair.start, actions)))
             else:
                 try:  # enumerates the pair's states once: the reachability check and the evidence
-                    evidence = LayoutEvidence(pair.start, pair.end, library, noise, max_states)
+                    evidence = cache.evidence(pair.start, pair.end, max_states)
                 except StateSpaceError:
                     instance = None
                 else:
@@ -183,6 +186,8 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
                                     evidence=tuple(e for i in usable for e in i.evidence))]
         out.instances.extend(usable)
         out.commands.extend([index] * len(usable))
+    if cache is not None:
+        cache.report()
     return out
 
 
