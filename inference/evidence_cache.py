@@ -17,8 +17,10 @@ kept in the cache folder of the behaviour likelihoods (``inference.likelihoods``
 - entries are written atomically, not fsynced (a lost entry is recomputed), read with a size limit;
 - a folder that cannot be written gives one warning, and the run goes on without writing.
 
-Memory: one entry is read at a time and only its numbers are kept (in the LayoutEvidence); a run
-keeps counts and the first damaged entry, not a list of them.
+Pairs repeat within a corpus (a demonstration shown to several workers), so the last
+:data:`REMEMBERED` pieces of evidence are also kept in memory by key, read or computed once per run
+and shared by reference, with the cache folder or without it. Memory stays bounded: that many entries,
+one file read at a time, and counts and the first damaged entry rather than a list of them.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ import json
 import logging
 import os
 import weakref
+from collections import OrderedDict
 from pathlib import Path
 
 from groundlang.inference.end_states import EndStateNoise
@@ -46,6 +49,8 @@ logger = logging.getLogger(__name__)
 EVIDENCE_VERSION = 1
 # An entry holds a few numbers per grounded task: tens of KB for the largest layouts of the corpora.
 MAX_ENTRY_BYTES = 4 * 1024 * 1024
+# Pieces of evidence kept in memory per EvidenceCache (a few KB each), the most recently used.
+REMEMBERED = 1024
 
 _DIGESTS: "weakref.WeakKeyDictionary[TaskLibrary, str]" = weakref.WeakKeyDictionary()
 
@@ -118,7 +123,7 @@ def _restore(data, key: str, library: TaskLibrary, noise: EndStateNoise) -> Layo
 class EvidenceCache:
     """The evidence of pairs, read from the cache folder or computed and written there. ``cache_dir``:
     the folder (see the module docstring), None for the default, False for no cache. Counts ``hits``,
-    ``computed`` and ``damaged`` entries; :meth:`report` logs them once."""
+    ``computed`` and ``damaged`` entries (hits from memory included); :meth:`report` logs them once."""
 
     def __init__(self, library: TaskLibrary, noise: EndStateNoise, cache_dir: str | os.PathLike | None | bool = None):
         self.library, self.noise = library, noise
@@ -126,27 +131,34 @@ class EvidenceCache:
         self.digest = library_digest(library)
         self.hits = self.computed = self.damaged = 0
         self._first_damaged: tuple[Path, str] | None = None
+        self._memory: OrderedDict[str, LayoutEvidence] = OrderedDict()
 
     def evidence(self, start: State, end: State, max_states: int | None = None) -> LayoutEvidence:
         """The pair's LayoutEvidence; StateSpaceError (not cached) when its end cannot be reached."""
-        if self.root is None:
-            self.computed += 1
-            return LayoutEvidence(start, end, self.library, self.noise, max_states)
         key = evidence_key(start, end, self.digest, self.noise, evidence_space(start, end, max_states))
-        path = self.root / "evidence" / key[:2] / f"{key}.json"
-        try:
-            found = self._read(path, key)
-        except _Damaged as exc:
-            self.damaged += 1
-            self._first_damaged = self._first_damaged or (path, str(exc))
-            found = None
+        if key in self._memory:
+            self._memory.move_to_end(key)
+            self.hits += 1
+            return self._memory[key]
+        found = None
+        if self.root is not None:
+            path = self.root / "evidence" / key[:2] / f"{key}.json"
+            try:
+                found = self._read(path, key)
+            except _Damaged as exc:
+                self.damaged += 1
+                self._first_damaged = self._first_damaged or (path, str(exc))
         if found is not None:
             self.hits += 1
-            return found
-        evidence = LayoutEvidence(start, end, self.library, self.noise, max_states)
-        self.computed += 1
-        self._write(path, key, evidence)
-        return evidence
+        else:
+            found = LayoutEvidence(start, end, self.library, self.noise, max_states)
+            self.computed += 1
+            if self.root is not None:
+                self._write(path, key, found)
+        self._memory[key] = found
+        if len(self._memory) > REMEMBERED:
+            self._memory.popitem(last=False)
+        return found
 
     def _read(self, path: Path, key: str) -> LayoutEvidence | None:
         try:
@@ -176,4 +188,4 @@ class EvidenceCache:
             first, why = self._first_damaged
             logger.warning("evidence cache: %d corrupt entr%s recomputed (first: %s: %s)", self.damaged,
                            "y" if self.damaged == 1 else "ies", first, why)
-        logger.info("end-state evidence: %d pairs from the cache, %d computed", self.hits, self.computed)
+        logger.info("end-state evidence: %d pairs from the cache or repeated, %d computed", self.hits, self.computed)

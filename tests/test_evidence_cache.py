@@ -120,3 +120,14 @@ def test_a_cache_folder_that_is_a_file_is_refused(williams_library, tmp_path):
     (tmp_path / "cache").write_text("")
     with pytest.raises(ValueError, match="is a file, not a folder"):
         EvidenceCache(williams_library, EndStateNoise(), tmp_path / "cache")
+
+
+def test_repeated_pairs_are_computed_once_and_memory_is_bounded(williams_commands, williams_library, monkeypatch):
+    monkeypatch.setattr(evidence_cache, "REMEMBERED", 2)
+    cache = EvidenceCache(williams_library, EndStateNoise(), cache_dir=False)
+    pairs = _pairs(williams_commands)
+    first = cache.evidence(*pairs[0])
+    assert cache.evidence(*pairs[0]) is first and (cache.hits, cache.computed) == (1, 1)  # shared, not recomputed
+    for pair in pairs:
+        cache.evidence(*pair)
+    assert len(cache._memory) == 2 and cache.computed == 6  # the oldest forgotten: pairs[0] computed again
