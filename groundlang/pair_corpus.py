@@ -8,10 +8,12 @@ Such a corpus shows no trajectory, so a pair becomes evidence in one of two ways
   plan from the start to exactly the end state (``pair_tasks.shortest_actions``; of several shortest
   plans the first in a fixed order), scored by MLIRL's behaviour likelihood like a recorded one.
 
-Which is better was measured on a development split (ABLATIONS.md). A pair too large to enumerate is
-scored, with end-state evidence, in the relevance abstraction where the toys it moves move
-(``inference.shared_meaning``); one too large even for that is skipped and counted; one whose end state cannot be reached from its start is an
-inconsistent demonstration (an error naming file and line, or skipped with ``skip_inconsistent``).
+Which is better was measured on a development split (ABLATIONS.md). End-state evidence is computed
+once per distinct pair and kept in the cache folder (``inference.evidence_cache``). A pair too large
+to enumerate is scored, with end-state evidence, in the relevance abstraction where the toys it moves
+move (``inference.shared_meaning``); one too large even for that is skipped and counted; one whose end
+state cannot be reached from its start is an inconsistent demonstration (an error naming file and
+line, or skipped with ``skip_inconsistent``).
 """
 
 from __future__ import annotations
