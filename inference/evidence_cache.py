@@ -47,7 +47,7 @@ logger = logging.getLogger(__name__)
 
 # Bump when the meaning of a stored number changes (the end-state likelihood, the spaces it is computed in).
 EVIDENCE_VERSION = 1
-# An entry holds a few numbers per grounded task: tens of KB for the largest layouts of the corpora.
+# An entry holds a few numbers per grounded task (tens of bytes each); far more is not an entry.
 MAX_ENTRY_BYTES = 4 * 1024 * 1024
 # Pieces of evidence kept in memory per EvidenceCache (a few KB each), the most recently used.
 REMEMBERED = 1024

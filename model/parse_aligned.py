@@ -274,7 +274,8 @@ class ParseAligned(LanguageModel):
         ``P({})`` (= ``entities``), to which it is added.
         """
         # Only the real interpretations, flattened to [N] = the True entries of ``batch.mask``: padding
-        # is half of [I, J] where instances offer few interpretations, and its factor is 1 (log 0).
+        # fills [I, J] wherever an instance offers fewer interpretations than the most, and its factor
+        # is 1 (log 0: no slot to name), so it is left at 0 rather than computed.
         real_i, real_j = batch.mask.nonzero(as_tuple=True)
         cover_slot = batch.cover_slot[real_i, real_j]  # [N, G]
         cover_mask = batch.cover_mask[real_i, real_j]  # [N, G]
