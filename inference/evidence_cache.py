@@ -38,7 +38,7 @@ from groundlang.inference.likelihoods import cache_directory, layout_description
 from groundlang.inference.shared_meaning import LayoutEvidence, evidence_space
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.storage import FileRefused, read_limited, write_atomically
+from groundlang.logic.storage import FileRefused, read_limited, write_atomically
 from groundlang.model.world import State
 
 __all__ = ["EVIDENCE_VERSION", "EvidenceCache", "evidence_key", "library_digest"]
