@@ -8,10 +8,12 @@ Such a corpus shows no trajectory, so a pair becomes evidence in one of two ways
   plan from the start to exactly the end state (``pair_tasks.shortest_actions``; of several shortest
   plans the first in a fixed order), scored by MLIRL's behaviour likelihood like a recorded one.
 
-Which is better was measured on a development split (ABLATIONS.md). A pair too large to enumerate is
-scored, with end-state evidence, in the relevance abstraction where the toys it moves move
-(``inference.shared_meaning``); one too large even for that is skipped and counted; one whose end state cannot be reached from its start is an
-inconsistent demonstration (an error naming file and line, or skipped with ``skip_inconsistent``).
+Which is better was measured on a development split (ABLATIONS.md). End-state evidence is computed
+once per distinct pair and kept in the cache folder (``inference.evidence_cache``). A pair too large
+to enumerate is scored, with end-state evidence, in the relevance abstraction where the toys it moves
+move (``inference.shared_meaning``); one too large even for that is skipped and counted; one whose end
+state cannot be reached from its start is an inconsistent demonstration (an error naming file and
+line, or skipped with ``skip_inconsistent``).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from pathlib import Path
 from groundlang.bdm import DEFAULT_PALETTE, Command, bdm_files, read_bdm
 from groundlang.corpus import CorpusError, InconsistentDemonstration, Instance
 from groundlang.inference.end_states import EndStateNoise
-from groundlang.inference.shared_meaning import LayoutEvidence
+from groundlang.inference.evidence_cache import EvidenceCache
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.relevance import abstraction_bound, exact_fits, relevant_toys
 from groundlang.model.statespace import StateSpaceError
@@ -136,11 +138,13 @@ class TrainingPairs:
 
 def training_instances(commands: list[Command], library: TaskLibrary, demonstrations: str = "end-state",
                        skip_inconsistent: bool = False, max_states: int = REACHABILITY_MAX_STATES,
-                       layouts: str = "shared") -> TrainingPairs:
+                       layouts: str = "shared", cache_dir=None) -> TrainingPairs:
     """The instances of ``commands``' pairs (see the module docstring); pairs too large to enumerate are
     skipped as ``"too large"``, unreachable ones raise InconsistentDemonstration unless
     ``skip_inconsistent`` (then skipped as ``"unreachable"``). With ``layouts="shared"`` (end-state
-    evidence only) a command's usable pairs make one :class:`PairedCommand`."""
+    evidence only) a command's usable pairs make one :class:`PairedCommand`. End-state evidence is read
+    from and written to the cache folder ``cache_dir`` (``inference.evidence_cache``; None: the
+    default, False: none)."""
     if demonstrations not in DEMONSTRATIONS:
         raise ValueError(f"demonstrations={demonstrations!r}: expected one of {', '.join(DEMONSTRATIONS)}")
     if layouts not in LAYOUTS:
@@ -150,6 +154,7 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
                          "use layouts='separate'")
     out = TrainingPairs()
     noise = EndStateNoise()
+    cache = EvidenceCache(library, noise, cache_dir) if demonstrations == "end-state" else None
     for index, command in enumerate(commands):
         usable = []
         for pair in command.pairs:
@@ -162,7 +167,7 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
                     Path(f"{command.path}:{pair.line}"), command.text, actions, tuple(replay(pair.start, actions)))
             else:
                 try:  # enumerates the pair's states once: the reachability check and the evidence
-                    evidence = LayoutEvidence(pair.start, pair.end, library, noise, max_states)
+                    evidence = cache.evidence(pair.start, pair.end, max_states)
                 except StateSpaceError:
                     instance = None
                 else:
@@ -183,6 +188,8 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
                                     evidence=tuple(e for i in usable for e in i.evidence))]
         out.instances.extend(usable)
         out.commands.extend([index] * len(usable))
+    if cache is not None:
+        cache.report()
     return out
 
 

@@ -52,7 +52,7 @@ from groundlang.inference.planning import (TaskSettings, as_transitions, demonst
 from groundlang.logic.atoms import Atom, parse_atom
 from groundlang.logic.storage import FileRefused, check_folder, read_limited, write_atomically
 
-__all__ = ["CACHE_VERSION", "behaviour_likelihood_table", "cache_directory", "entry_key", "pad_table"]
+__all__ = ["CACHE_VERSION", "behaviour_likelihood_table", "cache_directory", "entry_key", "layout_description", "pad_table"]
 
 logger = logging.getLogger(__name__)
 
@@ -75,7 +75,8 @@ def cache_directory(cache_dir: str | os.PathLike | None = None) -> Path:
     return check_folder(root, f"{what} {root}")
 
 
-def _layout_description(layout) -> dict:
+def layout_description(layout) -> dict:
+    """The layout as cache keys describe it: everything its states and PFs depend on but the palette's values."""
     return {
         "rooms": [[r.colour, r.left, r.top, r.right, r.bottom] for r in layout.rooms],
         "doors": [[d.left, d.top, d.right, d.bottom] for d in layout.doors],
@@ -96,7 +97,7 @@ def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], setti
     abstraction rather than the exact space (a different number)."""
     description = {
         "version": CACHE_VERSION,
-        "layout": _layout_description(initial_state.layout),
+        "layout": layout_description(initial_state.layout),
         "initial": initial_state.positions.tolist(),
         "goal": sorted(str(a) for a in goal),
         # The dynamics are deterministic: the initial state and the actions fix the states.

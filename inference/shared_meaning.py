@@ -33,7 +33,7 @@ from groundlang.model.statespace import enumerate_states
 from groundlang.model.tasks import candidate_tasks
 from groundlang.model.world import State
 
-__all__ = ["LayoutEvidence", "properties_of", "layout_evidence", "shared_meaning_terms", "end_state_behaviour"]
+__all__ = ["LayoutEvidence", "properties_of", "evidence_space", "layout_evidence", "shared_meaning_terms", "end_state_behaviour"]
 
 
 def _log_mean_exp(values) -> float:
@@ -54,7 +54,9 @@ def properties_of(task: GroundedTask, atoms) -> dict[str, frozenset[str]]:
 
 class LayoutEvidence:
     """Pair k's end-state likelihood under every grounding of every task in its own layout, with what
-    each grounding's bound objects are, and the pair's noise floor."""
+    each grounding's bound objects are, and the pair's noise floor. ``goals`` (in candidate order),
+    ``groundings`` (task, properties of its bound objects, index into ``goals``) and ``floor`` are what
+    :meth:`from_parts` takes back: what the evidence cache (``inference.evidence_cache``) stores."""
 
     def __init__(self, start: State, end: State, library: TaskLibrary, noise: EndStateNoise,
                  max_states: int | None = None):
@@ -66,14 +68,29 @@ class LayoutEvidence:
         dist = distances(space)
         masks = np.stack([goal_mask(space, goal, tables) for goal in goals]) if goals else None
         values = end_state_log_likelihood(dist, end_index, masks, noise) if goals else np.zeros(0)
-        self.by_goal: dict[tuple, float] = {goal: float(v) for goal, v in zip(goals, values)}
+        position = {goal: g for g, goal in enumerate(goals)}
+        groundings = [(task.task, properties_of(task, constraints[0].atoms if constraints else ()),
+                       position[task.goal]) for task, constraints in found]
+        floor = math.log(noise.anywhere / int((dist >= 0).sum()))
+        self._set(library, noise, goals, [float(v) for v in values], groundings, floor)
+
+    @classmethod
+    def from_parts(cls, library: TaskLibrary, noise: EndStateNoise, goals: Sequence[tuple], values: Sequence[float],
+                   groundings: Sequence[tuple[str, dict[str, frozenset[str]], int]], floor: float) -> "LayoutEvidence":
+        """The evidence from what an instance computed once held (``goals`` and their ``values``,
+        ``groundings``, ``floor``), for the same library and noise."""
+        self = cls.__new__(cls)
+        self._set(library, noise, list(goals), [float(v) for v in values], list(groundings), float(floor))
+        return self
+
+    def _set(self, library, noise, goals, values, groundings, floor) -> None:
         self.library = library
         self.noise = noise.key()
+        self.goals, self.values, self.groundings, self.floor = goals, values, groundings, floor
+        self.by_goal: dict[tuple, float] = dict(zip(goals, values))
         self.by_task: dict[str, list[tuple[dict[str, frozenset[str]], float]]] = {}
-        for task, constraints in found:
-            largest = constraints[0].atoms if constraints else ()
-            self.by_task.setdefault(task.task, []).append((properties_of(task, largest), self.by_goal[task.goal]))
-        self.floor = math.log(noise.anywhere / int((dist >= 0).sum()))
+        for task, props, g in groundings:
+            self.by_task.setdefault(task, []).append((props, values[g]))
 
     def goal_value(self, goal: tuple) -> float:
         """log P(e | g) for a grounded goal of this layout (the noise floor for one no task has)."""
@@ -87,6 +104,14 @@ class LayoutEvidence:
         if not values:
             return self.floor
         return _log_mean_exp(values)
+
+
+def evidence_space(start: State, end: State, max_states: int | None = None) -> str:
+    """Which space a pair's evidence is computed in (what its cache key records): ``"exact"``, or the
+    abstraction and the toys that move in it."""
+    if exact_fits(start, max_states):
+        return "exact"
+    return "abstraction moving " + ",".join(str(i) for i in relevant_toys(start, (), [(start, end)]))
 
 
 def _space(start: State, end: State, max_states: int | None):

@@ -278,36 +278,41 @@ class ParseAligned(LanguageModel):
         ``phi * grad`` still gives EM's expected counts. Returned relative to
         ``P({})`` (= ``entities``), to which it is added.
         """
-        G = batch.cover_slot.shape[-1]
-        role_of_slot = torch.gather(batch.role, 2, batch.cover_slot)  # [I, J, G]
+        # Only the real interpretations, flattened to [N] = the True entries of ``batch.mask``: padding
+        # fills [I, J] wherever an instance offers fewer interpretations than the most, and its factor
+        # is 1 (log 0: no slot to name), so it is left at 0 rather than computed.
+        real_i, real_j = batch.mask.nonzero(as_tuple=True)
+        cover_slot = batch.cover_slot[real_i, real_j]  # [N, G]
+        cover_mask = batch.cover_mask[real_i, real_j]  # [N, G]
+        G = cover_slot.shape[-1]
+        role_of_slot = torch.gather(batch.role[real_i, real_j], 1, cover_slot)  # [N, G]
         # In double precision: the terms alternate in sign and nearly cancel when a task's object
         # is almost surely named, so float32 would leave errors of 1e-3 nats that depend on padding.
-        mention = g["mention"].double()[role_of_slot]  # [I, J, G, 2]
-        joint = joint.double()
-        named = torch.where(batch.cover_mask, mention[..., 0], torch.ones_like(mention[..., 0]))
-        unnamed_minus_named = torch.where(
-            batch.cover_mask, mention[..., 1] - mention[..., 0], torch.zeros_like(named)
-        )
+        mention = g["mention"].double()[role_of_slot]  # [N, G, 2]
+        joint = joint[real_i, real_j].double()  # [N, V, K]
+        named = torch.where(cover_mask, mention[..., 0], torch.ones_like(mention[..., 0]))
+        unnamed_minus_named = torch.where(cover_mask, mention[..., 1] - mention[..., 0], torch.zeros_like(named))
         # Each slot is its own role binding, so the roles avoiding U carry the mass of all roles
         # less the slots' own: one subtraction per subset instead of a masked logsumexp.
-        K = joint.shape[3]
-        top = joint.max(dim=2, keepdim=True).values  # [I, J, 1, K]
-        mass = (joint - top).exp()  # [I, J, V, K]
-        all_roles = mass.sum(2)  # [I, J, K]
-        slot_mass = torch.gather(mass, 2, batch.cover_slot[..., None].expand(-1, -1, -1, K))
-        slot_mass = slot_mass * batch.cover_mask[..., None]  # [I, J, G, K]
+        K = joint.shape[2]
+        top = joint.max(dim=1, keepdim=True).values  # [N, 1, K]
+        mass = (joint - top).exp()  # [N, V, K]
+        all_roles = mass.sum(1)  # [N, K]
+        slot_mass = torch.gather(mass, 1, cover_slot[..., None].expand(-1, -1, K))
+        slot_mass = slot_mass * cover_mask[..., None]  # [N, G, K]
         # Subsets U of the slots, a block at a time: chosen[u, g] says whether slot g is in subset u.
         # One block holds them all for the few slots of the Cleanup World (2^4 here); blocks bound
-        # the memory of [I, J, subsets, K] when a layout has many toys.
+        # the memory of [N, subsets, K] when a layout has many toys.
         subsets = torch.tensor(list(itertools.product((False, True), repeat=G)), dtype=torch.bool)  # [2^G, G]
         naming = batch.type_mask & batch.type_refers if referring_only else batch.type_mask
-        types = naming[:, None, None, :]
-        readings = batch.reading_types.double()
-        total = torch.zeros(entities.shape, dtype=torch.float64)
+        types = naming[real_i][:, None, :]  # [N, 1, K]
+        readings = batch.reading_types.double()[real_i]  # [N, R, K]
+        total = torch.zeros((len(real_i), entities.shape[-1]), dtype=torch.float64)
         for chosen in subsets.split(MENTION_SUBSETS_PER_BLOCK):
-            weight = torch.where(chosen, unnamed_minus_named[:, :, None, :], named[:, :, None, :]).prod(-1)  # [I, J, U]
-            avoided = torch.einsum("ijgk,ug->ijuk", slot_mass, chosen.to(slot_mass.dtype))  # [I, J, U, K]
-            share = ((all_roles[:, :, None, :] - avoided) / all_roles[:, :, None, :]).clamp_min(1e-30).log()
-            share = torch.einsum("ijuk,irk->ijur", share * types, readings)
-            total = total + (weight[..., None] * share.exp()).sum(2)  # [I, J, R]
-        return total.clamp_min(1e-30).log().to(entities.dtype)
+            weight = torch.where(chosen, unnamed_minus_named[:, None, :], named[:, None, :]).prod(-1)  # [N, U]
+            avoided = torch.einsum("ngk,ug->nuk", slot_mass, chosen.to(slot_mass.dtype))  # [N, U, K]
+            share = ((all_roles[:, None, :] - avoided) / all_roles[:, None, :]).clamp_min(1e-30).log()
+            share = torch.einsum("nuk,nrk->nur", share * types, readings)
+            total = total + (weight[..., None] * share.exp()).sum(1)  # [N, R]
+        out = torch.zeros(entities.shape, dtype=torch.float64).index_put((real_i, real_j), total.clamp_min(1e-30).log())
+        return out.to(entities.dtype)

@@ -22,6 +22,9 @@ def register(subparsers) -> None:
     add_lexicon_option(p)
     p.add_argument("--library", metavar="LP", action="append", help="task library .lp file(s) instead of the default")
     p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
+    p.add_argument("--cache-dir", metavar="DIR", help="cache of behaviour likelihoods and .bdm pairs' end-state evidence "
+                   "(default $GROUNDLANG_CACHE or ./.groundlang-cache)")
+    p.add_argument("--no-cache", action="store_true", help="do not read or write that cache")
     p.add_argument("--seed", type=seed, default=0, help="seed of the fit (default 0; training is deterministic)")
     p.set_defaults(func=run)
 
@@ -47,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
         instances = corpus.instances
         library = TaskLibrary.load(args.library) if args.library else None
     lm = get_language_model(args.language_model, **language_model_settings(args.lm_settings))
-    learner = Learner(lm, library=library, seed=args.seed, lexicon=words)
+    learner = Learner(lm, library=library, seed=args.seed, lexicon=words, cache_dir=_cache(args))
     learner.fit(instances, progress=args.progress)
     learner.save(args.output)
     fit = learner.fit_result
@@ -68,8 +71,13 @@ def _pairs(args: argparse.Namespace):
 
     library = default_library(args.library)
     commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE).commands
-    made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent)
+    made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent, cache_dir=_cache(args))
     skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
     print(f"{len(commands)} commands, {sum(len(i.pairs) for i in made.instances)} pairs used"
           + (f"; pairs skipped: {skipped}" if skipped else ""))
     return made.instances, library
+
+
+def _cache(args: argparse.Namespace):
+    """The cache folder the options name: False for none, None for the default."""
+    return False if args.no_cache else args.cache_dir

@@ -1,0 +1,133 @@
+"""The end-state evidence cache: a warm read gives the numbers a cold one computed, keys follow what the
+numbers depend on, damaged entries are recomputed with one warning, and a folder that cannot be written
+is only a warning."""
+
+from __future__ import annotations
+
+import json
+import logging
+
+import pytest
+
+from groundlang.inference import evidence_cache
+from groundlang.inference.end_states import EndStateNoise
+from groundlang.inference.evidence_cache import EvidenceCache, evidence_key, library_digest
+from groundlang.inference.shared_meaning import LayoutEvidence, end_state_behaviour, evidence_space
+from groundlang.logic.program import Source
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.interpretations import interpretations
+from groundlang.pair_corpus import training_instances
+
+
+def _pairs(commands):
+    return [(p.start, p.end) for c in commands for p in c.pairs]
+
+
+def _same(a: LayoutEvidence, b: LayoutEvidence) -> None:
+    assert a.goals == b.goals and a.values == b.values and a.floor == b.floor  # exactly: floats round-trip
+    assert a.by_task == b.by_task and a.by_goal == b.by_goal
+
+
+def test_a_warm_cache_gives_what_was_computed_and_computes_nothing(williams_commands, williams_library, tmp_path,
+                                                                    monkeypatch):
+    cold = training_instances(williams_commands, williams_library, cache_dir=tmp_path)
+    assert len(list((tmp_path / "evidence").rglob("*.json"))) == 6  # one entry per pair
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("computed, not read from the cache")
+
+    monkeypatch.setattr(LayoutEvidence, "__init__", refuse)
+    warm = training_instances(williams_commands, williams_library, cache_dir=tmp_path)
+    for a, b in zip(cold.instances, warm.instances):
+        for x, y in zip(a.evidence, b.evidence):
+            _same(x, y)
+    # and the behaviour terms the learner reads from them are the same numbers
+    interps = [interpretations(i.initial_state, williams_library) for i in cold.instances]
+    assert (end_state_behaviour(cold.instances, interps, williams_library)
+            == end_state_behaviour(warm.instances, interps, williams_library))
+
+
+def test_no_cache_writes_nothing(williams_commands, williams_library, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("GROUNDLANG_CACHE", raising=False)
+    training_instances(williams_commands[:1], williams_library, cache_dir=False)
+    assert not any(tmp_path.iterdir())
+
+
+def test_the_key_follows_what_the_numbers_depend_on(williams_commands, williams_library):
+    (start, end), (other_start, other_end) = _pairs(williams_commands)[:2]
+    digest = library_digest(williams_library)
+    noise = EndStateNoise()
+    space = evidence_space(start, end)
+    key = evidence_key(start, end, digest, noise, space)
+    assert key == evidence_key(start, end, digest, EndStateNoise(), space)  # same inputs, same entry
+    changed = [
+        evidence_key(other_start, end, digest, noise, space),  # another start (and layout)
+        evidence_key(start, start, digest, noise, space),  # another end
+        evidence_key(start, end, digest, EndStateNoise(beta=1.0), space),
+        evidence_key(start, end, digest, EndStateNoise(anywhere=0.1), space),
+        evidence_key(start, end, "another library", noise, space),
+        evidence_key(start, end, digest, noise, evidence_space(start, end, max_states=10)),  # the abstraction
+    ]
+    assert len({key, *changed}) == 1 + len(changed)
+    # a library differing in one rule has another digest, package sources included
+    edited = TaskLibrary([*williams_library.sources, Source("extra.lp", "% a comment")])
+    assert library_digest(edited) != digest
+    assert library_digest(williams_library) == digest  # once per library, the same each time
+
+
+def test_damaged_entries_are_recomputed_with_one_warning(williams_commands, williams_library, tmp_path, caplog):
+    cold = training_instances(williams_commands, williams_library, cache_dir=tmp_path)
+    entries = sorted((tmp_path / "evidence").rglob("*.json"))
+    text = entries[0].read_text()
+    entries[0].write_text(text[: len(text) // 2])  # truncated
+    data = json.loads(entries[1].read_text())
+    data["values"][0] -= 1.0  # one number changed, its checksum not
+    entries[1].write_text(json.dumps(data))
+    entries[2].write_text(entries[3].read_text())  # another pair's entry under this name
+    entries[4].write_bytes(b"\xff\xfe\x00garbage")  # not UTF-8
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.evidence_cache"):
+        warm = training_instances(williams_commands, williams_library, cache_dir=tmp_path)
+    corrupt = [r for r in caplog.records if "corrupt" in r.getMessage()]
+    assert len(corrupt) == 1 and "4 corrupt entries recomputed" in corrupt[0].getMessage()
+    for a, b in zip(cold.instances, warm.instances):
+        for x, y in zip(a.evidence, b.evidence):
+            _same(x, y)
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.evidence_cache"):
+        training_instances(williams_commands, williams_library, cache_dir=tmp_path)
+    assert not caplog.records  # rewritten whole
+
+
+def test_a_folder_that_cannot_be_written_is_a_warning(williams_commands, williams_library, tmp_path, monkeypatch,
+                                                      caplog):
+    writes = []
+
+    def full(path, data, durable=True):
+        writes.append(path)
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(evidence_cache, "write_atomically", full)
+    cache = EvidenceCache(williams_library, EndStateNoise(), tmp_path)
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.evidence_cache"):
+        for start, end in _pairs(williams_commands):
+            cache.evidence(start, end)
+    assert len(writes) == 1 and cache.computed == 6  # tried once, then went on without writing
+    assert len(caplog.records) == 1 and "cannot be written" in caplog.records[0].getMessage()
+
+
+def test_a_cache_folder_that_is_a_file_is_refused(williams_library, tmp_path):
+    (tmp_path / "cache").write_text("")
+    with pytest.raises(ValueError, match="is a file, not a folder"):
+        EvidenceCache(williams_library, EndStateNoise(), tmp_path / "cache")
+
+
+def test_repeated_pairs_are_computed_once_and_memory_is_bounded(williams_commands, williams_library, monkeypatch):
+    monkeypatch.setattr(evidence_cache, "REMEMBERED", 2)
+    cache = EvidenceCache(williams_library, EndStateNoise(), cache_dir=False)
+    pairs = _pairs(williams_commands)
+    first = cache.evidence(*pairs[0])
+    assert cache.evidence(*pairs[0]) is first and (cache.hits, cache.computed) == (1, 1)  # shared, not recomputed
+    for pair in pairs:
+        cache.evidence(*pair)
+    assert len(cache._memory) == 2 and cache.computed == 6  # the oldest forgotten: pairs[0] computed again
