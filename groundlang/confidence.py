@@ -99,7 +99,7 @@ def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpa
     ``library``: the TaskLibrary whose PF rules say what the goals mean (default: the package's)."""
     tables = library_pf_tables(space.layout, library)
     # From the initial state of an enumerated space (not a sample of placements): how far each state is.
-    dist = distances(space) if space.level_sizes is not None else None
+    dist = distances(space) if getattr(space, "level_sizes", None) is not None else None
     by_mask: dict[bytes, list] = {}
     order: list[bytes] = []
     for k, (goal, p) in enumerate(goals):
