@@ -112,7 +112,7 @@ class Learner:
         self.palettes: list[dict] | None = None
         self.globals: dict[str, torch.Tensor] | None = None
         self.fit_result: FitResult | None = None
-        self._interp_cache: dict[State, list[Interpretation]] = {}
+        self._interp_cache: dict[tuple[State, bool], list[Interpretation]] = {}
         self._plans: dict = {}
         self._spaces: dict[State, StateSpace] = {}
 
@@ -129,15 +129,17 @@ class Learner:
         return self
 
     # ----------------------------------------------------------------- observing
-    def _interpretations(self, state: State) -> list[Interpretation]:
-        if state not in self._interp_cache:
-            self._interp_cache[state] = interpretations(
+    def _interpretations(self, state: State, demonstrated: bool = False) -> list[Interpretation]:
+        key = (state, demonstrated)
+        if key not in self._interp_cache:
+            self._interp_cache[key] = interpretations(
                 state, self.library, enumerate_constraints=self.lm.enumerates_constraints,
                 relation_words=self.lm.relation_words,
                 held_parts=self.lm.held_parts,
                 relational=self.lm.relational_descriptions,
+                demonstrated=demonstrated,
             )
-        return self._interp_cache[state]
+        return self._interp_cache[key]
 
     def observe(self, instances: Sequence, progress: bool = False) -> list[Observation]:
         """Observations with behaviour likelihoods for training instances (cached on disk)."""
@@ -151,8 +153,8 @@ class Learner:
                 words.setdefault(category, []).extend(w for w in entries if not self.word_lexicon.listed(w))
         if any(words.values()):
             self.add_words(words)
-        interps = [self._interpretations(inst.initial_state) for inst in instances]
         shown = [getattr(inst, "actions", None) is not None for inst in instances]
+        interps = [self._interpretations(inst.initial_state, demonstrated=all(shown)) for inst in instances]
         if not any(shown):  # (start, end) pairs: end states' likelihoods (inference.end_states, shared_meaning)
             behaviour = end_state_behaviour(instances, interps, self.library)
         elif all(shown):

@@ -46,9 +46,11 @@ def enumerate_groundings(
 
 
 def ground_environment(
-    library: TaskLibrary, facts: str, *, time_limit: float | None = None, environment: str | None = None
+    library: TaskLibrary, facts: str, *, time_limit: float | None = None, environment: str | None = None,
+    wholly_true: bool = False,
 ) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions, PFTerms, Relations]:
-    """Every permissible grounding not true initially, with its binding constraints; the
+    """Every permissible grounding not true initially (with ``wholly_true``, those too), with its
+    binding constraints; the
     unary PFs of every class but position true of each object, by class
     (``{"door1": {"spatial": ("doorWestOfAgent",)}}``; objects none holds of are left out); and
     the term of each of those PFs as a library writes it (``{"roomIsGreen": "roomIs(green)"}``); and
@@ -157,7 +159,8 @@ def ground_environment(
     }
     relations = {o: tuple(sorted(related[o], key=lambda r: (r[0], r[1], _natural_key(r[2]))))
                  for o in sorted(related, key=_natural_key)}
-    return [(g, c) for _, g, c in found], descriptions, dict(sorted(terms.items())), relations
+    return ([(g, c) for _, g, c in found if wholly_true or len(g.holding) < len(g.goal)], descriptions,
+            dict(sorted(terms.items())), relations)
 
 
 def _unusable_restriction_message(library: TaskLibrary, restriction: tuple[str, str, clingo.Symbol],

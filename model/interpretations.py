@@ -202,7 +202,7 @@ def start_rooms(state: State) -> tuple[frozenset[str], bool]:
 
 def interpretations(state: State, library: TaskLibrary, enumerate_constraints: bool = True,
                     relation_words: bool = False, relational: bool = False,
-                    held_parts: bool = False) -> list[Interpretation]:
+                    held_parts: bool = False, demonstrated: bool = False) -> list[Interpretation]:
     """Every (L, T, C) of ``state`` with its log prior, in a deterministic order.
 
     With ``enumerate_constraints=False`` each grounding appears once, with C
@@ -222,13 +222,17 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     part the plan must break and restore. Without it such groundings are left out: they then ask
     no more than the smaller task unless the plan breaks the part, and, kept where nothing breaks it,
     they duplicate that task (:func:`unbroken_held_parts` says which a demonstration rules out).
+    With ``held_parts`` and ``demonstrated`` (the instance comes with a demonstration) a goal that holds
+    at the start as a whole is offered too, for a demonstration that leaves it and comes back; its
+    prior is its lifted task's share for one grounding, so the other readings' priors are those of an
+    instance without it. Without a demonstration it asks for nothing and is left out.
 
     Raises ValueError when no lifted task has a grounding that is not already
     true in ``state`` (nothing could be asked of the agent).
     """
     candidates = [
         (task, constraints)
-        for task, constraints in candidate_tasks(state, library)
+        for task, constraints in candidate_tasks(state, library, wholly_true=held_parts and demonstrated)
         if len(task.goal) == 1 or not task.holding or held_parts
     ]
     if not candidates:
@@ -240,7 +244,9 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     described = object_descriptions(state, library)
     starts = start_rooms(state)
     relations = object_relations(state, library) if relational else None
-    per_lifted = Counter(task.task for task, _ in candidates)
+    # Counted over what could be asked of the agent: a goal that wholly holds takes a share, not a count.
+    per_lifted = Counter(task.task for task, _ in candidates if len(task.holding) < len(task.goal))
+    per_lifted.update({task.task: 1 for task, _ in candidates if task.task not in per_lifted})
     n_lifted = len(per_lifted)
     result = []
     for task, constraints in candidates:

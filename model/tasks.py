@@ -33,19 +33,20 @@ Candidate = tuple[GroundedTask, list[BindingConstraint]]
 def _environment(state: State, library: TaskLibrary) -> tuple:
     palette = state.layout.palette.name
     found, described, terms, related = ground_environment(library, state_facts(state),
-                                                          environment=f"palette {palette}")
+                                                          environment=f"palette {palette}", wholly_true=True)
     frozen = MappingProxyType({obj: MappingProxyType(by_class) for obj, by_class in described.items()})
     return tuple((g, tuple(c)) for g, c in found), frozen, MappingProxyType(terms), MappingProxyType(related)
 
 
-def candidate_tasks(state: State, library: TaskLibrary) -> list[Candidate]:
-    """Every permissible grounding not true in ``state``, each with all its binding constraints.
+def candidate_tasks(state: State, library: TaskLibrary, wholly_true: bool = False) -> list[Candidate]:
+    """Every permissible grounding not true in ``state`` (with ``wholly_true``, those too), each with all
+    its binding constraints.
 
     Order: tasks in library order, then bound objects in variable order; constraints
     largest first, the empty conjunction last. One clingo Control per (state, library),
     cached (the library is keyed by identity, the state by value). Raises AspError.
     """
-    return [(g, list(c)) for g, c in _environment(state, library)[0]]
+    return [(g, list(c)) for g, c in _environment(state, library)[0] if wholly_true or len(g.holding) < len(g.goal)]
 
 
 def object_descriptions(state: State, library: TaskLibrary) -> Mapping[str, Mapping[str, tuple[str, ...]]]:

@@ -18,7 +18,7 @@ import pytest
 from groundlang.logic.atoms import parse_goal
 
 from groundlang.cli import main
-from groundlang.corpus import Corpus, read_corpus, read_state_file
+from groundlang.corpus import Corpus, Instance, read_corpus, read_state_file
 from groundlang.evaluation import NovelEnvironmentError, evaluate
 from groundlang.labels import goal_holds, read_labels
 from groundlang.learner import Learner
@@ -26,6 +26,7 @@ from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.interpretations import interpretations, unbroken_held_parts
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.statespace import enumerate_states
+from groundlang.model.world import Action, replay
 
 FIXTURES = Path(__file__).parent / "fixtures"
 CORPUS = FIXTURES / "sokoban2_corpus"
@@ -201,6 +202,31 @@ def test_a_clause_the_goal_does_not_need_is_not_forced_onto_a_part(l1_learner, c
     longer = l1_learner.posterior("push the chair into the red room and then come back", start)
     assert [str(a) for a in longer.best_goal] == ["toyInRoom(block0, room1)"] == [str(a) for a in plain.best_goal]
     assert abs(longer.goals()[0][1] - plain.goals()[0][1]) < 0.02
+
+
+def test_a_goal_that_holds_at_the_start_is_a_reading_only_where_the_demonstration_leaves_and_returns(corpus):
+    # The agent starts in the green room of L1. One demonstration steps out through the door and back in
+    # ("step out of the green room and come back in"): the whole goal "the agent in the green room" holds
+    # at the start and is broken and restored, so it is a reading of that instance, the one its
+    # demonstration explains best. A demonstration that stays inside never breaks it, and a command
+    # alone (no demonstration) asks nothing of a goal that holds: neither offers it.
+    start = _start(corpus, HELD_OUT)
+    green = parse_goal("agentInRoom(agent0, room0)")
+    assert goal_holds(green, start)
+    leave_and_return = [Action.EAST, Action.NORTH, Action.EAST, Action.EAST, Action.WEST, Action.WEST]
+    stay_inside = [Action.NORTH, Action.SOUTH]
+    instances = [Instance(Path(f"d{n}.txt"), "step out of the green room and come back in", tuple(a), replay(start, a))
+                 for n, a in enumerate((leave_and_return, stay_inside))]
+    assert goal_holds(green, instances[0].states[-1]) and not goal_holds(green, instances[0].states[3])
+    learner = Learner()
+    returned, stayed = learner.observe(instances)
+    behaviour = dict(zip((i.goal for i in returned.interpretations), returned.behaviour))
+    assert max(behaviour, key=behaviour.get) == green
+    assert green not in [i.goal for i in stayed.interpretations]
+    assert green not in [i.goal for i in learner._command_observation("go to the green room", start).interpretations]
+    # Its prior is its lifted task's share for one grounding: the others' priors are as without it.
+    other = {i.goal: i.log_prior for i in stayed.interpretations}
+    assert all(other[i.goal] == pytest.approx(i.log_prior) for i in returned.interpretations if i.goal in other)
 
 
 def test_unbroken_held_parts_rule_readings_out_of_training(corpus):
