@@ -371,6 +371,19 @@ ROWS.append(Row("input/GROUNDLANG_CACHE a file",
                 ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "{tmp}/model"),
                 env={"GROUNDLANG_CACHE": str(_SMALL)},
                 pieces=(f"GROUNDLANG_CACHE {_SMALL}: it is a file, not a folder",), absent=("{tmp}/model",)))
+_WILLIAMS_SMALL = FIXTURES / "williams2018" / "small.bdm"
+ROWS += [
+    Row("input/train .bdm with a setting the model lacks refused before the evidence",
+        ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model", "--cache-dir", "{tmp}/cache", "--lm-setting",
+         "held_parts=maybe"),
+        pieces=("held_parts",), absent=("{tmp}/model", "{tmp}/cache")),
+    Row("input/train --no-cache with --cache-dir",
+        ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model", "--no-cache", "--cache-dir", "{tmp}/cache"),
+        pieces=("--no-cache and --cache-dir {tmp}/cache: choose one",), absent=("{tmp}/model", "{tmp}/cache")),
+    Row("input/train an empty --cache-dir",
+        ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model", "--cache-dir", ""),
+        pieces=("--cache-dir: empty; name a folder",), absent=("{tmp}/model",)),
+]
 ROWS.append(Row("input/a task library that does not exist", (*_TASKS, "{tmp}/nope.lp"),
                 pieces=("groundlang tasks: error: {tmp}/nope.lp: No such file or directory",)))
 ROWS.append(Row("input/a folder where a state file is expected", ("tasks", str(FIXTURES), "--palette", "sokoban"),

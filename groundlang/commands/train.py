@@ -39,6 +39,8 @@ def run(args: argparse.Namespace) -> int:
 
     check_model_destination(args.output, "-o")  # before training, not after it
     words = extra_words(args.lexicon)  # a malformed word file stops here, before the corpus is read
+    lm = get_language_model(args.language_model, **language_model_settings(args.lm_settings))  # and a setting
+    _cache(args)
     started = time.perf_counter()
     instances, library = _pairs(args) if bdm_files(args.corpus) else (None, None)
     if instances is None:
@@ -49,7 +51,6 @@ def run(args: argparse.Namespace) -> int:
             print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
         instances = corpus.instances
         library = TaskLibrary.load(args.library) if args.library else None
-    lm = get_language_model(args.language_model, **language_model_settings(args.lm_settings))
     learner = Learner(lm, library=library, seed=args.seed, lexicon=words, cache_dir=_cache(args))
     learner.fit(instances, progress=args.progress)
     learner.save(args.output)
@@ -79,5 +80,11 @@ def _pairs(args: argparse.Namespace):
 
 
 def _cache(args: argparse.Namespace):
-    """The cache folder the options name: False for none, None for the default."""
+    """The cache folder the options name: False for none, None for the default. ValueError for both
+    --no-cache and --cache-dir, or an empty --cache-dir (which would be the working folder)."""
+    if args.cache_dir is not None and not args.cache_dir.strip():
+        raise ValueError("--cache-dir: empty; name a folder (or leave the option out for $GROUNDLANG_CACHE "
+                         "or ./.groundlang-cache)")
+    if args.no_cache and args.cache_dir is not None:
+        raise ValueError(f"--no-cache and --cache-dir {args.cache_dir}: choose one (no cache, or this one)")
     return False if args.no_cache else args.cache_dir
