@@ -32,7 +32,9 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
     from groundlang.model.pf_tables import TabulationError, library_pf_tables
+    from groundlang.logic.classes import domain_classes
     from groundlang.model.tasks import candidate_tasks, object_descriptions, object_relations
+    from groundlang.model.world import object_class
 
     state = read_initial_state(args.file, args.palette)
     library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
@@ -42,10 +44,12 @@ def run(args: argparse.Namespace) -> int:
     described = {obj: by_name[obj] for obj in object_names(state) if obj in by_name}
     # What words may say of an object through another (related/4 of groundings.lp; the language model's
     # relational descriptions), written as the PF's atom: "block0: toyInRoom(block0, room2)".
+    # Only objects of the classes commands name as things (toys) describe another, as in the model.
     related = object_relations(state, library)
-    by_relation = {obj: [f"{pf}({', '.join((obj, other) if index == 0 else (other, obj))})"
-                         for pf, index, other in related[obj]]
-                   for obj in object_names(state) if obj in related}
+    describing = domain_classes().mentioned
+    by_relation = {obj: atoms for obj in object_names(state) if obj in related
+                   and (atoms := [f"{pf}({', '.join((obj, other) if index == 0 else (other, obj))})"
+                                  for pf, index, other in related[obj] if object_class(other) in describing])}
     # Relations (toyInRoom, a user's agentNextToToy, ...) as the PF tables planning uses say they hold.
     try:
         holding = [a for a in library_pf_tables(state.layout, library).holding(state.positions)
