@@ -104,7 +104,9 @@ class _Damaged(ValueError):
 
 
 def _restore(data, key: str, library: TaskLibrary, noise: EndStateNoise) -> LayoutEvidence:
-    if not isinstance(data, dict) or data.get("key") != key:
+    if not isinstance(data, dict) or "key" not in data:
+        raise ValueError("not an evidence entry (no key)")
+    if data["key"] != key:
         raise ValueError("records another key")
     contents = {name: data[name] for name in ("goals", "values", "groundings", "floor")}
     if data.get("checksum") != _checksum(key, contents):
@@ -168,8 +170,14 @@ class EvidenceCache:
         except (OSError, FileRefused) as exc:
             raise _Damaged(f"unreadable: {exc.strerror if isinstance(exc, OSError) and exc.strerror else exc}") from None
         try:
-            return _restore(json.loads(raw.decode("utf-8")), key, self.library, self.noise)
-        except (ValueError, TypeError, KeyError, AttributeError, RecursionError) as exc:
+            data = json.loads(raw.decode("utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+            raise _Damaged("not JSON (truncated or overwritten)") from None
+        try:
+            return _restore(data, key, self.library, self.noise)
+        except KeyError as exc:
+            raise _Damaged(f"lacks its field {exc}") from None
+        except (ValueError, TypeError, AttributeError, RecursionError) as exc:
             raise _Damaged(str(exc) or type(exc).__name__) from None
 
     def _write(self, path: Path, key: str, evidence: LayoutEvidence) -> None:
