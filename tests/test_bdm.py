@@ -134,3 +134,18 @@ def test_a_fifo_or_device_is_refused_by_name(tmp_path):
     for path in (fifo, Path("/dev/zero")):
         with pytest.raises(CorpusError, match="not a regular file"):
             read_bdm(path)
+
+
+def test_tasks_reads_a_burlap_state_line_with_the_corpus_domain_by_default(capsys):
+    # A one-line .state file in the Williams et al. format works without --palette and --library: the
+    # palette williams2018 and its domain's relations and tasks are the defaults for it.
+    from groundlang.cli import main
+
+    import json
+
+    fixtures = Path(__file__).parent / "fixtures"
+    assert main(["tasks", str(fixtures / "williams2018" / "one.state"), "--json"]) == 0
+    shown = json.loads(capsys.readouterr().out)
+    assert {"agentNextToToy", "agentLeftOfToy", "agentRightOfToy"} <= set(shown["lifted_tasks"])
+    assert main(["tasks", str(fixtures / "small.state")]) == 2
+    assert "--palette is required for a state in the corpus's format" in capsys.readouterr().err

@@ -7,7 +7,10 @@ from __future__ import annotations
 
 import argparse
 import json
+from importlib.resources import files as resources
+from pathlib import Path
 
+from groundlang.bdm import DEFAULT_PALETTE
 from groundlang.commands import PALETTE_HELP, positive_seconds
 from groundlang.corpus import read_initial_state
 
@@ -16,16 +19,26 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "tasks", help="list lifted tasks and their groundings and binding constraints in a file's initial state"
     )
-    p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state file")
-    p.add_argument("--palette", required=True, help=PALETTE_HELP)
+    p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state file (either "
+                   "format: a state in the corpus's format, or a BURLAP state line as Williams et al. write them)")
+    p.add_argument("--palette", help=PALETTE_HELP + "; required but for a BURLAP state line (default williams2018)")
     p.add_argument("--library", metavar="LP", action="append",
-                   help="task library .lp file (repeatable; default: groundlang's tasks.lp)")
+                   help="task library .lp file (repeatable; default: groundlang's tasks.lp, or for a BURLAP "
+                   "state line the williams2018 domain)")
     p.add_argument("--allow-scripts", action="store_true",
                    help="let library files run #script blocks (only for files you trust)")
     p.add_argument("--time-limit", type=positive_seconds, default=10.0, metavar="SECONDS",
                    help="stop grounding/solving the library after this long (default 10)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     p.set_defaults(func=run)
+
+
+def _burlap_state(path: str) -> bool:
+    """Whether ``path`` is a one-line state file holding a BURLAP state line (the Williams et al. format)."""
+    if Path(path).suffix not in (".state", ".bdm") or not Path(path).is_file():
+        return False
+    with open(path, "rb") as handle:
+        return handle.read(64).lstrip().startswith(b"{")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -36,8 +49,13 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.model.tasks import candidate_tasks, object_descriptions, object_relations
     from groundlang.model.world import object_class
 
-    state = read_initial_state(args.file, args.palette)
-    library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
+    burlap = _burlap_state(args.file)
+    if args.palette is None and not burlap:
+        raise ValueError(f"{args.file}: --palette is required for a state in the corpus's format "
+                         "(e.g. --palette sokoban)")
+    state = read_initial_state(args.file, args.palette or DEFAULT_PALETTE)
+    files = args.library or ([str(resources("groundlang.logic") / "domains" / "williams2018.lp")] if burlap else None)
+    library = TaskLibrary.load(files, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
     candidates = candidate_tasks(state, library)
     by_name = object_descriptions(state, library)
     # The layout's order (rooms, doors, toys), as the corpus writes a state, not the names' alphabetical order.
