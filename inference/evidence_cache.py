@@ -34,11 +34,11 @@ from collections import OrderedDict
 from pathlib import Path
 
 from groundlang.inference.end_states import EndStateNoise
-from groundlang.inference.likelihoods import cache_directory, layout_description
+from groundlang.inference.likelihoods import DamagedEntry, cache_directory, layout_description, read_entry_json
 from groundlang.inference.shared_meaning import LayoutEvidence, evidence_space
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.logic.storage import FileRefused, read_limited, write_atomically
+from groundlang.logic.storage import write_atomically
 from groundlang.model.world import State
 
 __all__ = ["EVIDENCE_VERSION", "EvidenceCache", "evidence_key", "library_digest"]
@@ -99,14 +99,8 @@ def _checksum(key: str, contents: dict) -> str:
     return hashlib.sha256(f"{key} {text}".encode()).hexdigest()
 
 
-class _Damaged(ValueError):
-    """An entry that exists but cannot be trusted."""
-
-
 def _restore(data, key: str, library: TaskLibrary, noise: EndStateNoise) -> LayoutEvidence:
-    if not isinstance(data, dict) or "key" not in data:
-        raise ValueError("not an evidence entry (no key)")
-    if data["key"] != key:
+    if data.get("key") != key:
         raise ValueError("records another key")
     contents = {name: data[name] for name in ("goals", "values", "groundings", "floor")}
     if data.get("checksum") != _checksum(key, contents):
@@ -147,7 +141,7 @@ class EvidenceCache:
             path = self.root / "evidence" / key[:2] / f"{key}.json"
             try:
                 found = self._read(path, key)
-            except _Damaged as exc:
+            except DamagedEntry as exc:
                 self.damaged += 1
                 self._first_damaged = self._first_damaged or (path, str(exc))
         if found is not None:
@@ -163,22 +157,15 @@ class EvidenceCache:
         return found
 
     def _read(self, path: Path, key: str) -> LayoutEvidence | None:
-        try:
-            raw = read_limited(path, MAX_ENTRY_BYTES, "an evidence cache entry")
-        except FileNotFoundError:
+        data = read_entry_json(path, MAX_ENTRY_BYTES, "an evidence cache entry")
+        if data is None:
             return None
-        except (OSError, FileRefused) as exc:
-            raise _Damaged(f"unreadable: {exc.strerror if isinstance(exc, OSError) and exc.strerror else exc}") from None
-        try:
-            data = json.loads(raw.decode("utf-8"))
-        except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
-            raise _Damaged("not JSON (truncated or overwritten)") from None
         try:
             return _restore(data, key, self.library, self.noise)
         except KeyError as exc:
-            raise _Damaged(f"lacks its field {exc}") from None
+            raise DamagedEntry(f"lacks its field {exc}") from None
         except (ValueError, TypeError, AttributeError, RecursionError) as exc:
-            raise _Damaged(str(exc) or type(exc).__name__) from None
+            raise DamagedEntry(str(exc) or type(exc).__name__) from None
 
     def _write(self, path: Path, key: str, evidence: LayoutEvidence) -> None:
         contents = _contents(evidence)

@@ -52,7 +52,8 @@ from groundlang.inference.planning import (TaskSettings, as_transitions, demonst
 from groundlang.logic.atoms import Atom, parse_atom
 from groundlang.logic.storage import FileRefused, check_folder, read_limited, write_atomically
 
-__all__ = ["CACHE_VERSION", "behaviour_likelihood_table", "cache_directory", "entry_key", "layout_description", "pad_table"]
+__all__ = ["CACHE_VERSION", "DamagedEntry", "behaviour_likelihood_table", "cache_directory", "entry_key", "layout_description",
+           "pad_table", "read_entry_json"]
 
 logger = logging.getLogger(__name__)
 
@@ -121,20 +122,34 @@ def _checksum(key: str, value_text: str) -> str:
     return hashlib.sha256(f"{key} {value_text}".encode()).hexdigest()[:16]
 
 
-class _Damaged(ValueError):
-    """A cache entry that exists but cannot be trusted."""
+class DamagedEntry(ValueError):
+    """A cache entry that exists but cannot be trusted (the message says why)."""
 
 
-def _read_entry(path: Path, key: str) -> float | None:
-    """The cached value, or None when absent; _Damaged (saying why) when present but not trustworthy."""
+def read_entry_json(path: Path, max_bytes: int, what: str) -> dict | None:
+    """A cache entry's JSON object, or None when the file is absent; DamagedEntry when it cannot be read
+    or is not a JSON object (truncated, overwritten, not UTF-8)."""
     try:
-        raw = read_limited(path, MAX_ENTRY_BYTES, "a behaviour cache entry")
+        raw = read_limited(path, max_bytes, what)
     except FileNotFoundError:
         return None
     except (OSError, FileRefused) as exc:
-        raise _Damaged(f"unreadable: {exc.strerror if isinstance(exc, OSError) and exc.strerror else exc}") from None
+        raise DamagedEntry(f"unreadable: {exc.strerror if isinstance(exc, OSError) and exc.strerror else exc}") from None
     try:
-        data = json.loads(raw.decode("utf-8"))  # UnicodeDecodeError is a ValueError: a corrupt entry
+        data = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+        raise DamagedEntry("not JSON (truncated or overwritten)") from None
+    if not isinstance(data, dict):
+        raise DamagedEntry("not a cache entry (no key)")
+    return data
+
+
+def _read_entry(path: Path, key: str) -> float | None:
+    """The cached value, or None when absent; DamagedEntry (saying why) when present but not trustworthy."""
+    data = read_entry_json(path, MAX_ENTRY_BYTES, "a behaviour cache entry")
+    if data is None:
+        return None
+    try:
         if data.get("key") != key:
             raise ValueError(f"records key {str(data.get('key'))[:12]}..., expected {key[:12]}...")
         value = data["log_likelihood"]
@@ -145,8 +160,8 @@ def _read_entry(path: Path, key: str) -> float | None:
         if math.isnan(value) or value > 0:
             raise ValueError(f"holds {value}; a log-likelihood is at most 0")
         return value
-    except (ValueError, TypeError, KeyError, AttributeError, RecursionError) as exc:
-        raise _Damaged(str(exc)) from None
+    except (ValueError, TypeError, KeyError, AttributeError) as exc:
+        raise DamagedEntry(str(exc)) from None
 
 
 def _write_entry(path: Path, key: str, value: float, goal: Sequence[Atom]) -> None:
@@ -206,7 +221,7 @@ def behaviour_likelihood_table(
                 path = _entry_path(root, key)
                 try:
                     value = None if path in damaged else _read_entry(path, key)
-                except _Damaged as exc:
+                except DamagedEntry as exc:
                     damaged[path] = str(exc)
             if value is None:
                 todo.setdefault(inst.initial_state, {}).setdefault(g, []).append((i, k))
