@@ -55,3 +55,25 @@ def _pyro_state():
     pyro.clear_param_store()
     yield
     pyro.clear_param_store()
+
+
+def _shortest_plan(start, goal, library):
+    """A shortest plan to ``goal`` under ``library``'s PFs (soft value iteration, greedy rollout): states
+    and actions. (``groundlang.examples.build.shortest_demonstration`` knows only the package's PFs.)"""
+    from groundlang.inference.acting import rollout, rollout_states
+    from groundlang.inference.planning import solve_task
+    from groundlang.model.features import goal_mask
+    from groundlang.model.pf_tables import pf_tables
+    from groundlang.model.statespace import enumerate_states
+
+    space = enumerate_states(start)
+    mask = goal_mask(space, goal, pf_tables(start.layout, library.tabulation_program))
+    trajectory = rollout(space.next_state, solve_task(space.next_state, mask), 0, goal_mask=mask)
+    assert trajectory.reason == "goal"
+    return rollout_states(space, trajectory)
+
+
+@pytest.fixture(scope="session")
+def shortest_plan():
+    """Demonstrations for a user's domain: see _shortest_plan."""
+    return _shortest_plan

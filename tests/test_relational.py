@@ -109,28 +109,13 @@ TRAINING = [  # (room colours, chair, bag, agent, command, goal)
 ]
 
 
-def demonstration(start, goal, library):
-    """A shortest plan to ``goal`` (soft value iteration, greedy rollout): states and actions."""
-    from groundlang.inference.acting import rollout, rollout_states
-    from groundlang.inference.planning import solve_task
-    from groundlang.model.features import goal_mask
-    from groundlang.model.pf_tables import pf_tables
-    from groundlang.model.statespace import enumerate_states
-
-    space = enumerate_states(start)
-    mask = goal_mask(space, goal, pf_tables(start.layout, library.tabulation_program))
-    trajectory = rollout(space.next_state, solve_task(space.next_state, mask), 0, goal_mask=mask)
-    assert trajectory.reason == "goal"
-    return rollout_states(space, trajectory)
-
-
 @pytest.fixture(scope="module")
-def trained(library, tmp_path_factory):
+def trained(library, tmp_path_factory, shortest_plan):
     instances = []
     for n, (colours, chair, bag, agent, command, goal) in enumerate(TRAINING):
         start = parse_state(layout(colours, chair, bag, agent), PALETTE)
         assert not goal_holds(parse_goal(goal), start, library), command
-        states, actions = demonstration(start, parse_goal(goal), library)
+        states, actions = shortest_plan(start, parse_goal(goal), library)
         instances.append(Instance(Path(f"rel{n}.txt"), command, tuple(actions), tuple(states)))
     lm = get_language_model("parse", relational_descriptions=True)
     return Learner(language_model=lm, library=library, cache_dir=tmp_path_factory.mktemp("cache"),

@@ -21,7 +21,6 @@ from groundlang.corpus import Instance, parse_state
 from groundlang.labels import goal_holds
 from groundlang.logic.atoms import parse_goal
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.features import goal_mask
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.world import get_palette
 
@@ -83,19 +82,6 @@ def state(layout: str, star, mug, agent, palette):
                        f"agent,{agent[0]},{agent[1]}", palette)
 
 
-def demonstration(start, goal, library):
-    """A shortest plan to ``goal`` (soft value iteration, greedy rollout): states and actions."""
-    from groundlang.inference.acting import rollout, rollout_states
-    from groundlang.inference.planning import solve_task
-    from groundlang.model.statespace import enumerate_states
-
-    space = enumerate_states(start)
-    mask = goal_mask(space, goal, pf_tables(start.layout, library.tabulation_program))
-    trajectory = rollout(space.next_state, solve_task(space.next_state, mask), 0, goal_mask=mask)
-    assert trajectory.reason == "goal"
-    return rollout_states(space, trajectory)
-
-
 @pytest.fixture(scope="module")
 def domain(tmp_path_factory):
     folder = tmp_path_factory.mktemp("toyshop")
@@ -111,13 +97,13 @@ def library(domain):
 
 
 @pytest.fixture(scope="module")
-def trained(domain, library, tmp_path_factory):
+def trained(domain, library, tmp_path_factory, shortest_plan):
     palette = str(domain / "toyshop.lp")
     instances = []
     for n, (layout, star, mug, agent, command, goal) in enumerate(TRAINING):
         start = state(layout, star, mug, agent, palette)
         assert not goal_holds(parse_goal(goal), start, library), command
-        states, actions = demonstration(start, parse_goal(goal), library)
+        states, actions = shortest_plan(start, parse_goal(goal), library)
         instances.append(Instance(Path(f"shop{n}.txt"), command, tuple(actions), tuple(states)))
     learner = Learner(library=library, cache_dir=tmp_path_factory.mktemp("cache"), steps=200)
     return learner.fit(instances), palette
