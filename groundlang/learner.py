@@ -30,6 +30,7 @@ from groundlang.model.domain_words import WordSource, domain_lexicon, extra_word
 from groundlang.model.encoding import Batch, Observation, encode
 from groundlang.model.interpretations import Interpretation, interpretations, without_unbroken_held_parts
 from groundlang.model.pf_tables import library_pf_tables
+from groundlang.model.language_model_base import token_words
 from groundlang.model.language_models import BagOfWords, LanguageModel, get_language_model
 from groundlang.model.relevance import check_abstraction_possible, exact_fits
 from groundlang.model.statespace import StateSpace
@@ -192,7 +193,7 @@ class Learner:
 
     def _build_vocabulary(self, observations: Iterable[Observation], palettes: Iterable) -> Vocabulary:
         return build_vocabulary(observations, palettes, self.library, self.word_lexicon,
-                                relational=self.lm.relational_descriptions)
+                                relational=self.lm.relational_descriptions, names=self.lm.schema_names)
 
     def fit(self, instances: Sequence, progress: bool = False, init: dict | None = None,
             observations: list[Observation] | None = None, batch: Batch | None = None) -> "Learner":
@@ -228,7 +229,7 @@ class Learner:
             raise ValueError("fit(batch=...) needs the vocabulary the batch was encoded with")
         if init is None and self.lm.starts_from_bag_of_words:
             # (From a flat start "star" was learned as a room word on the crowd corpus.)
-            start = fit_globals(batch, BagOfWords(self.lm.word_concentration), self.vocab,
+            start = fit_globals(batch, BagOfWords(self.lm.word_concentration, schema_names=self.lm.schema_names), self.vocab,
                                 steps=self.steps, seed=self.seed)
             init = {"phi": start.globals["phi"]}
         self.fit_result = fit_globals(
@@ -353,7 +354,9 @@ class Learner:
         distribution and is left out, so that it does not dilute the table.
         """
         self._require_fitted()
-        phi = self.globals["phi"]  # [S, W]
+        # What a token says: its learned words, and its name under ``schema_names``.
+        phi = token_words(self.globals, torch.tensor(self.vocab.token_names()),
+                          torch.tensor(self.vocab.kind_words(), dtype=torch.bool))  # [S, W]
         learned = phi.max(-1).values > 3.0 / phi.shape[1]
         meaning = phi * learned[:, None]
         meaning = meaning / meaning.sum(0, keepdim=True).clamp_min(1e-30)

@@ -13,7 +13,7 @@ from groundlang.model.encoding import Observation, bare_preposition, entity_word
 from groundlang.model.interpretations import OTHER_ROLES, alignable_roles
 from groundlang.model.vocabulary import Vocabulary, class_token
 
-__all__ = ["build_vocabulary", "palette_schema", "schema_words", "word_files_beside"]
+__all__ = ["build_vocabulary", "palette_schema", "schema_names", "schema_words", "word_files_beside"]
 
 
 def palette_schema(library: TaskLibrary, palette):
@@ -22,12 +22,14 @@ def palette_schema(library: TaskLibrary, palette):
 
 
 def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, library: TaskLibrary,
-                     word_lexicon, relational: bool = False) -> Vocabulary:
+                     word_lexicon, relational: bool = False, names: bool = False) -> Vocabulary:
     """The vocabulary of a training set: its words, the preposition keys of its readings (and the bare
     prepositions the parse model generates), the tokens and roles of its interpretations, and every
     property PF and class the domain declares for ``palettes`` (a test layout may show values training
     never did). ``relational``: the tasks' tables span their relational roles too
-    (``model.relational``; the parse model's ``relational_descriptions``)."""
+    (``model.relational``; the parse model's ``relational_descriptions``). ``names``: the vocabulary
+    keeps the schema's names of its tokens (:func:`schema_names`) and knows their words (a language
+    model's ``schema_names``)."""
     vocab = Vocabulary(lexicon=word_lexicon)
     vocab.add_tasks((task.name for task in library.tasks),
                     roles={task.name: alignable_roles(task, library.relational_pfs if relational else ())
@@ -49,17 +51,24 @@ def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, li
                 roles.append(rb.role)
                 tokens.append(class_token(rb.cls))
                 tokens.extend(rb.constraint_tokens + rb.kind_tokens)  # a user's PF may describe only bystanders
+                if names:
+                    vocab.kinds.extend(t for t in (class_token(rb.cls), *rb.kind_tokens) if t not in vocab.kinds)
     # Every property PF the domain declares for the palettes seen (colours, shapes, a user's
     # sizes...) and every class: a layout of the test may have values training never saw.
     classes: list[str] = []
     for palette in palettes:
         schema = palette_schema(library, palette)
+        if names:
+            vocab.names.update(schema_names(schema))
         tokens.extend(d.name for d in schema.pfs.values() if len(d.signature) == 1
                       and d.pf_class not in ("position", "spatial"))
         classes.extend(schema.classes)
     tokens.extend(class_token(c) for c in dict.fromkeys(classes))
+    if names:
+        vocab.kinds.extend(t for t in (class_token(c) for c in dict.fromkeys(classes)) if t not in vocab.kinds)
     tokens.extend(library.spatial_pfs)  # a layout of the test may have sides training never saw
     vocab.add_tokens(tokens)
+    vocab.add_words(vocab.names.values())  # a name is a word before training says it: "the yellow room"
     vocab.add_roles(roles + list(OTHER_ROLES))
     vocab.add_preps(preps)
     vocab.read_misspellings(counts)
@@ -78,6 +87,19 @@ def word_files_beside(library: TaskLibrary) -> list[Path]:
         words = path.with_suffix(".words")
         if path.suffix == ".lp" and words.is_file():
             out.append(words)
+    return out
+
+
+def schema_names(schema) -> dict[str, str]:
+    """Token -> the word the schema names it by: a class token its class (``CLASS:door`` -> ``door``), a
+    property PF of one object its value (``toyIs(chair)`` -> ``chair``). Values in camelCase
+    (``darkGray``) are not words anyone types and are left out, as in :func:`schema_words`."""
+    out = {class_token(c): c for c in schema.classes if c.isalpha() and c.islower()}
+    for d in schema.pfs.values():
+        functor, _, rest = d.term.partition("(")
+        value = rest.rstrip(")")
+        if len(d.signature) == 1 and value in schema.values.get(d.pf_class, ()) and value.isalpha() and value.islower():
+            out[d.name] = value
     return out
 
 

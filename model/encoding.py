@@ -62,6 +62,8 @@ class Batch:
     behaviour: torch.Tensor  # [I, J], 0 where padded or unobserved
     mask: torch.Tensor  # [I, J] bool
     mixtures: torch.Tensor  # [X, S] rows: uniform weights over a token set
+    token_name: torch.Tensor  # [S] the word the schema names each token by, or -1 (Vocabulary.names)
+    kind_word: torch.Tensor  # [W] bool: the word names a kind (Vocabulary.kind_words)
     bow_mix: torch.Tensor  # [I, J] mixture of {L} + C + {NULL}
     bow_mix_no_null: torch.Tensor  # [I, J] mixture of {L} + C (Model 0 has no NULL)
     uniq: torch.Tensor  # [I, U] distinct word ids of the command (0-padded)
@@ -109,8 +111,11 @@ class Batch:
         values = {}
         for f in fields(self):
             value = getattr(self, f.name)
-            values[f.name] = value if f.name == "mixtures" else value[index]
+            values[f.name] = value if f.name in _SHARED else value[index]
         return Batch(**values)
+
+
+_SHARED = ("mixtures", "token_name", "kind_word")  # fields of the vocabulary, not of instances
 
 
 def is_mentionable(rb: RoleBinding) -> bool:
@@ -348,7 +353,9 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
 
     align_context = task_index[:, :, None] * len(vocab.preps) + type_prep[:, None, :]  # [I, J, K]
     return Batch(
-        log_prior=log_prior, behaviour=behaviour, mask=mask, mixtures=mix.table(S), bow_mix=bow_mix,
+        log_prior=log_prior, behaviour=behaviour, mask=mask, mixtures=mix.table(S),
+        token_name=torch.tensor(vocab.token_names(), dtype=torch.long),
+        kind_word=torch.tensor(vocab.kind_words(), dtype=torch.bool), bow_mix=bow_mix,
         bow_mix_no_null=bow_mix_no_null, uniq=uniq, word_counts=word_counts, words=words, word_mask=word_mask,
         machine=machine, machine_mask=machine_mask, reading_logp=reading_logp, type_counts=type_counts,
         type_head_counts=type_head_counts, type_prep=type_prep, type_mask=type_mask, reading_types=reading_types,

@@ -12,7 +12,8 @@ import torch
 
 from groundlang.model.encoding import Batch
 
-__all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive"]
+__all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
+           "token_words"]
 
 
 class LanguageModel:
@@ -30,14 +31,22 @@ class LanguageModel:
     held_parts = False
     relational_descriptions = False
 
-    def __init__(self, word_concentration: float = 1.05, null_token: bool = True):
+    def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False):
+        """``schema_names``: a token says the word the domain's schema names it by (a class's name,
+        "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
+        ``name_share``, and its learned words otherwise: the names a domain's author gives are words
+        for what they name, so a token training never names ("door") does not take a frequent word it
+        could explain for free, a room is not called "chair", and a value training never showed ("the
+        yellow room") is read by its name."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
         self.null_token = null_token
+        self.schema_names = schema_names
 
     def settings(self) -> dict:
-        return {"word_concentration": self.word_concentration, "null_token": self.null_token}
+        return {"word_concentration": self.word_concentration, "null_token": self.null_token,
+                "schema_names": self.schema_names}
 
     def sample_globals(
         self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),
@@ -47,7 +56,11 @@ class LanguageModel:
             phi = pyro.sample(
                 "phi", dist.Dirichlet(torch.full((num_words,), self.word_concentration))
             )
-        return {"phi": phi}
+        g = {"phi": phi}
+        if self.schema_names:
+            # P(a named token says its name), P(it says one of its learned words): a mixture, so EM stays exact.
+            g["name_share"] = pyro.sample("name_share", dist.Dirichlet(torch.full((2,), NAME_SHARE_CONCENTRATION)))
+        return g
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
         """``log P(words_i | interpretation j)`` as ``[I, J]``, readings and alignments summed out."""
@@ -67,9 +80,31 @@ def require_positive(model: str, name: str, value: float) -> None:
 NULL_MIXTURE = 0  # encode() interns the {NULL} mixture first
 
 
+# The prior of ``name_share``: flat but for one pseudo-count each way, so the share is learned.
+NAME_SHARE_CONCENTRATION = 2.0
+
+
+def token_words(g: dict, token_name: torch.Tensor, kind_word: torch.Tensor) -> torch.Tensor:
+    """``P(word | token)`` as ``[T, W]``: ``phi``, or with ``name_share`` (``schema_names``) a named
+    token's name mixed with its ``phi`` row. ``token_name`` ``[T]``: the word each token is named by, or
+    -1; ``kind_word`` ``[W]``: whether a word names a kind (``Vocabulary.token_names``, ``kind_words``)."""
+    phi = g["phi"]
+    if "name_share" not in g:
+        return phi
+    names = token_name
+    named = names >= 0
+    said = torch.nn.functional.one_hot(names.clamp_min(0), phi.shape[-1]).to(phi.dtype)
+    # Mutual exclusivity: a named token does not learn another kind's name ("chair" is not a word for
+    # a room); that share of its learned words is lost, as a role an interpretation lacks is, so EM
+    # stays exact and drives it to the prior's pseudo-count.
+    other_kind = kind_word[None, :] & (said == 0) & named[:, None]
+    share = g["name_share"]
+    return torch.where(named[:, None], share[0] * said + share[1] * phi.masked_fill(other_kind, 0.0), phi)
+
+
 def mixture_log_emissions(g: dict, batch: Batch) -> torch.Tensor:
     """``log P(word u of instance i | mixture x)`` as ``[X, I, U]``."""
-    emit = batch.mixtures @ g["phi"]  # [X, W]
+    emit = batch.mixtures @ token_words(g, batch.token_name, batch.kind_word)  # [X, W]
     return emit[:, batch.uniq].clamp_min(1e-30).log()
 
 

@@ -35,6 +35,7 @@ import torch
 from groundlang.model.encoding import CLAUSE_ARITY_BINS, PAD_LOGIT, Batch
 from groundlang.model.language_model_base import (NULL_MIXTURE, LanguageModel, gather_mixtures,
                                                   mixture_log_emissions, require_positive)
+from groundlang.model.relational import is_relational_role
 from groundlang.model.vocabulary import is_task_role
 
 __all__ = ["ParseAligned", "MENTION_SUBSETS_PER_BLOCK"]
@@ -60,6 +61,7 @@ class ParseAligned(LanguageModel):
         preposition_concentration: float | None = 1.05,
         held_parts: bool = True,
         relational_descriptions: bool = False,
+        schema_names: bool = False,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -85,7 +87,8 @@ class ParseAligned(LanguageModel):
         come back to the green room"); a demonstration that never breaks it rules the reading out
         (``interpretations.unbroken_held_parts``). ``relational_descriptions``: a bystander related to an object the task binds by a PF of two objects (a toy in the goal room)
         is offered in a role named by that relation, so "the room *with the red chair*" can say which
-        room (``model.relational``). What each measured: ABLATIONS.md."""
+        room (``model.relational``). ``schema_names``: see :class:`LanguageModel`. What each measured:
+        ABLATIONS.md."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")
@@ -97,7 +100,7 @@ class ParseAligned(LanguageModel):
                 require_positive(self.name, name, value)
         if not argument_bonus >= 0:
             raise ValueError(f"language model {self.name}: argument_bonus must be >= 0, not {argument_bonus!r}")
-        super().__init__(word_concentration)
+        super().__init__(word_concentration, schema_names=schema_names)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus
         self.mention_concentration = mention_concentration
@@ -124,6 +127,7 @@ class ParseAligned(LanguageModel):
             "preposition_concentration": self.preposition_concentration,
             "held_parts": self.held_parts,
             "relational_descriptions": self.relational_descriptions,
+            "schema_names": self.schema_names,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
@@ -158,8 +162,13 @@ class ParseAligned(LanguageModel):
             # Per role: P(an object in this role is named by some phrase), P(it is not).
             # A priori a task's object is named and a bystander is not, by as many
             # pseudo-counts as the alignment prior's argument bonus.
+            # A relational role's object (model.relational) is named when the relation describes the
+            # object it relates to ("the room with the chair") and not otherwise: no prior either way.
+            relational = torch.tensor([is_relational_role(name) for name in role_names], dtype=torch.bool)
+            if relational.numel() != num_roles:
+                relational = torch.zeros(num_roles, dtype=torch.bool)
             mention = torch.full((num_roles, 2), self.mention_concentration)
-            mention += self.argument_bonus * torch.stack([task_role, ~task_role], dim=-1)
+            mention += self.argument_bonus * torch.stack([task_role, ~task_role & ~relational], dim=-1)
             with pyro.plate("mention_roles", num_roles, dim=-1):
                 g["mention"] = pyro.sample("mention", dist.Dirichlet(mention))
         if self.arity_concentration is not None:

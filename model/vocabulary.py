@@ -94,6 +94,11 @@ class Vocabulary:
     # (model.interpretations.alignable_roles); a task missing here (a vocabulary built by
     # hand) is taken to offer every role.
     task_roles: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    # The word the domain's schema names a token by ("CLASS:door" -> "door", "toyIsChair" -> "chair"):
+    # what a language model with ``schema_names`` lets a token say.
+    names: dict[str, str] = field(default_factory=dict)
+    # The tokens a head noun says (a class, a toy's shape): their names are words for kinds of things.
+    kinds: list[str] = field(default_factory=list)
     # The words the grammar lists (not saved with the vocabulary: the learner sets the one it parses
     # with): two listed words with no category in common are not a misspelling of one another.
     lexicon: Lexicon = field(default_factory=domain_lexicon, repr=False, compare=False)
@@ -191,6 +196,16 @@ class Vocabulary:
         self._spelling.clear()
         return new
 
+    def token_names(self) -> list[int]:
+        """Per token, the index of the word :attr:`names` names it by, or -1 (no name, or a word the
+        vocabulary lacks)."""
+        return [self._word_index.get(self.names.get(t, ""), -1) if t in self.names else -1 for t in self.tokens]
+
+    def kind_words(self) -> list[bool]:
+        """Per word, whether it is the name of a kind (:attr:`kinds`): "chair", "room", "door"."""
+        said = {self.names[t] for t in self.kinds if t in self.names}
+        return [w in said for w in self.words]
+
     def token_id(self, token: str) -> int:
         """Index of a semantic token; tokens unknown to training map to NULL."""
         return self._token_index.get(token, 0)
@@ -207,6 +222,8 @@ class Vocabulary:
             "aliases": dict(sorted(self.aliases.items())),
             "tasks": list(self.tasks),
             "task_roles": {task: list(roles) for task, roles in self.task_roles.items()},
+            "names": dict(self.names),
+            "kinds": list(self.kinds),
         }
 
     @classmethod
@@ -216,4 +233,4 @@ class Vocabulary:
         return cls(list(data["words"]), list(data["tokens"]), list(data["roles"]), list(data["preps"]),
                    dict(data.get("aliases", {})), list(data.get("tasks", [])),
                    {task: tuple(roles) for task, roles in data.get("task_roles", {}).items()},
-                   lexicon or domain_lexicon())
+                   dict(data.get("names", {})), list(data.get("kinds", [])), lexicon or domain_lexicon())

@@ -19,7 +19,8 @@ def test_settings_make_the_model_they_name():
     lm = get_language_model("parse", mention_phrases="any", argument_bonus=0, mention_concentration=None)
     assert isinstance(lm, ParseAligned)
     assert (lm.mention_phrases, lm.argument_bonus, lm.mention_concentration) == ("any", 0, None)
-    assert get_language_model("bow", null_token=False).settings() == {"word_concentration": 1.05, "null_token": False}
+    assert get_language_model("bow", null_token=False).settings() == {"word_concentration": 1.05, "null_token": False,
+                                                                        "schema_names": False}
 
 
 @pytest.mark.parametrize("name, settings, message", [
