@@ -225,3 +225,14 @@ def test_a_saved_model_keeps_the_switch_and_the_relational_roles(trained, tmp_pa
     before, after = (m.posterior("go to the room with the chair", start).goals() for m in (trained, again))
     assert [g for g, _ in after] == [g for g, _ in before]
     assert [p for _, p in after] == pytest.approx([p for _, p in before], abs=1e-6)
+
+
+def test_schema_names_read_a_colour_training_never_said(trained, library):
+    # Training said red, green and blue; the schema names the palette's other colours too.
+    start = parse_state(layout((4, 2, 0), (10, 1), (2, 3), (2, 1)), PALETTE)  # yellow, magenta, blue; agent in yellow
+    for command, goal in (("go to the magenta room", "agentInRoom(agent0, room1)"),
+                          ("go to the blue room", "agentInRoom(agent0, room2)")):
+        post = trained.posterior(command, start)
+        best = max(range(len(post.interpretations)), key=lambda j: post.probabilities[j])
+        assert post.interpretations[best].goal == parse_goal(goal) and post.probabilities[best] > 0.9, command
+    assert "magenta" in trained.vocab.words and "magenta" not in {w for *_, c, _ in TRAINING for w in c.split()}
