@@ -27,7 +27,7 @@ from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
-from groundlang.model.encoding import Batch, Observation, encode
+from groundlang.model.encoding import Batch, Observation, encode, token_exclusions
 from groundlang.model.interpretations import Interpretation, interpretations, without_unbroken_held_parts
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.language_model_base import token_words
@@ -355,8 +355,8 @@ class Learner:
         """
         self._require_fitted()
         # What a token says: its learned words, and its name under ``schema_names``.
-        phi = token_words(self.globals, torch.tensor(self.vocab.token_names()),
-                          torch.tensor(self.vocab.kind_words(), dtype=torch.bool))  # [S, W]
+        phi = token_words(self.globals, torch.tensor(self.vocab.token_names()), token_exclusions(self.vocab),
+                          torch.tensor(self.vocab.token_families()))  # [S, W]
         learned = phi.max(-1).values > 3.0 / phi.shape[1]
         meaning = phi * learned[:, None]
         meaning = meaning / meaning.sum(0, keepdim=True).clamp_min(1e-30)

@@ -52,20 +52,22 @@ def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, li
                 tokens.append(class_token(rb.cls))
                 tokens.extend(rb.constraint_tokens + rb.kind_tokens)  # a user's PF may describe only bystanders
                 if names:
-                    vocab.kinds.extend(t for t in (class_token(rb.cls), *rb.kind_tokens) if t not in vocab.kinds)
+                    vocab.kinds.update(dict.fromkeys((class_token(rb.cls), *rb.kind_tokens), rb.cls))
     # Every property PF the domain declares for the palettes seen (colours, shapes, a user's
     # sizes...) and every class: a layout of the test may have values training never saw.
     classes: list[str] = []
     for palette in palettes:
         schema = palette_schema(library, palette)
         if names:
-            vocab.names.update(schema_names(schema))
+            for token, (word, family) in schema_names(schema).items():
+                vocab.names[token] = word
+                vocab.name_families[token] = family
         tokens.extend(d.name for d in schema.pfs.values() if len(d.signature) == 1
                       and d.pf_class not in ("position", "spatial"))
         classes.extend(schema.classes)
     tokens.extend(class_token(c) for c in dict.fromkeys(classes))
     if names:
-        vocab.kinds.extend(t for t in (class_token(c) for c in dict.fromkeys(classes)) if t not in vocab.kinds)
+        vocab.kinds.update({class_token(c): c for c in classes})
     tokens.extend(library.spatial_pfs)  # a layout of the test may have sides training never saw
     vocab.add_tokens(tokens)
     vocab.add_words(vocab.names.values())  # a name is a word before training says it: "the yellow room"
@@ -90,16 +92,17 @@ def word_files_beside(library: TaskLibrary) -> list[Path]:
     return out
 
 
-def schema_names(schema) -> dict[str, str]:
-    """Token -> the word the schema names it by: a class token its class (``CLASS:door`` -> ``door``), a
-    property PF of one object its value (``toyIs(chair)`` -> ``chair``). Values in camelCase
-    (``darkGray``) are not words anyone types and are left out, as in :func:`schema_words`."""
-    out = {class_token(c): c for c in schema.classes if c.isalpha() and c.islower()}
+def schema_names(schema) -> dict[str, tuple[str, str]]:
+    """Token -> (the word the schema names it by, the family of names it is one of): a class token its
+    class (``CLASS:door`` -> ``("door", "class")``), a property PF of one object its value and PF class
+    (``toyIs(chair)`` -> ``("chair", "shape")``). Values in camelCase (``darkGray``) are not words anyone
+    types and are left out, as in :func:`schema_words`."""
+    out = {class_token(c): (c, "class") for c in schema.classes if c.isalpha() and c.islower()}
     for d in schema.pfs.values():
         functor, _, rest = d.term.partition("(")
         value = rest.rstrip(")")
         if len(d.signature) == 1 and value in schema.values.get(d.pf_class, ()) and value.isalpha() and value.islower():
-            out[d.name] = value
+            out[d.name] = (value, d.pf_class)
     return out
 
 

@@ -63,7 +63,8 @@ class Batch:
     mask: torch.Tensor  # [I, J] bool
     mixtures: torch.Tensor  # [X, S] rows: uniform weights over a token set
     token_name: torch.Tensor  # [S] the word the schema names each token by, or -1 (Vocabulary.names)
-    kind_word: torch.Tensor  # [W] bool: the word names a kind (Vocabulary.kind_words)
+    token_family: torch.Tensor  # [S] the family of names of each token, or -1 (Vocabulary.token_families)
+    token_excluded: torch.Tensor  # [S, W] bool: a word the token does not say (Vocabulary.other_kinds)
     bow_mix: torch.Tensor  # [I, J] mixture of {L} + C + {NULL}
     bow_mix_no_null: torch.Tensor  # [I, J] mixture of {L} + C (Model 0 has no NULL)
     uniq: torch.Tensor  # [I, U] distinct word ids of the command (0-padded)
@@ -115,7 +116,17 @@ class Batch:
         return Batch(**values)
 
 
-_SHARED = ("mixtures", "token_name", "kind_word")  # fields of the vocabulary, not of instances
+def token_exclusions(vocab: Vocabulary) -> torch.Tensor:
+    """``[S, W]`` bool: the words each token does not say (:meth:`Vocabulary.other_kinds`)."""
+    out = torch.zeros(len(vocab.tokens), len(vocab.words), dtype=torch.bool)
+    pairs = vocab.other_kinds()
+    if pairs:
+        token, word = torch.tensor(pairs, dtype=torch.long).T
+        out[token, word] = True
+    return out
+
+
+_SHARED = ("mixtures", "token_name", "token_family", "token_excluded")  # fields of the vocabulary, not of instances
 
 
 def is_mentionable(rb: RoleBinding) -> bool:
@@ -355,7 +366,8 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
     return Batch(
         log_prior=log_prior, behaviour=behaviour, mask=mask, mixtures=mix.table(S),
         token_name=torch.tensor(vocab.token_names(), dtype=torch.long),
-        kind_word=torch.tensor(vocab.kind_words(), dtype=torch.bool), bow_mix=bow_mix,
+        token_family=torch.tensor(vocab.token_families(), dtype=torch.long),
+        token_excluded=token_exclusions(vocab), bow_mix=bow_mix,
         bow_mix_no_null=bow_mix_no_null, uniq=uniq, word_counts=word_counts, words=words, word_mask=word_mask,
         machine=machine, machine_mask=machine_mask, reading_logp=reading_logp, type_counts=type_counts,
         type_head_counts=type_head_counts, type_prep=type_prep, type_mask=type_mask, reading_types=reading_types,

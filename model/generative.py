@@ -32,6 +32,7 @@ def global_sizes(vocab: Vocabulary) -> dict:
         "num_roles": len(vocab.roles),
         "num_preps": len(vocab.preps),
         "role_names": tuple(vocab.roles),
+        "name_families": len(vocab.families),
         # offered[t][v]: whether lifted task t can offer role v (Vocabulary.offers_role)
         "offered": tuple(tuple(vocab.offers_role(t, r) for r in vocab.roles) for t in vocab.tasks),
     }

@@ -50,16 +50,21 @@ class LanguageModel:
 
     def sample_globals(
         self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),
-        num_tasks: int = 0, offered: tuple[tuple[bool, ...], ...] = (),
+        num_tasks: int = 0, offered: tuple[tuple[bool, ...], ...] = (), name_families: int = 0,
     ) -> dict:
         with pyro.plate("tokens", num_tokens, dim=-1):
             phi = pyro.sample(
                 "phi", dist.Dirichlet(torch.full((num_words,), self.word_concentration))
             )
         g = {"phi": phi}
-        if self.schema_names:
-            # P(a named token says its name), P(it says one of its learned words): a mixture, so EM stays exact.
-            g["name_share"] = pyro.sample("name_share", dist.Dirichlet(torch.full((2,), NAME_SHARE_CONCENTRATION)))
+        if self.schema_names and name_families:
+            # Per family of names (classes, colours, shapes): P(a token says its name), P(it says one of
+            # its learned words); a mixture, so EM stays exact. Per family, because a palette's names may
+            # not be what people call its values (a room the palette names "red" that commands call
+            # "orange") while its shapes' are.
+            with pyro.plate("name_families", name_families, dim=-1):
+                g["name_share"] = pyro.sample(
+                    "name_share", dist.Dirichlet(torch.full((2,), NAME_SHARE_CONCENTRATION)))
         return g
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
@@ -84,10 +89,12 @@ NULL_MIXTURE = 0  # encode() interns the {NULL} mixture first
 NAME_SHARE_CONCENTRATION = 2.0
 
 
-def token_words(g: dict, token_name: torch.Tensor, kind_word: torch.Tensor) -> torch.Tensor:
+def token_words(g: dict, token_name: torch.Tensor, excluded: torch.Tensor, family: torch.Tensor) -> torch.Tensor:
     """``P(word | token)`` as ``[T, W]``: ``phi``, or with ``name_share`` (``schema_names``) a named
     token's name mixed with its ``phi`` row. ``token_name`` ``[T]``: the word each token is named by, or
-    -1; ``kind_word`` ``[W]``: whether a word names a kind (``Vocabulary.token_names``, ``kind_words``)."""
+    -1; ``excluded`` ``[T, W]``: the words a token does not say (``Vocabulary.token_names``,
+    ``encoding.token_exclusions``); ``family`` ``[T]``: each token's family of names, or -1
+    (``Vocabulary.token_families``)."""
     phi = g["phi"]
     if "name_share" not in g:
         return phi
@@ -97,14 +104,13 @@ def token_words(g: dict, token_name: torch.Tensor, kind_word: torch.Tensor) -> t
     # Mutual exclusivity: a named token does not learn another kind's name ("chair" is not a word for
     # a room); that share of its learned words is lost, as a role an interpretation lacks is, so EM
     # stays exact and drives it to the prior's pseudo-count.
-    other_kind = kind_word[None, :] & (said == 0) & named[:, None]
-    share = g["name_share"]
-    return torch.where(named[:, None], share[0] * said + share[1] * phi.masked_fill(other_kind, 0.0), phi)
+    share = g["name_share"][family.clamp_min(0)]  # [T, 2]
+    return torch.where(named[:, None], share[:, :1] * said + share[:, 1:] * phi.masked_fill(excluded, 0.0), phi)
 
 
 def mixture_log_emissions(g: dict, batch: Batch) -> torch.Tensor:
     """``log P(word u of instance i | mixture x)`` as ``[X, I, U]``."""
-    emit = batch.mixtures @ token_words(g, batch.token_name, batch.kind_word)  # [X, W]
+    emit = batch.mixtures @ token_words(g, batch.token_name, batch.token_excluded, batch.token_family)  # [X, W]
     return emit[:, batch.uniq].clamp_min(1e-30).log()
 
 

@@ -57,8 +57,9 @@ class IBMModel2(LanguageModel):
     # colour/shape PF of the bound objects and alignment picks what was said.
     enumerates_constraints = False
 
-    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
-        g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
+    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=(),
+                       name_families=0):
+        g = super().sample_globals(num_tokens, num_words, num_roles, num_preps, name_families=name_families)
         contexts = POSITION_BINS * (MAX_MACHINE + 1)
         with pyro.plate("distortion_contexts", contexts, dim=-1):
             g["distortion"] = pyro.sample(

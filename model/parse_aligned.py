@@ -130,8 +130,9 @@ class ParseAligned(LanguageModel):
             "schema_names": self.schema_names,
         }
 
-    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=()):
-        g = super().sample_globals(num_tokens, num_words, num_roles, num_preps)
+    def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=(),
+                       name_families=0):
+        g = super().sample_globals(num_tokens, num_words, num_roles, num_preps, name_families=name_families)
         if num_tasks < 1:
             raise ValueError("the parse model needs the lifted tasks of the vocabulary (Vocabulary.add_tasks)")
         task_role = torch.tensor([is_task_role(name) for name in role_names], dtype=torch.bool)

@@ -97,8 +97,12 @@ class Vocabulary:
     # The word the domain's schema names a token by ("CLASS:door" -> "door", "toyIsChair" -> "chair"):
     # what a language model with ``schema_names`` lets a token say.
     names: dict[str, str] = field(default_factory=dict)
-    # The tokens a head noun says (a class, a toy's shape): their names are words for kinds of things.
-    kinds: list[str] = field(default_factory=list)
+    # Which family of names each is one of (a class, a colour, a shape): a family's names are people's
+    # words, or not, together (a palette's colour names may not be what people call its colours).
+    name_families: dict[str, str] = field(default_factory=dict)
+    # The tokens a head noun says (a class, a toy's shape) -> the class of the things they name: their
+    # names are words for kinds of things, a shape's a word for a kind of toy.
+    kinds: dict[str, str] = field(default_factory=dict)
     # The words the grammar lists (not saved with the vocabulary: the learner sets the one it parses
     # with): two listed words with no category in common are not a misspelling of one another.
     lexicon: Lexicon = field(default_factory=domain_lexicon, repr=False, compare=False)
@@ -201,10 +205,31 @@ class Vocabulary:
         vocabulary lacks)."""
         return [self._word_index.get(self.names.get(t, ""), -1) if t in self.names else -1 for t in self.tokens]
 
-    def kind_words(self) -> list[bool]:
-        """Per word, whether it is the name of a kind (:attr:`kinds`): "chair", "room", "door"."""
-        said = {self.names[t] for t in self.kinds if t in self.names}
-        return [w in said for w in self.words]
+    @property
+    def families(self) -> list[str]:
+        """The families of names (:attr:`name_families`), in order of first appearance."""
+        return list(dict.fromkeys(self.name_families.values()))
+
+    def token_families(self) -> list[int]:
+        """Per token, the index of its family of names in :attr:`families`, or -1 (a token with no name)."""
+        index = {f: n for n, f in enumerate(self.families)}
+        return [index[self.name_families[t]] if n >= 0 and t in self.name_families else -1
+                for t, n in zip(self.tokens, self.token_names())]
+
+    def other_kinds(self) -> list[tuple[int, int]]:
+        """``(token, word)`` indices where a named token does not say the word, by mutual exclusivity:
+        the word names a kind (:attr:`kinds`) that is not the token's own nor, for a class, one of its
+        kinds ("chair" is not a word for a room nor for a colour; it is one for a toy)."""
+        kind_names = {self.names[t]: cls for t, cls in self.kinds.items() if t in self.names}
+        out = []
+        for t, token in enumerate(self.tokens):
+            if token not in self.names:
+                continue
+            own = self.kinds.get(token) if token == class_token(self.kinds.get(token, "")) else None
+            for word, cls in kind_names.items():
+                if word != self.names[token] and cls != own and word in self._word_index:
+                    out.append((t, self._word_index[word]))
+        return out
 
     def token_id(self, token: str) -> int:
         """Index of a semantic token; tokens unknown to training map to NULL."""
@@ -223,7 +248,8 @@ class Vocabulary:
             "tasks": list(self.tasks),
             "task_roles": {task: list(roles) for task, roles in self.task_roles.items()},
             "names": dict(self.names),
-            "kinds": list(self.kinds),
+            "name_families": dict(self.name_families),
+            "kinds": dict(self.kinds),
         }
 
     @classmethod
@@ -233,4 +259,5 @@ class Vocabulary:
         return cls(list(data["words"]), list(data["tokens"]), list(data["roles"]), list(data["preps"]),
                    dict(data.get("aliases", {})), list(data.get("tasks", [])),
                    {task: tuple(roles) for task, roles in data.get("task_roles", {}).items()},
-                   dict(data.get("names", {})), list(data.get("kinds", [])), lexicon or domain_lexicon())
+                   dict(data.get("names", {})), dict(data.get("name_families", {})),
+                   dict(data.get("kinds", {})), lexicon or domain_lexicon())
