@@ -240,3 +240,13 @@ def test_schema_names_read_a_colour_training_never_said(trained, library):
         best = max(range(len(post.interpretations)), key=lambda j: post.probabilities[j])
         assert post.interpretations[best].goal == parse_goal(goal) and post.probabilities[best] > 0.9, command
     assert "magenta" in trained.vocab.words and "magenta" not in {w for *_, c, _ in TRAINING for w in c.split()}
+
+
+def test_a_model_with_schema_names_reads_the_same_after_saving(trained, tmp_path):
+    start = parse_state(layout((4, 2, 0), (10, 1), (2, 2), (6, 2)), PALETTE)
+    loaded = Learner.load(trained.save(tmp_path / "model"))
+    assert loaded.lm.schema_names and loaded.vocab.names == trained.vocab.names
+    assert loaded.vocab.kinds == trained.vocab.kinds and loaded.vocab.families == trained.vocab.families
+    before = trained.posterior("go to the room with the chair", start).probabilities
+    after = loaded.posterior("go to the room with the chair", start).probabilities
+    assert max(abs(float(a) - float(b)) for a, b in zip(before, after)) < 1e-6
