@@ -109,15 +109,16 @@ def token_words(g: dict, token_name: torch.Tensor, excluded: torch.Tensor, famil
 
 
 def mixture_log_emissions(g: dict, batch: Batch) -> torch.Tensor:
-    """``log P(word u of instance i | mixture x)`` as ``[X, I, U]``."""
+    """``log P(word w | mixture x)`` as ``[X, W]``: the log is taken once per word of the vocabulary,
+    not once per word of every instance."""
     emit = batch.mixtures @ token_words(g, batch.token_name, batch.token_excluded, batch.token_family)  # [X, W]
-    return emit[:, batch.uniq].clamp_min(1e-30).log()
+    return emit.clamp_min(1e-30).log()
 
 
-def gather_mixtures(log_emit: torch.Tensor, mix_ids: torch.Tensor) -> torch.Tensor:
-    """``log_emit [X, I, U]`` at ``mix_ids [I, ...]`` -> ``[I, ..., U]``."""
-    I, U = log_emit.shape[1], log_emit.shape[2]
+def gather_mixtures(log_emit: torch.Tensor, mix_ids: torch.Tensor, uniq: torch.Tensor) -> torch.Tensor:
+    """``log_emit [X, W]`` at mixtures ``mix_ids [I, ...]`` and each instance's words ``uniq [I, U]`` ->
+    ``[I, ..., U]``, with no ``[X, I, U]`` table in between."""
+    I, U = uniq.shape
     flat = mix_ids.reshape(I, -1)  # [I, Q]
-    per_instance = log_emit.permute(1, 0, 2)  # [I, X, U]
-    out = torch.gather(per_instance, 1, flat[..., None].expand(-1, -1, U))
+    out = log_emit[flat[:, :, None], uniq[:, None, :]]  # [I, Q, U]
     return out.reshape(*mix_ids.shape, U)

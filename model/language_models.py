@@ -38,7 +38,7 @@ class BagOfWords(LanguageModel):
 
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
         mix = batch.bow_mix if self.null_token else batch.bow_mix_no_null
-        per_word = gather_mixtures(mixture_log_emissions(g, batch), mix)  # [I, J, U]
+        per_word = gather_mixtures(mixture_log_emissions(g, batch), mix, batch.uniq)  # [I, J, U]
         return (per_word * batch.word_counts[:, None, :]).sum(-1)
 
 

@@ -211,9 +211,9 @@ class ParseAligned(LanguageModel):
         categoricals, which keeps EM exact). The phrase's words then come from
         that role's mixture.
         """
-        log_emit = mixture_log_emissions(g, batch)  # [X, I, U]
-        modifiers = gather_mixtures(log_emit, batch.role_mix)  # [I, J, V, U]
-        heads = gather_mixtures(log_emit, batch.role_head_mix)  # [I, J, V, U]
+        log_emit = mixture_log_emissions(g, batch)  # [X, W]
+        modifiers = gather_mixtures(log_emit, batch.role_mix, batch.uniq)  # [I, J, V, U]
+        heads = gather_mixtures(log_emit, batch.role_head_mix, batch.uniq)  # [I, J, V, U]
         type_ll = torch.einsum("ijvu,iku->ijvk", modifiers, batch.type_counts) + torch.einsum(
             "ijvu,iku->ijvk", heads, batch.type_head_counts
         )  # [I, J, V, K]
@@ -245,7 +245,7 @@ class ParseAligned(LanguageModel):
         # ("do not enter it") is one of the other words (see encoding._reading_structure).
         phi = g["phi"]
         task_words = phi[batch.task_token[:, :, None], batch.uniq[:, None, :]].clamp_min(1e-30).log()  # [I, J, U]
-        null_words = log_emit[NULL_MIXTURE][:, None, :].expand_as(task_words)  # [I, J, U]
+        null_words = log_emit[NULL_MIXTURE][batch.uniq][:, None, :].expand_as(task_words)  # [I, J, U]
         both = torch.stack([task_words, null_words], dim=-1)  # [I, J, U, 2]
         frame_words = torch.logsumexp(both + g["frame_source"].log(), dim=-1)
         verb_words = torch.logsumexp(both + g["verb_source"].log(), dim=-1)
