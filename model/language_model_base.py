@@ -10,7 +10,7 @@ import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import Batch
+from groundlang.model.encoding import Batch, PhraseKeys
 
 __all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive"]
 
@@ -29,6 +29,8 @@ class LanguageModel:
     relation_words = False
     held_parts = False
     relational_descriptions = False
+    start_role = True
+    bystander_roles = True
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True):
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
@@ -38,6 +40,10 @@ class LanguageModel:
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token}
+
+    def phrase_keys(self) -> PhraseKeys:
+        """The marks of the noun phrases' preposition keys this model's batches are encoded with."""
+        return PhraseKeys()
 
     def sample_globals(
         self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),

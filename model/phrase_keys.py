@@ -6,16 +6,33 @@ key states are in :func:`entity_words`."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from groundlang.grammar.lexicon import Lexicon
 from groundlang.grammar.logical_form import LogicalForm
 from groundlang.model.domain_words import domain_lexicon
 from groundlang.model.vocabulary import DIRECT_OBJECT, Vocabulary
 
-__all__ = ["entity_words", "backoff_key", "bare_preposition", "backoff_prep_ids", "is_referring"]
+__all__ = ["PhraseKeys", "entity_words", "backoff_key", "bare_preposition", "backoff_prep_ids", "is_referring"]
 
 
-def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None) -> list[tuple[str | None, tuple[str, ...]]]:
+@dataclass(frozen=True)
+class PhraseKeys:
+    """Which marks a phrase's preposition key carries (the parse model's settings of these names; each
+    on by default). What each measured: ABLATIONS.md."""
+
+    # Commands end with where things go: the last phrase with words has a key of its own (``|last``).
+    last_phrase_key: bool = True
+    # A clause with a direct object says where the object goes, one without it where the agent goes:
+    # a verb-attached phrase in a clause with a direct object has a key of its own (``+obj``).
+    object_key: bool = True
+    # A phrase saying where a motion starts or what goes along ("from ...", "with ...") never says where
+    # it ends: ``|last`` passes over it to the phrase before.
+    last_passes_over_source: bool = True
+
+
+def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None,
+                 keys: PhraseKeys = PhraseKeys()) -> list[tuple[str | None, tuple[str, ...]]]:
     """(preposition key, modifiers, head) per entity of a logical form.
 
     The key is the preposition for a verb-attached phrase, ``prep@np`` for a
@@ -33,14 +50,15 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None) -> list[tuple[
     over it to the phrase before. The object of a relative or participial clause about a noun phrase
     whose verb says what it holds ("the room *that has the chair*", "the room *containing the chair*";
     ``VERB_HAVING`` of the word files) is keyed as a noun-attached phrase of ``PREP_HAVING`` ("with":
-    ``with@np``): it describes the noun phrase as "the room *with the chair*" does. What each of these measured:
+    ``with@np``): it describes the noun phrase as "the room *with the chair*" does. ``keys`` switches the
+    ``+obj`` and ``|last`` marks and the passing over (:class:`PhraseKeys`). What each of these measured:
     ABLATIONS.md.
     """
     lexicon = lexicon or domain_lexicon()
-    passed_over = lexicon.source_and_comitative_prepositions
+    passed_over = lexicon.source_and_comitative_prepositions if keys.last_passes_over_source else frozenset()
     having = _having_clauses(lf, lexicon)
     negated = {i for i, clause in enumerate(lf.clauses) if getattr(clause, "negated", False)}
-    transitive = {entity.clause for entity in lf.entities if entity.role == "dobj"}
+    transitive = {entity.clause for entity in lf.entities if entity.role == "dobj"} if keys.object_key else set()
     result = []
     for entity in lf.entities:
         if entity.role == "npp":
@@ -54,6 +72,8 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None) -> list[tuple[
         if entity.clause in negated:
             key = f"not:{key or 'dobj'}"
         result.append((key, tuple(entity.modifiers), (entity.head,) if entity.head else ()))
+    if not keys.last_phrase_key:
+        return result
     # Commands end with where things go ("..., then push it to the blue room"): the last
     # phrase with words gets its own key, ``|last``.
     for n in range(len(result) - 1, -1, -1):
