@@ -24,8 +24,8 @@ class LanguageModel:
     # Whether training starts from the bag of words' word distributions: an alignment model's MAP from a
     # flat start lands in poor local optima, as IBM Model 2 is classically started from Model 1.
     starts_from_bag_of_words = True
-    # What the interpretations offer (model.interpretations.interpretations); the parse model has both
-    # as settings.
+    # What the interpretations offer (model.interpretations.interpretations); the parse model has these
+    # as settings, and its preposition keys' marks (phrase_keys).
     relation_words = False
     held_parts = False
     relational_descriptions = False
