@@ -191,7 +191,7 @@ def evaluate(
     context = {
         "learner": learner,
         "instances": instances,
-        "batch": encode(observations, learner.vocab),
+        "batch": encode(observations, learner.vocab, lm.phrase_keys()),
         "golds": golds,
         "globals": dict(learner.globals),
         "novel_states": list(novel_states),

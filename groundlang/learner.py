@@ -139,6 +139,8 @@ class Learner:
                 held_parts=self.lm.held_parts,
                 relational=self.lm.relational_descriptions,
                 demonstrated=demonstrated,
+                start_role=self.lm.start_role,
+                bystander_roles=self.lm.bystander_roles,
             )
         return self._interp_cache[key]
 
@@ -193,7 +195,9 @@ class Learner:
 
     def _build_vocabulary(self, observations: Iterable[Observation], palettes: Iterable) -> Vocabulary:
         return build_vocabulary(observations, palettes, self.library, self.word_lexicon,
-                                relational=self.lm.relational_descriptions, names=self.lm.schema_names)
+                                relational=self.lm.relational_descriptions, keys=self.lm.phrase_keys(),
+                                start_role=self.lm.start_role, by_class=self.lm.bystander_roles,
+                                names=self.lm.schema_names)
 
     def fit(self, instances: Sequence, progress: bool = False, init: dict | None = None,
             observations: list[Observation] | None = None, batch: Batch | None = None) -> "Learner":
@@ -224,7 +228,7 @@ class Learner:
                 self.palettes = [{"name": p.name, "colours": list(p.colours), "shapes": list(p.shapes)}
                                  for p in palettes]
                 init = None
-            batch = encode(observations, self.vocab)
+            batch = encode(observations, self.vocab, self.lm.phrase_keys())
         elif self.vocab is None:
             raise ValueError("fit(batch=...) needs the vocabulary the batch was encoded with")
         if init is None and self.lm.starts_from_bag_of_words:
@@ -266,7 +270,7 @@ class Learner:
         self._require_fitted()
         self._check_state("posterior", command, state)
         obs = self._command_observation(command, state)
-        batch = encode([obs], self.vocab)
+        batch = encode([obs], self.vocab, self.lm.phrase_keys())
         probs = posterior(batch, self.lm, self.globals, use_behaviour=False)[0]
         J = len(obs.interpretations)
         reading_probs = self.lm.reading_probabilities(self.globals, batch, [r.probability for r in obs.readings])

@@ -9,8 +9,8 @@ from pathlib import Path
 
 from groundlang.logic.schema import domain_schema
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.encoding import Observation, bare_preposition, entity_words, machine_string
-from groundlang.model.interpretations import OTHER_ROLES, alignable_roles
+from groundlang.model.encoding import Observation, PhraseKeys, bare_preposition, entity_words, machine_string
+from groundlang.model.interpretations import alignable_roles, bystander_roles
 from groundlang.model.vocabulary import Vocabulary, class_token
 
 __all__ = ["build_vocabulary", "palette_schema", "schema_names", "schema_words", "word_files_beside"]
@@ -22,17 +22,20 @@ def palette_schema(library: TaskLibrary, palette):
 
 
 def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, library: TaskLibrary,
-                     word_lexicon, relational: bool = False, names: bool = False) -> Vocabulary:
+                     word_lexicon, relational: bool = False, keys: PhraseKeys = PhraseKeys(),
+                     start_role: bool = True, by_class: bool = True, names: bool = False) -> Vocabulary:
     """The vocabulary of a training set: its words, the preposition keys of its readings (and the bare
     prepositions the parse model generates), the tokens and roles of its interpretations, and every
     property PF and class the domain declares for ``palettes`` (a test layout may show values training
     never did). ``relational``: the tasks' tables span their relational roles too
-    (``model.relational``; the parse model's ``relational_descriptions``). ``names``: the vocabulary
-    keeps the schema's names of its tokens (:func:`schema_names`) and knows their words (a language
-    model's ``schema_names``)."""
+    (``model.relational``; the parse model's ``relational_descriptions``). ``keys``: the marks of the
+    preposition keys (``phrase_keys.PhraseKeys``); ``start_role``, ``by_class``: the bystanders' roles
+    (``interpretations.bystander_roles``). ``names``: the vocabulary keeps the schema's names of its
+    tokens (:func:`schema_names`) and knows their words (a language model's ``schema_names``)."""
     vocab = Vocabulary(lexicon=word_lexicon)
     vocab.add_tasks((task.name for task in library.tasks),
-                    roles={task.name: alignable_roles(task, library.relational_pfs if relational else ())
+                    roles={task.name: alignable_roles(task, library.relational_pfs if relational else (),
+                                                      start_role, by_class)
                            for task in library.tasks})
     tokens: list[str] = []
     roles: list[str] = []
@@ -42,9 +45,9 @@ def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, li
         vocab.add_words(obs.words)
         counts.update(obs.words)
         for reading in obs.readings:
-            keys = [p for p, _, _ in entity_words(reading.logical_form, word_lexicon) if p is not None]
-            preps.extend(keys)
-            preps.extend(b for p in keys if (b := bare_preposition(p)) is not None)  # what the parse model generates
+            said = [p for p, _, _ in entity_words(reading.logical_form, word_lexicon, keys) if p is not None]
+            preps.extend(said)
+            preps.extend(b for p in said if (b := bare_preposition(p)) is not None)  # what the parse model generates
         for interp in obs.interpretations:
             tokens.extend(machine_string(interp))
             for rb in interp.roles:
@@ -71,7 +74,7 @@ def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, li
     tokens.extend(library.spatial_pfs)  # a layout of the test may have sides training never saw
     vocab.add_tokens(tokens)
     vocab.add_words(vocab.names.values())  # a name is a word before training says it: "the yellow room"
-    vocab.add_roles(roles + list(OTHER_ROLES))
+    vocab.add_roles(roles + list(bystander_roles(start_role, by_class)))
     vocab.add_preps(preps)
     vocab.read_misspellings(counts)
     return vocab

@@ -102,7 +102,7 @@ def update_learner(learner, command: str, state, demonstration: Sequence | str |
     # On a copy, so that a failure leaves the learner as it was.
     vocab = Vocabulary.from_json(learner.vocab.to_json(), learner.word_lexicon)
     vocab.add_words(new_words)
-    globals_, _ = fold_in(encode([obs], vocab), learner.lm, vocab, {**learner.globals, "phi": phi}, totals,
-                          steps=steps)
+    globals_, _ = fold_in(encode([obs], vocab, learner.lm.phrase_keys()), learner.lm, vocab,
+                          {**learner.globals, "phi": phi}, totals, steps=steps)
     learner.vocab, learner.globals = vocab, globals_
     return learner

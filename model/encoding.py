@@ -22,12 +22,12 @@ import torch
 from groundlang.grammar.logical_form import Reading
 from groundlang.logic.classes import domain_classes
 from groundlang.model.interpretations import UNALIGNED_CLASSES, Interpretation, RoleBinding
-from groundlang.model.phrase_keys import (backoff_key, backoff_prep_ids, bare_preposition, entity_words,
-                                          is_referring)
+from groundlang.model.phrase_keys import (PhraseKeys, backoff_key, backoff_prep_ids, bare_preposition,
+                                          entity_words, is_referring)
 from groundlang.model.vocabulary import NULL, Vocabulary, class_token, is_task_role
 from groundlang.model.world import object_class
 
-__all__ = ["Observation", "Batch", "encode", "entity_words", "is_mentionable", "is_referring", "machine_string",
+__all__ = ["Observation", "Batch", "encode", "PhraseKeys", "entity_words", "is_mentionable", "is_referring", "machine_string",
            "backoff_key", "backoff_prep_ids", "bare_preposition", "PAD_LOGIT"]
 
 CLAUSE_ARITY_BINS = 5  # clauses with 4 or more noun phrases share the last bin
@@ -172,7 +172,7 @@ class _Mixtures:
         return out
 
 
-def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int]):
+def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int], keys: PhraseKeys):
     """Distinct noun-phrase types and, per distinct reading structure, their counts.
 
     Readings that give the same multiset of (preposition key, words), the
@@ -185,7 +185,7 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
     order: dict[tuple, int] = {}  # signature -> its index in ``merged``
     groups: list[int] = []  # per reading, the index of its structure in ``merged``
     for reading in obs.readings:
-        ents = entity_words(reading.logical_form, vocab.lexicon)
+        ents = entity_words(reading.logical_form, vocab.lexicon, keys)
         inside = Counter(w for _, mods, head in ents for w in mods + head)
         frame = Counter(obs.words)
         frame.subtract(inside)
@@ -220,8 +220,10 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int])
     return types, merged, groups
 
 
-def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
-    """Pad and index a list of observations with a fixed vocabulary."""
+def encode(observations: list[Observation], vocab: Vocabulary, keys: PhraseKeys = PhraseKeys()) -> Batch:
+    """Pad and index a list of observations with a fixed vocabulary; ``keys``: the marks of the noun
+    phrases' preposition keys (the language model's ``phrase_keys()``; the vocabulary's keys were made
+    with the same)."""
     if not observations:
         raise ValueError("cannot encode an empty list of observations")
     I = len(observations)
@@ -318,7 +320,7 @@ def encode(observations: list[Observation], vocab: Vocabulary) -> Batch:
         col = {w: u for u, w in enumerate(ids)}
         uniq_rows.append(ids)
         count_rows.append([float(counts.get(w, 0)) for w in ids])
-        structures.append(_reading_structure(obs, vocab, col))
+        structures.append(_reading_structure(obs, vocab, col, keys))
     uniq = _pad(uniq_rows, 0, torch.long)
     word_counts = _pad(count_rows, 0.0, torch.float32)
     U = uniq.shape[1]

@@ -28,7 +28,9 @@ the agent is in no room; a command may then presuppose any room as its start,
 so every room the task does not bind is offered both as the start room and as
 another room (:func:`start_rooms`): a command written for another layout starts
 where it says, and the agent of a new layout may stand on a door cell. What the
-start role and the door-cell rule measured: ABLATIONS.md.
+start role and the door-cell rule measured: ABLATIONS.md. Both kinds of bystander role are switches
+(the parse model's ``start_role`` and ``bystander_roles``): without the first the start room is one more
+``other:room``; without the second every bystander shares one role, ``other:*`` (:data:`BYSTANDER_ROLE`).
 
 Every object, bound or not, may also be described by the spatial PFs
 (``pfs.lp``) true of it where the agent stands: "the door on the left"
@@ -73,6 +75,8 @@ __all__ = [
     "alignable_roles",
     "OTHER_ROLES",
     "START_ROLE",
+    "BYSTANDER_ROLE",
+    "bystander_roles",
     "start_rooms",
     "UNALIGNED_CLASSES",
 ]
@@ -81,6 +85,9 @@ __all__ = [
 # role of its own (see start_rooms).
 START_ROLE = "other:start"
 OTHER_ROLES = tuple(f"other:{cls}" for cls in WORLD_CLASSES) + (START_ROLE,)
+# The one role of every bystander when bystanders are not told apart by their class (``bystander_roles``
+# off): a phrase about an object the task leaves alone aligns with it whatever the object is.
+BYSTANDER_ROLE = "other:*"
 # The addressee (addressee/1 of logic/domain.lp) is "you", which the parser leaves without words: no
 # noun phrase aligns with it (model.encoding), whatever its role.
 UNALIGNED_CLASSES = domain_classes().addressee
@@ -129,14 +136,24 @@ def task_roles(lifted: LiftedTask) -> tuple[str, ...]:
     )
 
 
-def alignable_roles(lifted: LiftedTask, relational_pfs=()) -> tuple[str, ...]:
+def bystander_roles(start_role: bool = True, by_class: bool = True) -> tuple[str, ...]:
+    """The roles of objects a task does not bind: one per class and the start room's
+    (:data:`OTHER_ROLES`), or with ``by_class`` off one for all (:data:`BYSTANDER_ROLE`) and the start
+    room's; without ``start_role`` no start room's."""
+    roles = OTHER_ROLES[:-1] if by_class else (BYSTANDER_ROLE,)
+    return roles + ((START_ROLE,) if start_role else ())
+
+
+def alignable_roles(lifted: LiftedTask, relational_pfs=(), start_role: bool = True,
+                    by_class: bool = True) -> tuple[str, ...]:
     """Every role a noun phrase may align with in an interpretation of ``lifted``: nothing, the
     roles of its own variables and those of bystanders, but never the agent's (UNALIGNED_CLASSES)
     nor another task's variables. What the parse model's per-task alignment tables span.
     ``relational_pfs`` (``TaskLibrary.relational_pfs``, when relational descriptions are on): the
-    relational roles of its variables too."""
+    relational roles of its variables too. ``start_role``, ``by_class``: :func:`bystander_roles`."""
     own = (role for var, role in zip(lifted.variables, task_roles(lifted)) if var.cls not in UNALIGNED_CLASSES)
-    others = (role for role in OTHER_ROLES if role.removeprefix("other:") not in UNALIGNED_CLASSES)
+    others = (role for role in bystander_roles(start_role, by_class)
+              if role.removeprefix("other:") not in UNALIGNED_CLASSES)
     related = relational_roles([(role, var.cls) for var, role in zip(lifted.variables, task_roles(lifted))],
                                relational_pfs, UNALIGNED_CLASSES, domain_classes().mentioned)
     return (NO_ROLE, *dict.fromkeys(own), *others, *related)
@@ -150,13 +167,14 @@ def object_names(state: State) -> list[str]:
 def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, library: TaskLibrary,
            described: Mapping[str, Mapping[str, tuple[str, ...]]],
            starts: tuple[frozenset[str], bool], relation_words: bool = False,
-           relations: Mapping[str, tuple] | None = None) -> tuple[RoleBinding, ...]:
+           relations: Mapping[str, tuple] | None = None, by_class: bool = True) -> tuple[RoleBinding, ...]:
     """The roles of an interpretation: the task's variables (what words may say of a bound object:
     its PFs in C, then its spatial PFs), then every other object (all its unary PFs, as clingo
     describes it: colours, shapes, spatial PFs, any class a user's library adds). A head noun may
     also say an object's shape PF. ``starts``: :func:`start_rooms` of ``state``. ``relations``
     (:func:`~groundlang.model.tasks.object_relations`, when relational descriptions are on): a bystander
-    related to a bound object takes its relational role instead of ``other:<class>``."""
+    related to a bound object takes its relational role instead of ``other:<class>``, which is
+    :data:`BYSTANDER_ROLE` for every class without ``by_class``."""
     lifted = library.task(task.task)
     binding = dict(task.binding)
     bindings = []
@@ -181,7 +199,8 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
                 bindings.append(RoleBinding(START_ROLE, obj, cls, said, about.get("shape", ())))
                 if start_known:
                     continue
-            bindings.append(RoleBinding(links.get(obj, f"other:{cls}"), obj, cls, said, about.get("shape", ())))
+            other = f"other:{cls}" if by_class or cls in UNALIGNED_CLASSES else BYSTANDER_ROLE
+            bindings.append(RoleBinding(links.get(obj, other), obj, cls, said, about.get("shape", ())))
     return tuple(bindings)
 
 
@@ -202,7 +221,8 @@ def start_rooms(state: State) -> tuple[frozenset[str], bool]:
 
 def interpretations(state: State, library: TaskLibrary, enumerate_constraints: bool = True,
                     relation_words: bool = False, relational: bool = False,
-                    held_parts: bool = False, demonstrated: bool = False) -> list[Interpretation]:
+                    held_parts: bool = False, demonstrated: bool = False, start_role: bool = True,
+                    bystander_roles: bool = True) -> list[Interpretation]:
     """Every (L, T, C) of ``state`` with its log prior, in a deterministic order.
 
     With ``enumerate_constraints=False`` each grounding appears once, with C
@@ -227,6 +247,11 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     prior is its lifted task's share for one grounding, so the other readings' priors are those of an
     instance without it. Without a demonstration it asks for nothing and is left out.
 
+    ``start_role`` offers the room the agent starts in (any room, on a door cell) in the role
+    :data:`START_ROLE` (:func:`start_rooms`); without it that room is another room like the rest.
+    ``bystander_roles`` gives each class of bystander a role of its own (``other:room``); without it they
+    share :data:`BYSTANDER_ROLE` (the parse model's settings of these names).
+
     Raises ValueError when no lifted task has a grounding that is not already
     true in ``state`` (nothing could be asked of the agent).
     """
@@ -242,7 +267,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
         )
     # Once per state, shared by every interpretation.
     described = object_descriptions(state, library)
-    starts = start_rooms(state)
+    starts = start_rooms(state) if start_role else (frozenset(), True)
     relations = object_relations(state, library) if relational else None
     # Counted over what could be asked of the agent: a goal that wholly holds takes a share, not a count.
     per_lifted = Counter(task.task for task, _ in candidates if len(task.holding) < len(task.goal))
@@ -253,7 +278,8 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
         log_prior_t = -math.log(n_lifted) - math.log(per_lifted[task.task])
         if not enumerate_constraints:
             largest = max(constraints, key=lambda c: len(c.atoms))
-            result.append(Interpretation(task, largest, log_prior_t, _roles(task, largest, state, library, described, starts, relation_words, relations)))
+            roles = _roles(task, largest, state, library, described, starts, relation_words, relations, bystander_roles)
+            result.append(Interpretation(task, largest, log_prior_t, roles))
             continue
         for constraint in constraints:
             result.append(
@@ -261,7 +287,8 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
                     task,
                     constraint,
                     log_prior_t - math.log(len(constraints)),
-                    _roles(task, constraint, state, library, described, starts, relation_words, relations),
+                    _roles(task, constraint, state, library, described, starts, relation_words, relations,
+                           bystander_roles),
                 )
             )
     return result

@@ -10,7 +10,7 @@ import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import Batch
+from groundlang.model.encoding import Batch, PhraseKeys
 
 __all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
            "token_words"]
@@ -25,11 +25,13 @@ class LanguageModel:
     # Whether training starts from the bag of words' word distributions: an alignment model's MAP from a
     # flat start lands in poor local optima, as IBM Model 2 is classically started from Model 1.
     starts_from_bag_of_words = True
-    # What the interpretations offer (model.interpretations.interpretations); the parse model has both
-    # as settings.
+    # What the interpretations offer (model.interpretations.interpretations); the parse model has these
+    # as settings, and its preposition keys' marks (phrase_keys).
     relation_words = False
     held_parts = False
     relational_descriptions = False
+    start_role = True
+    bystander_roles = True
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
@@ -47,6 +49,10 @@ class LanguageModel:
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
                 "schema_names": self.schema_names}
+
+    def phrase_keys(self) -> PhraseKeys:
+        """The marks of the noun phrases' preposition keys this model's batches are encoded with."""
+        return PhraseKeys()
 
     def sample_globals(
         self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),

@@ -32,7 +32,7 @@ import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import CLAUSE_ARITY_BINS, PAD_LOGIT, Batch
+from groundlang.model.encoding import CLAUSE_ARITY_BINS, PAD_LOGIT, Batch, PhraseKeys
 from groundlang.model.language_model_base import (NULL_MIXTURE, LanguageModel, gather_mixtures,
                                                   mixture_log_emissions, require_positive)
 from groundlang.model.relational import is_relational_role
@@ -62,6 +62,11 @@ class ParseAligned(LanguageModel):
         held_parts: bool = True,
         relational_descriptions: bool = False,
         schema_names: bool = False,
+        last_phrase_key: bool = True,
+        object_key: bool = True,
+        last_passes_over_source: bool = True,
+        start_role: bool = True,
+        bystander_roles: bool = True,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -87,8 +92,12 @@ class ParseAligned(LanguageModel):
         come back to the green room"); a demonstration that never breaks it rules the reading out
         (``interpretations.unbroken_held_parts``). ``relational_descriptions``: a bystander related to an object the task binds by a PF of two objects (a toy in the goal room)
         is offered in a role named by that relation, so "the room *with the red chair*" can say which
-        room (``model.relational``). ``schema_names``: see :class:`LanguageModel`. What each measured:
-        ABLATIONS.md."""
+        room (``model.relational``). ``last_phrase_key``, ``object_key``, ``last_passes_over_source``: the
+        marks of a phrase's preposition key (``phrase_keys.PhraseKeys`` says the regularity each states).
+        ``start_role``: the room the agent starts in has a role of its own ("go *from the orange room*");
+        ``bystander_roles``: objects the task leaves alone have one role per class (``other:room``), not
+        one for all (``interpretations.interpretations``). ``schema_names``: see
+        :class:`LanguageModel`. What each measured: ABLATIONS.md."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
                              f"not {mention_phrases!r}")
@@ -112,6 +121,14 @@ class ParseAligned(LanguageModel):
         self.preposition_concentration = preposition_concentration
         self.held_parts = held_parts
         self.relational_descriptions = relational_descriptions
+        self.last_phrase_key = last_phrase_key
+        self.object_key = object_key
+        self.last_passes_over_source = last_passes_over_source
+        self.start_role = start_role
+        self.bystander_roles = bystander_roles
+
+    def phrase_keys(self) -> PhraseKeys:
+        return PhraseKeys(self.last_phrase_key, self.object_key, self.last_passes_over_source)
 
     def settings(self) -> dict:
         return {
@@ -128,6 +145,11 @@ class ParseAligned(LanguageModel):
             "held_parts": self.held_parts,
             "relational_descriptions": self.relational_descriptions,
             "schema_names": self.schema_names,
+            "last_phrase_key": self.last_phrase_key,
+            "object_key": self.object_key,
+            "last_passes_over_source": self.last_passes_over_source,
+            "start_role": self.start_role,
+            "bystander_roles": self.bystander_roles,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=(),

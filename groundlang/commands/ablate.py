@@ -1,4 +1,5 @@
-"""``groundlang ablate --corpus DIR --palette NAME --labels CSV [--language-models ...] [--sizes ...] ...``."""
+"""``groundlang ablate --corpus DIR --palette NAME --labels CSV [--language-models ...] [--sizes ...] ...``, or
+``groundlang ablate --held-out-likelihood --corpus DIR --palette NAME --switch NAME [--switch NAME=VALUE ...]``."""
 
 from __future__ import annotations
 
@@ -25,13 +26,30 @@ def _sizes(text: str) -> list[int]:
     return sizes
 
 
+def _at_least_two(text: str) -> int:
+    value = positive_int(text)
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"expected a whole number of 2 or more, not {text!r}")
+    return value
+
+
 def register(subparsers) -> None:
-    p = subparsers.add_parser("ablate", help="accuracy over language models x task libraries x training sizes")
+    p = subparsers.add_parser("ablate", help="accuracy over language models x task libraries x training sizes, "
+                                             "or held-out likelihood of settings switched")
     p.add_argument("--corpus", required=True, metavar="DIR", help="folder of corpus files (*.txt)")
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
-    p.add_argument("--labels", required=True, metavar="CSV", help="gold labels (prefix,goal) the corpus is scored against")
-    p.add_argument("--language-models", type=_names, default=["bow", "ibm2", "parse"], metavar="LIST",
-                   help="comma-separated: bow,ibm2,parse (default: all three)")
+    p.add_argument("--labels", metavar="CSV",
+                   help="gold labels (prefix,goal) the corpus is scored against (not with --held-out-likelihood)")
+    p.add_argument("--language-models", type=_names, metavar="LIST",
+                   help="comma-separated: bow,ibm2,parse (default: all three; with --held-out-likelihood one, parse)")
+    p.add_argument("--held-out-likelihood", action="store_true",
+                   help="instead of the grid: per --switch, the held-out log-likelihood of words and demonstrations "
+                        "(and of words alone) with the default and with the other value (no labels used)")
+    p.add_argument("--switch", action="append", default=[], metavar="NAME[=VALUE]", dest="switches",
+                   help="with --held-out-likelihood: a setting of the language model to switch; NAME alone for a "
+                        "true/false setting (its other value), else NAME=VALUE (repeatable)")
+    p.add_argument("--folds", type=_at_least_two, default=10,
+                   help="with --held-out-likelihood: folds, instance n in fold n mod FOLDS (default 10)")
     p.add_argument("--libraries", type=_names, default=["authored", "discovered"], metavar="LIST",
                    help="comma-separated: authored,discovered (default: both)")
     p.add_argument("--sizes", type=_sizes, metavar="LIST",
@@ -72,6 +90,37 @@ def write_plot(result, path: Path) -> None:
     write_atomically(path, buffer.getvalue())
 
 
+def run_held_out(args: argparse.Namespace, words: dict) -> int:
+    """``--held-out-likelihood``: the table of :func:`groundlang.held_out.format_switches`."""
+    from groundlang.corpus import read_corpus
+    from groundlang.held_out import compare_switches, format_switches, switch_settings
+
+    models = args.language_models or ["parse"]
+    if len(models) != 1:
+        raise ValueError(f"--held-out-likelihood: name one language model, not {','.join(models)}")
+    if not args.switches:
+        raise ValueError("--held-out-likelihood: name at least one --switch, e.g. --switch start_role")
+    base = language_model_settings(args.lm_settings)
+    for switch in args.switches:
+        switch_settings(models[0], switch, base)  # every switch checked before the corpus is read
+    corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
+    rows = compare_switches(corpus.instances, args.switches, models[0], args.folds,
+                            {"lexicon": words} if words else None, base)
+    print(f"{args.folds}-fold held-out log-likelihood (nats), {len(corpus.instances)} instances, "
+          f"language model {models[0]}")
+    print(format_switches(rows))
+    if args.json:
+        from groundlang.logic.storage import write_atomically
+
+        data = [{"setting": r.setting, "default": r.default, "value": r.value, "favours": r.favours,
+                 "default_joint": r.on.joint, "value_joint": r.off.joint, "default_words": r.on.words,
+                 "value_words": r.off.words} for r in rows]
+        write_atomically(Path(args.json), json.dumps({"folds": args.folds, "n": len(corpus.instances),
+                                                      "rows": data}, indent=1).encode("utf-8"))
+        print(f"rows written to {args.json}")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     from groundlang.ablation import run_ablation
     from groundlang.corpus import read_corpus
@@ -85,11 +134,21 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.render import check_picture_destination
 
         check_picture_destination(args.plot, "--plot")
+    if args.held_out_likelihood and (args.labels or args.plot or args.sizes):
+        raise ValueError("--held-out-likelihood uses no --labels, --plot or --sizes")
+    if not args.held_out_likelihood:
+        if args.switches:
+            raise ValueError("--switch needs --held-out-likelihood (the grid takes --lm-setting)")
+        if not args.labels:
+            raise ValueError("--labels is required (except with --held-out-likelihood)")
     words = extra_words(args.lexicon)  # read once here: a bad file is one error line, workers get the words
+    if args.held_out_likelihood:
+        return run_held_out(args, words)
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)
     result = run_ablation(
-        corpus, labels, language_models=args.language_models, libraries=args.libraries, sizes=args.sizes,
+        corpus, labels, language_models=args.language_models or ["bow", "ibm2", "parse"], libraries=args.libraries,
+        sizes=args.sizes,
         protocol=args.protocol, seed=args.seed, workers=args.workers, ray_address=args.ray,
         progress=args.progress, limit=args.limit, language_model_settings=language_model_settings(args.lm_settings),
         learner_options={"lexicon": words} if words else None,
