@@ -20,7 +20,7 @@ from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import group_goals
 from groundlang.goal_plans import plan_for_goal, planning_space
-from groundlang.inference.joint import FitResult, fit_globals, posterior
+from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings
 from groundlang.inference.shared_meaning import end_state_behaviour
@@ -271,9 +271,12 @@ class Learner:
         self._check_state("posterior", command, state)
         obs = self._command_observation(command, state)
         batch = encode([obs], self.vocab, self.lm.phrase_keys())
-        probs = posterior(batch, self.lm, self.globals, use_behaviour=False)[0]
+        # The interpretation and the reading: the two sites the model enumerates per command.
+        probs, structures = local_posteriors(batch, self.lm, self.globals, use_behaviour=False)
+        probs = probs[0]
         J = len(obs.interpretations)
-        reading_probs = self.lm.reading_probabilities(self.globals, batch, [r.probability for r in obs.readings])
+        reading_probs = None if structures is None else per_parser_reading(
+            structures[0], batch, [r.probability for r in obs.readings])
         post = Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
                          list(obs.readings), reading_probs)
         post.groups = group_goals(post.goals(), self._space(state), self.library)

@@ -14,6 +14,7 @@ import logging
 from contextlib import contextmanager
 from dataclasses import dataclass
 
+import numpy as np
 import pyro
 import pyro.distributions as dist
 import torch
@@ -24,12 +25,12 @@ from pyro import poutine
 from pyro.poutine.util import site_is_subsample
 
 from groundlang.model.encoding import Batch
-from groundlang.model.generative import global_sizes, instance_model
+from groundlang.model.generative import LOCAL_SITES, global_sizes, instance_model
 from groundlang.model.language_models import LanguageModel
 from groundlang.model.vocabulary import Vocabulary
 
-__all__ = ["FitResult", "fit_globals", "log_joint", "posterior", "posterior_by_enumeration", "prior_concentrations",
-           "single_threaded"]
+__all__ = ["FitResult", "fit_globals", "log_joint", "posterior", "local_posteriors", "posterior_by_enumeration",
+           "posteriors_by_enumeration", "per_parser_reading", "prior_concentrations", "single_threaded"]
 
 log = logging.getLogger(__name__)
 
@@ -106,7 +107,7 @@ def fit_globals(
 
 def _global_sites(model) -> dict:
     """The model's global sample sites and their prior distributions."""
-    trace = poutine.trace(poutine.block(model, hide=["z"])).get_trace()
+    trace = poutine.trace(poutine.block(model, hide=list(LOCAL_SITES))).get_trace()
     return {
         name: site["fn"].base_dist if isinstance(site["fn"], dist.Independent) else site["fn"]
         for name, site in trace.nodes.items()
@@ -179,7 +180,7 @@ def _fit_em(model, sites, lm, steps, init, tol, progress) -> FitResult:
 
 def _fit_svi(model, lm, steps, lr, init, tol, optimizer, progress) -> FitResult:
     init_fn = init_to_value(values=init, fallback=init_to_mean) if init else init_to_mean
-    guide = AutoDelta(poutine.block(model, hide=["z"]), init_loc_fn=init_fn)
+    guide = AutoDelta(poutine.block(model, hide=list(LOCAL_SITES)), init_loc_fn=init_fn)
     elbo = TraceEnum_ELBO(max_plate_nesting=1)
     losses: list[float] = []
     converged = False
@@ -230,26 +231,65 @@ def posterior(
     batch: Batch, lm: LanguageModel, g: dict[str, torch.Tensor], use_behaviour: bool = True
 ) -> torch.Tensor:
     """``P(z_i = j | words, behaviour)`` as ``[I, J]`` (0 on padding)."""
+    return local_posteriors(batch, lm, g, use_behaviour)[0]
+
+
+def local_posteriors(batch: Batch, lm: LanguageModel, g: dict[str, torch.Tensor], use_behaviour: bool = True
+                     ) -> tuple[torch.Tensor, torch.Tensor | None]:
+    """The posteriors of the sites :func:`instance_model` enumerates per instance, from its own terms
+    summed exactly: ``P(z_i = j | words[, behaviour])`` ``[I, J]`` (0 on padding) and, for a language
+    model that reads parses (``words_by_reading``), ``P(reading s | words[, behaviour])`` ``[I, S]`` over
+    the merged structures of the parser's readings (else None). Pyro's own enumeration gives the same
+    (:func:`posteriors_by_enumeration`, a test)."""
     with torch.no_grad():
-        logits = batch.log_prior + lm.log_likelihood(g, batch)
-        if use_behaviour:
-            logits = logits + batch.behaviour
-        return torch.softmax(logits, dim=-1) * batch.mask
+        logits = batch.log_prior + (batch.behaviour if use_behaviour else 0.0)  # [I, J]
+        by_reading = lm.words_by_reading(g, batch)
+        if by_reading is None:
+            return torch.softmax(logits + lm.log_likelihood(g, batch), dim=-1) * batch.mask, None
+        table, reading_logits = by_reading  # [I, J, S], [I, S]
+        joint = logits[:, :, None] + table + reading_logits[:, None, :]
+        joint = joint.masked_fill(~batch.mask[:, :, None], float("-inf"))
+        norm = torch.logsumexp(joint.flatten(1), dim=-1)[:, None]
+        z = (torch.logsumexp(joint, dim=2) - norm).exp() * batch.mask
+        return z, (torch.logsumexp(joint, dim=1) - norm).exp()
 
 
-def posterior_by_enumeration(
-    batch: Batch, lm: LanguageModel, vocab: Vocabulary, g: dict[str, torch.Tensor], use_behaviour: bool = True
-) -> torch.Tensor:
-    """The same posterior read off Pyro's ``compute_marginals`` (a cross-check)."""
+def _marginals(batch: Batch, lm: LanguageModel, vocab: Vocabulary, g: dict[str, torch.Tensor],
+               use_behaviour: bool) -> dict[str, torch.Tensor]:
+    """Pyro's ``compute_marginals`` of the enumerated sites of :func:`instance_model`, globals fixed, as
+    probabilities ``[I, values]`` per site."""
+    I = batch.num_instances
     sizes = global_sizes(vocab)
 
     def model():
         return instance_model(batch, lm, sizes, use_behaviour)
 
+    # (Not under no_grad: Pyro computes the marginals by differentiating the log normaliser.)
     conditioned = poutine.condition(model, data=g)
+    marginals = TraceEnum_ELBO(max_plate_nesting=1).compute_marginals(conditioned, _empty_guide)
+    return {name: d.probs.detach().reshape(I, -1) for name, d in marginals.items()}
 
-    def guide():
-        pass
 
-    marginals = TraceEnum_ELBO(max_plate_nesting=1).compute_marginals(conditioned, guide)
-    return marginals["z"].probs.detach() * batch.mask
+def posterior_by_enumeration(
+    batch: Batch, lm: LanguageModel, vocab: Vocabulary, g: dict[str, torch.Tensor], use_behaviour: bool = True
+) -> torch.Tensor:
+    """The same posterior as :func:`posterior`, read off Pyro's ``compute_marginals`` (a cross-check)."""
+    return _marginals(batch, lm, vocab, g, use_behaviour)["z"] * batch.mask
+
+
+def posteriors_by_enumeration(batch: Batch, lm: LanguageModel, vocab: Vocabulary, g: dict[str, torch.Tensor],
+                              use_behaviour: bool = False) -> tuple[torch.Tensor, torch.Tensor | None]:
+    """:func:`local_posteriors` read off Pyro's ``compute_marginals`` of the enumerated sites (a
+    cross-check: Pyro's contraction loses a plate or an enumerated site of size 1, so the batch needs
+    two instances and two structures)."""
+    marginals = _marginals(batch, lm, vocab, g, use_behaviour)
+    return marginals["z"] * batch.mask, marginals.get("reading")
+
+
+def per_parser_reading(structure: torch.Tensor, batch: Batch, prior) -> np.ndarray:
+    """Spread ``P(s | words)`` ``[S]`` of one command over its parser readings, whose prior probabilities
+    are ``prior``, by each reading's share of its merged structure's prior (``batch.reading_group``)."""
+    group = batch.reading_group[0, : len(prior)].numpy()
+    prior = np.asarray(prior, dtype=float)
+    share = prior / np.bincount(group, weights=prior)[group]
+    return structure.numpy()[group] * share

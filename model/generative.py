@@ -21,7 +21,11 @@ from groundlang.model.encoding import Batch
 from groundlang.model.language_models import LanguageModel
 from groundlang.model.vocabulary import Vocabulary
 
-__all__ = ["instance_model", "global_sizes"]
+__all__ = ["instance_model", "global_sizes", "LOCAL_SITES"]
+
+# The sites enumerated per instance (the rest are the globals): the interpretation, and the reading
+# for a language model that reads parses.
+LOCAL_SITES = ("z", "reading")
 
 
 def global_sizes(vocab: Vocabulary) -> dict:
@@ -39,9 +43,17 @@ def global_sizes(vocab: Vocabulary) -> dict:
 
 
 def instance_model(batch: Batch, lm: LanguageModel, sizes: dict, use_behaviour: bool = True) -> torch.Tensor:
-    """The Pyro model; returns the words table ``[I, J]`` for inspection."""
+    """The Pyro model; returns the words table ``[I, J]`` for inspection.
+
+    For a language model that reads parses (``words_by_reading``), the reading is a site too, given
+    the interpretation, enumerated with it."""
     g = lm.sample_globals(**sizes)
-    words_ll = lm.log_likelihood(g, batch)  # [I, J]
+    by_reading = lm.words_by_reading(g, batch)
+    if by_reading is None:
+        words_ll = lm.log_likelihood(g, batch)  # [I, J]
+    else:
+        table, reading_logits = by_reading  # [I, J, S], [I, S]
+        words_ll = torch.logsumexp(table + reading_logits[:, None, :], dim=-1)
     I = batch.num_instances
     idx = torch.arange(I)
     with pyro.plate("instances", I, dim=-1):
@@ -50,5 +62,10 @@ def instance_model(batch: Batch, lm: LanguageModel, sizes: dict, use_behaviour: 
         )
         if use_behaviour:
             pyro.factor("behaviour", Vindex(batch.behaviour)[idx, z])
-        pyro.factor("words", Vindex(words_ll)[idx, z])
+        if by_reading is None:
+            pyro.factor("words", Vindex(words_ll)[idx, z])
+        else:
+            reading = pyro.sample("reading", dist.Categorical(logits=reading_logits),
+                                  infer={"enumerate": "parallel"})
+            pyro.factor("words", Vindex(table)[idx, z, reading])
     return words_ll

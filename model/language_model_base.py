@@ -3,9 +3,7 @@ mixtures of tokens words are emitted from (``model.language_models`` lists the m
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 
-import numpy as np
 import pyro
 import pyro.distributions as dist
 import torch
@@ -77,9 +75,11 @@ class LanguageModel:
         """``log P(words_i | interpretation j)`` as ``[I, J]``, readings and alignments summed out."""
         raise NotImplementedError
 
-    def reading_probabilities(self, g: dict, batch: Batch, prior: Sequence[float]) -> np.ndarray | None:
-        """``P(reading | words)`` for the one command of ``batch``, whose parser readings have prior
-        probabilities ``prior``; None for a model that reads no parse."""
+    def words_by_reading(self, g: dict, batch: Batch) -> tuple[torch.Tensor, torch.Tensor] | None:
+        """For a model that reads the parser's readings: ``log P(words_i | j, reading s)`` as ``[I, J, S]``
+        and the readings' prior logits ``[I, S]`` (the parser's, merged by structure), so the reading
+        is a Pyro site of the generative model (``model.generative.instance_model``) and its posterior
+        is Pyro's (``inference.joint.reading_posterior``). None (the default): no reading."""
         return None
 
 

@@ -95,7 +95,7 @@ def register_language_model(model: type[LanguageModel]) -> type[LanguageModel]:
     """Make a language model available by its ``name`` (``Learner("mine")``, saved models, ablations);
     usable as a class decorator. A model is a :class:`LanguageModel` subclass: its globals as Pyro
     sites (``sample_globals``), ``log P(words | interpretation)`` (``log_likelihood``) and, if it
-    reads parses, ``reading_probabilities``. ValueError for a name taken by another model."""
+    reads parses, ``words_by_reading``. ValueError for a name taken by another model."""
     if not (isinstance(model, type) and issubclass(model, LanguageModel)) or model is LanguageModel:
         raise TypeError(f"register_language_model: expected a LanguageModel subclass, got {model!r}")
     known = LANGUAGE_MODELS.get(model.name)

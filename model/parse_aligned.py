@@ -24,9 +24,7 @@ roles its interpretations can offer (``Vocabulary.task_roles``). What each part 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
 
-import numpy as np
 
 import pyro
 import pyro.distributions as dist
@@ -211,19 +209,9 @@ class ParseAligned(LanguageModel):
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
         return self.reading_table(g, batch)[0]
 
-    def reading_probabilities(self, g: dict, batch: Batch, prior: Sequence[float]) -> np.ndarray:
-        with torch.no_grad():
-            _, per_reading, _ = self.reading_table(g, batch)  # [1, J, S]: log P(words, s | j), merged structures s
-            J = int(batch.mask[0].sum())
-            joint = per_reading[0, :J] + batch.log_prior[0, :J, None]
-            structure = torch.softmax(torch.logsumexp(joint, 0), 0).numpy()  # P(s | words)
-        group = batch.reading_group[0, : len(prior)].numpy()
-        prior = np.asarray(prior, dtype=float)
-        share = prior / np.bincount(group, weights=prior)[group]  # a reading's share of its structure
-        return structure[group] * share
-
-    def reading_table(self, g: dict, batch: Batch):
-        """``(log P(words | j) [I, J], per reading [I, J, R], per type and role [I, J, V, K])``.
+    def _words_given_reading(self, g: dict, batch: Batch):
+        """``(log P(words | j, s) [I, J, S] per merged structure s of the parser's readings, per type and
+        role [I, J, V, K])``.
 
         A noun phrase of type k aligns with role v with probability
         ``align[prep_k, role_v]`` (with ``align_backoff``, a mixture of that and
@@ -273,7 +261,7 @@ class ParseAligned(LanguageModel):
         verb_words = torch.logsumexp(both + g["verb_source"].log(), dim=-1)
         frame = torch.einsum("iju,iru->ijr", frame_words, batch.frame_counts)
         verbs = torch.einsum("iju,iru->ijr", verb_words, batch.verb_counts)
-        per_reading = entities + frame + verbs + batch.reading_logp[:, None, :]
+        per_reading = entities + frame + verbs
         if "arity" in g:
             arity = g["arity"].clamp_min(1e-30).log()
             # Each clause's number of noun phrases given L: a command's length is its number of clauses,
@@ -289,7 +277,20 @@ class ParseAligned(LanguageModel):
                                                             batch.type_preposition.clamp_min(0)[:, None, :]]
             keys = keys * (batch.type_mask & said)[:, None, :]  # [I, J, K]
             per_reading = per_reading + torch.einsum("ijk,irk->ijr", keys, batch.reading_types)
-        return torch.logsumexp(per_reading, dim=-1), per_reading, joint
+        return per_reading, joint
+
+    def reading_table(self, g: dict, batch: Batch):
+        """``(log P(words | j) [I, J], log P(words, s | j) per merged structure s [I, J, S], per type and role
+        [I, J, V, K])``: :meth:`words_by_reading` with the readings' prior, summed over readings too."""
+        per_reading, joint = self._words_given_reading(g, batch)
+        with_prior = per_reading + batch.reading_logp[:, None, :]
+        return torch.logsumexp(with_prior, dim=-1), with_prior, joint
+
+    def words_by_reading(self, g: dict, batch: Batch):
+        # A padded structure's words carry PAD_LOGIT, not 0: Pyro sums an enumerated site in log space
+        # shifted by its largest term, and a padded 0 would shift a real -150 to nothing.
+        padded = batch.reading_logp <= PAD_LOGIT
+        return self._words_given_reading(g, batch)[0].masked_fill(padded[:, None, :], PAD_LOGIT), batch.reading_logp
 
     @staticmethod
     def _mentions(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.Tensor,

@@ -45,7 +45,8 @@ def test_a_switch_is_compared_with_the_defaults(examples):
     assert row.on.joint == pytest.approx(held_out_likelihood(examples, folds=3).joint)
     assert row.off.joint == pytest.approx(held_out_likelihood(examples, settings={"object_key": False}, folds=3).joint)
     assert row.off.words != pytest.approx(row.on.words)  # the keys of "take the star to ..." changed
-    assert row.favours == ("other" if row.off.joint > row.on.joint else "default")
+    assert row.favours == ("other" if row.off.demonstrations > row.on.demonstrations else "default")
+    assert row.on.demonstrations == pytest.approx(row.on.joint - row.on.words)
 
 
 @pytest.mark.parametrize("switch, message", [
@@ -74,6 +75,7 @@ def test_cli_prints_and_writes_the_table(tmp_path, capsys):
     (row,) = data["rows"]
     assert (data["folds"], row["setting"], row["default"], row["value"]) == (3, "start_role", True, False)
     assert f"{row['default_joint']:.1f}" in printed and f"{row['value_joint']:.1f}" in printed
+    assert f"{row['default_demonstrations']:.1f}" in printed and f"{row['value_demonstrations']:.1f}" in printed
     assert printed.splitlines()[-2].endswith(row["favours"])
 
 

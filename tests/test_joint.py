@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 import torch
 
 from groundlang.corpus import example_corpus_path, read_corpus
-from groundlang.inference.joint import fit_globals, posterior, posterior_by_enumeration
+from groundlang.inference.joint import (_log_joint, fit_globals, local_posteriors, posterior,
+                                       posterior_by_enumeration, posteriors_by_enumeration)
+from groundlang.model.generative import global_sizes, instance_model
 from groundlang.learner import Learner
 from groundlang.model.encoding import encode
 from groundlang.model.language_models import BagOfWords, get_language_model
@@ -91,3 +95,55 @@ def test_unknown_language_model_and_optimizer_are_clear_errors(example):
         get_language_model("lstm")
     with pytest.raises(ValueError, match="unknown optimizer"):
         fit_globals(encode(observations[:2], learner.vocab), learner.lm, learner.vocab, optimizer="sgd")
+
+
+def _brute_force(batch, lm, g, use_behaviour):
+    """P(z = j), P(reading = s) per instance by listing every (j, s) of the model's terms."""
+    table, reading_logits = lm.words_by_reading(g, batch)
+    z_out, s_out = torch.zeros(batch.mask.shape), torch.zeros(reading_logits.shape)
+    for i in range(batch.num_instances):
+        readings = torch.log_softmax(reading_logits[i], -1)
+        weights = {}
+        for j in range(int(batch.mask[i].sum())):
+            for s in range(reading_logits.shape[1]):
+                term = batch.log_prior[i, j] + readings[s] + table[i, j, s]
+                weights[j, s] = float(term + (batch.behaviour[i, j] if use_behaviour else 0.0))
+        top = max(weights.values())
+        total = sum(math.exp(w - top) for w in weights.values())
+        for (j, s), w in weights.items():
+            z_out[i, j] += math.exp(w - top) / total
+            s_out[i, s] += math.exp(w - top) / total
+    return z_out, s_out
+
+
+@pytest.mark.parametrize("use_behaviour", [True, False])
+def test_the_reading_site_posterior_equals_brute_force_and_pyro(example, use_behaviour):
+    _, learner, observations = example
+    batch = encode(observations, learner.vocab)
+    assert batch.reading_logp.shape[1] >= 2  # two structures at least, or there is no reading to infer
+    z, readings = local_posteriors(batch, learner.lm, learner.globals, use_behaviour)
+    z_brute, readings_brute = _brute_force(batch, learner.lm, learner.globals, use_behaviour)
+    z_pyro, readings_pyro = posteriors_by_enumeration(batch, learner.lm, learner.vocab, learner.globals, use_behaviour)
+    assert torch.allclose(z, z_brute, atol=1e-5) and torch.allclose(readings, readings_brute, atol=1e-5)
+    assert torch.allclose(z_pyro, z_brute, atol=1e-4) and torch.allclose(readings_pyro, readings_brute, atol=1e-4)
+    several = (readings_brute > 0.01).sum(-1) > 1
+    assert several.any()  # the test reads commands whose reading the words leave open
+
+
+def test_the_reading_site_leaves_the_training_objective_as_the_summed_readings(example):
+    # With the reading a site, the log joint is the one with readings summed inside the words term, up to
+    # the constant that normalises the parser's probabilities of each command's merged structures.
+    _, learner, observations = example
+    batch = encode(observations, learner.vocab)
+    sizes = global_sizes(learner.vocab)
+    g = {k: v.clone().requires_grad_(True) for k, v in learner.globals.items()}
+    with_site = _log_joint(lambda: instance_model(batch, learner.lm, sizes), g).item()
+
+    class Summed(type(learner.lm)):
+        def words_by_reading(self, g, batch):
+            return None
+
+    summed = Summed(**learner.lm.settings())
+    by_hand = _log_joint(lambda: instance_model(batch, summed, sizes), g).item()
+    constant = float(torch.logsumexp(batch.reading_logp, -1).sum())
+    assert with_site == pytest.approx(by_hand - constant, rel=1e-5)

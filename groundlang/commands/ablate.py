@@ -43,8 +43,9 @@ def register(subparsers) -> None:
     p.add_argument("--language-models", type=_names, metavar="LIST",
                    help="comma-separated: bow,ibm2,parse (default: all three; with --held-out-likelihood one, parse)")
     p.add_argument("--held-out-likelihood", action="store_true",
-                   help="instead of the grid: per --switch, the held-out log-likelihood of words and demonstrations "
-                        "(and of words alone) with the default and with the other value (no labels used)")
+                   help="instead of the grid: per --switch, the held-out log-likelihood of the demonstrations given "
+                        "the words (what chooses), of words and demonstrations and of words alone, with the default "
+                        "and with the other value (no labels used)")
     p.add_argument("--switch", action="append", default=[], metavar="NAME[=VALUE]", dest="switches",
                    help="with --held-out-likelihood: a setting of the language model to switch; NAME alone for a "
                         "true/false setting (its other value), else NAME=VALUE (repeatable)")
@@ -114,7 +115,8 @@ def run_held_out(args: argparse.Namespace, words: dict) -> int:
 
         data = [{"setting": r.setting, "default": r.default, "value": r.value, "favours": r.favours,
                  "default_joint": r.on.joint, "value_joint": r.off.joint, "default_words": r.on.words,
-                 "value_words": r.off.words} for r in rows]
+                 "value_words": r.off.words, "default_demonstrations": r.on.demonstrations,
+                 "value_demonstrations": r.off.demonstrations} for r in rows]
         write_atomically(Path(args.json), json.dumps({"folds": args.folds, "n": len(corpus.instances),
                                                       "rows": data}, indent=1).encode("utf-8"))
         print(f"rows written to {args.json}")
