@@ -23,6 +23,7 @@ class DomainClasses:
     classes: tuple[str, ...]
     movable: frozenset[str]
     addressee: frozenset[str]
+    kinds: frozenset[str] = frozenset()  # attributes whose values name kinds of things (``kind/1``)
 
     @property
     def mentioned(self) -> frozenset[str]:
@@ -32,10 +33,11 @@ class DomainClasses:
 
 @lru_cache(maxsize=1)
 def domain_classes() -> DomainClasses:
-    """``class/1``, ``class_rank/2``, ``movable/1`` and ``addressee/1`` of ``domain.lp``, solved once."""
-    show = Source("groundlang.logic.classes", "#show class/1. #show class_rank/2. #show movable/1. #show addressee/1.")
-    found: dict[str, dict[str, int]] = {"class": {}, "class_rank": {}, "movable": {}, "addressee": {}}
+    """``class/1``, ``class_rank/2``, ``movable/1``, ``addressee/1`` and ``kind/1`` of ``domain.lp``, solved once."""
+    show = Source("groundlang.logic.classes",
+                  "#show class/1. #show class_rank/2. #show movable/1. #show addressee/1. #show kind/1.")
+    found: dict[str, dict[str, int]] = {"class": {}, "class_rank": {}, "movable": {}, "addressee": {}, "kind": {}}
     for sym in Program((package_source("domain.lp"), show)).solve(models=1)[0]:
         found[sym.name][str(sym.arguments[0])] = sym.arguments[1].number if sym.name == "class_rank" else 0
     return DomainClasses(ranked(found["class"], found["class_rank"]), frozenset(found["movable"]),
-                         frozenset(found["addressee"]))
+                         frozenset(found["addressee"]), frozenset(found["kind"]))

@@ -184,7 +184,7 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         obj = binding[var.name]
         about = described.get(obj, {})
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())
-        bindings.append(RoleBinding(role, obj, var.cls, said + relation, about.get("shape", ()) + relation))
+        bindings.append(RoleBinding(role, obj, var.cls, said + relation, _kinds(about) + relation))
     bound = set(binding.values())
     classes = {name: cls for cls, name, _ in state.layout.objects}
     links = relational_links([(binding[v.name], r) for v, r in zip(lifted.variables, task_roles(lifted))], relations,
@@ -196,11 +196,11 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
             about = described.get(obj, {})
             said = tuple(name for names in about.values() for name in names)
             if obj in start_set:
-                bindings.append(RoleBinding(START_ROLE, obj, cls, said, about.get("shape", ())))
+                bindings.append(RoleBinding(START_ROLE, obj, cls, said, _kinds(about)))
                 if start_known:
                     continue
             other = f"other:{cls}" if by_class or cls in UNALIGNED_CLASSES else BYSTANDER_ROLE
-            bindings.append(RoleBinding(links.get(obj, other), obj, cls, said, about.get("shape", ())))
+            bindings.append(RoleBinding(links.get(obj, other), obj, cls, said, _kinds(about)))
     return tuple(bindings)
 
 
@@ -322,3 +322,9 @@ def without_unbroken_held_parts(groups: Sequence[Sequence[Interpretation]], beha
         kept_groups.append([i for i, o in zip(group, out) if not o])
         kept_values.append([v for v, o in zip(values, out) if not o])
     return kept_groups, kept_values
+
+
+def _kinds(about: dict[str, tuple[str, ...]]) -> tuple[str, ...]:
+    """The PFs of an object's attributes whose values name kinds (``kind/1`` of ``domain.lp``: a toy's shape),
+    which a head noun may say besides its class."""
+    return tuple(pf for attribute in sorted(domain_classes().kinds) for pf in about.get(attribute, ()))

@@ -20,7 +20,7 @@ interpretation are unchanged. An object related to several bound objects takes t
 the order of the task's variables, then of PF name and argument index. The role names a lifted task
 can offer are at most (its variables) x (PFs of two objects) x 2, listed by :func:`relational_roles`.
 Rooms and doors keep their own descriptions: described by a relation to a bound toy (the room the
-star starts in), they lost the crowd corpus 35 of 720 executions in novel layouts (ABLATIONS.md).
+star starts in), they lost executions in novel layouts of the crowd corpus (ABLATIONS.md).
 """
 
 from __future__ import annotations
