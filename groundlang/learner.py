@@ -173,8 +173,11 @@ class Learner:
             tables = [library_pf_tables(inst.initial_state.layout, self.library) for inst in instances]
             interps, behaviour = without_unbroken_held_parts(interps, behaviour, [i.states for i in instances], tables)
         observations = []
+        parsed: dict[str, tuple] = {}  # a text said again is parsed once
         for inst, group, values in zip(instances, interps, behaviour):
-            readings = tuple(parse(inst.command, word_lexicon=self.word_lexicon))
+            if inst.command not in parsed:
+                parsed[inst.command] = tuple(parse(inst.command, word_lexicon=self.word_lexicon))
+            readings = parsed[inst.command]
             observations.append(
                 Observation(
                     tuple(readings[0].logical_form.words),
