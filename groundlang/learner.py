@@ -27,10 +27,10 @@ from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
-from groundlang.model.encoding import Batch, Observation, encode, token_exclusions
+from groundlang.model.encoding import Batch, Observation, encode
 from groundlang.model.interpretations import Interpretation, interpretations, without_unbroken_held_parts
 from groundlang.model.pf_tables import library_pf_tables
-from groundlang.model.language_model_base import token_words
+from groundlang.model.language_model_base import word_meanings
 from groundlang.model.language_models import BagOfWords, LanguageModel, get_language_model
 from groundlang.model.relevance import check_abstraction_possible, exact_fits
 from groundlang.model.statespace import StateSpace
@@ -364,19 +364,7 @@ class Learner:
         distribution and is left out, so that it does not dilute the table.
         """
         self._require_fitted()
-        # What a token says: its learned words, and its name under ``schema_names``.
-        phi = token_words(self.globals, torch.tensor(self.vocab.token_names()), token_exclusions(self.vocab),
-                          torch.tensor(self.vocab.token_families()))  # [S, W]
-        learned = phi.max(-1).values > 3.0 / phi.shape[1]
-        meaning = phi * learned[:, None]
-        meaning = meaning / meaning.sum(0, keepdim=True).clamp_min(1e-30)
-        out = {}
-        for w, word in enumerate(self.vocab.words[1:], start=1):
-            if word in self.vocab.aliases:
-                continue  # read as another word: its own column was never trained
-            order = torch.argsort(meaning[:, w], descending=True)[:top]
-            out[word] = [(self.vocab.tokens[int(s)], float(meaning[s, w])) for s in order]
-        return out
+        return word_meanings(self.globals, self.vocab, top)
 
     # ----------------------------------------------------------------- persistence
     def state_dict(self) -> dict:

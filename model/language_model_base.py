@@ -8,10 +8,10 @@ import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import Batch, PhraseKeys
+from groundlang.model.encoding import Batch, PhraseKeys, token_exclusions
 
 __all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
-           "token_words"]
+           "token_words", "word_meanings"]
 
 
 class LanguageModel:
@@ -128,3 +128,22 @@ def gather_mixtures(log_emit: torch.Tensor, mix_ids: torch.Tensor, uniq: torch.T
     flat = mix_ids.reshape(I, -1)  # [I, Q]
     out = log_emit[flat[:, :, None], uniq[:, None, :]]  # [I, Q, U]
     return out.reshape(*mix_ids.shape, U)
+
+
+def word_meanings(g: dict, vocab, top: int = 3) -> dict[str, list[tuple[str, float]]]:
+    """Each known word of ``vocab``'s most probable meanings, ``P(token | word)``, under the globals ``g``:
+    what a token says is its learned words and, under ``schema_names``, its name. The prior over tokens
+    is uniform over the tokens training used: a token with a flat distribution is left out, so that it
+    does not dilute the table."""
+    phi = token_words(g, torch.tensor(vocab.token_names()), token_exclusions(vocab),
+                      torch.tensor(vocab.token_families()))  # [S, W]
+    learned = phi.max(-1).values > 3.0 / phi.shape[1]
+    meaning = phi * learned[:, None]
+    meaning = meaning / meaning.sum(0, keepdim=True).clamp_min(1e-30)
+    out = {}
+    for w, word in enumerate(vocab.words[1:], start=1):
+        if word in vocab.aliases:
+            continue  # read as another word: its own column was never trained
+        order = torch.argsort(meaning[:, w], descending=True)[:top]
+        out[word] = [(vocab.tokens[int(s)], float(meaning[s, w])) for s in order]
+    return out
