@@ -356,6 +356,12 @@ class Learner:
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library))
 
+    def alignments(self, command: str, state: State, interpretation: int | None = None) -> list:
+        """Which object each noun phrase names: :func:`groundlang.alignments.phrase_alignments`."""
+        from groundlang.alignments import phrase_alignments
+
+        return phrase_alignments(self, command, state, interpretation)
+
     def lexicon(self, top: int = 3) -> dict[str, list[tuple[str, float]]]:
         """Each known word's most probable meanings, ``P(token | word)``.
 

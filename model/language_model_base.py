@@ -75,6 +75,12 @@ class LanguageModel:
         """``log P(words_i | interpretation j)`` as ``[I, J]``, readings and alignments summed out."""
         raise NotImplementedError
 
+    def alignment_probabilities(self, g: dict, batch: Batch, j: int, s: int) -> torch.Tensor | None:
+        """For a model that aligns noun phrases with roles: ``[K, V]``, ``P(phrase type k aligns with role
+        binding v | words, interpretation j, reading s)`` of the one command of ``batch``. None (the
+        default): it aligns nothing."""
+        return None
+
     def words_by_reading(self, g: dict, batch: Batch) -> tuple[torch.Tensor, torch.Tensor] | None:
         """For a model that reads the parser's readings: ``log P(words_i | j, reading s)`` as ``[I, J, S]``
         and the readings' prior logits ``[I, S]`` (the parser's, merged by structure), so the reading

@@ -209,9 +209,28 @@ class ParseAligned(LanguageModel):
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
         return self.reading_table(g, batch)[0]
 
-    def _words_given_reading(self, g: dict, batch: Batch):
+    def alignment_probabilities(self, g: dict, batch: Batch, j: int, s: int) -> torch.Tensor:
+        """For the one command of ``batch``, interpretation ``j`` and merged reading structure ``s``:
+        ``P(phrase type k aligns with role binding v | words, j, s)`` as ``[K, V]`` (``v`` indexes
+        ``batch.role[0, j]``, 0 = nothing), exact with the mention model: each ``(k, v)`` is the same
+        words term with type k's alignment fixed to v, over the term with it free. A type said twice in
+        the reading is fixed in both places, so its row is the probability that both align with v."""
+        with torch.no_grad():
+            free = self._words_given_reading(g, batch)[0][0, j, s]
+            K, V = batch.type_mask.shape[1], batch.role.shape[2]
+            out = torch.zeros(K, V)
+            for k in range(int(batch.type_mask[0].sum())):
+                if batch.reading_types[0, s, k] == 0:
+                    continue
+                for v in range(V):
+                    if batch.role_mask[0, j, v]:
+                        fixed = self._words_given_reading(g, batch, fix=(k, v))[0][0, j, s]
+                        out[k, v] = (fixed - free).exp()
+            return out
+
+    def _words_given_reading(self, g: dict, batch: Batch, fix: tuple[int, int] | None = None):
         """``(log P(words | j, s) [I, J, S] per merged structure s of the parser's readings, per type and
-        role [I, J, V, K])``.
+        role [I, J, V, K])``; with ``fix=(k, v)`` the words and phrase type k aligned with role binding v.
 
         A noun phrase of type k aligns with role v with probability
         ``align[prep_k, role_v]`` (with ``align_backoff``, a mixture of that and
@@ -245,6 +264,11 @@ class ParseAligned(LanguageModel):
             log_align = g["align"].clamp_min(1e-30).log()[context[:, :, None, :], roles]  # [I, J, V, K]
         log_align = (log_align + batch.role_logw[..., None]).masked_fill(~batch.role_mask[..., None], PAD_LOGIT)
         joint = type_ll + log_align
+        if fix is not None:  # phrase type k aligned with role binding v only (alignment_probabilities)
+            k, v = fix
+            others = torch.arange(joint.shape[2]) != v
+            joint = joint.clone()
+            joint[:, :, others, k] = PAD_LOGIT
         per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]
         entities = torch.einsum("ijk,irk->ijr", per_type, batch.reading_types)
         if "mention" in g:

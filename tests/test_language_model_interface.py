@@ -48,6 +48,7 @@ def test_a_new_language_model_trains_reads_and_round_trips_by_name(registered, c
     assert max(tasks, key=tasks.get) == "agentToRoom"
     assert max(moved, key=moved.get) != "agentToRoom"
     assert learner.posterior("go to the room", state).reading_probabilities is None  # it reads no parse
+    assert learner.alignments("go to the room", state) == []  # it aligns no phrase
     again = Learner.load(learner.save(tmp_path / "m"))
     assert type(again.lm) is TaskUnigram
     assert again.posterior("go to the room", state).lifted_tasks() == pytest.approx(tasks)

@@ -434,3 +434,35 @@ def test_the_room_the_agent_starts_in_has_a_role_of_its_own():
         free = set(door.layout.room_names) - bound
         assert {rb.obj for rb in interp.roles if rb.role == START_ROLE} == free
         assert {rb.obj for rb in interp.roles if rb.role == "other:room"} == free
+
+
+def test_alignment_posterior_equals_summing_over_every_alignment(setting):
+    # P(phrase type k aligns with role binding v | words, j, s), mention model included, against listing
+    # every alignment of the reading's phrases.
+    learner, observations, batch, g = setting
+    _, _, joint = learner.lm.reading_table(g, batch)
+    checked = 0
+    for i in range(len(observations)):
+        one = batch.subset([i])
+        for j in (0, len(observations[i].interpretations) - 1):
+            for r in range(batch.reading_types.shape[1]):
+                if batch.reading_logp[i, r] < -1e3:
+                    continue
+                got = learner.lm.alignment_probabilities(g, one, j, r)
+                K = int(batch.type_mask[i].sum())
+                phrases = [k for k in range(K) for _ in range(int(batch.reading_types[i, r, k]))]
+                options = [v for v in range(joint.shape[2]) if batch.role_mask[i, j, v]]
+                total, fixed = 0.0, {}
+                for choice, (_, p, w) in zip(itertools.product(options, repeat=len(phrases)),
+                                             _alignments(batch, joint, g, i, j, r)):
+                    total += p * w
+                    for k in set(phrases):
+                        same = {v for v, kk in zip(choice, phrases) if kk == k}
+                        if len(same) == 1:
+                            key = (k, same.pop())
+                            fixed[key] = fixed.get(key, 0.0) + p * w
+                for k in set(phrases):
+                    for v in options:
+                        assert float(got[k, v]) == pytest.approx(fixed.get((k, v), 0.0) / total, abs=1e-4)
+                    checked += 1
+    assert checked > 20

@@ -250,3 +250,15 @@ def test_a_model_with_schema_names_reads_the_same_after_saving(trained, tmp_path
     before = trained.posterior("go to the room with the chair", start).probabilities
     after = loaded.posterior("go to the room with the chair", start).probabilities
     assert max(abs(float(a) - float(b)) for a, b in zip(before, after)) < 1e-6
+
+
+def test_alignments_say_which_object_each_phrase_names(trained):
+    start = parse_state(layout((4, 2, 0), (10, 1), (2, 2), (6, 2)), PALETTE)
+    rows = trained.alignments("go to the room with the chair", start)
+    by_words = {row.words: row for row in rows}
+    assert set(by_words) == {("room",), ("chair",)}
+    assert by_words[("room",)].objects[0][:2] == ("room2", "agentInRoom.1")
+    assert by_words[("chair",)].objects[0][:2] == ("block0", ROLE) and by_words[("chair",)].objects[0][2] > 0.9
+    assert all(sum(p for *_, p in row.objects) == pytest.approx(1.0, abs=1e-4) for row in rows)
+    with pytest.raises(ValueError, match="interpretation must be an index below"):
+        trained.alignments("go to the room with the chair", start, interpretation=10_000)
