@@ -53,6 +53,15 @@ ax = posterior_bar_chart(post, kind="readings")
 ax.figure
 
 # %% [markdown]
+# Which object each noun phrase of the most probable reading names, under the most probable interpretation
+# (`Learner.alignments`: exact with the mention model).
+
+# %%
+for row in learner.alignments("push the star from the blue room into the green room", novel["b"]):
+    named = ", ".join(f"{obj or 'nothing'} as {role} {p:.2f}" for obj, role, p in row.objects[:2])
+    print(f"{row.key:<14} {' '.join(row.words):<12} {named}")
+
+# %% [markdown]
 # ## The lexicon as a heat map
 #
 # `P(token | word)` for the words and the semantic tokens they most probably mean.
