@@ -63,6 +63,8 @@ class ParseAligned(LanguageModel):
         last_phrase_key: bool = True,
         object_key: bool = True,
         last_passes_over_source: bool = True,
+        noun_attached_key: bool = True,
+        negation_key: bool = True,
         start_role: bool = True,
         bystander_roles: bool = True,
     ):
@@ -90,7 +92,8 @@ class ParseAligned(LanguageModel):
         come back to the green room"); a demonstration that never breaks it rules the reading out
         (``interpretations.unbroken_held_parts``). ``relational_descriptions``: a bystander related to an object the task binds by a PF of two objects (a toy in the goal room)
         is offered in a role named by that relation, so "the room *with the red chair*" can say which
-        room (``model.relational``). ``last_phrase_key``, ``object_key``, ``last_passes_over_source``: the
+        room (``model.relational``). ``last_phrase_key``, ``object_key``, ``last_passes_over_source``, ``noun_attached_key``,
+        ``negation_key``: the
         marks of a phrase's preposition key (``phrase_keys.PhraseKeys`` says the regularity each states).
         ``start_role``: the room the agent starts in has a role of its own ("go *from the orange room*");
         ``bystander_roles``: objects the task leaves alone have one role per class (``other:room``), not
@@ -122,11 +125,14 @@ class ParseAligned(LanguageModel):
         self.last_phrase_key = last_phrase_key
         self.object_key = object_key
         self.last_passes_over_source = last_passes_over_source
+        self.noun_attached_key = noun_attached_key
+        self.negation_key = negation_key
         self.start_role = start_role
         self.bystander_roles = bystander_roles
 
     def phrase_keys(self) -> PhraseKeys:
-        return PhraseKeys(self.last_phrase_key, self.object_key, self.last_passes_over_source)
+        return PhraseKeys(self.last_phrase_key, self.object_key, self.last_passes_over_source, self.noun_attached_key,
+                          self.negation_key)
 
     def settings(self) -> dict:
         return {
@@ -146,6 +152,8 @@ class ParseAligned(LanguageModel):
             "last_phrase_key": self.last_phrase_key,
             "object_key": self.object_key,
             "last_passes_over_source": self.last_passes_over_source,
+            "noun_attached_key": self.noun_attached_key,
+            "negation_key": self.negation_key,
             "start_role": self.start_role,
             "bystander_roles": self.bystander_roles,
         }

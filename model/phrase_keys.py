@@ -29,6 +29,12 @@ class PhraseKeys:
     # A phrase saying where a motion starts or what goes along ("from ...", "with ...") never says where
     # it ends: ``|last`` passes over it to the phrase before.
     last_passes_over_source: bool = True
+    # A phrase attached to another noun phrase ("the room *with the chair*") describes that phrase's object
+    # rather than saying where things go: it has a key of its own (``@np``); off, the bare preposition.
+    noun_attached_key: bool = True
+    # A phrase in a negated clause ("do not enter *the green room*") says what not to do: it has a key of its
+    # own (``not:``), so it may learn to align with nothing; off, the key the clause has unnegated.
+    negation_key: bool = True
 
 
 def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None,
@@ -61,15 +67,16 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None,
     transitive = {entity.clause for entity in lf.entities if entity.role == "dobj"} if keys.object_key else set()
     result = []
     for entity in lf.entities:
+        attached = "@np" if keys.noun_attached_key else ""
         if entity.role == "npp":
-            key = f"{entity.prep}@np"
+            key = f"{entity.prep}{attached}"
         elif entity.role == "dobj" and entity.clause in having:
-            key = f"{lexicon.having_preposition}@np"
+            key = f"{lexicon.having_preposition}{attached}"
         elif entity.prep is not None:
             key = entity.prep + ("+obj" if entity.clause in transitive else "")
         else:
             key = None
-        if entity.clause in negated:
+        if entity.clause in negated and keys.negation_key:
             key = f"not:{key or 'dobj'}"
         result.append((key, tuple(entity.modifiers), (entity.head,) if entity.head else ()))
     if not keys.last_phrase_key:

@@ -20,7 +20,8 @@ from groundlang.model.phrase_keys import PhraseKeys, entity_words
 
 EXAMPLES = example_corpus_path()
 NOVEL_A = Path(__file__).parent / "fixtures" / "novel_envs" / "novel_a.state"
-SWITCHES = ("last_phrase_key", "object_key", "last_passes_over_source", "start_role", "bystander_roles")
+SWITCHES = ("last_phrase_key", "object_key", "last_passes_over_source", "noun_attached_key", "negation_key",
+            "start_role", "bystander_roles")
 
 
 def _keys(command: str, **switches) -> list:
@@ -38,6 +39,10 @@ def _keys(command: str, **switches) -> list:
     # passing over means nothing without a last phrase's key
     ("walk to the white room from the orange room", {"last_phrase_key": False, "last_passes_over_source": False},
      ["to", "from"]),
+    ("go to the room that has the chair", {}, ["to", "with@np|last"]),
+    ("go to the room that has the chair", {"noun_attached_key": False}, ["to", "with|last"]),
+    ("do not enter the green room", {}, ["not:dobj|last"]),
+    ("do not enter the green room", {"negation_key": False}, ["dobj|last"]),
 ])
 def test_each_key_switch_removes_its_mark(command, switches, keys):
     assert _keys(command, **switches) == keys
