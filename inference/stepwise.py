@@ -4,23 +4,25 @@ Where the whole world is too large, a goal is scored in a relevance abstraction
 (:mod:`groundlang.model.relevance`): the agent, the toys the goal names and the toys the demonstration
 moves move, every other toy is a wall. When the goal names a toy the demonstration leaves alone
 and the demonstration moves another, that abstraction keeps both and is as large as the whole
-world of those toys. This module scores such a goal *stepwise* instead: the toys the demonstration
-moves but the goal does not name (the *carried* toys) are walls too, fixed where the demonstration
-has them at each step. For every distinct placement of the carried toys the demonstration visits
-(and every placement one push away from a visited state), the goal is solved in the abstraction
-of the agent and the named toys with the carried toys as walls there. At a demonstration state,
-the four moves are looked up in the real dynamics: a move that pushes a carried toy reads the
-value of the pushed state in the space of the pushed placement, the others in the step's own
-space, and the policy at the state is the soft-max of those Q-values and the terminate action,
-as :func:`groundlang.inference.sweeps.policy_from_carry` forms it from a solved space.
+world of those toys. This module scores such a goal *stepwise* instead, in a state space grown only
+around the demonstration: the toys the demonstration moves but the goal does not name (the
+*carried* toys) stand only where the demonstration puts them. For every distinct placement of the
+carried toys that the demonstration visits, the abstraction of the agent and the named toys is
+built with the carried toys as walls at that placement; the spaces are joined into one MDP in which
+a move that pushes a carried toy leads to the pushed state in the space of the pushed placement
+when the demonstration visits that placement. The demonstration's own pushes are therefore real
+moves of the joined MDP, and its policy at every demonstration state is the soft-max policy of that
+MDP's solution.
 
-What it loses: within one placement's space, a plan cannot push the carried toy again later
-(such a move is blocked there, as scenery is in any abstraction), so values of goals whose best
-plan moves a carried toy are pessimistic. The goals the demonstration pursues name the toys it
-moves, so those are scored in the ordinary abstraction; the stepwise goals are the unpursued ones.
+Boundary: a push that would put a carried toy where the demonstration never has it is blocked (the
+state stays), as a move into scenery is in any relevance abstraction. Values of goals whose plans
+would push a carried toy elsewhere are thus pessimistic. The goals the demonstration pursues name
+the toys it moves, so those are scored in the ordinary abstraction; the stepwise goals are the
+unpursued ones, and on the benchmark's 10^6-state layout their values stay within a nat of exact
+(README, "Worlds too large to enumerate").
 
 Which of the two is used per goal is decided by their sizes' bounds (the stepwise one counts one
-space per placement). All the spaces of one demonstration are solved together in one soft value
+space per placement); below STEPWISE_MIN_STATES the ordinary abstraction is always used. All the spaces of one demonstration are solved together in one soft value
 iteration over their disjoint union (a block-diagonal MDP): one compiled sweep loop rather than
 many small ones.
 """
@@ -33,7 +35,7 @@ from collections.abc import Sequence
 import numpy as np
 import torch
 
-from groundlang.inference.planning import TaskSettings, solve_task, task_rewards
+from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.model.features import goal_mask
 from groundlang.model.state_search import default_max_states
 from groundlang.model.relevance import (abstract_space_uncached, abstraction_bound, announce, relevant_toys,
@@ -79,33 +81,57 @@ def successor_positions(walkable: np.ndarray, positions: np.ndarray) -> np.ndarr
 
 
 class _Stepwise:
-    """The spaces of one goal's named toys, one (or more, when a placement splits the world) per
-    placement of the carried toys; ``lookup`` finds each needed state in them."""
+    """The states of the agent and a goal's named toys with the carried toys at any of the placements a
+    demonstration needs, as one MDP: one abstraction per placement (more when a placement splits the
+    world), concatenated, and a move that pushes a carried toy leads into the space of the pushed
+    placement when that is one of them (else it is blocked, as scenery is). Quacks like a StateSpace
+    for goal masks: ``layout``, ``positions`` ``[N, 1 + k, 2]``, ``next_state`` ``[N, 4]``."""
 
     def __init__(self, initial, named: tuple[int, ...], carried: tuple[int, ...], needed: np.ndarray,
-                 max_states: int) -> None:
-        self.named, self.carried = named, carried
+                 walkable: np.ndarray, objects: list[int], max_states: int) -> None:
+        self.layout = initial.layout
         cols = [1 + i for i in carried]
         configs = needed[:, cols].reshape(len(needed), -1)  # [N, 2c] placement of the carried toys
         _, group = np.unique(configs, axis=0, return_inverse=True)
         group = group.ravel()
         self.placements = int(group.max()) + 1
-        self.spaces: list = []
-        self.where = np.full((len(needed), 2), -1, dtype=np.int64)  # (space number, index) per needed state
-        for g in range(int(group.max()) + 1):
+        spaces: list = []
+        where = np.full((len(needed), 2), -1, dtype=np.int64)  # (space number, index) per needed state
+        for g in range(self.placements):
             rows = np.flatnonzero(group == g)
             while len(rows):  # a placement may split the world: a new space from the first unfound state
-                space = abstract_space_uncached(initial.with_positions(needed[rows[0]].astype(initial.positions.dtype)),
-                                                named, max_states)
+                start = initial.with_positions(needed[rows[0]].astype(initial.positions.dtype))
+                space = abstract_space_uncached(start, named, max_states)
                 index = space.indices_of(needed[rows])
                 found = index >= 0
-                self.where[rows[found]] = np.stack([np.full(found.sum(), len(self.spaces)), index[found]], axis=1)
-                self.spaces.append(space)
+                where[rows[found]] = np.stack([np.full(found.sum(), len(spaces)), index[found]], axis=1)
+                spaces.append(space)
                 rows = rows[~found]
+        offsets = np.cumsum([0] + [sp.num_states for sp in spaces])
+        self.spaces = spaces
+        self.indices = offsets[where[:, 0]] + where[:, 1]  # [N] each needed state in the union
+        self.positions = np.concatenate([sp.positions for sp in spaces])
+        self.next_state = np.concatenate([sp.next_state.astype(np.int64) + o for sp, o in zip(spaces, offsets)])
+        # pushes of a carried toy: from a blocked move to the pushed state, where some space holds it;
+        # only states with the agent next to a carried toy can push one
+        agent = self.positions[:, 0].astype(np.int64)
+        near = (np.abs(self.positions[:, cols].astype(np.int64) - agent[:, None]).sum(axis=2) == 1).any(axis=1)
+        rows = np.flatnonzero(near)
+        after = successor_positions(walkable, self.positions[rows][:, objects])  # [n, 4, m, 2]
+        carried_at = [objects.index(c) for c in cols]
+        pushed = (after[:, :, carried_at] != self.positions[rows][:, None, cols]).any(axis=(2, 3))  # [n, 4]
+        r, a = np.nonzero(pushed)
+        s = rows[r]
+        target = self.positions[s].astype(np.int64)
+        target[:, objects] = after[r, a]
+        for number, sp in enumerate(spaces):
+            index = sp.indices_of(target)
+            hit = index >= 0
+            self.next_state[s[hit], a[hit]] = offsets[number] + index[hit]
 
     @property
     def num_states(self) -> int:
-        return sum(s.num_states for s in self.spaces)
+        return len(self.next_state)
 
 
 def approximate_likelihoods(initial, goals: Sequence[tuple], states: Sequence, actions: Sequence[int], tables,
@@ -118,85 +144,62 @@ def approximate_likelihoods(initial, goals: Sequence[tuple], states: Sequence, a
     actions = np.asarray([int(a) for a in actions], dtype=np.int64)
     demo = np.stack([s.positions for s in states]).astype(np.int64)  # [T + 1, 1 + k, 2]
     moved = relevant_toys(initial, (), [states])
-    plans: list = []  # per goal: ("whole", space) or ("steps", _Stepwise)
+    plans: list = []  # per goal: ("whole" or "steps", space, goal mask)
     stepwise: dict = {}  # (named, carried) -> _Stepwise, shared by the goals naming the same toys
     for goal in goals:
         named = relevant_toys(initial, goal)
         carried = tuple(i for i in moved if i not in named)
+        whole = abstraction_bound(initial, tuple(sorted(set(named) | set(moved))))
         plan = None
-        if carried and abstraction_bound(initial, tuple(sorted(set(named) | set(moved)))) > STEPWISE_MIN_STATES \
-                and abstraction_bound(initial, named) <= max_states:
-            key = (named, carried)
-            if key not in stepwise:
-                stepwise[key] = _stepwise_spaces(initial, named, carried, demo, max_states)
-            held = stepwise[key]
-            whole = abstraction_bound(initial, tuple(sorted(set(named) | set(moved))))
-            # by bounds: the placements' spaces together against the one space of every toy involved
-            if whole > STEPWISE_MIN_STATES and held.placements * abstraction_bound(initial, named) < whole:
-                plan = ("steps", held)
-                if whole <= max_states and not any(goal_mask(s, goal, tables).any() for s in held.spaces):
-                    plan = None  # out of reach with the carried toys as walls: the one space may reach it
-        plans.append(plan or ("whole", state_space_for(initial, goal, [states], tables=tables,
-                                                        max_states=max_states, method="abstraction")))
-    # every (space, goal) to solve, as blocks of one disjoint union
-    blocks: list = []  # (space, mask)
-    first: list[int] = []  # per goal: its first block
-    for goal, (kind, held) in zip(goals, plans):
-        first.append(len(blocks))
-        spaces = [held] if kind == "whole" else held.spaces
-        blocks.extend((space, goal_mask(space, goal, tables)) for space in spaces)
-    used_steps = sum(kind == "steps" for kind, _ in plans)
+        # by bounds: the placements' spaces together against the one space of every toy involved
+        if carried and whole > STEPWISE_MIN_STATES and abstraction_bound(initial, named) <= max_states:
+            if (named, carried) not in stepwise:
+                stepwise[named, carried] = _stepwise_spaces(initial, named, carried, demo, max_states)
+            held = stepwise[named, carried]
+            if held.placements * abstraction_bound(initial, named) < whole:
+                mask = goal_mask(held, goal, tables)
+                # out of reach with the carried toys where the demonstration has them: the one space may reach it
+                plan = None if whole <= max_states and not mask.any() else ("steps", held, mask)
+        if plan is None:
+            space = state_space_for(initial, goal, [states], tables=tables, max_states=max_states,
+                                    method="abstraction")
+            plan = ("whole", space, goal_mask(space, goal, tables))
+        plans.append(plan)
+    # every (goal, space) solved as blocks of one disjoint union
+    blocks = [(space, mask) for _, space, mask in plans]
+    used_steps = sum(kind == "steps" for kind, _, _ in plans)
     exact = state_count_bound(int(initial.layout.walkable.sum()), len(initial.toys))
     announce(initial.layout, max_states, "behaviour likelihoods: approximate (the whole layout up to %s states, %s "
-             "max_states=%s): %d goal(s) stepwise (toys the demonstration moves and the goal does not name fixed "
-             "per step), %d in a relevance abstraction; %d spaces, %s states solved together", f"{exact:,}",
+             "max_states=%s): %d goal(s) stepwise (toys the demonstration moves and the goal does not name at "
+             "the placements it needs), %d in a relevance abstraction; %s states solved together", f"{exact:,}",
              ">" if exact > max_states else "<=", f"{max_states:,}", used_steps, len(goals) - used_steps,
-             len(blocks), f"{sum(s.num_states for s, _ in blocks):,}")
-    values, log_policy, reward, stop = _solve_blocks(blocks, settings)
+             f"{sum(s.num_states for s, _ in blocks):,}")
+    log_policy = _solve_blocks(blocks, settings)
     offsets = np.cumsum([0] + [s.num_states for s, _ in blocks])
     out = np.empty(len(goals))
-    for g, (kind, held) in enumerate(plans):
-        base = first[g]
-        if kind == "whole":
-            path = offsets[base] + trajectory_indices(held, list(states))
-            lp = log_policy[path[:-1], actions].sum() + log_policy[path[-1], 4]
-        else:
-            lp = _stepwise_log_likelihood(held, offsets[base:], values, reward, stop, actions, settings)
-        out[g] = float(lp)
+    for g, (kind, space, _) in enumerate(plans):
+        path = trajectory_indices(space, list(states)) if kind == "whole" else space.indices
+        path = torch.as_tensor(offsets[g] + path)
+        out[g] = float(log_policy[path[:-1], torch.as_tensor(actions)].sum() + log_policy[path[-1], 4])
     return out
 
 
 def _stepwise_spaces(initial, named, carried, demo, max_states) -> _Stepwise:
-    """The spaces holding every demonstration state and every state one move from it (real dynamics
-    with the unmoved, unnamed toys as walls)."""
+    """The union over the placements of the carried toys the demonstration ``[T + 1, 1 + k, 2]`` visits;
+    the toys neither moved nor named are walls."""
     objects = [0] + [1 + i for i in sorted(set(named) | set(carried))]
     walkable = initial.layout.walkable.copy()
     still = [j for j in range(1, demo.shape[1]) if j not in objects]
     walkable[demo[0, still, 0], demo[0, still, 1]] = False
-    after = successor_positions(walkable, demo[:, objects])  # [T + 1, 4, m, 2]
-    needed = np.repeat(demo[:, None], 5, axis=1)  # [T + 1, 5, 1 + k, 2]: the state, then its four successors
-    needed[:, 1:, objects] = after
-    return _Stepwise(initial, named, carried, needed.reshape(-1, *demo.shape[1:]), max_states)
-
-
-def _stepwise_log_likelihood(held: _Stepwise, offsets, values, reward, stop, actions, settings) -> torch.Tensor:
-    """The demonstration's log-likelihood with each state's policy formed from its successors' values."""
-    where = held.where.reshape(-1, 5, 2)  # [T + 1, 5, (space, index)]
-    flat = torch.as_tensor(offsets[where[..., 0]] + where[..., 1])  # [T + 1, 5] into the union
-    q = reward[flat[:, 1:]] + settings.discount * values[flat[:, 1:]]  # [T + 1, 4]
-    q = torch.cat([q, stop[flat[:, 0]][:, None]], dim=1)  # terminate last
-    temperature = settings.temperature
-    log_policy = (q - temperature * torch.logsumexp(q / temperature, dim=1, keepdim=True)) / temperature
-    steps = torch.arange(len(actions))
-    return log_policy[steps, torch.as_tensor(actions)].sum() + log_policy[-1, 4]
+    return _Stepwise(initial, named, carried, demo, walkable, objects, max_states)
 
 
 def _solve_blocks(blocks, settings: TaskSettings):
     """Solve every ``(space, mask)`` as one MDP, their disjoint union, in batches of at most
-    BATCH_STATES states; returns ``(values, log_policy, arrival reward, stop reward)`` over the union."""
+    BATCH_STATES states; returns the log-policy ``[N, 5]`` over the union."""
     if settings.absorbing_goal:
         raise StateSpaceError("stepwise likelihoods need goals that do not absorb (absorbing_goal=false)")
-    parts: list = [[], [], [], []]
+    parts: list = []
     batch: list = []
 
     def flush():
@@ -208,9 +211,7 @@ def _solve_blocks(blocks, settings: TaskSettings):
         if not result.converged:
             logger.warning("soft value iteration stopped after %d sweeps (residual %.3g)", result.sweeps,
                            result.residual)
-        reward, stop, _ = task_rewards(mask, settings)
-        for part, value in zip(parts, (result.values, result.log_policy, reward, stop)):
-            part.append(value)
+        parts.append(result.log_policy)
         batch.clear()
 
     total = 0
@@ -222,4 +223,4 @@ def _solve_blocks(blocks, settings: TaskSettings):
         total += block[0].num_states
     if batch:
         flush()
-    return tuple(torch.cat(p) for p in parts)
+    return torch.cat(parts)
