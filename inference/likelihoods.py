@@ -12,9 +12,10 @@ Work is shared: the state space is enumerated once per distinct initial
 state, the task is solved once per (initial state, goal), and every
 demonstration starting there is scored against that one solution. (The
 commands-to-tasks corpus has 240 instances but 6 demonstrations.) Where the
-whole world is too large, each goal is solved in the relevance abstraction of
-the toys it names and its demonstrations move
-(:func:`groundlang.model.relevance.state_space_for`).
+whole world is too large, each demonstration's goals are scored by
+:func:`groundlang.inference.stepwise.approximate_likelihoods`: each goal in the
+relevance abstraction of the toys it names and the demonstration moves, or
+stepwise over the placements the demonstration visits, all solved together.
 
 Cache: one small JSON file per (layout, initial state, goal, demonstration,
 settings), named by the sha256 of a canonical JSON description of those, in

@@ -18,8 +18,7 @@ Boundary: a push that would put a carried toy where the demonstration never has 
 state stays), as a move into scenery is in any relevance abstraction. Values of goals whose plans
 would push a carried toy elsewhere are thus pessimistic. The goals the demonstration pursues name
 the toys it moves, so those are scored in the ordinary abstraction; the stepwise goals are the
-unpursued ones, and on the benchmark's 10^6-state layout their values stay within a nat of exact
-(README, "Worlds too large to enumerate").
+unpursued ones (agreement with exact: README, "Worlds too large to enumerate").
 
 Which of the two is used per goal is decided by their sizes' bounds (the stepwise one counts one
 space per placement); below STEPWISE_MIN_STATES the ordinary abstraction is always used. All the spaces of one demonstration are solved together in one soft value
