@@ -36,9 +36,9 @@ import torch
 
 from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.model.features import goal_mask
-from groundlang.model.state_search import default_max_states
 from groundlang.model.relevance import (abstract_space_uncached, abstraction_bound, announce, relevant_toys,
                                         state_space_for)
+from groundlang.model.state_search import default_max_states
 from groundlang.model.statespace import StateSpaceError, state_count_bound, trajectory_indices
 from groundlang.model.world import ACTION_DELTAS
 
@@ -46,8 +46,8 @@ __all__ = ["approximate_likelihoods", "successor_positions"]
 
 logger = logging.getLogger(__name__)
 
-# Below this bound the one abstraction of every toy involved is cheap enough that stepwise (pessimistic
-# for goals whose plans would push a carried toy) is not worth its error.
+# Below this bound the one abstraction of every toy involved is cheap enough that stepwise (whose
+# blocked pushes change the values of goals whose plans would push a carried toy) is not worth its error.
 STEPWISE_MIN_STATES = 100_000
 # The disjoint union solved at once is split into batches of at most this many states (memory bound).
 BATCH_STATES = 4_000_000
@@ -150,12 +150,14 @@ def approximate_likelihoods(initial, goals: Sequence[tuple], states: Sequence, a
         carried = tuple(i for i in moved if i not in named)
         whole = abstraction_bound(initial, tuple(sorted(set(named) | set(moved))))
         plan = None
-        # by bounds: the placements' spaces together against the one space of every toy involved
-        if carried and whole > STEPWISE_MIN_STATES and abstraction_bound(initial, named) <= max_states:
-            if (named, carried) not in stepwise:
-                stepwise[named, carried] = _stepwise_spaces(initial, named, carried, demo, max_states)
-            held = stepwise[named, carried]
-            if held.placements * abstraction_bound(initial, named) < whole:
+        # by bounds: the placements' spaces together (at most max_states) against the one space of every
+        # toy involved; counted before any is built
+        if carried and whole > STEPWISE_MIN_STATES:
+            size = _placements(demo, carried) * abstraction_bound(initial, named)
+            if size < whole and size <= max_states:
+                if (named, carried) not in stepwise:
+                    stepwise[named, carried] = _stepwise_spaces(initial, named, carried, demo, max_states)
+                held = stepwise[named, carried]
                 mask = goal_mask(held, goal, tables)
                 # out of reach with the carried toys where the demonstration has them: the one space may reach it
                 plan = None if whole <= max_states and not mask.any() else ("steps", held, mask)
@@ -181,6 +183,12 @@ def approximate_likelihoods(initial, goals: Sequence[tuple], states: Sequence, a
         path = torch.as_tensor(offsets[g] + path)
         out[g] = float(log_policy[path[:-1], torch.as_tensor(actions)].sum() + log_policy[path[-1], 4])
     return out
+
+
+def _placements(demo: np.ndarray, toys: Sequence[int]) -> int:
+    """How many distinct placements of ``toys`` the demonstration ``[T + 1, 1 + k, 2]`` visits."""
+    cols = [1 + i for i in toys]
+    return len(np.unique(demo[:, cols].reshape(len(demo), -1), axis=0))
 
 
 def _stepwise_spaces(initial, named, carried, demo, max_states) -> _Stepwise:
