@@ -8,8 +8,11 @@ Prints:
   first action (goal under 1 s), each the first time in the layout (cold: PF tables and groundings
   included) and again (warm);
 - in a layout of about 10^6 reachable states (``bench_statespace.benchmark_layouts()``' largest), where
-  both run: one demonstration's behaviour likelihoods over every candidate goal, exact and abstraction,
-  their speed ratio (goal at least 10x) and whether the top goal agrees;
+  both run: one demonstration's behaviour likelihoods over every candidate goal, exact and approximate
+  (``behaviour_likelihood_table(method=...)``: relevance abstraction or stepwise, inference/stepwise.py),
+  their speed ratio (goal at least 10x), whether the top goal agrees and every goal's two values; the
+  automatic switch (``GROUNDLANG_MAX_STATES`` just below the exact count); one MLIRL fit, exact and in
+  the demonstration's abstraction;
 - the top goal of every distinct demonstration of the shipped corpora (and the crowd-sourced corpus when
   present at ``../shared/data/commands-to-tasks``) under both methods: how many agree;
 - ``follow`` in the 32x32 five-toy layout (``tests/fixtures/large/thirtytwo.state``);
