@@ -39,7 +39,7 @@ from groundlang.model.features import goal_mask
 from groundlang.model.relevance import (abstract_space_uncached, abstraction_bound, announce, relevant_toys,
                                         state_space_for)
 from groundlang.model.state_search import default_max_states
-from groundlang.model.statespace import StateSpaceError, state_count_bound, trajectory_indices
+from groundlang.model.statespace import state_count_bound, trajectory_indices
 from groundlang.model.world import ACTION_DELTAS
 
 __all__ = ["approximate_likelihoods", "successor_positions"]
@@ -204,8 +204,6 @@ def _stepwise_spaces(initial, named, carried, demo, max_states) -> _Stepwise:
 def _solve_blocks(blocks, settings: TaskSettings):
     """Solve every ``(space, mask)`` as one MDP, their disjoint union, in batches of at most
     BATCH_STATES states; returns the log-policy ``[N, 5]`` over the union."""
-    if settings.absorbing_goal:
-        raise StateSpaceError("stepwise likelihoods need goals that do not absorb (absorbing_goal=false)")
     parts: list = []
     batch: list = []
 
