@@ -8,8 +8,11 @@ Prints:
   first action (goal under 1 s), each the first time in the layout (cold: PF tables and groundings
   included) and again (warm);
 - in a layout of about 10^6 reachable states (``bench_statespace.benchmark_layouts()``' largest), where
-  both run: one demonstration's behaviour likelihoods over every candidate goal, exact and abstraction,
-  their speed ratio (goal at least 10x) and whether the top goal agrees;
+  both run: one demonstration's behaviour likelihoods over every candidate goal, exact and approximate
+  (``behaviour_likelihood_table(method=...)``: relevance abstraction or stepwise, inference/stepwise.py),
+  their speed ratio (goal at least 10x), whether the top goal agrees and every goal's two values; the
+  automatic switch (``GROUNDLANG_MAX_STATES`` just below the exact count); one MLIRL fit, exact and in
+  the demonstration's abstraction;
 - the top goal of every distinct demonstration of the shipped corpora (and the crowd-sourced corpus when
   present at ``../shared/data/commands-to-tasks``) under both methods: how many agree;
 - ``follow`` in the 32x32 five-toy layout (``tests/fixtures/large/thirtytwo.state``);
@@ -40,7 +43,7 @@ from groundlang.corpus import example_corpus_path, read_corpus, read_state_file 
 from groundlang.inference.discovery import DISCOVERY_IRL  # noqa: E402
 from groundlang.inference.likelihoods import behaviour_likelihood_table  # noqa: E402
 from groundlang.inference.mlirl import mlirl  # noqa: E402
-from groundlang.inference.planning import TaskSettings, demonstration_log_likelihood, solve_task  # noqa: E402
+from groundlang.inference.planning import TaskSettings, solve_task  # noqa: E402
 from groundlang.inference.acting import rollout, rollout_states  # noqa: E402
 from groundlang.learner import Learner  # noqa: E402
 from groundlang.logic.atoms import parse_goal  # noqa: E402
@@ -54,6 +57,7 @@ from groundlang.model.statespace import state_count_bound, trajectory_indices  #
 ROOT = Path(__file__).resolve().parent.parent
 LARGE = ROOT / "tests" / "fixtures" / "large"
 CROWD = ROOT.parent / "shared" / "data" / "commands-to-tasks" / "allTurkTrain"
+NEAR = 20.0  # nats below the exact top: the candidates a posterior could give weight
 
 
 class Demo:
@@ -91,19 +95,19 @@ def planned_demo(state, goal, method: str) -> Demo:
 
 
 def row(demo: Demo, goals, library, method: str) -> np.ndarray:
-    """One demonstration's log-likelihood under each goal, every space built by ``method``."""
-    tables = pf_tables(demo.initial_state.layout, library.tabulation_program)
-    out = []
-    spaces: dict = {}
-    for goal in goals:
-        key = () if method == "exact" else goal
-        if key not in spaces:
-            spaces[key] = state_space_for(demo.initial_state, goal, [demo.states], tables=tables, method=method)
-        space = spaces[key]
-        solved = solve_task(space.next_state, goal_mask(space, goal, tables), TaskSettings())
-        path = trajectory_indices(space, list(demo.states))
-        out.append(float(demonstration_log_likelihood(solved.log_policy, path, [int(a) for a in demo.actions])))
-    return np.array(out)
+    """One demonstration's log-likelihood under each goal, by ``method`` (exact or abstraction), cache off."""
+    return behaviour_likelihood_table([demo], [goals], cache_dir=False, library=library, method=method)[0]
+
+
+def fit_mlirl(state, demo: Demo, method: str):
+    """One MLIRL fit over every position PF in the space ``method`` gives for the demonstration."""
+    tables = pf_tables(state.layout)
+    space = state_space_for(state, demonstrations=[demo.states], tables=tables, method=method)
+    atoms = position_atoms(state.layout, tables)
+    features = feature_matrix(space, atoms, tables)
+    path = trajectory_indices(space, list(demo.states))
+    result = mlirl(space.next_state, features, [(path, [int(a) for a in demo.actions])], **DISCOVERY_IRL)
+    return space, atoms, result
 
 
 def billion(learner: Learner, library, repeats: int) -> None:
@@ -131,17 +135,7 @@ def billion(learner: Learner, library, repeats: int) -> None:
     print(f"  behaviour likelihood of the demonstration ({len(demo.actions)} moves): one goal {one:.3f} s; all "
           f"{len(goals)} candidate goals {warm:.3f} s ({cold:.3f} s cold)   goal < 1 s; top goal "
           f"{' '.join(map(str, top))}")
-    tables = pf_tables(state.layout)
-
-    def fit():
-        space = state_space_for(state, demonstrations=[demo.states], tables=tables)
-        atoms = position_atoms(state.layout, tables)
-        features = feature_matrix(space, atoms, tables)
-        path = trajectory_indices(space, list(demo.states))
-        result = mlirl(space.next_state, features, [(path, [int(a) for a in demo.actions])], **DISCOVERY_IRL)
-        return space, atoms, result
-
-    took, (space, atoms, fitted) = seconds(fit, repeats)
+    took, (space, atoms, fitted) = seconds(lambda: fit_mlirl(state, demo, "auto"), repeats)
     best = atoms[int(np.argmax(fitted.weights))]
     print(f"  one MLIRL fit over {len(atoms)} position PFs in the demonstration's abstraction ({space.num_states:,} "
           f"states): {took:.3f} s   goal < 5 s; top weight {best}")
@@ -153,22 +147,28 @@ def million(library, repeats: int) -> None:
     demo = planned_demo(state, goal, "exact")
     goals = candidate_goals(state, library)
     row(demo, goals[:1], library, "exact")  # one-off torch.compile of the large sweep, not timed
+    row(demo, goals, library, "abstraction")  # and of the union's sweep (another shape), not timed
     size = state_space_for(state, method="exact").num_states
     print(f"\n{name}: {size:,} reachable states, {len(goals)} candidate goals, a demonstration of "
-          f"{len(demo.actions)} moves pushing block0")
+          f"{len(demo.actions)} moves pushing block0 (exact and approximate in this run, best of {repeats})")
     one_exact, _ = seconds(lambda: row(demo, [goal], library, "exact"), repeats)
     one_approx, _ = seconds(lambda: row(demo, [goal], library, "abstraction"), repeats)
-    print(f"  its goal {' '.join(map(str, goal))} alone: exact {one_exact:.3f} s, abstraction {one_approx:.3f} s, "
-          f"ratio {one_exact / one_approx:.1f}x   goal >= 10x")
+    print(f"  its goal {' '.join(map(str, goal))} alone: exact {one_exact:.3f} s, approximate {one_approx:.3f} s, "
+          f"ratio {one_exact / one_approx:.1f}x")
     exact_s, exact = seconds(lambda: row(demo, goals, library, "exact"), repeats)
     approx_s, approx = seconds(lambda: row(demo, goals, library, "abstraction"), repeats)
     top = int(np.argmax(exact))
-    print(f"  every candidate goal, abstraction of the goal's toys and the moved ones (those naming block1 keep "
-          f"both toys: no smaller): exact {exact_s:.3f} s, abstraction {approx_s:.3f} s, ratio "
-          f"{exact_s / approx_s:.1f}x; same top goal: {top == int(np.argmax(approx))}; top goal's value exact "
-          f"{exact[top]:.3f}, abstraction {approx[top]:.3f}")
-    # As the table runs where max_states is below the exact bound: goals whose toys and the moved ones
-    # do not fit are scored with the unmoved toys as walls.
+    near = exact >= exact[top] - NEAR
+    lower = approx < exact - 1
+    below = (f" (approximate lower by more than 1 nat: {int(lower.sum())} goals, all at least "
+             f"{exact[top] - exact[lower].max():.0f} nats below the top)") if lower.any() else ""
+    print(f"  every candidate goal (behaviour_likelihood_table): exact {exact_s:.3f} s, approximate {approx_s:.3f} s, "
+          f"ratio {exact_s / approx_s:.1f}x   goal >= 10x; same top goal: {top == int(np.argmax(approx))}; "
+          f"largest |difference| within {NEAR:.0f} nats of the top {np.abs(exact - approx)[near].max():.3f} nats; "
+          f"over all goals {np.abs(exact - approx).max():.1f} nats{below}")
+    for g, e, a in zip(goals, exact, approx):
+        print(f"    {' '.join(map(str, g)):55s} exact {e:9.3f}  approximate {a:9.3f}")
+    # the automatic switch: with the limit below the exact bound, the table chooses the approximation
     limit = str(size - 1)
     before, os.environ["GROUNDLANG_MAX_STATES"] = os.environ.get("GROUNDLANG_MAX_STATES"), limit
     try:
@@ -178,9 +178,15 @@ def million(library, repeats: int) -> None:
             del os.environ["GROUNDLANG_MAX_STATES"]
         else:
             os.environ["GROUNDLANG_MAX_STATES"] = before
-    print(f"  behaviour_likelihood_table with GROUNDLANG_MAX_STATES={limit} (the exact space refused): "
-          f"{table_s:.3f} s, ratio {exact_s / table_s:.1f}x to exact; same top goal: {top == int(np.argmax(table))}; "
-          f"top goal's value {table[top]:.3f}")
+    print(f"  the same table with method auto and GROUNDLANG_MAX_STATES={limit}: {table_s:.3f} s, "
+          f"{exact_s / table_s:.1f}x; same values as the forced approximation: {np.allclose(table, approx)}")
+    fit_mlirl(state, demo, "exact")  # the adjoint's compiled sweep, not timed
+    exact_s, (space_e, atoms, fit_e) = seconds(lambda: fit_mlirl(state, demo, "exact"), repeats)
+    approx_s, (space_a, _, fit_a) = seconds(lambda: fit_mlirl(state, demo, "abstraction"), repeats)
+    best_e, best_a = atoms[int(np.argmax(fit_e.weights))], atoms[int(np.argmax(fit_a.weights))]
+    print(f"  one MLIRL fit over {len(atoms)} position PFs: exact ({space_e.num_states:,} states) {exact_s:.3f} s, "
+          f"approximate ({space_a.num_states:,} states) {approx_s:.3f} s, ratio {exact_s / approx_s:.1f}x; top "
+          f"weight exact {best_e}, approximate {best_a}")
 
 
 def agreement(library) -> None:

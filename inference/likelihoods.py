@@ -12,9 +12,10 @@ Work is shared: the state space is enumerated once per distinct initial
 state, the task is solved once per (initial state, goal), and every
 demonstration starting there is scored against that one solution. (The
 commands-to-tasks corpus has 240 instances but 6 demonstrations.) Where the
-whole world is too large, each goal is solved in the relevance abstraction of
-the toys it names and its demonstrations move
-(:func:`groundlang.model.relevance.state_space_for`).
+whole world is too large, each demonstration's goals are scored by
+:func:`groundlang.inference.stepwise.approximate_likelihoods`: each goal in the
+relevance abstraction of the toys it names and the demonstration moves, or
+stepwise over the placements the demonstration visits, all solved together.
 
 Cache: one small JSON file per (layout, initial state, goal, demonstration,
 settings), named by the sha256 of a canonical JSON description of those, in
@@ -178,6 +179,7 @@ def behaviour_likelihood_table(
     cache_dir: str | os.PathLike | None | bool = None,
     progress: bool = False,
     library=None,
+    method: str = "auto",
 ) -> list[np.ndarray]:
     """Log-likelihood of each instance's demonstration under each of its candidate goals.
 
@@ -191,14 +193,17 @@ def behaviour_likelihood_table(
         cache_dir: cache root (see module docstring); False for no cache.
         library: the TaskLibrary whose PF rules say what the goals mean (default: the package's PFs);
             a library with PF rules of its own keys its entries by their text.
+        method: "auto" (the exact space where the whole world fits ``max_states``, else the approximation
+            of inference/stepwise.py; logged by model.relevance), or "exact" / "abstraction" to force one.
     Returns a list of float64 arrays, ``result[i][k]`` for candidate ``k`` of instance ``i``.
     Raises ValueError when the lists differ in length or a goal names an unknown object.
     """
-    from groundlang.model.features import goal_mask
+    from groundlang.inference.stepwise import approximate_likelihoods
     from groundlang.model.pf_tables import pf_tables, program_digest, tabulation_program
-    from groundlang.model.relevance import exact_fits, state_space_for
-    from groundlang.model.statespace import trajectory_indices
+    from groundlang.model.relevance import exact_fits
 
+    if method not in ("auto", "exact", "abstraction"):
+        raise ValueError(f"method {method!r}: expected auto, exact or abstraction")
     if len(candidates) != len(instances):
         raise ValueError(f"{len(instances)} instances but {len(candidates)} candidate lists")
     root = None if cache_dir is False else cache_directory(cache_dir)
@@ -213,7 +218,7 @@ def behaviour_likelihood_table(
     damaged: dict[Path, str] = {}  # path -> why; an entry shared by many instances is counted once
     for i, (inst, row) in enumerate(zip(instances, goals)):
         actions = [int(a) for a in inst.actions]
-        abstraction = not exact_fits(inst.initial_state)
+        abstraction = method == "abstraction" or (method == "auto" and not exact_fits(inst.initial_state))
         keys.append([entry_key(inst.initial_state, g, actions, settings, pfs, abstraction) for g in row])
         for k, (g, key) in enumerate(zip(row, keys[i])):
             value = None
@@ -242,45 +247,71 @@ def behaviour_likelihood_table(
         bar = tqdm(total=solves, desc="behaviour likelihoods", unit="solve")
     for initial, by_goal in todo.items():
         tables = pf_tables(initial.layout, program)
-        # Where the whole world does not fit, each goal gets the relevance abstraction of the objects it
-        # names and its demonstrations move (widened when the goal is out of its reach).
-        shared = exact_fits(initial)
-        spaces: dict = {}  # goal (or () when shared) -> space; abstractions of the same toys are one object
-        converted: dict[int, tuple] = {}  # id(space) -> (space, transitions): converted once per space
-        demo_indices: dict[tuple, np.ndarray] = {}
+        if method == "exact" or (method == "auto" and exact_fits(initial)):
+            for goal, entries in _exact_rows(initial, by_goal, instances, tables, settings):
+                for (i, k), value in entries:
+                    table[i][k] = value
+                    root = _store(root, keys[i][k], value, goal)
+                if bar is not None:
+                    bar.update(1)
+            continue
+        # Where the whole world does not fit: per demonstration, every goal in a relevance abstraction or
+        # stepwise (inference/stepwise.py), all solved together.
+        by_demo: dict = {}  # actions -> [(goal, i, k)]
         for goal, entries in by_goal.items():
-            demos = [] if shared else [instances[i].states for i, _ in entries]
-            key = () if shared else goal
-            if key not in spaces:
-                spaces[key] = state_space_for(initial, goal, demos, tables=tables)
-            space = spaces[key]
-            key = id(space)  # demonstration indices are per space
-            mask = goal_mask(space, goal, tables)
-            with threads_for(space.num_states):  # small spaces: one thread (others may share the cores)
-                if key not in converted:
-                    converted[key] = (space, as_transitions(space.next_state))
-                result = solve_task(converted[key][1], mask, settings)
-            if not result.converged:
-                logger.warning("goal %s: soft value iteration stopped after %d sweeps (residual %.3g)",
-                               " ".join(map(str, goal)), result.sweeps, result.residual)
             for i, k in entries:
-                if (key, i) not in demo_indices:
-                    demo_indices[key, i] = trajectory_indices(space, list(instances[i].states))
-                actions = [int(a) for a in instances[i].actions]
-                value = float(demonstration_log_likelihood(result.log_policy, demo_indices[key, i], actions))
-                table[i][k] = value
-                if root is not None:
-                    try:
-                        _write_entry(_entry_path(root, keys[i][k]), keys[i][k], value, goal)
-                    except OSError as exc:
-                        logger.warning("behaviour cache %s cannot be written (%s: %s); going on without writing "
-                                       "to it", root, exc.filename or root, exc.strerror or exc)
-                        root = None
+                by_demo.setdefault(tuple(int(a) for a in instances[i].actions), []).append((goal, i, k))
+        for rows in by_demo.values():
+            goals = list(dict.fromkeys(g for g, _, _ in rows))
+            inst = instances[rows[0][1]]
+            values = dict(zip(goals, approximate_likelihoods(initial, goals, list(inst.states), inst.actions,
+                                                             tables, settings)))
+            for goal, i, k in rows:
+                table[i][k] = float(values[goal])
+                root = _store(root, keys[i][k], table[i][k], goal)
             if bar is not None:
-                bar.update(1)
+                bar.update(len(goals))
     if bar is not None:
         bar.close()
     return table
+
+
+def _exact_rows(initial, by_goal: dict, instances, tables, settings):
+    """``(goal, [((i, k), value)])`` per goal: the whole state space, enumerated once, solved per goal."""
+    from groundlang.model.features import goal_mask
+    from groundlang.model.relevance import state_space_for
+    from groundlang.model.statespace import trajectory_indices
+
+    space = state_space_for(initial, method="exact")
+    with threads_for(space.num_states):  # small spaces: one thread (others may share the cores)
+        transitions = as_transitions(space.next_state)
+    paths: dict[int, np.ndarray] = {}
+    for goal, entries in by_goal.items():
+        with threads_for(space.num_states):
+            result = solve_task(transitions, goal_mask(space, goal, tables), settings)
+        if not result.converged:
+            logger.warning("goal %s: soft value iteration stopped after %d sweeps (residual %.3g)",
+                           " ".join(map(str, goal)), result.sweeps, result.residual)
+        out = []
+        for i, k in entries:
+            if i not in paths:
+                paths[i] = trajectory_indices(space, list(instances[i].states))
+            actions = [int(a) for a in instances[i].actions]
+            out.append(((i, k), float(demonstration_log_likelihood(result.log_policy, paths[i], actions))))
+        yield goal, out
+
+
+def _store(root, key: str, value: float, goal) -> Path | None:
+    """Write one entry; the root, or None once the cache cannot be written (warned once)."""
+    if root is None:
+        return None
+    try:
+        _write_entry(_entry_path(root, key), key, value, goal)
+        return root
+    except OSError as exc:
+        logger.warning("behaviour cache %s cannot be written (%s: %s); going on without writing "
+                       "to it", root, exc.filename or root, exc.strerror or exc)
+        return None
 
 
 def pad_table(rows: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

@@ -44,12 +44,13 @@ from .state_search import MAX_STATES_VARIABLE, default_max_states, key_powers, s
 from .statespace import StateSpace, StateSpaceError, enumerate_states
 from .world import ACTION_DELTAS, State
 
-__all__ = ["AbstractStateSpace", "abstract_space", "exact_fits", "relevant_toys", "state_space_for",
+__all__ = ["AbstractStateSpace", "abstract_space", "abstract_space_uncached", "abstraction_bound", "announce",
+           "exact_fits", "relevant_toys", "state_space_for",
            "check_abstraction_possible", "pushes_scenery", "PlacementSample", "placement_sample"]
 
 logger = logging.getLogger(__name__)
 
-# (layout, max_states) already announced at info level, oldest first (bounded).
+# (layout, max_states, message) already announced at info level, oldest first (bounded).
 _ANNOUNCED: dict = {}
 
 
@@ -154,6 +155,12 @@ def abstract_space(state: State, relevant: Sequence[int], max_states: int | None
 
 @lru_cache(maxsize=4)
 def _abstract_space(state: State, relevant: tuple[int, ...], max_states: int) -> AbstractStateSpace:
+    return abstract_space_uncached(state, relevant, max_states)
+
+
+def abstract_space_uncached(state: State, relevant: tuple[int, ...], max_states: int) -> AbstractStateSpace:
+    """:func:`abstract_space` without its memory (``relevant`` sorted): for callers that build many
+    abstractions once each (one per placement of the toys a demonstration moves)."""
     scenery = [i for i in range(len(state.toys)) if i not in relevant]
     pos = state.positions
     walkable = state.layout.walkable.copy()
@@ -251,17 +258,21 @@ def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstration
                     _goal_text(goal), len(space.scenery), len(more) - len(relevant))
         relevant = more
         space = abstract_space(state, relevant, max_states)
-    # info once per layout and limit (a corpus of many pairs in one layout would repeat it), then debug
-    seen = (state.layout, max_states) in _ANNOUNCED
-    _ANNOUNCED[state.layout, max_states] = None
+    announce(state.layout, max_states, "state space: relevance abstraction, %d states (whole layout up to %s %s "
+             "max_states=%s; moving agent0%s, %d toy(s) as walls)", space.num_states, f"{exact:,}",
+             ">" if exact > max_states else "<=", f"{max_states:,}",
+             "".join(f", {state.layout.toy_names[i]}" for i in space.relevant), len(space.scenery))
+    return space
+
+
+def announce(layout, max_states: int, message: str, *args) -> None:
+    """Log ``message`` at info level the first time for (layout, max_states), then at debug level (a corpus
+    of many pairs in one layout would repeat it)."""
+    seen = (layout, max_states, message) in _ANNOUNCED
+    _ANNOUNCED[layout, max_states, message] = None
     if len(_ANNOUNCED) > 256:
         _ANNOUNCED.pop(next(iter(_ANNOUNCED)))
-    logger.log(logging.DEBUG if seen else logging.INFO,
-               "state space: relevance abstraction, %d states (whole layout up to %s %s max_states=%s; "
-                "moving agent0%s, %d toy(s) as walls)", space.num_states, f"{exact:,}",
-                ">" if exact > max_states else "<=", f"{max_states:,}",
-                "".join(f", {state.layout.toy_names[i]}" for i in space.relevant), len(space.scenery))
-    return space
+    logger.log(logging.DEBUG if seen else logging.INFO, message, *args)
 
 
 def _goal_reachable(space: StateSpace, goal: Sequence[Atom], tables) -> bool:
