@@ -12,7 +12,6 @@ from dataclasses import dataclass
 import torch
 
 from groundlang.inference.joint import local_posteriors
-from groundlang.model.encoding import encode
 
 __all__ = ["PhraseAlignment", "phrase_alignments"]
 
@@ -34,7 +33,7 @@ def phrase_alignments(learner, command: str, state, interpretation: int | None =
     learner._require_fitted()
     learner._check_state("alignments", command, state)
     obs = learner._command_observation(command, state)
-    batch = encode([obs], learner.vocab, learner.lm.phrase_keys())
+    batch = learner.lm.encode([obs], learner.vocab)
     z, structures = local_posteriors(batch, learner.lm, learner.globals, use_behaviour=False)
     if structures is None:
         return []

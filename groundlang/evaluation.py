@@ -29,7 +29,6 @@ from groundlang.folds import run_folds
 from groundlang.goal_translation import NovelEnvironmentError, describe_goal, translate_goal
 from groundlang.labels import label_for
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
-from groundlang.model.encoding import encode
 from groundlang.model.language_models import get_language_model
 from groundlang.model.world import State
 
@@ -191,7 +190,7 @@ def evaluate(
     context = {
         "learner": learner,
         "instances": instances,
-        "batch": encode(observations, learner.vocab, lm.phrase_keys()),
+        "batch": lm.encode(observations, learner.vocab),
         "golds": golds,
         "globals": dict(learner.globals),
         "novel_states": list(novel_states),

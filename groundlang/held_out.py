@@ -23,7 +23,6 @@ from dataclasses import dataclass
 import torch
 
 from groundlang.learner import Learner
-from groundlang.model.encoding import encode
 from groundlang.model.language_models import get_language_model, setting_names
 
 __all__ = ["HeldOutLikelihood", "SwitchRow", "held_out_likelihood", "switch_settings", "compare_switches",
@@ -85,7 +84,7 @@ def held_out_likelihood(instances: Sequence, language_model: str = "parse", sett
         train = [n for n in range(len(instances)) if n % folds != k]
         test = [n for n in range(len(instances)) if n % folds == k]
         learner.fit([instances[n] for n in train], observations=[observations[n] for n in train])
-        batch = encode([observations[n] for n in test], learner.vocab, lm.phrase_keys())
+        batch = lm.encode([observations[n] for n in test], learner.vocab)
         with torch.no_grad():
             said = lm.log_likelihood(learner.globals, batch)  # [I, J]
             joint += float(torch.logsumexp(batch.log_prior + batch.behaviour + said, -1).sum())

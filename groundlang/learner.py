@@ -27,7 +27,7 @@ from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
-from groundlang.model.encoding import Batch, Observation, encode
+from groundlang.model.encoding import Batch, Observation
 from groundlang.model.interpretations import Interpretation, interpretations, without_unbroken_held_parts
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.language_model_base import word_meanings
@@ -231,7 +231,7 @@ class Learner:
                 self.palettes = [{"name": p.name, "colours": list(p.colours), "shapes": list(p.shapes)}
                                  for p in palettes]
                 init = None
-            batch = encode(observations, self.vocab, self.lm.phrase_keys())
+            batch = self.lm.encode(observations, self.vocab)
         elif self.vocab is None:
             raise ValueError("fit(batch=...) needs the vocabulary the batch was encoded with")
         if init is None and self.lm.starts_from_bag_of_words:
@@ -273,7 +273,7 @@ class Learner:
         self._require_fitted()
         self._check_state("posterior", command, state)
         obs = self._command_observation(command, state)
-        batch = encode([obs], self.vocab, self.lm.phrase_keys())
+        batch = self.lm.encode([obs], self.vocab)
         # The interpretation and the reading: the two sites the model enumerates per command.
         probs, structures = local_posteriors(batch, self.lm, self.globals, use_behaviour=False)
         probs = probs[0]

@@ -18,7 +18,7 @@ from groundlang.corpus import Instance
 from groundlang.inference.incremental import fold_in, grow_words, word_totals
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.logic.atoms import Atom, format_goal, parse_goal
-from groundlang.model.encoding import Observation, encode
+from groundlang.model.encoding import Observation
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import Action, WorldError, replay
 
@@ -102,7 +102,7 @@ def update_learner(learner, command: str, state, demonstration: Sequence | str |
     # On a copy, so that a failure leaves the learner as it was.
     vocab = Vocabulary.from_json(learner.vocab.to_json(), learner.word_lexicon)
     vocab.add_words(new_words)
-    globals_, _ = fold_in(encode([obs], vocab, learner.lm.phrase_keys()), learner.lm, vocab,
+    globals_, _ = fold_in(learner.lm.encode([obs], vocab), learner.lm, vocab,
                           {**learner.globals, "phi": phi}, totals, steps=steps)
     learner.vocab, learner.globals = vocab, globals_
     return learner

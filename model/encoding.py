@@ -129,11 +129,13 @@ def token_exclusions(vocab: Vocabulary) -> torch.Tensor:
 _SHARED = ("mixtures", "token_name", "token_family", "token_excluded")  # fields of the vocabulary, not of instances
 
 
-def is_mentionable(rb: RoleBinding) -> bool:
+def is_mentionable(rb: RoleBinding, task_objects: bool = True) -> bool:
     """Whether the mention model asks if a phrase names this object: every toy (a command
-    names the toys its task moves, not bystanders) and every other object the task binds
-    but the agent, who is "you" (a command names the room its task ends in). Measured: ABLATIONS.md."""
-    return rb.cls in domain_classes().mentioned or (rb.cls not in UNALIGNED_CLASSES and is_task_role(rb.role))
+    names the toys its task moves, not bystanders) and, with ``task_objects``, every other object
+    the task binds but the agent, who is "you" (a command names the room its task ends in; the
+    parse model's ``mention_task_objects``). Measured: ABLATIONS.md."""
+    return rb.cls in domain_classes().mentioned or (
+        task_objects and rb.cls not in UNALIGNED_CLASSES and is_task_role(rb.role))
 
 
 def machine_string(interp: Interpretation) -> list[str]:
@@ -172,7 +174,8 @@ class _Mixtures:
         return out
 
 
-def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int], keys: PhraseKeys):
+def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int], keys: PhraseKeys,
+                       negated_verbs_frame: bool):
     """Distinct noun-phrase types and, per distinct reading structure, their counts.
 
     Readings that give the same multiset of (preposition key, words), the
@@ -194,7 +197,8 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int],
         # "... but do not enter it" taught the toy task "enter" and "dont cross over to orange" taught it
         # "cross": in a layout with a toy, "cross path from green room to orange room" read as moving it
         # (measured: ABLATIONS.md).
-        said = Counter(c.verb for c in reading.logical_form.clauses if c.verb and not c.negated)
+        said = Counter(c.verb for c in reading.logical_form.clauses
+                       if c.verb and not (negated_verbs_frame and c.negated))
         verbs = Counter({v: min(n, frame[v]) for v, n in said.items() if frame[v] > 0})  # a word counts once
         frame.subtract(verbs)
         ent_types = Counter()
@@ -220,10 +224,13 @@ def _reading_structure(obs: Observation, vocab: Vocabulary, col: dict[int, int],
     return types, merged, groups
 
 
-def encode(observations: list[Observation], vocab: Vocabulary, keys: PhraseKeys = PhraseKeys()) -> Batch:
+def encode(observations: list[Observation], vocab: Vocabulary, keys: PhraseKeys = PhraseKeys(), *,
+           negated_verbs_frame: bool = True, mention_task_objects: bool = True) -> Batch:
     """Pad and index a list of observations with a fixed vocabulary; ``keys``: the marks of the noun
     phrases' preposition keys (the language model's ``phrase_keys()``; the vocabulary's keys were made
-    with the same)."""
+    with the same). ``negated_verbs_frame``: the verb of a negated clause is a frame word, not one of
+    the task's verbs; ``mention_task_objects``: see :func:`is_mentionable` (the parse model's settings of
+    these names; :meth:`LanguageModel.encode` passes a model's own)."""
     if not observations:
         raise ValueError("cannot encode an empty list of observations")
     I = len(observations)
@@ -250,7 +257,7 @@ def encode(observations: list[Observation], vocab: Vocabulary, keys: PhraseKeys 
     # explain every phrase (see model.interpretations).
     role_mix = torch.full((I, J, V), pad_mix, dtype=torch.long)
     role_head_mix = torch.full((I, J, V), pad_mix, dtype=torch.long)
-    G = max(1, max(sum(1 for rb in interp.roles if is_mentionable(rb))
+    G = max(1, max(sum(1 for rb in interp.roles if is_mentionable(rb, mention_task_objects))
                    for o in observations for interp in o.interpretations))
     cover_slot = torch.zeros(I, J, G, dtype=torch.long)
     cover_mask = torch.zeros(I, J, G, dtype=torch.bool)
@@ -279,7 +286,7 @@ def encode(observations: list[Observation], vocab: Vocabulary, keys: PhraseKeys 
             sharing = Counter(rb.role for rb in interp.roles)
             slots = 0
             for v, rb in enumerate(interp.roles, start=1):
-                if is_mentionable(rb):  # the mention model asks whether it is named
+                if is_mentionable(rb, mention_task_objects):  # the mention model asks whether it is named
                     cover_slot[i, j, slots] = v
                     cover_mask[i, j, slots] = True
                     slots += 1
@@ -320,7 +327,7 @@ def encode(observations: list[Observation], vocab: Vocabulary, keys: PhraseKeys 
         col = {w: u for u, w in enumerate(ids)}
         uniq_rows.append(ids)
         count_rows.append([float(counts.get(w, 0)) for w in ids])
-        structures.append(_reading_structure(obs, vocab, col, keys))
+        structures.append(_reading_structure(obs, vocab, col, keys, negated_verbs_frame))
     uniq = _pad(uniq_rows, 0, torch.long)
     word_counts = _pad(count_rows, 0.0, torch.float32)
     U = uniq.shape[1]

@@ -8,7 +8,7 @@ import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import Batch, PhraseKeys, token_exclusions
+from groundlang.model.encoding import Batch, Observation, PhraseKeys, encode, token_exclusions
 
 __all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
            "token_words", "word_meanings"]
@@ -30,6 +30,8 @@ class LanguageModel:
     relational_descriptions = False
     start_role = True
     bystander_roles = True
+    negated_verbs_frame = True
+    mention_task_objects = True
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
@@ -51,6 +53,11 @@ class LanguageModel:
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""
         return PhraseKeys()
+
+    def encode(self, observations: list[Observation], vocab) -> Batch:
+        """The batch this model reads: ``observations`` indexed with ``vocab`` under the model's settings."""
+        return encode(observations, vocab, self.phrase_keys(), negated_verbs_frame=self.negated_verbs_frame,
+                      mention_task_objects=self.mention_task_objects)
 
     def sample_globals(
         self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),

@@ -67,6 +67,9 @@ class ParseAligned(LanguageModel):
         negation_key: bool = True,
         start_role: bool = True,
         bystander_roles: bool = True,
+        largest_constraint: bool = True,
+        negated_verbs_frame: bool = True,
+        mention_task_objects: bool = True,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -97,7 +100,12 @@ class ParseAligned(LanguageModel):
         marks of a phrase's preposition key (``phrase_keys.PhraseKeys`` says the regularity each states).
         ``start_role``: the room the agent starts in has a role of its own ("go *from the orange room*");
         ``bystander_roles``: objects the task leaves alone have one role per class (``other:room``), not
-        one for all (``interpretations.interpretations``). ``schema_names``: see
+        one for all (``interpretations.interpretations``). ``largest_constraint``: each grounding is offered once,
+        described by every property PF of its objects, and each word picks the property it says; off, one
+        interpretation per binding constraint, each with its share of the prior. ``negated_verbs_frame``: the
+        verb of a negated clause ("do not *enter*") says what not to do, a frame word rather than one of the
+        task's verbs. ``mention_task_objects``: the mention model asks whether each object the task binds
+        (a room it ends in) is named, not only toys. ``schema_names``: see
         :class:`LanguageModel`. What each measured: ABLATIONS.md."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
@@ -129,6 +137,9 @@ class ParseAligned(LanguageModel):
         self.negation_key = negation_key
         self.start_role = start_role
         self.bystander_roles = bystander_roles
+        self.enumerates_constraints = not largest_constraint
+        self.negated_verbs_frame = negated_verbs_frame
+        self.mention_task_objects = mention_task_objects
 
     def phrase_keys(self) -> PhraseKeys:
         return PhraseKeys(self.last_phrase_key, self.object_key, self.last_passes_over_source, self.noun_attached_key,
@@ -156,6 +167,9 @@ class ParseAligned(LanguageModel):
             "negation_key": self.negation_key,
             "start_role": self.start_role,
             "bystander_roles": self.bystander_roles,
+            "largest_constraint": not self.enumerates_constraints,
+            "negated_verbs_frame": self.negated_verbs_frame,
+            "mention_task_objects": self.mention_task_objects,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=(),

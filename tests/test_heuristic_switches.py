@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -21,7 +22,7 @@ from groundlang.model.phrase_keys import PhraseKeys, entity_words
 EXAMPLES = example_corpus_path()
 NOVEL_A = Path(__file__).parent / "fixtures" / "novel_envs" / "novel_a.state"
 SWITCHES = ("last_phrase_key", "object_key", "last_passes_over_source", "noun_attached_key", "negation_key",
-            "start_role", "bystander_roles")
+            "start_role", "bystander_roles", "largest_constraint", "negated_verbs_frame", "mention_task_objects")
 
 
 def _keys(command: str, **switches) -> list:
@@ -134,3 +135,53 @@ def test_evaluate_accepts_a_switch_off_and_records_it(tmp_path, capsys):
                  str(EXAMPLES / "labels.csv"), "--lm-setting", "object_key=0"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["groundlang evaluate: error: language model parse, setting object_key: expected true or false, not 0"]
+
+
+def test_with_every_constraint_each_grounding_is_offered_once_per_constraint_with_its_share(examples):
+    state = examples[0].initial_state
+    lm = get_language_model("parse", largest_constraint=False)
+    assert lm.enumerates_constraints and not get_language_model("parse").enumerates_constraints
+    library = Learner("parse").library
+    largest = interpretations(state, library, enumerate_constraints=False)
+    every = interpretations(state, library, enumerate_constraints=True)
+    assert len(every) > len(largest)
+    # one per grounding either way; the constraints of a grounding split its prior
+    assert {i.task for i in every} == {i.task for i in largest}
+    assert math.isclose(sum(math.exp(i.log_prior) for i in every), sum(math.exp(i.log_prior) for i in largest),
+                        rel_tol=1e-9)
+    every_obs = Learner(language_model=lm).observe(examples[:1])[0].interpretations
+    largest_obs = Learner("parse").observe(examples[:1])[0].interpretations
+    assert len(every_obs) > len(largest_obs)  # the learner offers what the setting says
+    assert {i.task for i in every_obs} == {i.task for i in largest_obs}
+
+
+def _encoded(examples, command, **settings):
+    lm = get_language_model("parse", **settings)
+    said = replace(examples[0], command=command)
+    learner = Learner(language_model=lm, steps=5).fit([*examples[::3], said])
+    return learner, lm.encode(learner.observe([said]), learner.vocab)
+
+
+def test_a_negated_verb_is_a_frame_word_unless_switched_off(examples):
+    for frame in (True, False):
+        learner, batch = _encoded(examples, "go to the red room and do not enter the green room",
+                                  negated_verbs_frame=frame)
+        col = {int(w): u for u, w in enumerate(batch.uniq[0])}
+        enter, go = col[learner.vocab.word_id("enter")], col[learner.vocab.word_id("go")]
+        verbs, frames = batch.verb_counts[0].sum(0), batch.frame_counts[0].sum(0)
+        assert verbs[go] > 0
+        if frame:
+            assert verbs[enter] == 0 and frames[enter] > 0
+        else:
+            assert verbs[enter] > 0
+
+
+def test_without_task_objects_the_mention_model_asks_only_about_toys(examples):
+    _, on = _encoded(examples, "go to the red room")
+    learner, off = _encoded(examples, "go to the red room", mention_task_objects=False)
+    obs = learner.observe([replace(examples[0], command="go to the red room")])[0]
+    for j, interp in enumerate(obs.interpretations):
+        toys = sum(1 for rb in interp.roles if rb.cls == "toy")
+        assert int(off.cover_mask[0, j].sum()) == toys
+        rooms_bound = sum(1 for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:"))
+        assert int(on.cover_mask[0, j].sum()) == toys + rooms_bound
