@@ -24,6 +24,7 @@ from pyro.infer.autoguide.initialization import init_to_mean, init_to_value
 from pyro import poutine
 from pyro.poutine.util import site_is_subsample
 
+from groundlang.inference.em import EM_ACCELERATIONS, run_em
 from groundlang.model.encoding import Batch
 from groundlang.model.generative import LOCAL_SITES, global_sizes, instance_model
 from groundlang.model.language_models import LanguageModel
@@ -52,7 +53,7 @@ def single_threaded():
 class FitResult:
     globals: dict[str, torch.Tensor]
     losses: list[float]
-    steps: int
+    steps: int  # EM steps (a forward and a backward pass each), or optimiser rounds
     converged: bool
 
 
@@ -67,6 +68,7 @@ def fit_globals(
     tol: float = 1e-7,
     optimizer: str = "auto",
     progress: bool = False,
+    acceleration: str = "none",
 ) -> FitResult:
     """MAP estimate of the language model's globals.
 
@@ -84,11 +86,17 @@ def fit_globals(
     - ``"adam"``: ``steps`` SVI steps with learning rate ``lr``.
     - ``"auto"``: EM when every global is Dirichlet, else L-BFGS.
 
+    ``acceleration`` (EM only): ``"none"``, one EM step after another, or ``"squarem"``, which
+    extrapolates along two EM steps (:mod:`groundlang.inference.em`) and never decreases the objective
+    from one accepted iterate to the next.
+
     ``init`` warm-starts from earlier globals (e.g. the full model's, for a
     leave-one-out fold); the fit still runs to convergence on its own data.
     """
     if optimizer not in ("auto", "em", "lbfgs", "adam"):
         raise ValueError(f"unknown optimizer {optimizer!r}; expected auto, em, lbfgs or adam")
+    if acceleration not in EM_ACCELERATIONS:
+        raise ValueError(f"unknown EM acceleration {acceleration!r}; expected one of {', '.join(EM_ACCELERATIONS)}")
     with single_threaded():
         pyro.set_rng_seed(seed)
         pyro.clear_param_store()
@@ -101,7 +109,7 @@ def fit_globals(
         if optimizer == "auto":
             optimizer = "em" if all(isinstance(d, dist.Dirichlet) for d in sites.values()) else "lbfgs"
         if optimizer == "em":
-            return _fit_em(model, sites, lm, steps, init, tol, progress)
+            return _fit_em(model, sites, lm, steps, init, tol, progress, acceleration)
         return _fit_svi(model, lm, steps, lr, init, tol, optimizer, progress)
 
 
@@ -148,34 +156,32 @@ def prior_concentrations(batch: Batch, lm: LanguageModel, vocab: Vocabulary) -> 
     return {name: prior.concentration for name, prior in sites.items() if isinstance(prior, dist.Dirichlet)}
 
 
-def _fit_em(model, sites, lm, steps, init, tol, progress) -> FitResult:
+def _fit_em(model, sites, lm, steps, init, tol, progress, acceleration) -> FitResult:
     values = {
         name: (init[name].clone() if init and name in init else prior.mean.detach().clone())
         for name, prior in sites.items()
     }
-    losses: list[float] = []
-    converged = False
     bar = _progress_bar(progress, steps, lm)
-    for _ in range(steps):
-        leaves = {k: v.clone().requires_grad_(True) for k, v in values.items()}
+
+    def step(current):
+        leaves = {k: v.clone().requires_grad_(True) for k, v in current.items()}
         objective = _log_joint(model, leaves)
         objective.backward()
-        losses.append(-float(objective.detach()))
         with torch.no_grad():
-            for name, leaf in leaves.items():
-                # phi * dlogp/dphi = expected counts + (alpha - 1): the M step.
-                counts = (leaf * leaf.grad).clamp_min(1e-12)
-                values[name] = counts / counts.sum(-1, keepdim=True)
+            # phi * dlogp/dphi = expected counts + (alpha - 1): the M step.
+            counts = {name: (leaf * leaf.grad).clamp_min(1e-12) for name, leaf in leaves.items()}
+        return {name: c / c.sum(-1, keepdim=True) for name, c in counts.items()}, -float(objective.detach())
+
+    def tick(loss: float) -> None:
         if bar is not None:
             bar.update(1)
-            bar.set_postfix(loss=f"{losses[-1]:.1f}")
-        if len(losses) >= 2 and abs(losses[-2] - losses[-1]) <= tol * abs(losses[-1]):
-            converged = True
-            break
+            bar.set_postfix(loss=f"{loss:.1f}")
+
+    values, losses, taken, converged = run_em(step, values, steps, tol, acceleration, tick)
     if bar is not None:
         bar.close()
-    log.debug("EM fit %s: %d iterations, final loss %.3f", lm.name, len(losses), losses[-1])
-    return FitResult(values, losses, len(losses), converged)
+    log.debug("EM (%s) fit %s: %d steps, final loss %.3f", acceleration, lm.name, taken, losses[-1])
+    return FitResult(values, losses, taken, converged)
 
 
 def _fit_svi(model, lm, steps, lr, init, tol, optimizer, progress) -> FitResult:

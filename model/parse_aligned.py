@@ -23,9 +23,6 @@ roles its interpretations can offer (``Vocabulary.task_roles``). What each part 
 
 from __future__ import annotations
 
-import itertools
-
-
 import pyro
 import pyro.distributions as dist
 import torch
@@ -33,12 +30,11 @@ import torch
 from groundlang.model.encoding import CLAUSE_ARITY_BINS, PAD_LOGIT, Batch, PhraseKeys
 from groundlang.model.language_model_base import (NULL_MIXTURE, LanguageModel, gather_mixtures,
                                                   mixture_log_emissions, require_positive)
+from groundlang.model.mentions import mention_factor
 from groundlang.model.relational import is_relational_role
 from groundlang.model.vocabulary import is_task_role
 
-__all__ = ["ParseAligned", "MENTION_SUBSETS_PER_BLOCK"]
-
-MENTION_SUBSETS_PER_BLOCK = 64  # subsets of mentionable objects summed at once by the mention factor
+__all__ = ["ParseAligned"]
 
 
 class ParseAligned(LanguageModel):
@@ -294,7 +290,7 @@ class ParseAligned(LanguageModel):
         per_type = torch.logsumexp(joint, dim=2) * batch.type_mask[:, None, :]  # [I, J, K]
         entities = torch.einsum("ijk,irk->ijr", per_type, batch.reading_types)
         if "mention" in g:
-            entities = entities + self._mentions(g, batch, joint, entities, self.mention_phrases == "referring")
+            entities = entities + mention_factor(g, batch, joint, entities, self.mention_phrases == "referring")
         # Words outside noun phrases come from the lifted task's token or NULL
         # with learned shares, one pair for verbs and one for the other words:
         # a verb says more about the task than "to" or "the" does. A negated clause's verb
@@ -337,61 +333,3 @@ class ParseAligned(LanguageModel):
         # shifted by its largest term, and a padded 0 would shift a real -150 to nothing.
         padded = batch.reading_logp <= PAD_LOGIT
         return self._words_given_reading(g, batch)[0].masked_fill(padded[:, None, :], PAD_LOGIT), batch.reading_logp
-
-    @staticmethod
-    def _mentions(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.Tensor,
-                  referring_only: bool = True) -> torch.Tensor:
-        """``log`` of the mention model's factor per ``[I, J, R]``.
-
-        Each mentionable object g of the interpretation (every toy, every object
-        the task binds but the agent) is named by some phrase ("covered")
-        with probability ``mention[role_g, 0]`` and not with ``mention[role_g, 1]``.
-        With ``referring_only``, only a referring phrase (``batch.type_refers``)
-        aligned with g names it; the others align as freely but name nothing.
-        The alignments in which exactly the objects W go unnamed carry the mass
-        ``E(W)``; with ``P(U)`` the mass of alignments avoiding the objects U
-        (phrases choose roles independently, so it is a product over phrases),
-        inclusion-exclusion gives ``sum_W E(W) prod_{W} m1 prod_{not W} m0 =
-        sum_U P(U) prod_{U} (m1 - m0) prod_{not U} m0``, a polynomial in the
-        mention parameters with non-negative coefficients in the E(W) form:
-        ``phi * grad`` still gives EM's expected counts. Returned relative to
-        ``P({})`` (= ``entities``), to which it is added.
-        """
-        # Only the real interpretations, flattened to [N] = the True entries of ``batch.mask``: padding
-        # fills [I, J] wherever an instance offers fewer interpretations than the most, and its factor
-        # is 1 (log 0: no slot to name), so it is left at 0 rather than computed.
-        real_i, real_j = batch.mask.nonzero(as_tuple=True)
-        cover_slot = batch.cover_slot[real_i, real_j]  # [N, G]
-        cover_mask = batch.cover_mask[real_i, real_j]  # [N, G]
-        G = cover_slot.shape[-1]
-        role_of_slot = torch.gather(batch.role[real_i, real_j], 1, cover_slot)  # [N, G]
-        # In double precision: the terms alternate in sign and nearly cancel when a task's object
-        # is almost surely named, so float32 would leave errors of 1e-3 nats that depend on padding.
-        mention = g["mention"].double()[role_of_slot]  # [N, G, 2]
-        joint = joint[real_i, real_j].double()  # [N, V, K]
-        named = torch.where(cover_mask, mention[..., 0], torch.ones_like(mention[..., 0]))
-        unnamed_minus_named = torch.where(cover_mask, mention[..., 1] - mention[..., 0], torch.zeros_like(named))
-        # Each slot is its own role binding, so the roles avoiding U carry the mass of all roles
-        # less the slots' own: one subtraction per subset instead of a masked logsumexp.
-        K = joint.shape[2]
-        top = joint.max(dim=1, keepdim=True).values  # [N, 1, K]
-        mass = (joint - top).exp()  # [N, V, K]
-        all_roles = mass.sum(1)  # [N, K]
-        slot_mass = torch.gather(mass, 1, cover_slot[..., None].expand(-1, -1, K))
-        slot_mass = slot_mass * cover_mask[..., None]  # [N, G, K]
-        # Subsets U of the slots, a block at a time: chosen[u, g] says whether slot g is in subset u.
-        # One block holds them all for the few slots of the Cleanup World (2^4 here); blocks bound
-        # the memory of [N, subsets, K] when a layout has many toys.
-        subsets = torch.tensor(list(itertools.product((False, True), repeat=G)), dtype=torch.bool)  # [2^G, G]
-        naming = batch.type_mask & batch.type_refers if referring_only else batch.type_mask
-        types = naming[real_i][:, None, :]  # [N, 1, K]
-        readings = batch.reading_types.double()[real_i]  # [N, R, K]
-        total = torch.zeros((len(real_i), entities.shape[-1]), dtype=torch.float64)
-        for chosen in subsets.split(MENTION_SUBSETS_PER_BLOCK):
-            weight = torch.where(chosen, unnamed_minus_named[:, None, :], named[:, None, :]).prod(-1)  # [N, U]
-            avoided = torch.einsum("ngk,ug->nuk", slot_mass, chosen.to(slot_mass.dtype))  # [N, U, K]
-            share = ((all_roles[:, None, :] - avoided) / all_roles[:, None, :]).clamp_min(1e-30).log()
-            share = torch.einsum("nuk,nrk->nur", share * types, readings)
-            total = total + (weight[..., None] * share.exp()).sum(1)  # [N, R]
-        out = torch.zeros(entities.shape, dtype=torch.float64).index_put((real_i, real_j), total.clamp_min(1e-30).log())
-        return out.to(entities.dtype)

@@ -147,3 +147,26 @@ def test_the_reading_site_leaves_the_training_objective_as_the_summed_readings(e
     by_hand = _log_joint(lambda: instance_model(batch, summed, sizes), g).item()
     constant = float(torch.logsumexp(batch.reading_logp, -1).sum())
     assert with_site == pytest.approx(by_hand - constant, rel=1e-5)
+
+
+def test_squarem_reaches_em_s_optimum_in_fewer_steps_and_never_loses_ground(example):
+    """SQUAREM extrapolates along two EM steps; where EM crawls (the bag of words' ridge between
+    synonyms) it must find the same MAP, take fewer forward/backward passes, and never accept an
+    iterate worse than the last."""
+    _, learner, observations = example
+    batch = encode(observations, learner.vocab)
+    plain = fit_globals(batch, BagOfWords(), learner.vocab, steps=1000, tol=1e-8, optimizer="em")
+    fast = fit_globals(batch, BagOfWords(), learner.vocab, steps=1000, tol=1e-8, optimizer="em",
+                       acceleration="squarem")
+    assert plain.converged and fast.converged
+    assert fast.steps < plain.steps
+    assert fast.losses[-1] <= plain.losses[-1] + 1e-4 * abs(plain.losses[-1])
+    assert all(b <= a + 1e-5 * abs(a) for a, b in zip(fast.losses, fast.losses[1:]))
+    for name in plain.globals:
+        assert torch.allclose(fast.globals[name], plain.globals[name], atol=2e-2), name
+
+
+def test_unknown_em_acceleration_is_a_clear_error(example):
+    _, learner, observations = example
+    with pytest.raises(ValueError, match="unknown EM acceleration"):
+        fit_globals(encode(observations[:2], learner.vocab), learner.lm, learner.vocab, acceleration="aitken")

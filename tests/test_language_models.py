@@ -327,11 +327,11 @@ def test_each_lifted_task_has_its_own_arity_per_clause(setting):
 
 def test_mention_factor_is_the_same_summed_one_subset_at_a_time(setting, monkeypatch):
     """The blocks that bound the mention factor's memory change nothing but the memory."""
-    from groundlang.model import parse_aligned
+    from groundlang.model import mentions
 
     learner, _, batch, g = setting
     whole = learner.lm.reading_table(g, batch)[1]
-    monkeypatch.setattr(parse_aligned, "MENTION_SUBSETS_PER_BLOCK", 1)
+    monkeypatch.setattr(mentions, "MENTION_SUBSETS_PER_BLOCK", 1)
     assert torch.allclose(learner.lm.reading_table(g, batch)[1], whole, atol=1e-6)
 
 
