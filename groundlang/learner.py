@@ -20,6 +20,7 @@ from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import group_goals
 from groundlang.goal_plans import plan_for_goal, planning_space
+from groundlang.inference.em import EM_ACCELERATIONS
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings
@@ -71,7 +72,8 @@ class Learner:
     ``lexicon``: words the parser should know beyond English and the Cleanup World's
     (``logic/cleanup.words``): a word file's path, words by category (``{"NOUN": ["mug"]}``), or a
     list of them; the words are saved with the model. Raises LexiconError (a ValueError) naming file
-    and line for a malformed word file.
+    and line for a malformed word file. ``em_acceleration``: ``"squarem"`` or ``"none"``, how EM steps
+    are chained (:mod:`groundlang.inference.em`; both reach the same MAP).
     """
 
     def __init__(
@@ -84,6 +86,7 @@ class Learner:
         settings: TaskSettings | None = None,
         cache_dir: str | Path | None = None,
         lexicon: WordSource | Sequence[WordSource] | None = None,
+        em_acceleration: str = "squarem",
     ):
         self.lm = get_language_model(language_model) if isinstance(language_model, str) else language_model
         self.library = library if library is not None else TaskLibrary.load()
@@ -97,7 +100,11 @@ class Learner:
             raise ValueError(f"Learner: seed must be an integer, got {seed!r}")
         if settings is not None and not isinstance(settings, TaskSettings):
             raise TypeError(f"Learner: settings must be a TaskSettings, got {type(settings).__name__}")
+        if em_acceleration not in EM_ACCELERATIONS:
+            raise ValueError(f"Learner: em_acceleration must be one of {', '.join(EM_ACCELERATIONS)}, "
+                             f"got {em_acceleration!r}")
         self.steps = steps
+        self.em_acceleration = em_acceleration
         self.lr = lr
         self.seed = seed
         self.settings = settings or TaskSettings()
@@ -237,11 +244,11 @@ class Learner:
         if init is None and self.lm.starts_from_bag_of_words:
             # (From a flat start "star" was learned as a room word on the crowd corpus.)
             start = fit_globals(batch, BagOfWords(self.lm.word_concentration, schema_names=self.lm.schema_names), self.vocab,
-                                steps=self.steps, seed=self.seed)
+                                steps=self.steps, seed=self.seed, acceleration=self.em_acceleration)
             init = {"phi": start.globals["phi"]}
         self.fit_result = fit_globals(
             batch, self.lm, self.vocab, steps=self.steps, lr=self.lr, seed=self.seed,
-            init=init, progress=progress,
+            init=init, progress=progress, acceleration=self.em_acceleration,
         )
         self.globals = self.fit_result.globals
         return self

@@ -28,7 +28,8 @@ def learner_state(learner) -> dict:
         "palettes": learner.palettes,
         "task_library": learner.library.source_text(),
         "planning": learner.settings.as_dict(),
-        "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed},
+        "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed,
+                     "em_acceleration": learner.em_acceleration},
         "globals": learner.globals,
     }
 
@@ -43,6 +44,8 @@ def learner_from_state(cls, state: dict, where: str):
         library=TaskLibrary.from_text(state["task_library"], f"{where}:task_library"),
         steps=state["training"]["steps"], lr=state["training"]["lr"], seed=state["training"]["seed"],
         settings=TaskSettings(**state["planning"]), lexicon=[state["lexicon"]],
+        # models saved before the setting existed were fitted by plain EM
+        em_acceleration=state["training"].get("em_acceleration", "none"),
     )
     learner.vocab = Vocabulary.from_json(state["vocabulary"], learner.word_lexicon)
     learner.palettes = _checked_palettes(state["palettes"])

@@ -104,6 +104,16 @@ def test_state_dict_round_trips_without_files(learner, corpus):
         Learner().state_dict()
 
 
+def test_the_em_acceleration_is_saved_and_a_model_from_before_it_reads_as_plain_em(learner):
+    state = learner.state_dict()
+    assert state["training"]["em_acceleration"] == "squarem"  # the default
+    assert Learner.from_state_dict(state).em_acceleration == "squarem"
+    older = {**state, "training": {k: v for k, v in state["training"].items() if k != "em_acceleration"}}
+    assert Learner.from_state_dict(older).em_acceleration == "none"
+    with pytest.raises(ValueError, match="em_acceleration must be one of none, squarem"):
+        Learner(em_acceleration="anderson")
+
+
 def test_foreign_and_corrupt_model_directories_are_refused(learner, tmp_path):
     with pytest.raises(ModelFormatError, match="no model.json"):
         Learner.load(tmp_path)

@@ -91,6 +91,13 @@ def language_model_settings(pairs: list[str]) -> dict:
     return settings
 
 
+def add_em_acceleration_option(parser) -> None:
+    """``--em-acceleration {squarem,none}``: how the fit chains EM steps (both reach the same MAP)."""
+    parser.add_argument("--em-acceleration", choices=["squarem", "none"], default="squarem",
+                        help="how EM steps are chained: squarem extrapolates along two steps, none takes one "
+                             "after another (default squarem; both reach the same MAP)")
+
+
 PALETTE_HELP = ("colour and shape values of the files: a palette the package ships (sokoban, sokoban2; "
                 "groundlang/logic/palettes/) or the path of a .lp file of value(Attribute, Index, Name) facts")
 

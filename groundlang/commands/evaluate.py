@@ -6,7 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
+from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_em_acceleration_option,
+                                 add_language_model_settings,
                                  add_lexicon_option, fraction, language_model_settings, open_fraction,
                                  positive_int)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
@@ -38,6 +39,7 @@ def register(subparsers) -> None:
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES), help="language model: bow, ibm2 or parse (default parse)")
     add_language_model_settings(p)
     add_lexicon_option(p)
+    add_em_acceleration_option(p)
     p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes)")
     p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
     p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
@@ -96,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
         novel_states=novel, workers=args.workers, ray_address=args.ray,
         progress=args.progress, limit=args.limit, warm_start=not args.cold_folds,
         language_model_settings=language_model_settings(args.lm_settings),
-        learner_options={"lexicon": words} if words else None,
+        learner_options={"em_acceleration": args.em_acceleration, **({"lexicon": words} if words else {})},
         min_confidence=args.min_confidence,
     )
     print(result.summary())
@@ -152,7 +154,8 @@ def run_pairs(args: argparse.Namespace) -> int:
         train, test = held_out_by_text(train, args.holdout)
     from groundlang.model.language_models import get_language_model
 
-    options = {"language_model": get_language_model(args.language_model, **language_model_settings(args.lm_settings))}
+    options = {"language_model": get_language_model(args.language_model, **language_model_settings(args.lm_settings)),
+               "em_acceleration": args.em_acceleration}
     if words:
         options["lexicon"] = words
     result = evaluate_pairs(train, test, library, demonstrations=args.demonstrations,

@@ -8,7 +8,7 @@ import time
 from groundlang.bdm import bdm_files
 from groundlang.corpus import read_corpus
 from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
-                                 add_lexicon_option, language_model_settings, seed)
+                                 add_em_acceleration_option, add_lexicon_option, language_model_settings, seed)
 
 
 def register(subparsers) -> None:
@@ -26,6 +26,7 @@ def register(subparsers) -> None:
                    "(default $GROUNDLANG_CACHE or ./.groundlang-cache)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write that cache")
     p.add_argument("--seed", type=seed, default=0, help="seed of the fit (default 0; training is deterministic)")
+    add_em_acceleration_option(p)
     p.set_defaults(func=run)
 
 
@@ -51,13 +52,14 @@ def run(args: argparse.Namespace) -> int:
             print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
         instances = corpus.instances
         library = TaskLibrary.load(args.library) if args.library else None
-    learner = Learner(lm, library=library, seed=args.seed, lexicon=words, cache_dir=_cache(args))
+    learner = Learner(lm, library=library, seed=args.seed, lexicon=words, cache_dir=_cache(args),
+                      em_acceleration=args.em_acceleration)
     learner.fit(instances, progress=args.progress)
     learner.save(args.output)
     fit = learner.fit_result
     print(
         f"trained {args.language_model} on {len(instances)} instances in {time.perf_counter() - started:.1f} s "
-        f"({fit.steps} optimiser rounds, {'converged' if fit.converged else 'not converged'}); "
+        f"({fit.steps} EM steps, {'converged' if fit.converged else 'not converged'}); "
         f"model written to {args.output}"
     )
     return 0
