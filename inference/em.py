@@ -37,8 +37,8 @@ _FLOOR = 1e-12
 
 def run_em(step: Step, values: Values, steps: int, tol: float, acceleration: str = "none",
            tick: Callable[[float], None] | None = None) -> tuple[Values, list[float], int, bool]:
-    """Iterate ``step`` from ``values`` until the relative change of the loss between accepted
-    iterates is at most ``tol`` or ``steps`` EM steps have been taken.
+    """Iterate ``step`` from ``values`` until one EM step changes the loss by at most ``tol`` (relative)
+    or ``steps`` EM steps have been taken.
 
     Returns the final globals, the loss of every accepted iterate (non-increasing up to rounding),
     the number of EM steps taken and whether it converged.
@@ -62,24 +62,26 @@ def run_em(step: Step, values: Values, steps: int, tol: float, acceleration: str
                 return values, losses, taken, True
         return values, losses, taken, False
 
+    # Stopping means the same as for plain EM: one EM step (t0 -> t1) changes the loss by at most tol.
     t0 = values
     while taken < steps:
         t1, loss0 = step(t0)
         taken += 1
-        if accept(loss0) or taken >= steps:
-            return t1, losses, taken, len(losses) >= 2 and abs(losses[-2] - losses[-1]) <= tol * abs(losses[-1])
+        accept(loss0)
+        if taken >= steps:
+            return t1, losses, taken, False
         t2, loss1 = step(t1)
         taken += 1
+        if abs(loss0 - loss1) <= tol * abs(loss1):
+            accept(loss1)
+            return t2, losses, taken, True
         r = {k: t1[k] - t0[k] for k in t0}
         v = {k: t2[k] - 2 * t1[k] + t0[k] for k in t0}
         r_norm = torch.sqrt(sum((x.double() ** 2).sum() for x in r.values()))
         v_norm = torch.sqrt(sum((x.double() ** 2).sum() for x in v.values()))
-        if float(v_norm) == 0.0 or taken >= steps:
-            t0 = t2
-            continue
-        a = min(-float(r_norm / v_norm), -1.0)
-        if a == -1.0:
-            t0 = t2
+        a = -float(r_norm / v_norm) if float(v_norm) > 0.0 else -1.0
+        if a >= -1.0 or taken >= steps:
+            t0 = t2  # no jump beyond two plain steps
             continue
         jumped = {k: _on_simplex(t0[k] - 2 * a * r[k] + a * a * v[k]) for k in t0}
         t3, loss_jumped = step(jumped)
