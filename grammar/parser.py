@@ -39,7 +39,7 @@ from .phrases import DEFAULT_WEIGHTS, top_k
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["DEFAULT_WEIGHTS", "ParseError", "Word", "parse", "tokenise", "tag"]
+__all__ = ["DEFAULT_WEIGHTS", "ParseError", "Word", "checked_weights", "parse", "tokenise", "tag"]
 
 # Longer sentences are split at commas first, then chunked: Earley is cubic and the number of PP
 # attachments grows exponentially, and no corpus sentence needs more.
@@ -222,6 +222,23 @@ def _normalise(scored: list[tuple[float, LogicalForm]]) -> list[tuple[float, Log
         total[lf] = total.get(lf, 0.0) + math.exp(w - top)
     z = sum(total.values())
     return sorted(((p / z, lf) for lf, p in total.items()), key=lambda pl: (-round(pl[0], 12), repr(pl[1])))
+
+
+def checked_weights(weights) -> dict[str, float]:
+    """Overrides of DEFAULT_WEIGHTS by rule name, checked: a mapping of known rule names to positive
+    finite numbers. Raises ValueError naming what is wrong (an unknown rule with the list of known ones)."""
+    if not isinstance(weights, Mapping):
+        raise ValueError(f"grammar weights must be rule names with weights, e.g. {{\"nmods_coord\": 1.0}}; "
+                         f"got {weights!r}")
+    unknown = sorted(set(weights) - set(DEFAULT_WEIGHTS))
+    if unknown:
+        raise ValueError(f"unknown grammar rule(s) {', '.join(map(repr, unknown))}; the rules are "
+                         f"{', '.join(sorted(DEFAULT_WEIGHTS))}")
+    for name, w in weights.items():
+        if isinstance(w, bool) or not isinstance(w, (int, float)):
+            raise ValueError(f"grammar weight {name!r} must be a positive finite number, got {w!r}")
+    log_weights(weights)  # positive and finite
+    return {name: float(w) for name, w in weights.items()}
 
 
 def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None = None,

@@ -183,7 +183,8 @@ class Learner:
         parsed: dict[str, tuple] = {}  # a text said again is parsed once
         for inst, group, values in zip(instances, interps, behaviour):
             if inst.command not in parsed:
-                parsed[inst.command] = tuple(parse(inst.command, word_lexicon=self.word_lexicon))
+                parsed[inst.command] = tuple(parse(inst.command, weights=self.lm.parser_weights,
+                                                   word_lexicon=self.word_lexicon))
             readings = parsed[inst.command]
             observations.append(
                 Observation(
@@ -196,7 +197,7 @@ class Learner:
         return observations
 
     def _command_observation(self, command: str, state: State) -> Observation:
-        readings = tuple(parse(command, word_lexicon=self.word_lexicon))
+        readings = tuple(parse(command, weights=self.lm.parser_weights, word_lexicon=self.word_lexicon))
         return Observation(tuple(readings[0].logical_form.words), readings, tuple(self._interpretations(state)))
 
     # ----------------------------------------------------------------- training

@@ -32,6 +32,7 @@ class LanguageModel:
     bystander_roles = True
     negated_verbs_frame = True
     mention_task_objects = True
+    parser_weights = None  # overrides of the grammar's rule weights (grammar.parser.DEFAULT_WEIGHTS)
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,

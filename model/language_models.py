@@ -138,6 +138,8 @@ def _setting_problem(param: inspect.Parameter, value) -> str | None:
         return None if optional or default is None else "None is not allowed here"
     if isinstance(default, bool):
         return None if isinstance(value, bool) else f"expected true or false, not {value!r}"
+    if "dict" in str(param.annotation):  # checked by the model itself, which knows the keys
+        return None if isinstance(value, dict) else f"expected names with values, e.g. {{\"name\": 1.0}}, not {value!r}"
     if isinstance(default, (int, float)) or default is None:
         ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
         return None if ok else f"expected a number, not {value!r}"

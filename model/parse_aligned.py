@@ -27,6 +27,7 @@ import pyro
 import pyro.distributions as dist
 import torch
 
+from groundlang.grammar.parser import checked_weights
 from groundlang.model.encoding import CLAUSE_ARITY_BINS, PAD_LOGIT, Batch, PhraseKeys
 from groundlang.model.language_model_base import (NULL_MIXTURE, LanguageModel, gather_mixtures,
                                                   mixture_log_emissions, require_positive)
@@ -66,6 +67,7 @@ class ParseAligned(LanguageModel):
         largest_constraint: bool = True,
         negated_verbs_frame: bool = True,
         mention_task_objects: bool = True,
+        parser_weights: dict | None = None,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -101,7 +103,9 @@ class ParseAligned(LanguageModel):
         interpretation per binding constraint, each with its share of the prior. ``negated_verbs_frame``: the
         verb of a negated clause ("do not *enter*") says what not to do, a frame word rather than one of the
         task's verbs. ``mention_task_objects``: the mention model asks whether each object the task binds
-        (a room it ends in) is named, not only toys. ``schema_names``: see
+        (a room it ends in) is named, not only toys. ``parser_weights``: overrides of the grammar's rule
+        weights by name (``grammar.parser.DEFAULT_WEIGHTS``, e.g. ``{"nmods_coord": 1.0}``), which weigh
+        the readings of an ambiguous command. ``schema_names``: see
         :class:`LanguageModel`. What each measured: ABLATIONS.md."""
         if mention_phrases not in ("referring", "any"):
             raise ValueError(f"language model {self.name}: mention_phrases must be 'referring' or 'any', "
@@ -136,6 +140,10 @@ class ParseAligned(LanguageModel):
         self.enumerates_constraints = not largest_constraint
         self.negated_verbs_frame = negated_verbs_frame
         self.mention_task_objects = mention_task_objects
+        try:
+            self.parser_weights = checked_weights(parser_weights) if parser_weights else None
+        except ValueError as exc:
+            raise ValueError(f"language model {self.name}: parser_weights: {exc}") from None
 
     def phrase_keys(self) -> PhraseKeys:
         return PhraseKeys(self.last_phrase_key, self.object_key, self.last_passes_over_source, self.noun_attached_key,
@@ -166,6 +174,7 @@ class ParseAligned(LanguageModel):
             "largest_constraint": not self.enumerates_constraints,
             "negated_verbs_frame": self.negated_verbs_frame,
             "mention_task_objects": self.mention_task_objects,
+            "parser_weights": self.parser_weights,
         }
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=(),

@@ -185,3 +185,27 @@ def test_without_task_objects_the_mention_model_asks_only_about_toys(examples):
         assert int(off.cover_mask[0, j].sum()) == toys
         rooms_bound = sum(1 for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:"))
         assert int(on.cover_mask[0, j].sum()) == toys + rooms_bound
+
+
+def test_the_grammar_s_rule_weights_are_a_setting_that_weighs_the_readings_training_sees(examples, tmp_path,
+                                                                                           capsys):
+    """``parser_weights`` overrides DEFAULT_WEIGHTS by rule name: the readings of an ambiguous command
+    change their probabilities, in what the learner observes and in a saved model."""
+    command = "go to the room with white / cream floor"
+    plain = [r.probability for r in parse(command)]
+    favoured = [r.probability for r in parse(command, weights={"nmods_coord": 2.0})]
+    assert plain != favoured
+    lm = get_language_model("parse", parser_weights={"nmods_coord": 2.0})
+    learner = Learner(language_model=lm, steps=5).fit(examples[:4])
+    state = examples[0].initial_state
+    seen = [r.probability for r in learner._command_observation(command, state).readings]
+    assert seen == [r.probability for r in parse(command, weights={"nmods_coord": 2.0},
+                                                 word_lexicon=learner.word_lexicon)]
+    assert seen != [r.probability for r in Learner(steps=5)._command_observation(command, state).readings]
+    again = Learner.from_state_dict(learner.state_dict())
+    assert again.lm.parser_weights == {"nmods_coord": 2.0}
+    assert [r.probability for r in again._command_observation(command, state).readings] == seen
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "bad"),
+                 "--lm-setting", 'parser_weights={"nmods_cord": 2}']) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown grammar rule(s) 'nmods_cord'; the rules are c_adv" in err[0]
