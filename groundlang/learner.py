@@ -13,14 +13,12 @@ import logging
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
-import numpy as np
 import torch
 
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import group_goals
 from groundlang.goal_plans import plan_for_goal, planning_space
-from groundlang.inference.em import EM_ACCELERATIONS
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings
@@ -37,7 +35,7 @@ from groundlang.model.relevance import check_abstraction_possible, exact_fits
 from groundlang.model.statespace import StateSpace
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
-from groundlang.learner_state import learner_from_state, learner_state
+from groundlang.learner_state import check_count, check_training_options, learner_from_state, learner_state
 from groundlang.model_io import read_model, write_model
 from groundlang.results import FollowResult, Posterior
 from groundlang.training_vocabulary import build_vocabulary, palette_schema, schema_words, word_files_beside
@@ -55,11 +53,6 @@ log = logging.getLogger(__name__)
 
 class NotFittedError(ValueError):
     """A learner was asked to interpret a command before it was trained or loaded."""
-
-
-def _check_count(method: str, name: str, value) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{method}: {name} must be a positive integer, got {value!r}")
 
 
 class Learner:
@@ -93,16 +86,7 @@ class Learner:
         if not self.library.tasks:  # a file of PFs only (discover --pfs) is a library of none
             raise ValueError(f"{self.library.program.user_names}: the task library declares no task/1; a learner "
                              "needs at least one task to read commands as")
-        _check_count("Learner", "steps", steps)
-        if isinstance(lr, bool) or not isinstance(lr, (int, float)) or not 0 < lr < float("inf"):
-            raise ValueError(f"Learner: lr must be a positive number, got {lr!r}")
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-            raise ValueError(f"Learner: seed must be an integer, got {seed!r}")
-        if settings is not None and not isinstance(settings, TaskSettings):
-            raise TypeError(f"Learner: settings must be a TaskSettings, got {type(settings).__name__}")
-        if em_acceleration not in EM_ACCELERATIONS:
-            raise ValueError(f"Learner: em_acceleration must be one of {', '.join(EM_ACCELERATIONS)}, "
-                             f"got {em_acceleration!r}")
+        check_training_options(steps, lr, seed, settings, em_acceleration)
         self.steps = steps
         self.em_acceleration = em_acceleration
         self.lr = lr
@@ -229,7 +213,7 @@ class Learner:
         if bad is not None:
             raise TypeError(f"fit: each instance needs command, initial_state, states and actions (a corpus "
                             f"Instance); got {type(bad).__name__}")
-        _check_count("fit", "steps", self.steps)
+        check_count("fit", "steps", self.steps)
         if batch is None:
             if observations is None:
                 observations = self.observe(instances, progress=progress)
@@ -316,7 +300,7 @@ class Learner:
         the result has ``abstained=True``, the ``question`` to ask, its ``choices`` and the
         ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer.
         """
-        _check_count("follow", "max_steps", max_steps)
+        check_count("follow", "max_steps", max_steps)
         self._require_fitted()
         self._check_state("follow", command, state)
         check_abstraction_possible(state)

@@ -7,12 +7,35 @@ a file is untrusted: every field is checked here before anything is built from i
 
 from __future__ import annotations
 
+import numpy as np
+
+from groundlang.inference.em import EM_ACCELERATIONS
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.language_models import get_language_model
 from groundlang.model.vocabulary import Vocabulary
 
-__all__ = ["learner_state", "learner_from_state"]
+__all__ = ["learner_state", "learner_from_state", "check_count", "check_training_options"]
+
+
+def check_count(method: str, name: str, value) -> None:
+    """ValueError unless ``value`` is a positive integer (``method`` and ``name`` say where)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{method}: {name} must be a positive integer, got {value!r}")
+
+
+def check_training_options(steps, lr, seed, settings, em_acceleration) -> None:
+    """The checks of ``Learner(...)``'s training options, whether given or read from a saved model."""
+    check_count("Learner", "steps", steps)
+    if isinstance(lr, bool) or not isinstance(lr, (int, float)) or not 0 < lr < float("inf"):
+        raise ValueError(f"Learner: lr must be a positive number, got {lr!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise ValueError(f"Learner: seed must be an integer, got {seed!r}")
+    if settings is not None and not isinstance(settings, TaskSettings):
+        raise TypeError(f"Learner: settings must be a TaskSettings, got {type(settings).__name__}")
+    if em_acceleration not in EM_ACCELERATIONS:
+        raise ValueError(f"Learner: em_acceleration must be one of {', '.join(EM_ACCELERATIONS)}, "
+                         f"got {em_acceleration!r}")
 
 
 def learner_state(learner) -> dict:
