@@ -68,7 +68,8 @@ class SoftValueResult:
 
     values ``[S]``; q_values and log_policy ``[S, A]`` or ``[S, A + 1]`` when
     a terminate action exists (column ``TERMINATE``); ``sweeps`` done;
-    ``converged`` when the last residual ``max |dV|`` was ``<= tol``.
+    ``converged`` when the last residual ``max |dV|`` was ``<= tol``. Solved with
+    ``policy_states`` (n indices), all three hold those states' rows only, in that order.
     """
 
     values: torch.Tensor
@@ -171,6 +172,7 @@ def soft_value_iteration(
     initial_values=None,
     dtype: torch.dtype = torch.float32,
     backend: str = "auto",
+    policy_states=None,
 ) -> SoftValueResult:
     """Soft-max value iteration on a deterministic MDP.
 
@@ -185,6 +187,9 @@ def soft_value_iteration(
         initial_values: ``[S]`` warm start (default zeros).
         backend: "eager", "compiled" (torch.compile; falls back to eager if it fails)
             or "auto" (compiled from ``COMPILE_MIN_STATES`` states).
+        policy_states: indices of the states whose values, Q-values and policy are wanted (default
+            all): a demonstration's likelihood needs its own states' only, and the last backup over
+            every state of a large space costs as much as a few sweeps.
     Raises PlanningError (a ValueError) naming any array of the wrong shape.
     """
     _check_scalars(discount, temperature)
@@ -201,7 +206,15 @@ def soft_value_iteration(
     with threads_for(S):
         carry, sweeps, residual = solve_values(v0, columns, r, stop, float(discount), T, term, tol, max_sweeps,
                                                backend)
-        values, q, log_policy = policy_from_carry(carry, columns, r, stop, T, term)
+        if policy_states is None:
+            values, q, log_policy = policy_from_carry(carry, columns, r, stop, T, term)
+        else:
+            rows = torch.as_tensor(np.asarray(policy_states, dtype=np.int64))
+            if rows.ndim != 1 or (len(rows) and (int(rows.min()) < 0 or int(rows.max()) >= S)):
+                raise PlanningError(f"policy_states must be state indices 0..{S - 1}, got shape {tuple(rows.shape)}")
+            values, q, log_policy = policy_from_carry(
+                carry, columns[:, rows], r[rows] if r.ndim == 2 else r, None if stop is None else stop[rows], T,
+                None if term is None else term[rows])
     converged = residual <= tol
     if not converged:
         logger.info("soft value iteration: %d sweeps, residual %.3g > tol %.3g", sweeps, residual, tol)

@@ -175,13 +175,16 @@ def approximate_likelihoods(initial, goals: Sequence[tuple], states: Sequence, a
              "the placements it needs), %d in a relevance abstraction; %s states solved together", f"{exact:,}",
              ">" if exact > max_states else "<=", f"{max_states:,}", used_steps, len(goals) - used_steps,
              f"{sum(s.num_states for s, _ in blocks):,}")
-    log_policy = _solve_blocks(blocks, settings)
-    offsets = np.cumsum([0] + [s.num_states for s, _ in blocks])
+    # the demonstration's states in each block: the only rows of the policy its likelihood reads
+    paths = [trajectory_indices(space, list(states)) if kind == "whole" else space.indices for kind, space, _ in plans]
+    log_policy = _solve_blocks(blocks, settings, paths)  # [sum of path lengths, 5]
     out = np.empty(len(goals))
-    for g, (kind, space, _) in enumerate(plans):
-        path = trajectory_indices(space, list(states)) if kind == "whole" else space.indices
-        path = torch.as_tensor(offsets[g] + path)
-        out[g] = float(log_policy[path[:-1], torch.as_tensor(actions)].sum() + log_policy[path[-1], 4])
+    start = 0
+    moves = torch.as_tensor(actions)
+    for g, path in enumerate(paths):
+        rows = log_policy[start:start + len(path)]
+        start += len(path)
+        out[g] = float(rows[torch.arange(len(path) - 1), moves].sum() + rows[-1, 4])
     return out
 
 
@@ -201,18 +204,20 @@ def _stepwise_spaces(initial, named, carried, demo, max_states) -> _Stepwise:
     return _Stepwise(initial, named, carried, demo, walkable, objects, max_states)
 
 
-def _solve_blocks(blocks, settings: TaskSettings):
+def _solve_blocks(blocks, settings: TaskSettings, paths):
     """Solve every ``(space, mask)`` as one MDP, their disjoint union, in batches of at most
-    BATCH_STATES states; returns the log-policy ``[N, 5]`` over the union."""
+    BATCH_STATES states; returns the log-policy at each block's ``paths`` states, stacked in block
+    order ``[sum of path lengths, 5]``."""
     parts: list = []
     batch: list = []
 
     def flush():
-        sizes = [s.num_states for s, _ in batch]
+        sizes = [blocks[b][0].num_states for b in batch]
         offsets = np.cumsum([0] + sizes[:-1])
-        union = np.concatenate([s.next_state.astype(np.int64) + o for (s, _), o in zip(batch, offsets)])
-        mask = np.concatenate([m for _, m in batch])
-        result = solve_task(union, mask, settings)
+        union = np.concatenate([blocks[b][0].next_state.astype(np.int64) + o for b, o in zip(batch, offsets)])
+        mask = np.concatenate([blocks[b][1] for b in batch])
+        rows = np.concatenate([np.asarray(paths[b], dtype=np.int64) + o for b, o in zip(batch, offsets)])
+        result = solve_task(union, mask, settings, policy_states=rows)
         if not result.converged:
             logger.warning("soft value iteration stopped after %d sweeps (residual %.3g)", result.sweeps,
                            result.residual)
@@ -220,12 +225,12 @@ def _solve_blocks(blocks, settings: TaskSettings):
         batch.clear()
 
     total = 0
-    for block in blocks:
-        if batch and total + block[0].num_states > BATCH_STATES:
+    for b, (space, _) in enumerate(blocks):
+        if batch and total + space.num_states > BATCH_STATES:
             flush()
             total = 0
-        batch.append(block)
-        total += block[0].num_states
+        batch.append(b)
+        total += space.num_states
     if batch:
         flush()
     return torch.cat(parts)

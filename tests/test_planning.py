@@ -182,3 +182,19 @@ def test_compiled_sweeps_agree_with_eager():
     compiled = solve_task(ns, goal, backend="compiled")
     assert compiled.sweeps == eager.sweeps
     np.testing.assert_allclose(compiled.values.numpy(), eager.values.numpy(), rtol=1e-5, atol=1e-4)
+
+
+@pytest.mark.parametrize("absorbing", [False, True])
+def test_the_policy_at_some_states_is_those_rows_of_the_whole_policy(absorbing):
+    rng = np.random.default_rng(3)
+    ns = rng.integers(0, 300, size=(300, 4))
+    goal = rng.random(300) < 0.05
+    settings = TaskSettings(absorbing_goal=absorbing)
+    whole = solve_task(ns, goal, settings)
+    rows = np.array([5, 0, 299, 5, 17])
+    some = solve_task(ns, goal, settings, policy_states=rows)
+    assert some.log_policy.shape == (5, 5) and some.sweeps == whole.sweeps
+    assert torch.equal(some.log_policy, whole.log_policy[rows])
+    assert torch.equal(some.values, whole.values[rows])
+    with pytest.raises(PlanningError, match="policy_states must be state indices 0..299"):
+        solve_task(ns, goal, settings, policy_states=[300])
