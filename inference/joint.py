@@ -170,11 +170,12 @@ def _fit_em(model, sites, lm, steps, init, tol, progress, acceleration) -> FitRe
         with torch.no_grad():
             # phi * dlogp/dphi = expected counts + (alpha - 1): the M step.
             counts = {name: (leaf * leaf.grad).clamp_min(1e-12) for name, leaf in leaves.items()}
+        if bar is not None:  # one tick per EM step, accepted or not
+            bar.update(1)
         return {name: c / c.sum(-1, keepdim=True) for name, c in counts.items()}, -float(objective.detach())
 
     def tick(loss: float) -> None:
         if bar is not None:
-            bar.update(1)
             bar.set_postfix(loss=f"{loss:.1f}")
 
     values, losses, taken, converged = run_em(step, values, steps, tol, acceleration, tick)
