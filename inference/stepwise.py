@@ -21,9 +21,10 @@ the toys it moves, so those are scored in the ordinary abstraction; the stepwise
 unpursued ones (agreement with exact: README, "Worlds too large to enumerate").
 
 Which of the two is used per goal is decided by their sizes' bounds (the stepwise one counts one
-space per placement); below STEPWISE_MIN_STATES the ordinary abstraction is always used. All the spaces of one demonstration are solved together in one soft value
-iteration over their disjoint union (a block-diagonal MDP): one compiled sweep loop rather than
-many small ones.
+space per placement); below STEPWISE_MIN_STATES the ordinary abstraction is always used. All the
+spaces of one demonstration are solved together, one sweep over the disjoint union of those not yet
+converged (:mod:`groundlang.inference.disjoint`): one compiled sweep loop rather than many small
+ones, and each space stops when it alone would.
 """
 
 from __future__ import annotations
@@ -34,7 +35,8 @@ from collections.abc import Sequence
 import numpy as np
 import torch
 
-from groundlang.inference.planning import TaskSettings, solve_task
+from groundlang.inference.disjoint import solve_blocks
+from groundlang.inference.planning import TaskSettings
 from groundlang.model.features import goal_mask
 from groundlang.model.relevance import (abstract_space_uncached, abstraction_bound, announce, relevant_toys,
                                         state_space_for)
@@ -205,23 +207,15 @@ def _stepwise_spaces(initial, named, carried, demo, max_states) -> _Stepwise:
 
 
 def _solve_blocks(blocks, settings: TaskSettings, paths):
-    """Solve every ``(space, mask)`` as one MDP, their disjoint union, in batches of at most
-    BATCH_STATES states; returns the log-policy at each block's ``paths`` states, stacked in block
-    order ``[sum of path lengths, 5]``."""
+    """Solve every ``(space, mask)`` (:func:`solve_blocks`: one sweep over the union of those still
+    unconverged), in batches of at most BATCH_STATES states; returns the log-policy at each block's
+    ``paths`` states, stacked in block order ``[sum of path lengths, 5]``."""
     parts: list = []
     batch: list = []
 
     def flush():
-        sizes = [blocks[b][0].num_states for b in batch]
-        offsets = np.cumsum([0] + sizes[:-1])
-        union = np.concatenate([blocks[b][0].next_state.astype(np.int64) + o for b, o in zip(batch, offsets)])
-        mask = np.concatenate([blocks[b][1] for b in batch])
-        rows = np.concatenate([np.asarray(paths[b], dtype=np.int64) + o for b, o in zip(batch, offsets)])
-        result = solve_task(union, mask, settings, policy_states=rows)
-        if not result.converged:
-            logger.warning("soft value iteration stopped after %d sweeps (residual %.3g)", result.sweeps,
-                           result.residual)
-        parts.append(result.log_policy)
+        parts.extend(solve_blocks([(blocks[b][0].next_state, blocks[b][1]) for b in batch], settings,
+                                  [paths[b] for b in batch]))
         batch.clear()
 
     total = 0
