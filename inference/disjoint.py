@@ -51,10 +51,11 @@ def solve_blocks(blocks: Sequence[tuple[np.ndarray, np.ndarray]], settings: Task
             carry, spare = torch.cat([carries[b] for b in active]), torch.empty_like(arrival)
             sweep = (lambda *a: run_compiled(carry_sweep, *a)) if use_compiled(len(arrival), backend) else carry_sweep
             while True:
-                for _ in range(CHECK_EVERY):
+                chunk = min(CHECK_EVERY, settings.max_sweeps - sweeps)
+                for _ in range(chunk):
                     sweep(spare, carry, union, arrival, None, stop, discount, temperature, terminal, False)
                     carry, spare = spare, carry
-                sweeps += CHECK_EVERY
+                sweeps += chunk
                 # each block's max |dV| over the last sweep (spare holds the sweep before)
                 change = np.abs(carry.numpy() - spare.numpy())
                 residual = torch.from_numpy(np.maximum.reduceat(change, offsets)) / discount

@@ -46,3 +46,16 @@ def test_each_block_gets_the_policy_its_own_solve_gives(absorbing, backend):
 def test_blocks_and_their_policy_states_must_pair_up():
     with pytest.raises(PlanningError, match="2 blocks but 1 lists of policy states"):
         solve_blocks([(_grid(2, 2), np.ones(4, bool))] * 2, TaskSettings(), [np.array([0])])
+
+
+def test_a_block_stopped_at_max_sweeps_is_left_as_solve_task_leaves_it(caplog):
+    settings = TaskSettings(max_sweeps=5)
+    ns = _grid(30, 30)
+    goal = np.zeros(len(ns), dtype=bool)
+    goal[0] = True
+    rows = np.array([0, 899])
+    (policy,) = solve_blocks([(ns, goal)], settings, [rows], backend="eager")
+    alone = solve_task(ns, goal, settings, backend="eager")
+    assert not alone.converged and alone.sweeps == 5
+    assert torch.allclose(policy, alone.log_policy[torch.as_tensor(rows)], atol=1e-6)
+    assert "stopped 1 of 1 blocks after 5 sweeps" in caplog.text
