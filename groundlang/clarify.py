@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 
 from groundlang.confidence import GoalGroup
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.encoding import entity_words
+from groundlang.model.phrase_keys import entity_words
 from groundlang.model.world import object_class
 from groundlang.model.world import State
 from groundlang.wording import choice_list, goal_phrase, object_phrase

@@ -9,7 +9,8 @@ from pathlib import Path
 
 from groundlang.logic.schema import domain_schema
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.encoding import Observation, PhraseKeys, bare_preposition, entity_words, machine_string
+from groundlang.model.encoding import Observation, machine_string
+from groundlang.model.phrase_keys import PhraseKeys, bare_preposition, entity_words
 from groundlang.model.interpretations import alignable_roles, bystander_roles
 from groundlang.model.vocabulary import Vocabulary, class_token
 

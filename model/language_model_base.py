@@ -8,7 +8,8 @@ import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import Batch, Observation, PhraseKeys, encode, token_exclusions
+from groundlang.model.encoding import Batch, Encoder, Observation, token_exclusions
+from groundlang.model.phrase_keys import PhraseKeys
 
 __all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
            "token_words", "word_meanings"]
@@ -55,10 +56,18 @@ class LanguageModel:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""
         return PhraseKeys()
 
+    # The type of this model's batches: the shared Batch, or a subclass holding the model's own fields.
+    batch_type = Batch
+
     def encode(self, observations: list[Observation], vocab) -> Batch:
         """The batch this model reads: ``observations`` indexed with ``vocab`` under the model's settings."""
-        return encode(observations, vocab, self.phrase_keys(), negated_verbs_frame=self.negated_verbs_frame,
-                      mention_task_objects=self.mention_task_objects)
+        enc = Encoder(observations, vocab)
+        return enc.batch(self.batch_type, **self.encode_fields(enc))
+
+    def encode_fields(self, enc: Encoder) -> dict:
+        """This model's own fields of its batch (``batch_type``), which may also replace a shared one;
+        ``enc`` holds the observations, the vocabulary and the mixture table to intern token sets in."""
+        return {}
 
     def sample_globals(
         self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),

@@ -19,16 +19,17 @@ from __future__ import annotations
 
 import inspect
 import math
+from dataclasses import dataclass
 
 import pyro
 import pyro.distributions as dist
 import torch
 
-from groundlang.model.encoding import Batch
+from groundlang.model.encoding import Batch, Encoder, machine_string, pad_rows
 from groundlang.model.language_model_base import NULL_MIXTURE, LanguageModel, gather_mixtures, mixture_log_emissions
 from groundlang.model.parse_aligned import ParseAligned
 
-__all__ = ["LanguageModel", "BagOfWords", "IBMModel2", "ParseAligned", "LANGUAGE_MODELS", "get_language_model",
+__all__ = ["LanguageModel", "BagOfWords", "IBMModel2", "MachineBatch", "ParseAligned", "LANGUAGE_MODELS", "get_language_model",
            "register_language_model", "setting_names", "NULL_MIXTURE", "mixture_log_emissions"]
 
 
@@ -36,10 +37,28 @@ class BagOfWords(LanguageModel):
     name = "bow"
     starts_from_bag_of_words = False
 
+    def encode_fields(self, enc: Encoder) -> dict:
+        if self.null_token:
+            return {}  # the shared bow_mix is {L} + C + {NULL}
+        mix = enc.per_interpretation(enc.null_mixture)
+        for i, j, interp in enc.interpretations():
+            lid, said = enc.said_tokens(interp)
+            mix[i, j] = enc.mixture([lid] + said)
+        return {"bow_mix": mix}
+
     def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
-        mix = batch.bow_mix if self.null_token else batch.bow_mix_no_null
-        per_word = gather_mixtures(mixture_log_emissions(g, batch), mix, batch.uniq)  # [I, J, U]
+        per_word = gather_mixtures(mixture_log_emissions(g, batch), batch.bow_mix, batch.uniq)  # [I, J, U]
         return (per_word * batch.word_counts[:, None, :]).sum(-1)
+
+
+@dataclass
+class MachineBatch(Batch):
+    """A :class:`Batch` with the command's words in order and each interpretation's machine string."""
+
+    words: torch.Tensor  # [I, N] word ids in order
+    word_mask: torch.Tensor  # [I, N] bool
+    machine: torch.Tensor  # [I, J, M] token ids of the machine string (NULL first)
+    machine_mask: torch.Tensor  # [I, J, M] bool
 
 
 class IBMModel2(LanguageModel):
@@ -56,6 +75,23 @@ class IBMModel2(LanguageModel):
     # A machine token need not generate any word, so the string can carry every
     # colour/shape PF of the bound objects and alignment picks what was said.
     enumerates_constraints = False
+    batch_type = MachineBatch
+
+    def encode_fields(self, enc: Encoder) -> dict:
+        vocab = enc.vocab
+        machines = [[[enc.null]] * enc.num_interpretations for _ in range(enc.num_instances)]
+        for i, j, interp in enc.interpretations():
+            machines[i][j] = [enc.null] + [vocab.token_id(t) for t in machine_string(interp)]
+        M = max(len(m) for row in machines for m in row)
+        machine = torch.full((enc.num_instances, enc.num_interpretations, M), enc.null, dtype=torch.long)
+        machine_mask = torch.zeros(machine.shape, dtype=torch.bool)
+        for i, row in enumerate(machines):
+            for j, m in enumerate(row):
+                machine[i, j, : len(m)] = torch.tensor(m)
+                machine_mask[i, j, : len(m)] = j < len(enc.observations[i].interpretations)
+        return {"words": pad_rows([[vocab.word_id(w) for w in o.words] for o in enc.observations], 0, torch.long),
+                "word_mask": pad_rows([[True] * len(o.words) for o in enc.observations], False, torch.bool),
+                "machine": machine, "machine_mask": machine_mask}
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=(),
                        name_families=0):

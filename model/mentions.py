@@ -13,14 +13,14 @@ import itertools
 
 import torch
 
-from groundlang.model.encoding import Batch
+from groundlang.model.parse_encoding import ParseBatch
 
 __all__ = ["MENTION_SUBSETS_PER_BLOCK", "mention_factor"]
 
 MENTION_SUBSETS_PER_BLOCK = 64  # subsets of mentionable objects summed at once by the mention factor
 
 
-def mention_factor(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.Tensor,
+def mention_factor(g: dict, batch: ParseBatch, joint: torch.Tensor, entities: torch.Tensor,
                    referring_only: bool = True) -> torch.Tensor:
     """``log`` of the mention model's factor per ``[I, J, R]``.
 
@@ -55,7 +55,7 @@ def mention_factor(g: dict, batch: Batch, joint: torch.Tensor, entities: torch.T
     return out.to(entities.dtype)
 
 
-def _factor_of_rows(g: dict, batch: Batch, joint: torch.Tensor, real_i: torch.Tensor, real_j: torch.Tensor,
+def _factor_of_rows(g: dict, batch: ParseBatch, joint: torch.Tensor, real_i: torch.Tensor, real_j: torch.Tensor,
                     cover_slot: torch.Tensor, referring_only: bool) -> torch.Tensor:
     """The factor ``[N, R]`` of rows whose slots ``cover_slot [N, G]`` are all covered."""
     G = cover_slot.shape[-1]

@@ -8,7 +8,7 @@ from L or ``NULL``. Readings are weighted by the parser's probabilities. More pa
 form depend on the task:
 
 - which objects it names: a learned ``P(named | role)`` for every toy and every object the task binds
-  (``encoding.is_mentionable``): a command that never mentions a toy speaks against "take the toy
+  (``parse_encoding.is_mentionable``): a command that never mentions a toy speaks against "take the toy
   somewhere", one that names a bystander toy against the tasks that leave it alone; only a referring
   phrase names what it aligns with (``phrase_keys.is_referring``: "on right" does not name the star);
 - how many noun phrases each of its clauses has (``P(arity | L)``, per clause; the number of clauses
@@ -28,10 +28,12 @@ import pyro.distributions as dist
 import torch
 
 from groundlang.grammar.parser import checked_weights
-from groundlang.model.encoding import CLAUSE_ARITY_BINS, PAD_LOGIT, Batch, PhraseKeys
+from groundlang.model.encoding import PAD_LOGIT, Encoder
 from groundlang.model.language_model_base import (NULL_MIXTURE, LanguageModel, gather_mixtures,
                                                   mixture_log_emissions, require_positive)
 from groundlang.model.mentions import mention_factor
+from groundlang.model.parse_encoding import CLAUSE_ARITY_BINS, ParseBatch, encode_parse_fields
+from groundlang.model.phrase_keys import PhraseKeys
 from groundlang.model.relational import is_relational_role
 from groundlang.model.vocabulary import is_task_role
 
@@ -149,6 +151,12 @@ class ParseAligned(LanguageModel):
         return PhraseKeys(self.last_phrase_key, self.object_key, self.last_passes_over_source, self.noun_attached_key,
                           self.negation_key)
 
+    batch_type = ParseBatch
+
+    def encode_fields(self, enc: Encoder) -> dict:
+        return encode_parse_fields(enc, self.phrase_keys(), negated_verbs_frame=self.negated_verbs_frame,
+                                   mention_task_objects=self.mention_task_objects)
+
     def settings(self) -> dict:
         return {
             "word_concentration": self.word_concentration,
@@ -233,10 +241,10 @@ class ParseAligned(LanguageModel):
                 )
         return g
 
-    def log_likelihood(self, g: dict, batch: Batch) -> torch.Tensor:
+    def log_likelihood(self, g: dict, batch: ParseBatch) -> torch.Tensor:
         return self.reading_table(g, batch)[0]
 
-    def alignment_probabilities(self, g: dict, batch: Batch, j: int, s: int) -> torch.Tensor:
+    def alignment_probabilities(self, g: dict, batch: ParseBatch, j: int, s: int) -> torch.Tensor:
         """For the one command of ``batch``, interpretation ``j`` and merged reading structure ``s``:
         ``P(phrase type k aligns with role binding v | words, j, s)`` as ``[K, V]`` (``v`` indexes
         ``batch.role[0, j]``, 0 = nothing), exact with the mention model: each ``(k, v)`` is the same
@@ -255,7 +263,7 @@ class ParseAligned(LanguageModel):
                         out[k, v] = (fixed - free).exp()
             return out
 
-    def _words_given_reading(self, g: dict, batch: Batch, fix: tuple[int, int] | None = None):
+    def _words_given_reading(self, g: dict, batch: ParseBatch, fix: tuple[int, int] | None = None):
         """``(log P(words | j, s) [I, J, S] per merged structure s of the parser's readings, per type and
         role [I, J, V, K])``; with ``fix=(k, v)`` the words and phrase type k aligned with role binding v.
 
@@ -303,7 +311,7 @@ class ParseAligned(LanguageModel):
         # Words outside noun phrases come from the lifted task's token or NULL
         # with learned shares, one pair for verbs and one for the other words:
         # a verb says more about the task than "to" or "the" does. A negated clause's verb
-        # ("do not enter it") is one of the other words (see encoding._reading_structure).
+        # ("do not enter it") is one of the other words (see parse_encoding._reading_structure).
         phi = g["phi"]
         task_words = phi[batch.task_token[:, :, None], batch.uniq[:, None, :]].clamp_min(1e-30).log()  # [I, J, U]
         null_words = log_emit[NULL_MIXTURE][batch.uniq][:, None, :].expand_as(task_words)  # [I, J, U]
@@ -330,14 +338,14 @@ class ParseAligned(LanguageModel):
             per_reading = per_reading + torch.einsum("ijk,irk->ijr", keys, batch.reading_types)
         return per_reading, joint
 
-    def reading_table(self, g: dict, batch: Batch):
+    def reading_table(self, g: dict, batch: ParseBatch):
         """``(log P(words | j) [I, J], log P(words, s | j) per merged structure s [I, J, S], per type and role
         [I, J, V, K])``: :meth:`words_by_reading` with the readings' prior, summed over readings too."""
         per_reading, joint = self._words_given_reading(g, batch)
         with_prior = per_reading + batch.reading_logp[:, None, :]
         return torch.logsumexp(with_prior, dim=-1), with_prior, joint
 
-    def words_by_reading(self, g: dict, batch: Batch):
+    def words_by_reading(self, g: dict, batch: ParseBatch):
         # A padded structure's words carry PAD_LOGIT, not 0: Pyro sums an enumerated site in log space
         # shifted by its largest term, and a padded 0 would shift a real -150 to nothing.
         padded = batch.reading_logp <= PAD_LOGIT

@@ -12,7 +12,6 @@ from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus
 from groundlang.held_out import compare_switches, held_out_likelihood, switch_settings
 from groundlang.learner import Learner
-from groundlang.model.encoding import encode
 
 EXAMPLES = example_corpus_path()
 
@@ -28,7 +27,7 @@ def test_a_fold_is_scored_by_a_model_that_never_saw_it(examples):
     joint = words = 0.0
     for k in range(3):
         learner = Learner("parse").fit([x for n, x in enumerate(examples) if n % 3 != k])
-        batch = encode(learner.observe([x for n, x in enumerate(examples) if n % 3 == k]), learner.vocab)
+        batch = learner.lm.encode(learner.observe([x for n, x in enumerate(examples) if n % 3 == k]), learner.vocab)
         with torch.no_grad():
             said = learner.lm.log_likelihood(learner.globals, batch)
         joint += float(torch.logsumexp(batch.log_prior + batch.behaviour + said, -1).sum())

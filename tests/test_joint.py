@@ -12,7 +12,6 @@ from groundlang.inference.joint import (_log_joint, fit_globals, local_posterior
                                        posterior_by_enumeration, posteriors_by_enumeration)
 from groundlang.model.generative import global_sizes, instance_model
 from groundlang.learner import Learner
-from groundlang.model.encoding import encode
 from groundlang.model.language_models import BagOfWords, get_language_model
 
 
@@ -27,7 +26,7 @@ def example():
 
 def test_em_never_decreases_the_map_objective(example):
     _, learner, observations = example
-    batch = encode(observations, learner.vocab)
+    batch = learner.lm.encode(observations, learner.vocab)
     result = fit_globals(batch, learner.lm, learner.vocab, steps=60, optimizer="em")
     losses = result.losses
     # The loss is -log p(data, globals); EM may only lower it (float32 rounding aside).
@@ -37,7 +36,7 @@ def test_em_never_decreases_the_map_objective(example):
 
 def test_posterior_equals_pyro_compute_marginals(example):
     _, learner, observations = example
-    batch = encode(observations, learner.vocab)
+    batch = learner.lm.encode(observations, learner.vocab)
     direct = posterior(batch, learner.lm, learner.globals)
     pyro_marginals = posterior_by_enumeration(batch, learner.lm, learner.vocab, learner.globals)
     assert torch.allclose(direct, pyro_marginals, atol=1e-5)
@@ -49,7 +48,7 @@ def test_training_posterior_puts_the_demonstrated_goal_first(example):
     from groundlang.labels import label_for, read_labels
 
     labels = read_labels(example_corpus_path() / "labels.csv")
-    batch = encode(observations, learner.vocab)
+    batch = learner.lm.encode(observations, learner.vocab)
     probs = posterior(batch, learner.lm, learner.globals)
     for i, (inst, obs) in enumerate(zip(corpus.instances, observations)):
         best = obs.interpretations[int(probs[i].argmax())]
@@ -58,9 +57,9 @@ def test_training_posterior_puts_the_demonstrated_goal_first(example):
 
 def test_subset_of_an_encoding_gives_the_same_likelihoods_as_encoding_the_subset(example):
     _, learner, observations = example
-    full = encode(observations, learner.vocab)
+    full = learner.lm.encode(observations, learner.vocab)
     keep = [0, 3, 7, 12, 20]
-    alone = encode([observations[k] for k in keep], learner.vocab)
+    alone = learner.lm.encode([observations[k] for k in keep], learner.vocab)
     subset = full.subset(keep)
     a = learner.lm.log_likelihood(learner.globals, subset)
     b = learner.lm.log_likelihood(learner.globals, alone)
@@ -72,7 +71,7 @@ def test_subset_of_an_encoding_gives_the_same_likelihoods_as_encoding_the_subset
 
 def test_warm_start_from_other_globals_reaches_the_same_bag_of_words_optimum(example):
     _, learner, observations = example
-    batch = encode(observations, learner.vocab)
+    batch = learner.lm.encode(observations, learner.vocab)
     lm = BagOfWords()
     cold = fit_globals(batch, lm, learner.vocab, steps=500, tol=1e-9)
     phi = cold.globals["phi"]
@@ -83,7 +82,7 @@ def test_warm_start_from_other_globals_reaches_the_same_bag_of_words_optimum(exa
 
 def test_lbfgs_and_em_agree_on_the_bag_of_words_map(example):
     _, learner, observations = example
-    batch = encode(observations, learner.vocab)
+    batch = learner.lm.encode(observations, learner.vocab)
     em = fit_globals(batch, BagOfWords(), learner.vocab, steps=500, tol=1e-9, optimizer="em")
     lbfgs = fit_globals(batch, BagOfWords(), learner.vocab, steps=400, optimizer="lbfgs")
     assert em.losses[-1] == pytest.approx(lbfgs.losses[-1], rel=1e-3)
@@ -94,7 +93,7 @@ def test_unknown_language_model_and_optimizer_are_clear_errors(example):
     with pytest.raises(ValueError, match="unknown language model 'lstm'"):
         get_language_model("lstm")
     with pytest.raises(ValueError, match="unknown optimizer"):
-        fit_globals(encode(observations[:2], learner.vocab), learner.lm, learner.vocab, optimizer="sgd")
+        fit_globals(learner.lm.encode(observations[:2], learner.vocab), learner.lm, learner.vocab, optimizer="sgd")
 
 
 def _brute_force(batch, lm, g, use_behaviour):
@@ -119,7 +118,7 @@ def _brute_force(batch, lm, g, use_behaviour):
 @pytest.mark.parametrize("use_behaviour", [True, False])
 def test_the_reading_site_posterior_equals_brute_force_and_pyro(example, use_behaviour):
     _, learner, observations = example
-    batch = encode(observations, learner.vocab)
+    batch = learner.lm.encode(observations, learner.vocab)
     assert batch.reading_logp.shape[1] >= 2  # two structures at least, or there is no reading to infer
     z, readings = local_posteriors(batch, learner.lm, learner.globals, use_behaviour)
     z_brute, readings_brute = _brute_force(batch, learner.lm, learner.globals, use_behaviour)
@@ -134,7 +133,7 @@ def test_the_reading_site_leaves_the_training_objective_as_the_summed_readings(e
     # With the reading a site, the log joint is the one with readings summed inside the words term, up to
     # the constant that normalises the parser's probabilities of each command's merged structures.
     _, learner, observations = example
-    batch = encode(observations, learner.vocab)
+    batch = learner.lm.encode(observations, learner.vocab)
     sizes = global_sizes(learner.vocab)
     g = {k: v.clone().requires_grad_(True) for k, v in learner.globals.items()}
     with_site = _log_joint(lambda: instance_model(batch, learner.lm, sizes), g).item()
@@ -154,7 +153,7 @@ def test_squarem_reaches_em_s_optimum_in_fewer_steps_and_never_loses_ground(exam
     synonyms) it must find the same MAP, take fewer forward/backward passes, and never accept an
     iterate worse than the last."""
     _, learner, observations = example
-    batch = encode(observations, learner.vocab)
+    batch = learner.lm.encode(observations, learner.vocab)
     plain = fit_globals(batch, BagOfWords(), learner.vocab, steps=1000, tol=1e-8, optimizer="em")
     fast = fit_globals(batch, BagOfWords(), learner.vocab, steps=1000, tol=1e-8, optimizer="em",
                        acceleration="squarem")
@@ -169,4 +168,4 @@ def test_squarem_reaches_em_s_optimum_in_fewer_steps_and_never_loses_ground(exam
 def test_unknown_em_acceleration_is_a_clear_error(example):
     _, learner, observations = example
     with pytest.raises(ValueError, match="unknown EM acceleration"):
-        fit_globals(encode(observations[:2], learner.vocab), learner.lm, learner.vocab, acceleration="aitken")
+        fit_globals(learner.lm.encode(observations[:2], learner.vocab), learner.lm, learner.vocab, acceleration="aitken")

@@ -18,7 +18,6 @@ import torch
 
 from groundlang.corpus import read_state_file
 from groundlang.learner import Learner
-from groundlang.model.encoding import encode
 from groundlang.model.generative import global_sizes
 from groundlang.model.language_models import ParseAligned
 from groundlang.model.vocabulary import Vocabulary, is_task_role
@@ -39,7 +38,7 @@ def setting():
     observations = [learner._command_observation(c, state) for c in COMMANDS]
     learner.vocab = learner._build_vocabulary(observations, [state.layout.palette])
     # Observations made before the vocabulary existed still encode with it.
-    batch = encode(observations, learner.vocab)
+    batch = learner.lm.encode(observations, learner.vocab)
     pyro.set_rng_seed(3)
     with pyro.poutine.block():
         g = learner.lm.sample_globals(**global_sizes(learner.vocab))  # a random draw from the prior
@@ -97,7 +96,7 @@ def test_mention_model_equals_summing_over_every_alignment(setting):
 
 
 def test_only_a_head_noun_a_colour_or_an_open_class_word_names_an_object(setting):
-    from groundlang.model.encoding import is_referring
+    from groundlang.model.phrase_keys import is_referring
 
     assert is_referring([], ["door"]) and is_referring(["left"], ["door"])
     assert is_referring(["orange"], []) and is_referring(["salmon"], [])  # "to orange": a colour word
@@ -120,7 +119,7 @@ def test_a_closed_class_word_training_never_saw_still_names_nothing(setting):
     learner, _, _, _ = setting
     state = read_state_file(TWO_TOYS, "sokoban2")
     assert learner.vocab.word_id("left") == 0
-    batch = encode([learner._command_observation("push the bag to the left", state)], learner.vocab)
+    batch = learner.lm.encode([learner._command_observation("push the bag to the left", state)], learner.vocab)
     refers = {}
     for k in range(int(batch.type_mask[0].sum())):
         has_head = bool(batch.type_head_counts[0, k].sum() > 0)
@@ -235,7 +234,7 @@ def test_switching_the_parts_off_removes_their_globals(setting):
 ])
 def test_preposition_keys_tell_transitive_clauses_apart(command, keys):
     from groundlang.grammar.parser import parse
-    from groundlang.model.encoding import entity_words
+    from groundlang.model.phrase_keys import entity_words
 
     assert [key for key, _, _ in entity_words(parse(command)[0].logical_form)] == keys
 
@@ -243,7 +242,7 @@ def test_preposition_keys_tell_transitive_clauses_apart(command, keys):
 def test_a_noun_attached_with_phrase_may_say_where_things_end():
     """Only a verb-attached "with" is comitative; in "the room with the green floor" it names the room."""
     from groundlang.grammar.parser import parse
-    from groundlang.model.encoding import entity_words
+    from groundlang.model.phrase_keys import entity_words
 
     readings = {tuple(key for key, _, _ in entity_words(r.logical_form)) for r in parse("enter the room with the green floor")}
     assert (None, "with@np|last") in readings  # the floor is the room's
@@ -287,7 +286,7 @@ def test_each_lifted_task_reads_prepositions_with_its_own_alignment_table(settin
 def test_arity_counts_the_noun_phrases_of_each_clause(setting):
     """P(arity | L) is per clause: batch.clause_arity[i, r, b] is how many clauses of reading
     structure r have b noun phrases with words (the last bin: b or more)."""
-    from groundlang.model.encoding import CLAUSE_ARITY_BINS
+    from groundlang.model.parse_encoding import CLAUSE_ARITY_BINS
 
     learner, observations, batch, _ = setting
     for i, obs in enumerate(observations):
@@ -340,7 +339,7 @@ def test_mention_factor_is_the_same_summed_one_subset_at_a_time(setting, monkeyp
     ("not:dobj|last", "not:dobj"), ("to@np|last", "to@np"), ("into", "into"),
 ])
 def test_a_key_backs_off_to_its_preposition(key, base):
-    from groundlang.model.encoding import backoff_key
+    from groundlang.model.phrase_keys import backoff_key
 
     assert backoff_key(key) == base
 
@@ -355,7 +354,7 @@ def test_with_back_off_each_context_mixes_its_table_with_its_base_keys(setting):
     own_only = {**g, "backoff": torch.tensor([1.0, 0.0]).expand(C, 2)}
     assert torch.allclose(backing.log_likelihood(own_only, batch), plain)
     # The same as the plain model with every key's rows replaced by its base key's.
-    from groundlang.model.encoding import backoff_prep_ids
+    from groundlang.model.phrase_keys import backoff_prep_ids
 
     base_of = backoff_prep_ids(vocab)
     assert base_of != list(range(len(vocab.preps)))  # some key here does back off
@@ -373,7 +372,7 @@ def test_em_with_back_off_never_lowers_the_objective():
     import dataclasses
 
     from groundlang.corpus import example_corpus_path, read_corpus
-    from groundlang.model.encoding import backoff_key
+    from groundlang.model.phrase_keys import backoff_key
 
     instances = {i.name: i for i in read_corpus(example_corpus_path(), "sokoban").instances}
     train = []
@@ -399,7 +398,7 @@ def test_the_verb_of_a_negated_clause_is_a_frame_word_not_the_tasks(setting):
     state = read_state_file(TWO_TOYS, "sokoban2")
     obs = learner._command_observation("push the bag into the blue room and do not walk into the red room", state)
     assert any(c.negated and c.verb == "walk" for c in obs.readings[0].logical_form.clauses)
-    batch = encode([obs], learner.vocab)
+    batch = learner.lm.encode([obs], learner.vocab)
     words = [learner.vocab.words[w] for w in batch.uniq[0].tolist()]
     for r in range(int((batch.reading_logp[0] > -1e3).sum())):
         verbs = {w for u, w in enumerate(words) if batch.verb_counts[0, r, u] > 0}

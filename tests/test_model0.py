@@ -26,7 +26,7 @@ from groundlang.learner import Learner
 from groundlang.logic.atoms import parse_goal
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
 from groundlang.model.domain_words import domain_lexicon
-from groundlang.model.encoding import Observation, encode
+from groundlang.model.encoding import Observation
 from groundlang.model.interpretations import Interpretation
 from groundlang.model.language_models import BagOfWords
 from groundlang.model.vocabulary import Vocabulary
@@ -113,8 +113,9 @@ def test_pyro_bag_of_words_reaches_model0s_word_distributions(story):
     vocab = Vocabulary()
     vocab.add_words(sorted({w for o in observations for w in o.words}))
     vocab.add_tokens(["toyToRoom", "agentToRoom"])
-    batch = encode(observations, vocab)
-    pyro_fit = fit_globals(batch, BagOfWords(1.0 + EPSILON, null_token=False), vocab, steps=2000, tol=1e-12)
+    model0 = BagOfWords(1.0 + EPSILON, null_token=False)
+    batch = model0.encode(observations, vocab)
+    pyro_fit = fit_globals(batch, model0, vocab, steps=2000, tol=1e-12)
     phi = pyro_fit.globals["phi"]  # [S, W]: NULL, toyToRoom, agentToRoom
 
     counts = torch.stack([_counts(vocab.words, inst.command) for inst in train])

@@ -204,7 +204,7 @@ def test_rooms_and_doors_keep_their_own_descriptions(start, library):
                                      "go to the room with the chair"])
 def test_a_clause_of_having_about_a_noun_is_keyed_as_its_with_phrase(command):
     from groundlang.grammar.parser import parse
-    from groundlang.model.encoding import entity_words
+    from groundlang.model.phrase_keys import entity_words
     from groundlang.model.domain_words import domain_lexicon
 
     keys = [[key for key, _, head in entity_words(r.logical_form, domain_lexicon()) if head == ("chair",)]
@@ -214,7 +214,7 @@ def test_a_clause_of_having_about_a_noun_is_keyed_as_its_with_phrase(command):
 
 def test_a_clause_of_being_is_not_read_as_having():
     from groundlang.grammar.parser import parse
-    from groundlang.model.encoding import entity_words
+    from groundlang.model.phrase_keys import entity_words
     from groundlang.model.domain_words import domain_lexicon
 
     for reading in parse("take the chair that is in the red room to the blue room", word_lexicon=domain_lexicon()):

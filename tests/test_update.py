@@ -13,7 +13,6 @@ from groundlang.inference.incremental import grow_words, word_totals
 from groundlang.inference.joint import log_joint
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
 from groundlang.logic.atoms import parse_goal
-from groundlang.model.encoding import encode
 
 EXAMPLES = example_corpus_path()
 # novel_b with its blue room orange (colour 8): two room colours the example corpus never names.
@@ -50,7 +49,7 @@ def _follow(learner, command, state):
 def test_training_counts_are_read_back_from_the_unknown_word_column(trained, corpus):
     # The E step on the training data gives each token's expected word count; update reads the
     # same totals off the model alone.
-    batch = encode(trained.observe(corpus), trained.vocab)
+    batch = trained.lm.encode(trained.observe(corpus), trained.vocab)
     phi = trained.globals["phi"].clone().requires_grad_(True)
     log_joint(batch, trained.lm, trained.vocab, {**trained.globals, "phi": phi}).backward()
     expected = (phi * phi.grad).sum(-1).detach().double()  # counts + W (alpha - 1) per token
