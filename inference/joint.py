@@ -11,6 +11,7 @@ or, equivalently and faster, from normalising the enumerated log-joint.
 from __future__ import annotations
 
 import logging
+import math
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -97,6 +98,8 @@ def fit_globals(
         raise ValueError(f"unknown optimizer {optimizer!r}; expected auto, em, lbfgs or adam")
     if acceleration not in EM_ACCELERATIONS:
         raise ValueError(f"unknown EM acceleration {acceleration!r}; expected one of {', '.join(EM_ACCELERATIONS)}")
+    if not (isinstance(tol, (int, float)) and 0 <= tol < math.inf):  # a NaN or negative tol would never stop early
+        raise ValueError(f"fit_globals: tol must be a finite number >= 0, not {tol!r}")
     with single_threaded():
         pyro.set_rng_seed(seed)
         pyro.clear_param_store()

@@ -169,3 +169,20 @@ def test_unknown_em_acceleration_is_a_clear_error(example):
     _, learner, observations = example
     with pytest.raises(ValueError, match="unknown EM acceleration"):
         fit_globals(learner.lm.encode(observations[:2], learner.vocab), learner.lm, learner.vocab, acceleration="aitken")
+
+
+@pytest.mark.parametrize("tol", [-1.0, float("nan"), float("inf")])
+def test_a_tolerance_that_could_never_stop_early_is_refused(example, tol):
+    _, learner, observations = example
+    with pytest.raises(ValueError, match="tol must be a finite number >= 0"):
+        fit_globals(learner.lm.encode(observations[:2], learner.vocab), learner.lm, learner.vocab, tol=tol)
+
+
+def test_one_em_step_and_one_instance_still_fit(example):
+    """SQUAREM's cycle takes two EM steps; a budget of one, or a batch of one command, is still a fit."""
+    _, learner, observations = example
+    one = fit_globals(learner.lm.encode(observations[:1], learner.vocab), learner.lm, learner.vocab, steps=1)
+    assert one.steps == 1 and len(one.losses) >= 1 and all(torch.isfinite(v).all() for v in one.globals.values())
+    zero_tol = fit_globals(learner.lm.encode(observations[:1], learner.vocab), learner.lm, learner.vocab, tol=0.0,
+                           steps=12)
+    assert zero_tol.steps <= 12 and all(b <= a + 1e-5 * abs(a) for a, b in zip(zero_tol.losses, zero_tol.losses[1:]))
