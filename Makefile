@@ -18,8 +18,10 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/groundlang demo --out demo.png
 
+# Two test processes (pytest-xdist): the suite is CPU-bound and single-threaded in most tests, so the
+# second core halves its wall time. `$(BIN)/python -m pytest -n 0` runs it in one process.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2
 
 # The notebooks' .py files are their source: write each paired .ipynb from it (outputs stay stripped).
 notebooks: $(STAMP)
