@@ -600,6 +600,16 @@ def test_fuzz_model_json_fields(trained_model, tmp_path_factory, key, value, dro
     _loads_or_refuses(d)
 
 
+@pytest.mark.parametrize("key", ["language_model_settings", "training", "planning"])
+def test_a_model_json_section_that_is_not_names_with_values_is_named(trained_model, tmp_path_factory, key):
+    d = _fresh_copy(trained_model, tmp_path_factory)
+    meta = json.loads((d / "model.json").read_text())
+    meta[key] = [1, 2]
+    (d / "model.json").write_text(json.dumps(meta))
+    with pytest.raises(ModelFormatError, match=f"{key} is list, expected names with values"):
+        Learner.load(d)
+
+
 @pytest.mark.parametrize("argv, message", [
     (("tasks", str(NOVEL), "--palette", "sokoban", "--time-limit", "inf"),
      "argument --time-limit: expected seconds above 0 and at most 1000000, not 'inf'"),
