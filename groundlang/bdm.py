@@ -81,12 +81,14 @@ def bdm_files(path: str | Path) -> list[Path]:
 
 
 def _int(text: str, where: str, attribute: str, name: str) -> int:
-    if not _NUMBER.match(text.strip()) or len(text.strip()) > 7:
+    text = text.strip()
+    if not _NUMBER.match(text):
         raise CorpusError(f"{where}: {attribute} of {name} is {text!r}; expected a whole number")
-    value = int(text)
-    if value > MAX_COORDINATE:
-        raise CorpusError(f"{where}: {attribute} of {name} is {value}; expected at most {MAX_COORDINATE}")
-    return value
+    # Length first: the digits of a number too large are never converted, however many a file holds.
+    if len(text.lstrip("0")) > len(str(MAX_COORDINATE)) or int(text) > MAX_COORDINATE:
+        shown = text if len(text) <= 20 else f"{text[:20]}... ({len(text)} digits)"
+        raise CorpusError(f"{where}: {attribute} of {name} is {shown}; expected at most {MAX_COORDINATE}")
+    return int(text)
 
 
 def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
@@ -112,7 +114,7 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
         missing = [a for a in _NEEDED[cls] if a not in attributes]
         if missing:
             raise CorpusError(f"{where}: {cls} {name} has no {', '.join(missing)}")
-        if name in objects[cls]:
+        if any(name in named for named in objects.values()):
             raise CorpusError(f"{where}: two objects are called {name}")
         objects[cls][name] = attributes
     if len(objects["agent"]) != 1:

@@ -83,13 +83,20 @@ def test_check_reports_the_fixture():
     ("go\nSTATE\nSTATE\nfalse\n", "line 4: expected the word true"),
     ("go\nROOMS_RED\nROOMS_PURPLE\ntrue\n", "'purple', which the palette does not have"),
     ("go\nROOMS_RED\nROOMS_RED_MOVED\ntrue\n", "line 3: the end state's rooms, doors or blocks differ"),
+    # one name for two objects of different classes ("agent0" a room too) is as ambiguous as within one class
+    ("go\nAGENT_ROOM\nAGENT_ROOM\ntrue\n", "line 2: two objects are called agent0"),
+    # a number too large is said to be too large, and its digits are never all converted
+    ("go\nFAR\nFAR\ntrue\n", "x of agent0 is 99999999999999999999... (5000 digits); expected at most 1000"),
+    ("go\nNEGATIVE\nNEGATIVE\ntrue\n", "x of agent0 is '-1'; expected a whole number"),
 ])
 def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
     room = "room0 (room): [top: {4} left: {0} bottom: {0} right: {4} colour: {%s} ]"
     state = "{agent0 (agent): [x: {1} y: {1} ] , " + room % "red" + " , }"
     text = (text.replace("ROOMS_RED_MOVED", state.replace("right: {4}", "right: {5}"))
             .replace("ROOMS_RED", state).replace("ROOMS_PURPLE", state.replace("{red}", "{purple}"))
-            .replace("STATE", state))
+            .replace("STATE", state).replace("AGENT_ROOM", state.replace("room0 (room)", "agent0 (room)"))
+            .replace("FAR", state.replace("x: {1}", "x: {%s}" % ("9" * 5000)))
+            .replace("NEGATIVE", state.replace("x: {1}", "x: {-1}")))
     path = tmp_path / "bad.bdm"
     path.write_text(text, encoding="utf-8")
     with pytest.raises(CorpusError) as info:
