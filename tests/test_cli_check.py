@@ -120,6 +120,25 @@ def test_show_state_file(capsys, fixtures, tmp_path):
     assert (tmp_path / "s.png").stat().st_size > 1000
 
 
+def test_show_a_one_line_bdm_state_file_without_a_palette(capsys, fixtures, tmp_path):
+    """A BURLAP state line (Williams et al.) is shown as a .state file is, with its own palette by default."""
+    line = (fixtures / "williams2018" / "small.bdm").read_text(encoding="utf-8").splitlines()[1]
+    (tmp_path / "one.bdm").write_text(line + "\n", encoding="utf-8")
+    code, out, err = run(capsys, "show", str(tmp_path / "one.bdm"), "--out", str(tmp_path / "one.png"))
+    assert code == 0 and err == ""
+    assert out.splitlines()[0] == f"state: {tmp_path / 'one.bdm'}" and "A" in out
+    assert (tmp_path / "one.png").read_bytes().startswith(b"\x89PNG")
+
+
+@pytest.mark.parametrize("name, piece", [
+    ("small.bdm", "line 1 is not a state line; show draws a one-line .bdm or .state file"),
+    ("absent.bdm", "absent.bdm: No such file or directory"),
+])
+def test_show_says_what_a_bdm_file_it_cannot_draw_is(capsys, fixtures, name, piece):
+    code, out, err = run(capsys, "show", str(fixtures / "williams2018" / name))
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and piece in err
+
+
 def test_check_example_corpus(capsys):
     folder = example_corpus_path()
     code, out, _ = run(capsys, "check", str(folder), "--palette", "sokoban", "--labels", str(folder / "labels.csv"))

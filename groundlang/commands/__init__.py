@@ -7,6 +7,7 @@ match the library's.
 
 import argparse
 import math
+from pathlib import Path
 
 LANGUAGE_MODEL_NAMES = ("bow", "ibm2", "parse")  # == tuple(groundlang.model.language_models.LANGUAGE_MODELS)
 
@@ -109,3 +110,12 @@ def add_lexicon_option(parser) -> None:
         help="a word file (`CATEGORY: word word ...` lines, see grammar/english.words) whose nouns, "
              "adjectives, verbs and prepositions the parser should know too (repeatable)",
     )
+
+
+def is_burlap_state_file(path: str) -> bool:
+    """Whether ``path`` is a one-line state file (``.state`` or ``.bdm``) holding a BURLAP state line, the
+    Williams et al. format, which is read with its own domain and palette by default."""
+    if Path(path).suffix not in (".state", ".bdm") or not Path(path).is_file():
+        return False
+    with open(path, "rb") as handle:
+        return handle.read(64).lstrip().startswith(b"{")

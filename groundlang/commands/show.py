@@ -1,18 +1,20 @@
-"""``groundlang show FILE --palette NAME [--out PNG]``: a corpus file or a ``.state`` file as a picture."""
+"""``groundlang show FILE [--palette NAME] [--out PNG]``: a corpus file or a one-line state file as a picture."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from groundlang.commands import PALETTE_HELP
+from groundlang.bdm import DEFAULT_PALETTE
+from groundlang.commands import PALETTE_HELP, is_burlap_state_file
 from groundlang.corpus import read_instance, read_state_file
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("show", help="draw a corpus file or a .state file (ASCII, and an image with --out)")
-    p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state file")
-    p.add_argument("--palette", required=True, help=PALETTE_HELP)
+    p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state or .bdm file (a state "
+                   "in the corpus's format, or a BURLAP state line as Williams et al. write them)")
+    p.add_argument("--palette", help=PALETTE_HELP + "; required but for a BURLAP state line (default williams2018)")
     p.add_argument("--out", metavar="PNG", help="also write an image (.png, .svg or .pdf) with the demonstration drawn")
     p.set_defaults(func=run)
 
@@ -23,8 +25,16 @@ def run(args: argparse.Namespace) -> int:
     if args.out:
         check_picture_destination(args.out)
     path = Path(args.file)
-    if path.suffix == ".state":
-        state = read_state_file(path, args.palette)
+    if not path.exists():
+        raise ValueError(f"{args.file}: No such file or directory")
+    burlap = is_burlap_state_file(args.file)
+    if path.suffix == ".bdm" and path.is_file() and not burlap:
+        raise ValueError(f"{args.file}: line 1 is not a state line; show draws a one-line .bdm or .state file, "
+                         "or a corpus file (*.txt), not a .bdm file of commands")
+    if args.palette is None and not burlap:
+        raise ValueError(f"{args.file}: --palette is required for a file in the corpus's format (e.g. --palette sokoban)")
+    if path.suffix in (".state", ".bdm"):
+        state = read_state_file(path, args.palette or DEFAULT_PALETTE)
         states, title = [state], path.name
         print(f"state: {path}")
         print(ascii_state(state))

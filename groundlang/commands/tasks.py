@@ -8,10 +8,9 @@ from __future__ import annotations
 import argparse
 import json
 from importlib.resources import files as resources
-from pathlib import Path
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import PALETTE_HELP, positive_seconds
+from groundlang.commands import PALETTE_HELP, is_burlap_state_file, positive_seconds
 from groundlang.corpus import read_initial_state
 
 
@@ -33,14 +32,6 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _burlap_state(path: str) -> bool:
-    """Whether ``path`` is a one-line state file holding a BURLAP state line (the Williams et al. format)."""
-    if Path(path).suffix not in (".state", ".bdm") or not Path(path).is_file():
-        return False
-    with open(path, "rb") as handle:
-        return handle.read(64).lstrip().startswith(b"{")
-
-
 def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
@@ -49,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.model.tasks import candidate_tasks, object_descriptions, object_relations
     from groundlang.model.world import object_class
 
-    burlap = _burlap_state(args.file)
+    burlap = is_burlap_state_file(args.file)
     if args.palette is None and not burlap:
         raise ValueError(f"{args.file}: --palette is required for a state in the corpus's format "
                          "(e.g. --palette sokoban)")
