@@ -76,7 +76,12 @@ def bdm_files(path: str | Path) -> list[Path]:
     """``path`` itself if it is a ``.bdm`` file, the ``.bdm`` files of a folder (sorted), else none."""
     path = Path(path)
     if path.is_dir():
-        return sorted(p for p in path.iterdir() if is_bdm(p))
+        found = sorted(p for p in path.iterdir() if is_bdm(p))
+        if found and any(p.suffix == ".txt" for p in path.iterdir()):
+            # Which kind the folder is would otherwise be decided by the .bdm files, the rest left unread.
+            raise CorpusError(f"{path}: holds both .bdm files and corpus files (*.txt); a folder is one corpus "
+                              "of one format, so move one kind out")
+        return found
     return [path] if is_bdm(path) else []
 
 

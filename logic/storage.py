@@ -144,7 +144,9 @@ def write_atomically(path: str | os.PathLike, data: bytes | str, *, durable: boo
                     handle.flush()
                     os.fsync(handle.fileno())
     except OSError as exc:
-        if exc.filename is None:  # a failed write or fsync (a full disk) names no file: name the target
+        # A failed write or fsync (a full disk) names no file, and one in a folder that cannot take a file
+        # names the temporary file next to the target: name the target, which is what the user gave.
+        if exc.filename is None or Path(exc.filename).parent == path.parent and Path(exc.filename).name != path.name:
             raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
         raise
     return path

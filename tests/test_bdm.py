@@ -156,3 +156,29 @@ def test_tasks_reads_a_burlap_state_line_with_the_corpus_domain_by_default(capsy
     assert {"agentNextToToy", "agentLeftOfToy", "agentRightOfToy"} <= set(shown["lifted_tasks"])
     assert main(["tasks", str(fixtures / "small.state")]) == 2
     assert "--palette is required for a state in the corpus's format" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", [["check"], ["train", "-o", "model"], ["evaluate", "--holdout", "0.5", "--corpus"]])
+def test_a_folder_of_bdm_and_txt_corpus_files_is_refused_not_half_read(tmp_path, capsys, command):
+    from groundlang.cli import main
+
+    folder = tmp_path / "mixed"
+    folder.mkdir()
+    (folder / "small.bdm").write_bytes((FIXTURE / "small.bdm").read_bytes())
+    (folder / "agent2blue_0.txt").write_text("go to the blue room\nnorth\n", encoding="utf-8")
+    argv = [command[0], *command[1:], str(folder)]
+    if command[0] == "train":
+        argv = ["train", str(folder), "-o", str(tmp_path / "model")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "holds both .bdm files and corpus files (*.txt)" in err
+    assert not (tmp_path / "model").exists()
+
+
+def test_a_json_result_that_cannot_be_written_names_the_path_given(tmp_path, capsys):
+    from groundlang.cli import main
+
+    small = str(FIXTURE / "small.bdm")
+    assert main(["evaluate", "--corpus", small, "--test", small, "--json", "/proc/groundlang-test.json"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("/proc/groundlang-test.json: No such file or directory") and ".tmp" not in err
