@@ -96,3 +96,13 @@ def test_each_model_encodes_only_what_it_reads(corpus):
     assert own["bow"] == set()
     assert own["ibm2"] == {"words", "word_mask", "machine", "machine_mask"}
     assert {"role", "reading_logp", "cover_slot"} <= own["parse"] and not own["parse"] & own["ibm2"]
+
+
+def test_fit_refuses_a_batch_another_model_encoded(corpus):
+    learner = Learner("parse").fit(corpus.instances[:6])
+    observations = learner.observe(corpus.instances[:6])
+    bag = get_language_model("bow").encode(observations, learner.vocab)
+    with pytest.raises(TypeError, match=r"a batch of this learner's language model \(parse: ParseBatch"):
+        learner.fit(corpus.instances[:6], batch=bag)
+    refit = learner.fit(corpus.instances[:6], batch=learner.lm.encode(observations, learner.vocab))
+    assert refit.globals is not None
