@@ -98,6 +98,9 @@ def fit_globals(
         raise ValueError(f"unknown optimizer {optimizer!r}; expected auto, em, lbfgs or adam")
     if acceleration not in EM_ACCELERATIONS:
         raise ValueError(f"unknown EM acceleration {acceleration!r}; expected one of {', '.join(EM_ACCELERATIONS)}")
+    if not isinstance(batch, lm.batch_type):
+        raise TypeError(f"fit_globals: language model {lm.name} reads a {lm.batch_type.__name__} (lm.encode), "
+                        f"not a {type(batch).__name__}")
     if not (isinstance(tol, (int, float)) and 0 <= tol < math.inf):  # a NaN or negative tol would never stop early
         raise ValueError(f"fit_globals: tol must be a finite number >= 0, not {tol!r}")
     with single_threaded():

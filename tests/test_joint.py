@@ -186,3 +186,12 @@ def test_one_em_step_and_one_instance_still_fit(example):
     zero_tol = fit_globals(learner.lm.encode(observations[:1], learner.vocab), learner.lm, learner.vocab, tol=0.0,
                            steps=12)
     assert zero_tol.steps <= 12 and all(b <= a + 1e-5 * abs(a) for a, b in zip(zero_tol.losses, zero_tol.losses[1:]))
+
+
+def test_a_batch_of_another_language_model_is_refused(example):
+    """The bag of words reads any batch (every batch holds its fields); IBM Model 2 needs its machine strings."""
+    _, learner, observations = example
+    parse_batch = learner.lm.encode(observations[:2], learner.vocab)
+    fit_globals(parse_batch, BagOfWords(), learner.vocab, steps=2)
+    with pytest.raises(TypeError, match="language model ibm2 reads a MachineBatch"):
+        fit_globals(parse_batch, get_language_model("ibm2"), learner.vocab, steps=2)
