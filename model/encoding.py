@@ -191,23 +191,31 @@ class Encoder:
 
     def _per_interpretation_fields(self) -> dict:
         vocab = self.vocab
+        at, priors, observed, tokens, tasks, mixtures = [], [], [], [], [], []
+        for i, j, interp in self.interpretations():
+            at.append((i, j))
+            priors.append(interp.log_prior)
+            behaviour = self.observations[i].behaviour
+            observed.append(0.0 if behaviour is None else behaviour[j])
+            lid, said = self.said_tokens(interp)
+            tokens.append(lid)
+            mixtures.append(self.mixture([lid, self.null] + said))
+            # Learner vocabularies always list the lifted tasks; one built by hand for the bag of
+            # words or IBM Model 2 (no per-task tables) need not.
+            tasks.append(vocab.task_id(interp.lifted) if vocab.tasks else 0)
         log_prior = self.per_interpretation(PAD_LOGIT, torch.float32)
         behaviour = self.per_interpretation(0.0, torch.float32)
         mask = self.per_interpretation(False, torch.bool)
         task_token = self.per_interpretation(self.null)
         task_index = self.per_interpretation(0)
         bow_mix = self.per_interpretation(self.null_mixture)
-        for i, j, interp in self.interpretations():
-            mask[i, j] = True
-            log_prior[i, j] = interp.log_prior
-            observed = self.observations[i].behaviour
-            if observed is not None:
-                behaviour[i, j] = observed[j]
-            lid, said = self.said_tokens(interp)
-            bow_mix[i, j] = self.mixture([lid, self.null] + said)
-            task_token[i, j] = lid
-            # Learner vocabularies always list the lifted tasks; one built by hand for the bag of
-            # words or IBM Model 2 (no per-task tables) need not.
-            task_index[i, j] = vocab.task_id(interp.lifted) if vocab.tasks else 0
+        if at:  # one indexed assignment per field (element by element it dominated encoding a large corpus)
+            ii, jj = torch.tensor(at, dtype=torch.long).T
+            mask[ii, jj] = True
+            log_prior[ii, jj] = torch.tensor(priors, dtype=torch.float32)
+            behaviour[ii, jj] = torch.tensor(observed, dtype=torch.float32)
+            task_token[ii, jj] = torch.tensor(tokens, dtype=torch.long)
+            task_index[ii, jj] = torch.tensor(tasks, dtype=torch.long)
+            bow_mix[ii, jj] = torch.tensor(mixtures, dtype=torch.long)
         return dict(log_prior=log_prior, behaviour=behaviour, mask=mask, uniq=self.uniq,
                     word_counts=self.word_counts, task_token=task_token, task_index=task_index, bow_mix=bow_mix)
