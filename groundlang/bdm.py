@@ -89,11 +89,13 @@ def _int(text: str, where: str, attribute: str, name: str) -> int:
     text = text.strip()
     if not _NUMBER.match(text):
         raise CorpusError(f"{where}: {attribute} of {name} is {text!r}; expected a whole number")
-    # Length first: the digits of a number too large are never converted, however many a file holds.
-    if len(text.lstrip("0")) > len(str(MAX_COORDINATE)) or int(text) > MAX_COORDINATE:
+    # Length first, without leading zeros: the digits of a number too large are never converted, however
+    # many a file holds (Python refuses to convert more than 4300).
+    digits = text.lstrip("0") or "0"
+    if len(digits) > len(str(MAX_COORDINATE)) or int(digits) > MAX_COORDINATE:
         shown = text if len(text) <= 20 else f"{text[:20]}... ({len(text)} digits)"
         raise CorpusError(f"{where}: {attribute} of {name} is {shown}; expected at most {MAX_COORDINATE}")
-    return int(text)
+    return int(digits)
 
 
 def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,

@@ -88,6 +88,7 @@ def test_check_reports_the_fixture():
     # a number too large is said to be too large, and its digits are never all converted
     ("go\nFAR\nFAR\ntrue\n", "x of agent0 is 99999999999999999999... (5000 digits); expected at most 1000"),
     ("go\nNEGATIVE\nNEGATIVE\ntrue\n", "x of agent0 is '-1'; expected a whole number"),
+    ("go\nZEROS\nZEROS\ntrue\n", "x of agent0 is 00000000000000000000... (5004 digits); expected at most 1000"),
 ])
 def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
     room = "room0 (room): [top: {4} left: {0} bottom: {0} right: {4} colour: {%s} ]"
@@ -96,7 +97,8 @@ def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
             .replace("ROOMS_RED", state).replace("ROOMS_PURPLE", state.replace("{red}", "{purple}"))
             .replace("STATE", state).replace("AGENT_ROOM", state.replace("room0 (room)", "agent0 (room)"))
             .replace("FAR", state.replace("x: {1}", "x: {%s}" % ("9" * 5000)))
-            .replace("NEGATIVE", state.replace("x: {1}", "x: {-1}")))
+            .replace("NEGATIVE", state.replace("x: {1}", "x: {-1}"))
+            .replace("ZEROS", state.replace("x: {1}", "x: {%s}" % ("0" * 5000 + "5000"))))
     path = tmp_path / "bad.bdm"
     path.write_text(text, encoding="utf-8")
     with pytest.raises(CorpusError) as info:
