@@ -21,7 +21,7 @@ __all__ = ["CorpusError", "MAX_COORDINATE", "MAX_FILE_BYTES", "parse_state", "fo
 MAX_COORDINATE = 1000
 # A corpus or state file: a demonstration of 10^4 steps takes about 1 MB.
 MAX_FILE_BYTES = 16 * 2**20
-_INTEGER = re.compile(r"-?[0-9]{1,7}")
+_INTEGER = re.compile(r"-?[0-9]+")
 
 # kind -> (field names after the kind, format shown in messages)
 _FIELDS = {
@@ -38,14 +38,17 @@ class CorpusError(ValueError):
 
 
 def _integer(text: str, where: str, name: str, obj: str) -> int:
+    obj = obj if len(obj) <= 60 else f"{obj[:60]}..."  # the message stays one readable line
     if not _INTEGER.fullmatch(text):
-        raise CorpusError(f"{where}: field {name} of {obj!r} is {text!r}; expected an integer")
-    value = int(text)
-    if abs(value) > MAX_COORDINATE:
-        raise CorpusError(
-            f"{where}: field {name} of {obj!r} is {value}; expected at most {MAX_COORDINATE} in size"
-        )
-    return value
+        shown = text if len(text) <= 20 else f"{text[:20]}... ({len(text)} characters)"
+        raise CorpusError(f"{where}: field {name} of {obj!r} is {shown!r}; expected an integer")
+    # Without its sign and leading zeros, a number of more digits than the bound is too large: it is
+    # never converted, however many digits a file holds (Python refuses more than 4300).
+    digits = text.lstrip("-").lstrip("0") or "0"
+    if len(digits) > len(str(MAX_COORDINATE)) or int(digits) > MAX_COORDINATE:
+        shown = text if len(text) <= 20 else f"{text[:20]}... ({len(text)} digits)"
+        raise CorpusError(f"{where}: field {name} of {obj!r} is {shown}; expected at most {MAX_COORDINATE} in size")
+    return -int(digits) if text.startswith("-") else int(digits)
 
 
 def parse_state(line: str, palette: str | Palette, where: str = "state", shared_cells_ok: bool = False) -> State:

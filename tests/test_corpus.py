@@ -314,3 +314,20 @@ def test_a_byte_order_mark_is_read_as_nothing(fixtures, tmp_path):
 def test_doors_between_two_rooms_are_accepted(line):
     state = parse_state(line, "sokoban")
     assert state.layout.doors and state.layout.walkable[state.layout.doors[-1].left, state.layout.doors[-1].bottom]
+
+
+@pytest.mark.parametrize("x, piece", [
+    ("0" * 5000 + "9", None),  # leading zeros are only zeros: x = 9
+    ("9" * 5000, "field X of 'agent," + "9" * 54 + "...' is 99999999999999999999... (5000 digits); expected at most"),
+    ("12345678", "is 12345678; expected at most 1000 in size"),
+])
+def test_a_coordinate_of_many_digits_is_read_or_refused_without_converting_them_all(tmp_path, x, piece):
+    rooms = "room,1,0,10,6,5 room,5,6,10,12,5 room,10,0,5,12,0 door,6,8,6,8 door,3,5,3,5 door,9,5,9,5"
+    path = tmp_path / "s.state"
+    path.write_text(f"{rooms} agent,{x},5\n", encoding="utf-8")
+    if piece is None:
+        assert read_state_file(path, "sokoban").agent.x == 9
+        return
+    with pytest.raises(CorpusError) as info:
+        read_state_file(path, "sokoban")
+    assert piece in str(info.value) and len(str(info.value)) < 300
