@@ -25,7 +25,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from groundlang.state_line import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError
+from groundlang.state_line import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, coordinate, shown
 from groundlang.logic.storage import FileRefused, read_limited
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
@@ -38,7 +38,6 @@ _MAX_LINE = 1 << 16
 
 _OBJECT = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*\(\s*([A-Za-z_]+)\s*\)\s*:\s*\[(.*?)\]\s*")
 _ATTRIBUTE = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*:\s*\{([^{}]*)\}")
-_NUMBER = re.compile(r"[0-9]+\Z")
 # class -> the attributes groundlang reads (lower case); others are allowed and ignored.
 _NEEDED = {
     "agent": ("x", "y"),
@@ -76,8 +75,9 @@ def bdm_files(path: str | Path) -> list[Path]:
     """``path`` itself if it is a ``.bdm`` file, the ``.bdm`` files of a folder (sorted), else none."""
     path = Path(path)
     if path.is_dir():
-        found = sorted(p for p in path.iterdir() if is_bdm(p))
-        if found and any(p.suffix == ".txt" for p in path.iterdir()):
+        entries = list(path.iterdir())
+        found = sorted(p for p in entries if is_bdm(p))
+        if found and any(p.suffix == ".txt" for p in entries):
             # Which kind the folder is would otherwise be decided by the .bdm files, the rest left unread.
             raise CorpusError(f"{path}: holds both .bdm files and corpus files (*.txt); a folder is one corpus "
                               "of one format, so move one kind out")
@@ -87,15 +87,20 @@ def bdm_files(path: str | Path) -> list[Path]:
 
 def _int(text: str, where: str, attribute: str, name: str) -> int:
     text = text.strip()
-    if not _NUMBER.match(text):
-        raise CorpusError(f"{where}: {attribute} of {name} is {text!r}; expected a whole number")
-    # Length first, without leading zeros: the digits of a number too large are never converted, however
-    # many a file holds (Python refuses to convert more than 4300).
-    digits = text.lstrip("0") or "0"
-    if len(digits) > len(str(MAX_COORDINATE)) or int(digits) > MAX_COORDINATE:
-        shown = text if len(text) <= 20 else f"{text[:20]}... ({len(text)} digits)"
-        raise CorpusError(f"{where}: {attribute} of {name} is {shown}; expected at most {MAX_COORDINATE}")
-    return int(digits)
+    try:
+        return coordinate(text, signed=False)
+    except OverflowError:
+        raise CorpusError(f"{where}: {attribute} of {name} is {shown(text, 'digits')}; "
+                          f"expected at most {MAX_COORDINATE}") from None
+    except ValueError:
+        raise CorpusError(f"{where}: {attribute} of {name} is {text!r}; expected a whole number") from None
+
+
+def _number_order(name: str) -> tuple[int, str]:
+    """The number in an object's name as a sort key: its digits compared shortest first, which orders them
+    as their values do, with no conversion of a name's thousands of digits."""
+    digits = re.sub(r"\D", "", name).lstrip("0")
+    return len(digits), digits
 
 
 def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
@@ -129,7 +134,7 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
 
     def ordered(cls: str) -> list[tuple[str, dict[str, str]]]:
         # room10 after room9: by the number a name ends with, then by name.
-        return sorted(objects[cls].items(), key=lambda kv: (int(re.sub(r"\D", "", kv[0]) or 0), kv[0]))
+        return sorted(objects[cls].items(), key=lambda kv: (*_number_order(kv[0]), kv[0]))
 
     try:
         rooms = tuple(Room(_value(a["colour"], palette.colours, where, name), *(

@@ -226,9 +226,6 @@ class Learner:
             batch = self.lm.encode(observations, self.vocab)
         elif self.vocab is None:
             raise ValueError("fit(batch=...) needs the vocabulary the batch was encoded with")
-        elif not isinstance(batch, self.lm.batch_type):
-            raise TypeError(f"fit(batch=...) takes a batch of this learner's language model ({self.lm.name}: "
-                            f"{self.lm.batch_type.__name__}, from lm.encode), not a {type(batch).__name__}")
         if init is None and self.lm.starts_from_bag_of_words:
             # (From a flat start "star" was learned as a room word on the crowd corpus.)
             start = fit_globals(batch, BagOfWords(self.lm.word_concentration, schema_names=self.lm.schema_names), self.vocab,

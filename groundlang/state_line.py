@@ -14,7 +14,8 @@ import re
 
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
-__all__ = ["CorpusError", "MAX_COORDINATE", "MAX_FILE_BYTES", "parse_state", "format_state", "shared_cell"]
+__all__ = ["CorpusError", "MAX_COORDINATE", "MAX_FILE_BYTES", "coordinate", "parse_state", "format_state", "shared_cell",
+           "shown"]
 
 # Coordinates beyond this are refused: a layout's grids are allocated densely,
 # so one absurd number in a file must not become a gigabyte array.
@@ -22,6 +23,7 @@ MAX_COORDINATE = 1000
 # A corpus or state file: a demonstration of 10^4 steps takes about 1 MB.
 MAX_FILE_BYTES = 16 * 2**20
 _INTEGER = re.compile(r"-?[0-9]+")
+_DIGITS = re.compile(r"[0-9]+")
 
 # kind -> (field names after the kind, format shown in messages)
 _FIELDS = {
@@ -37,18 +39,33 @@ class CorpusError(ValueError):
     """A corpus file, folder or labels file that cannot be used; the message says where and why."""
 
 
-def _integer(text: str, where: str, name: str, obj: str) -> int:
-    obj = obj if len(obj) <= 60 else f"{obj[:60]}..."  # the message stays one readable line
-    if not _INTEGER.fullmatch(text):
-        shown = text if len(text) <= 20 else f"{text[:20]}... ({len(text)} characters)"
-        raise CorpusError(f"{where}: field {name} of {obj!r} is {shown!r}; expected an integer")
-    # Without its sign and leading zeros, a number of more digits than the bound is too large: it is
-    # never converted, however many digits a file holds (Python refuses more than 4300).
+def coordinate(text: str, signed: bool = True) -> int:
+    """The integer ``text`` writes (decimal digits, a leading ``-`` if ``signed``); ValueError when it is
+    not one, OverflowError when it is larger than ``MAX_COORDINATE`` in size. Without its sign and leading
+    zeros, a number of more digits than the bound is too large: its digits are never converted, however
+    many a file holds (Python refuses more than 4300)."""
+    if not (_INTEGER if signed else _DIGITS).fullmatch(text):
+        raise ValueError(text)
     digits = text.lstrip("-").lstrip("0") or "0"
     if len(digits) > len(str(MAX_COORDINATE)) or int(digits) > MAX_COORDINATE:
-        shown = text if len(text) <= 20 else f"{text[:20]}... ({len(text)} digits)"
-        raise CorpusError(f"{where}: field {name} of {obj!r} is {shown}; expected at most {MAX_COORDINATE} in size")
+        raise OverflowError(text)
     return -int(digits) if text.startswith("-") else int(digits)
+
+
+def shown(text: str, unit: str = "characters") -> str:
+    """``text`` as an error message quotes it: whole when short, else its start and its length."""
+    return text if len(text) <= 20 else f"{text[:20]}... ({len(text)} {unit})"
+
+
+def _integer(text: str, where: str, name: str, obj: str) -> int:
+    obj = obj if len(obj) <= 60 else f"{obj[:60]}..."  # the message stays one readable line
+    try:
+        return coordinate(text)
+    except OverflowError:
+        raise CorpusError(f"{where}: field {name} of {obj!r} is {shown(text, 'digits')}; "
+                          f"expected at most {MAX_COORDINATE} in size") from None
+    except ValueError:
+        raise CorpusError(f"{where}: field {name} of {obj!r} is {shown(text)!r}; expected an integer") from None
 
 
 def parse_state(line: str, palette: str | Palette, where: str = "state", shared_cells_ok: bool = False) -> State:

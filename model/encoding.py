@@ -10,7 +10,7 @@ A language model's batch is a :class:`Batch` (what the generative model and
 every language model read) or a subclass with the model's own fields, which
 the model fills in its ``encode_fields`` (``LanguageModel.encode``): the bag of
 words reads only this one, IBM Model 2 adds its machine strings
-(``model.language_models``), the parse model its readings and roles
+(``model.ibm2``), the parse model its readings and roles
 (``model.parse_encoding``).
 
 Shapes below use I instances, J interpretations, S semantic tokens,
@@ -151,9 +151,9 @@ class Encoder:
             self.columns.append({w: u for u, w in enumerate(ids)})
             uniq_rows.append(ids)
             count_rows.append([float(counts.get(w, 0)) for w in ids])
-        self.uniq = pad_rows(uniq_rows, 0, torch.long)
-        self.word_counts = pad_rows(count_rows, 0.0, torch.float32)
-        self.shared = self._per_interpretation_fields()  # the fields of every batch but the vocabulary's
+        # The fields of every batch but the vocabulary's; a model's own fields may read them.
+        self.shared = dict(self._per_interpretation_fields(), uniq=pad_rows(uniq_rows, 0, torch.long),
+                           word_counts=pad_rows(count_rows, 0.0, torch.float32))
 
     def mixture(self, tokens) -> int:
         """The row of the mixture table that is uniform over ``tokens`` (token ids), interned."""
@@ -217,5 +217,5 @@ class Encoder:
             task_token[ii, jj] = torch.tensor(tokens, dtype=torch.long)
             task_index[ii, jj] = torch.tensor(tasks, dtype=torch.long)
             bow_mix[ii, jj] = torch.tensor(mixtures, dtype=torch.long)
-        return dict(log_prior=log_prior, behaviour=behaviour, mask=mask, uniq=self.uniq,
-                    word_counts=self.word_counts, task_token=task_token, task_index=task_index, bow_mix=bow_mix)
+        return dict(log_prior=log_prior, behaviour=behaviour, mask=mask, task_token=task_token,
+                    task_index=task_index, bow_mix=bow_mix)

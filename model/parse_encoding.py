@@ -120,7 +120,7 @@ def encode_parse_fields(enc: Encoder, keys: PhraseKeys, *, negated_verbs_frame: 
     fields = _role_fields(enc, mention_task_objects)
     structures = [_reading_structure(obs, vocab, col, keys, negated_verbs_frame)
                   for obs, col in zip(observations, enc.columns)]
-    U = enc.uniq.shape[1]
+    U = enc.shared["uniq"].shape[1]
     R = max(len(merged) for _, merged, _ in structures) or 1
     K = max(len(types) for types, _, _ in structures) or 1
     reading_logp = torch.full((I, R), PAD_LOGIT)

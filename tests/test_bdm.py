@@ -184,3 +184,12 @@ def test_a_json_result_that_cannot_be_written_names_the_path_given(tmp_path, cap
     assert main(["evaluate", "--corpus", small, "--test", small, "--json", "/proc/groundlang-test.json"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.endswith("/proc/groundlang-test.json: No such file or directory") and ".tmp" not in err
+
+
+def test_objects_are_ordered_by_the_number_in_their_name_however_long():
+    """room10 after room9, and a name of thousands of digits is ordered, never converted to an int."""
+    room = "{name} (room): [top: {{4}} left: {{{left}}} bottom: {{0}} right: {{{right}}} colour: {{red}} ]"
+    rooms = [room.format(name=n, left=l, right=r) for n, l, r in
+             (("room10", 0, 4), ("room" + "7" * 5000, 4, 8), ("room9", 8, 12))]
+    state, _ = parse_bdm_state("{agent0 (agent): [x: {1} y: {1} ] , " + " , ".join(rooms) + " , }")
+    assert [r.left for r in state.layout.rooms] == [8, 0, 4]

@@ -102,7 +102,7 @@ def test_fit_refuses_a_batch_another_model_encoded(corpus):
     learner = Learner("parse").fit(corpus.instances[:6])
     observations = learner.observe(corpus.instances[:6])
     bag = get_language_model("bow").encode(observations, learner.vocab)
-    with pytest.raises(TypeError, match=r"a batch of this learner's language model \(parse: ParseBatch"):
+    with pytest.raises(TypeError, match=r"language model parse reads a ParseBatch \(lm.encode\), not a Batch"):
         learner.fit(corpus.instances[:6], batch=bag)
     refit = learner.fit(corpus.instances[:6], batch=learner.lm.encode(observations, learner.vocab))
     assert refit.globals is not None
