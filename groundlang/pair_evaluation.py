@@ -22,15 +22,26 @@ from groundlang.learner import Learner
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.statespace import StateSpaceError
 from groundlang.pair_corpus import training_instances
-from groundlang.pair_tasks import REACHABILITY_MAX_STATES, pair_task, satisfies
+from groundlang.model.world import State
+from groundlang.pair_tasks import REACHABILITY_MAX_STATES, lifted_facts, pair_task, satisfies
 
-__all__ = ["PairEvaluation", "evaluate_pairs", "PUBLISHED_F1"]
+__all__ = ["PairEvaluation", "evaluate_pairs", "failure_kind", "FAILURE_KINDS", "PUBLISHED_F1"]
 
 log = logging.getLogger(__name__)
 
 # Williams et al. 2018, Table II: F1 of validated parses on their held-out test split, pruned data,
 # three pairs per command (0.75 with two pairs, 0.71 with one).
 PUBLISHED_F1 = 0.82
+
+# Why an execution failed, told from the goal acted on, what the pairs show and the final state alone
+# (no word is read), so that the kinds are counted the same way on any corpus of pairs.
+FAILURE_KINDS = {
+    "skipped": "too large to follow, even in the relevance abstraction",
+    "unreached": "the goal acted on was not reached",
+    "more than the goal": "the goal was met; the pairs also show a relation it does not ask for",
+    "another relation": "a relation the pairs do not show was acted on",
+    "another object": "the relation the pairs show, met with another object than they show",
+}
 
 
 @dataclass
@@ -50,6 +61,7 @@ class PairEvaluation:
     unseen_correct: int
     skipped_executions: int
     per_task: dict
+    failures: dict
     seconds_training: float
     seconds_following: float
     demonstrations: str
@@ -93,6 +105,14 @@ class PairEvaluation:
         lines.append("per task (relations the pairs show), per execution:")
         for task, (k, n) in sorted(self.per_task.items(), key=lambda item: -item[1][1]):
             lines.append(f"  {task:<40} {k / n:.2%} ({k}/{n})")
+        if self.failures:
+            lines.append(f"failed executions by kind ({sum(self.failures.values())}; the relations unmet in brackets):")
+            for kind in FAILURE_KINDS:
+                of_kind = {key: k for key, k in self.failures.items() if key.split(" (")[0] == kind}
+                if of_kind:
+                    detail = ", ".join(f"{k} {key[len(kind) + 2:-1]}" for key, k in
+                                       sorted(of_kind.items(), key=lambda item: -item[1]))
+                    lines.append(f"  {sum(of_kind.values()):>4} {kind}: {detail}")
         lines.append(f"published (Williams et al. 2018, Table II): F1 {PUBLISHED_F1:.2f} of validated parses, "
                      f"three pairs per command")
         lines.append(f"wall time: training {self.seconds_training:.1f} s, following {self.seconds_following:.1f} s")
@@ -102,6 +122,25 @@ class PairEvaluation:
 def _task_kind(task) -> str:
     """The relations a task is made of, without what is said of their arguments: ``agentInRoom``."""
     return "+".join(sorted({atom.predicate for atom in task})) or "(none)"
+
+
+def failure_kind(goal, task: frozenset[Atom], final: State, reached: bool, library) -> tuple[str, frozenset[Atom]]:
+    """Why following failed (a key of :data:`FAILURE_KINDS`) and the facts of ``task`` the final state lacks.
+
+    Told apart by relation (the predicate), not by what is said of the objects: when every unmet relation
+    is one the goal asked for, the goal's objects were not the pairs' ("another object"); when the goal's
+    relations are all among those the pairs show, the rest were not asked ("more than the goal"); else
+    the goal asked for a relation the pairs do not show ("another relation")."""
+    missing = task - lifted_facts(final, library)
+    if not reached:
+        return "unreached", missing
+    unmet = {atom.predicate for atom in missing}
+    asked = {atom.predicate for atom in goal}
+    if unmet <= asked:
+        return "another object", missing
+    if asked <= {atom.predicate for atom in task}:
+        return "more than the goal", missing
+    return "another relation", missing
 
 
 def evaluate_pairs(train: list[Command], test: list[Command], library, demonstrations: str = "end-state",
@@ -118,6 +157,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     seen = {c.text.strip().lower() for c in train}
     rows: list[dict] = []
     per_task: dict[str, list[int]] = defaultdict(lambda: [0, 0])
+    failures: dict[str, int] = defaultdict(int)
     correct = n = commands_correct = scored = no_task = unseen_n = unseen_correct = skipped = 0
     for index, command in enumerate(test):
         task = pair_task([(p.start, p.end) for p in command.pairs], library)
@@ -131,13 +171,20 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                 row.update(goal=None, final_state=None, skipped=str(exc))
                 hit = False
                 skipped += 1
+                why = ("skipped", task)
             else:
                 names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
                 goal = tuple(Atom(a.predicate, tuple(names.get(x, x) for x in a.args)) for a in result.goal)
                 row.update(goal=format_goal(goal), final_state=format_bdm_state(result.final_state, pair.toy_names))
                 hit = satisfies(result.final_state, task, library)
+                if task and not hit:
+                    why = failure_kind(result.goal, task, result.final_state, result.reached, library)
             if task:
                 row["correct"] = hit
+                if not hit:
+                    kind, missing = why
+                    row.update(failure=kind, unmet=sorted(map(str, missing)))
+                    failures[f"{kind} ({'+'.join(sorted({a.predicate for a in missing}))})"] += 1
                 n += 1
                 correct += hit
                 per_task[_task_kind(task)][0] += hit
@@ -159,7 +206,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         test_commands=len(test), scored_commands=scored, no_task_commands=no_task,
         executions_n=n, executions_correct=correct, commands_correct=commands_correct,
         unseen_n=unseen_n, unseen_correct=unseen_correct, skipped_executions=skipped,
-        per_task={k: tuple(v) for k, v in per_task.items()},
+        per_task={k: tuple(v) for k, v in per_task.items()}, failures=dict(failures),
         seconds_training=trained - started, seconds_following=finished - trained,
         demonstrations=demonstrations, layouts=layouts, executions=rows,
     )

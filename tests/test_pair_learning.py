@@ -214,3 +214,47 @@ def test_a_pair_of_a_billion_states_is_scored_in_its_relevance_abstraction(willi
     from groundlang.model.pf_tables import library_pf_tables
     holding = library_pf_tables(pair.end.layout, williams_library).position_holding(pair.end.positions)
     assert set(best) <= set(holding)  # the likeliest goal holds in the end state
+
+
+def test_a_failed_execution_is_told_by_kind_from_the_goal_the_task_and_the_final_state(williams_commands,
+                                                                                       williams_library):
+    from groundlang.logic.atoms import Atom
+    from groundlang.pair_evaluation import FAILURE_KINDS, failure_kind
+
+    command = williams_commands[1]  # "go next to the chair"
+    task = pair_task([(p.start, p.end) for p in command.pairs], williams_library)
+    assert {a.predicate for a in task} == {"agentNextToToy"}
+    start, end = command.pairs[0].start, command.pairs[0].end
+    toys = start.layout.toy_names
+    next_to = (Atom("agentNextToToy", ("agent0", toys[0])),)
+    in_room = (Atom("agentInRoom", ("agent0", "room0")),)
+    # the start is not next to any chair: acting on next to, the relation was asked and not met there
+    assert failure_kind(next_to, task, start, True, williams_library) == ("another object", task)
+    assert failure_kind(in_room, task, start, True, williams_library)[0] == "another relation"
+    assert failure_kind(next_to, task, start, False, williams_library)[0] == "unreached"
+    # the pairs show one more relation than the goal asks (as a block moved into a room no word names)
+    from groundlang.pair_tasks import lifted_facts
+
+    extra = sorted(a for a in lifted_facts(start, williams_library) - lifted_facts(end, williams_library)
+                   if a.predicate != "agentNextToToy")[0]
+    kind, unmet = failure_kind(next_to, task | {extra}, end, True, williams_library)
+    assert (kind, unmet) == ("more than the goal", frozenset({extra}))
+    assert set(FAILURE_KINDS) >= {"another object", "another relation", "unreached", "more than the goal", "skipped"}
+
+
+def test_evaluate_counts_the_failed_executions_by_kind(tmp_path):
+    """On the two-command fixture the shared meaning reads "the largest room" in the first layout only
+    (README): two executions go to another room; the CLI and the JSON say so by kind."""
+    out = tmp_path / "result.json"
+    small = str(FIXTURE / "small.bdm")
+    run = _cli("evaluate", "--corpus", small, "--test", small, "--json", str(out))
+    assert run.returncode == 0, run.stderr
+    assert "per execution: 66.67% (4/6" in run.stdout
+    assert "failed executions by kind (2; the relations unmet in brackets):" in run.stdout
+    assert "     2 another object: 2 agentInRoom" in run.stdout
+    data = json.loads(out.read_text())
+    assert data["failures"] == {"another object (agentInRoom)": 2}
+    failed = [r for r in data["executions"] if not r["correct"]]
+    assert [(r["index"], r["failure"], r["unmet"]) for r in failed] == [
+        (0, "another object", ["agentInRoom(agent, roomIsLargest)"])] * 2
+    assert all("failure" not in r for r in data["executions"] if r["correct"])
