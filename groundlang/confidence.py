@@ -29,7 +29,7 @@ from groundlang.model.statespace import StateSpace
 
 __all__ = [
     "GoalGroup", "group_goals", "expected_calibration_error", "risk_coverage", "accuracy_at_coverage",
-    "auroc", "reliability", "calibration_report", "format_calibration", "choose_threshold",
+    "auroc", "reliability", "calibration_report", "format_calibration", "choose_threshold", "unachievable_goals",
 ]
 
 # Goals below this probability are not compared by their masks: they cannot change the
@@ -89,6 +89,18 @@ def _asked(goal: tuple[Atom, ...], space: StateSpace, tables, dist: np.ndarray |
 
     whole, part = nearest(goal_mask(space, goal, tables)), nearest(goal_mask(space, rest, tables))
     return rest if whole is not None and whole == part else goal
+
+
+def unachievable_goals(goals: Sequence[tuple[Atom, ...]], space: StateSpace, library=None) -> set[tuple[Atom, ...]]:
+    """The ``goals`` that hold in no state of ``space``, when ``space`` holds every state reachable from
+    its start (an exact space enumerated from it); none otherwise (a relevance abstraction or a sample
+    of placements cannot say a goal is out of reach)."""
+    from groundlang.model.relevance import AbstractStateSpace
+
+    if getattr(space, "level_sizes", None) is None or isinstance(space, AbstractStateSpace):
+        return set()
+    tables = library_pf_tables(space.layout, library)
+    return {goal for goal in goals if not goal_mask(space, goal, tables).any()}
 
 
 def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpace,

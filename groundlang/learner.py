@@ -13,11 +13,12 @@ import logging
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import torch
 
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
-from groundlang.confidence import group_goals
+from groundlang.confidence import group_goals, unachievable_goals
 from groundlang.goal_plans import plan_for_goal, planning_space
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
@@ -258,7 +259,8 @@ class Learner:
                              f"palette {trained} (colours and shapes must be the same to read its words)")
 
     def posterior(self, command: str, state: State) -> Posterior:
-        """Posterior over interpretations of ``command`` in ``state`` from the words alone.
+        """Posterior over interpretations of ``command`` in ``state`` from the words, given (with the
+        language model's ``achievable_goals``, the default) that the goal can be reached from ``state``.
 
         TypeError for a non-string command or a non-State state; ValueError when the state's palette
         is not one the model was trained on."""
@@ -272,9 +274,17 @@ class Learner:
         J = len(obs.interpretations)
         reading_probs = None if structures is None else per_parser_reading(
             structures[0], batch, [r.probability for r in obs.readings])
-        post = Posterior(command, list(obs.interpretations), probs[:J].numpy().astype(float),
-                         list(obs.readings), reading_probs)
-        post.groups = group_goals(post.goals(), self._space(state), self.library)
+        probs = probs[:J].numpy().astype(float)
+        space = self._space(state)
+        if self.lm.achievable_goals:
+            # Commands ask for what can be done: condition on the goal holding in some state the agent can
+            # reach from here (a chair against the west wall cannot be stood left of).
+            out = unachievable_goals({i.goal for i in obs.interpretations}, space, self.library)
+            keep = np.array([i.goal not in out for i in obs.interpretations])
+            if out and probs[keep].sum() > 0:
+                probs = np.where(keep, probs, 0.0) / probs[keep].sum()
+        post = Posterior(command, list(obs.interpretations), probs, list(obs.readings), reading_probs)
+        post.groups = group_goals(post.goals(), space, self.library)
         return post
 
     def _space(self, state: State, goal: tuple[Atom, ...] | None = None) -> StateSpace:

@@ -127,16 +127,16 @@ def _task_kind(task) -> str:
 def failure_kind(goal, task: frozenset[Atom], final: State, reached: bool, library) -> tuple[str, frozenset[Atom]]:
     """Why following failed (a key of :data:`FAILURE_KINDS`) and the facts of ``task`` the final state lacks.
 
-    Told apart by relation (the predicate), not by what is said of the objects: when every unmet relation
-    is one the goal asked for, the goal's objects were not the pairs' ("another object"); when the goal's
-    relations are all among those the pairs show, the rest were not asked ("more than the goal"); else
-    the goal asked for a relation the pairs do not show ("another relation")."""
+    Told apart by relation (the predicate), not by what is said of the objects: when a relation the goal
+    asked for is unmet, the goal's objects were not the pairs' ("another object"); else, when the goal's
+    relations are all among those the pairs show, the unmet ones were not asked ("more than the goal");
+    else the goal asked for a relation the pairs do not show ("another relation")."""
     missing = task - lifted_facts(final, library)
     if not reached:
         return "unreached", missing
     unmet = {atom.predicate for atom in missing}
     asked = {atom.predicate for atom in goal}
-    if unmet <= asked:
+    if unmet & asked:
         return "another object", missing
     if asked <= {atom.predicate for atom in task}:
         return "more than the goal", missing

@@ -35,22 +35,26 @@ class LanguageModel:
     mention_task_objects = True
     parser_weights = None  # overrides of the grammar's rule weights (grammar.parser.DEFAULT_WEIGHTS)
 
-    def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False):
+    def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False,
+                 achievable_goals: bool = True):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
         "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
         ``name_share``, and its learned words otherwise: the names a domain's author gives are words
         for what they name, so a token training never names ("door") does not take a frequent word it
         could explain for free, a room is not called "chair", and a value training never showed ("the
-        yellow room") is read by its name."""
+        yellow room") is read by its name. ``achievable_goals``: a command asks for what can be done, so
+        following it conditions the posterior on the goal holding in some state reachable from the start
+        (where the whole state space is enumerated; ``Learner.posterior``)."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
         self.null_token = null_token
         self.schema_names = schema_names
+        self.achievable_goals = achievable_goals
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
-                "schema_names": self.schema_names}
+                "schema_names": self.schema_names, "achievable_goals": self.achievable_goals}
 
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""

@@ -70,6 +70,7 @@ class ParseAligned(LanguageModel):
         negated_verbs_frame: bool = True,
         mention_task_objects: bool = True,
         parser_weights: dict | None = None,
+        achievable_goals: bool = True,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -120,7 +121,7 @@ class ParseAligned(LanguageModel):
                 require_positive(self.name, name, value)
         if not argument_bonus >= 0:
             raise ValueError(f"language model {self.name}: argument_bonus must be >= 0, not {argument_bonus!r}")
-        super().__init__(word_concentration, schema_names=schema_names)
+        super().__init__(word_concentration, schema_names=schema_names, achievable_goals=achievable_goals)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus
         self.mention_concentration = mention_concentration
@@ -172,6 +173,7 @@ class ParseAligned(LanguageModel):
             "held_parts": self.held_parts,
             "relational_descriptions": self.relational_descriptions,
             "schema_names": self.schema_names,
+            "achievable_goals": self.achievable_goals,
             "last_phrase_key": self.last_phrase_key,
             "object_key": self.object_key,
             "last_passes_over_source": self.last_passes_over_source,

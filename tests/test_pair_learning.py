@@ -258,3 +258,33 @@ def test_evaluate_counts_the_failed_executions_by_kind(tmp_path):
     assert [(r["index"], r["failure"], r["unmet"]) for r in failed] == [
         (0, "another object", ["agentInRoom(agent, roomIsLargest)"])] * 2
     assert all("failure" not in r for r in data["executions"] if r["correct"])
+
+
+def test_following_reads_only_goals_the_agent_can_reach(williams_commands, williams_library):
+    """A chair against the west wall cannot be stood left of: with ``achievable_goals`` (the default)
+    the posterior gives that goal nothing and shares its mass among the goals that can be reached."""
+    from groundlang.confidence import unachievable_goals
+    from groundlang.learner import Learner
+    from groundlang.logic.atoms import Atom
+    from groundlang.model.language_models import get_language_model
+
+    line = FIXTURE.joinpath("small.bdm").read_text().splitlines()[14]  # "go next to the chair", pair 1
+    state, names = parse_bdm_state(line.replace("block0 (block): [x: {6} y: {2}", "block0 (block): [x: {1} y: {2}"))
+    assert names == ("block0", "block3")
+    chair = state.layout.toy_names[0]
+    left, right = (Atom("agentLeftOfToy", ("agent0", chair)),), (Atom("agentRightOfToy", ("agent0", chair)),)
+    instances = training_instances(williams_commands, williams_library).instances
+    on = Learner(library=williams_library, cache_dir=False).fit(instances)
+    off = Learner(get_language_model("parse", achievable_goals=False), library=williams_library,
+                  cache_dir=False).fit(instances)
+    assert unachievable_goals([left, right], on._space(state), williams_library) == {left}
+    command = "go to the left of the chair"
+    before, after = dict(off.posterior(command, state).goals()), dict(on.posterior(command, state).goals())
+    assert before[left] > 0.01 and after[left] == 0.0
+    assert sum(after.values()) == pytest.approx(1.0)
+    out = unachievable_goals(list(before), on._space(state), williams_library)
+    assert left in out and all(after[g] == 0.0 for g in out)
+    # conditioning: every reachable goal's share grows by one factor, 1 / P(reachable)
+    assert after[right] / before[right] == pytest.approx(1 / (1 - sum(before[g] for g in out)), rel=1e-4)
+    assert off.follow(command, state).reason in ("unreachable", "goal") and on.follow(command, state).reached
+    assert on.lm.settings()["achievable_goals"] and not off.lm.settings()["achievable_goals"]
