@@ -23,7 +23,7 @@ import numpy as np
 
 from groundlang.inference.end_states import distances
 from groundlang.logic.atoms import Atom
-from groundlang.model.features import goal_mask
+from groundlang.model.features import atoms_hold_along, goal_mask
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.statespace import StateSpace
 
@@ -99,8 +99,14 @@ def unachievable_goals(goals: Sequence[tuple[Atom, ...]], space: StateSpace, lib
 
     if getattr(space, "level_sizes", None) is None or isinstance(space, AbstractStateSpace):
         return set()
-    tables = library_pf_tables(space.layout, library)
-    return {goal for goal in goals if not goal_mask(space, goal, tables).any()}
+    goals = list(goals)
+    atoms = sorted({atom for goal in goals for atom in goal})
+    if not atoms:
+        return set()
+    column = {atom: k for k, atom in enumerate(atoms)}
+    # Every atom over every state in one pass, then each goal's conjunction of its columns.
+    holds = atoms_hold_along(space.layout, space.positions, atoms, library_pf_tables(space.layout, library))
+    return {goal for goal in goals if not holds[:, [column[a] for a in goal]].all(axis=1).any()}
 
 
 def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpace,
