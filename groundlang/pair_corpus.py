@@ -104,19 +104,29 @@ def read_pair_corpus(path: str | Path, palette=DEFAULT_PALETTE) -> PairCorpus:
     return PairCorpus(paths, [c for p in paths for c in read_bdm(p, palette)])
 
 
-def held_out_by_text(commands: list[Command], fraction: float) -> tuple[list[Command], list[Command]]:
+def held_out_by_text(commands: list[Command], fraction: float,
+                     tuning: bool = False) -> tuple[list[Command], list[Command]]:
     """A development split disjoint by command text: a text is held out when its hash (SHA-256 of the
     lower-cased, stripped text) falls in the first ``fraction`` of the range, so every copy of a text
-    lands on one side, and the split is the same on every machine and for every corpus order."""
+    lands on one side, and the split is the same on every machine and for every corpus order.
+
+    With ``tuning``, a split to choose mechanisms on that leaves the development split unseen: the texts
+    in the next ``fraction`` of the range are held out and those beyond it trained on; the development
+    split's commands are in neither (``fraction`` below one half)."""
     if not 0 < fraction < 1:
         raise ValueError(f"held-out fraction {fraction}: expected a number strictly between 0 and 1")
+    if tuning and not fraction < 0.5:
+        raise ValueError(f"held-out fraction {fraction}: a tuning split holds out the next {fraction} of the "
+                         "texts after the development split's, so it must be below 0.5")
 
-    def held(text: str) -> bool:
+    def position(text: str) -> float:
         digest = hashlib.sha256(text.strip().lower().encode("utf-8")).digest()
-        return int.from_bytes(digest[:8], "big") < fraction * 2**64
+        return int.from_bytes(digest[:8], "big") / 2**64
 
-    train = [c for c in commands if not held(c.text)]
-    test = [c for c in commands if held(c.text)]
+    low, high = (fraction, 2 * fraction) if tuning else (0.0, fraction)
+    where = [position(c.text) for c in commands]
+    train = [c for c, x in zip(commands, where) if x >= high]
+    test = [c for c, x in zip(commands, where) if low <= x < high]
     return train, test
 
 

@@ -104,6 +104,25 @@ def test_the_development_split_is_disjoint_by_text_and_stable(williams_commands)
         held_out_by_text(many, 1.0)
 
 
+def test_a_tuning_split_never_reads_the_development_split():
+    from dataclasses import replace
+
+    from groundlang.bdm import read_bdm
+
+    one = read_bdm(FIXTURE / "small.bdm")[0]
+    many = [replace(one, text=f"go to room number {k}") for k in range(300)]
+    train, dev = held_out_by_text(many, 0.2)
+    tune_train, tune = held_out_by_text(many, 0.2, tuning=True)
+    texts = lambda commands: {c.text for c in commands}
+    # the tuning split's both sides come from the development split's training side, disjoint by text
+    assert texts(tune_train) | texts(tune) <= texts(train) and not texts(tune_train) & texts(tune)
+    assert not (texts(tune_train) | texts(tune)) & texts(dev)
+    # a fifth of the range each, the rest trained on (300 texts: roughly 60, 60 and 180)
+    assert 40 < len(dev) < 80 and 40 < len(tune) < 80 and len(tune_train) == len(many) - len(dev) - len(tune)
+    with pytest.raises(ValueError, match="below 0.5"):
+        held_out_by_text(many, 0.5, tuning=True)
+
+
 def _cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "groundlang.cli", *args], capture_output=True, text=True, timeout=600)
 
@@ -142,6 +161,8 @@ def test_evaluate_refuses_a_test_file_for_a_text_corpus_in_one_line(args, messag
     (["--holdout", "0.2", "--limit", "1"], "--limit: for a *.txt corpus"),
     (["--holdout", "0.2", "--protocol", "loo"], "--protocol: for a *.txt corpus"),
     (["--test", str(FIXTURE / "small.bdm"), "--holdout", "0.5"], "pass one of --test"),
+    (["--test", str(FIXTURE / "small.bdm"), "--tuning"], "--tuning splits the training side of --holdout F"),
+    (["--holdout", "0.5", "--tuning"], "must be below 0.5"),
 ])
 def test_evaluate_on_pairs_refuses_what_it_would_ignore(args, message):
     run = _cli("evaluate", "--corpus", str(FIXTURE / "small.bdm"), *args)

@@ -27,6 +27,9 @@ def register(subparsers) -> None:
     p.add_argument("--holdout", type=open_fraction, metavar="F",
                    help="instead of --test: hold out the .bdm corpus's commands whose text hashes into a fraction "
                         "F (a development split disjoint by text, the same on every machine)")
+    p.add_argument("--tuning", action="store_true",
+                   help="with --holdout F: hold out the next F of the texts and train on the rest beyond it, "
+                        "never reading the development split (a split to choose mechanisms on)")
     p.add_argument("--format", choices=["commands-to-tasks", "williams2018"],
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
     p.add_argument("--library", metavar="LP", action="append",
@@ -118,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 # Options of one corpus format only (name -> default): refused, not ignored, with the other.
-_PAIR_OPTIONS = {"holdout": None, "layouts": "shared", "demonstrations": "end-state"}
+_PAIR_OPTIONS = {"holdout": None, "tuning": False, "layouts": "shared", "demonstrations": "end-state"}
 _TEXT_OPTIONS = ("labels", "novel_envs", "protocol", "limit", "cold_folds", "ray")
 
 
@@ -148,10 +151,12 @@ def run_pairs(args: argparse.Namespace) -> int:
     words = extra_words(args.lexicon)
     library = default_library(args.library)
     train = read_pair_corpus(args.corpus, palette).commands
+    if args.tuning and args.holdout is None:
+        raise ValueError("--tuning splits the training side of --holdout F; pass --holdout too (not --test)")
     if args.test:
         test = read_pair_corpus(args.test, palette).commands
     else:
-        train, test = held_out_by_text(train, args.holdout)
+        train, test = held_out_by_text(train, args.holdout, tuning=args.tuning)
     from groundlang.model.language_models import get_language_model
 
     options = {"language_model": get_language_model(args.language_model, **language_model_settings(args.lm_settings)),
