@@ -16,20 +16,21 @@ from __future__ import annotations
 
 import hashlib
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from groundlang.inference.end_states import distances
 from groundlang.logic.atoms import Atom
-from groundlang.model.features import atoms_hold_along, goal_mask
+from groundlang.model.features import atoms_hold_along
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.statespace import StateSpace
 
 __all__ = [
     "GoalGroup", "group_goals", "expected_calibration_error", "risk_coverage", "accuracy_at_coverage",
     "auroc", "reliability", "calibration_report", "format_calibration", "choose_threshold", "unachievable_goals",
+    "GoalMasks",
 ]
 
 # Goals below this probability are not compared by their masks: they cannot change the
@@ -67,17 +68,39 @@ def most_probable_first(items: Sequence, probability) -> list:
     return [items[k] for run in runs for k in sorted(run)]
 
 
-def _outcome_key(goal, space: StateSpace, tables) -> bytes:
-    return hashlib.sha1(np.packbits(goal_mask(space, goal, tables)).tobytes()).digest()
+class GoalMasks:
+    """Where goals hold over the states of ``space``: each atom's column is computed once, for all the
+    atoms asked at a time in one pass, and a goal (a conjunction) is the AND of its atoms' columns, so
+    the goals of one posterior share the work whoever asks (:func:`unachievable_goals`, :func:`group_goals`)."""
+
+    def __init__(self, space: StateSpace, library=None):
+        self.space = space
+        self.tables = library_pf_tables(space.layout, library)
+        self._columns: dict[Atom, np.ndarray] = {}
+
+    def prepare(self, goals: Iterable[tuple[Atom, ...]]) -> None:
+        missing = sorted({atom for goal in goals for atom in goal} - self._columns.keys())
+        if missing:
+            holds = atoms_hold_along(self.space.layout, self.space.positions, missing, self.tables)
+            self._columns.update(zip(missing, holds.T))
+
+    def mask(self, goal: tuple[Atom, ...]) -> np.ndarray:
+        """``[S]`` bool: the states where every atom of ``goal`` holds (as ``features.goal_mask``)."""
+        self.prepare([goal])
+        return np.logical_and.reduce([self._columns[atom] for atom in goal])
 
 
-def _asked(goal: tuple[Atom, ...], space: StateSpace, tables, dist: np.ndarray | None) -> tuple[Atom, ...]:
+def _outcome_key(goal, masks: GoalMasks) -> bytes:
+    return hashlib.sha1(np.packbits(masks.mask(goal)).tobytes()).digest()
+
+
+def _asked(goal: tuple[Atom, ...], masks: GoalMasks, dist: np.ndarray | None) -> tuple[Atom, ...]:
     """What ``goal`` asks beyond what already holds: without its parts that hold at the start when the
     nearest states where the rest holds keep them too (a plan for the rest need not break them, so
     "the bag stays in the red room and the agent goes to the blue room" is "go to the blue room")."""
     if dist is None or len(goal) < 2:
         return goal
-    held = [a for a in goal if goal_mask(space, (a,), tables)[0]]
+    held = [a for a in goal if masks.mask((a,))[0]]
     rest = tuple(a for a in goal if a not in held)
     if not held or not rest:
         return goal
@@ -87,35 +110,34 @@ def _asked(goal: tuple[Atom, ...], space: StateSpace, tables, dist: np.ndarray |
         hits = dist[mask & reach]
         return int(hits.min()) if hits.size else None
 
-    whole, part = nearest(goal_mask(space, goal, tables)), nearest(goal_mask(space, rest, tables))
+    whole, part = nearest(masks.mask(goal)), nearest(masks.mask(rest))
     return rest if whole is not None and whole == part else goal
 
 
-def unachievable_goals(goals: Sequence[tuple[Atom, ...]], space: StateSpace, library=None) -> set[tuple[Atom, ...]]:
+def unachievable_goals(goals: Sequence[tuple[Atom, ...]], space: StateSpace, library=None,
+                       masks: GoalMasks | None = None) -> set[tuple[Atom, ...]]:
     """The ``goals`` that hold in no state of ``space``, when ``space`` holds every state reachable from
     its start (an exact space enumerated from it); none otherwise (a relevance abstraction or a sample
-    of placements cannot say a goal is out of reach)."""
+    of placements cannot say a goal is out of reach). ``masks``: a :class:`GoalMasks` of ``space`` to share."""
     from groundlang.model.relevance import AbstractStateSpace
 
     if getattr(space, "level_sizes", None) is None or isinstance(space, AbstractStateSpace):
         return set()
+    masks = masks or GoalMasks(space, library)
     goals = list(goals)
-    atoms = sorted({atom for goal in goals for atom in goal})
-    if not atoms:
-        return set()
-    column = {atom: k for k, atom in enumerate(atoms)}
-    # Every atom over every state in one pass, then each goal's conjunction of its columns.
-    holds = atoms_hold_along(space.layout, space.positions, atoms, library_pf_tables(space.layout, library))
-    return {goal for goal in goals if not holds[:, [column[a] for a in goal]].all(axis=1).any()}
+    masks.prepare(goals)
+    return {goal for goal in goals if not masks.mask(goal).any()}
 
 
 def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpace,
-                library=None) -> list[GoalGroup]:
+                library=None, masks: GoalMasks | None = None) -> list[GoalGroup]:
     """Merge goals (most probable first, as :meth:`Posterior.goals` gives them) whose goal masks
     over ``space`` are equal, a conjunction counted as its rest where its parts that hold at the start
     need not be broken (:func:`_asked`); returns the groups, most probable first (ties: the first goal's order).
-    ``library``: the TaskLibrary whose PF rules say what the goals mean (default: the package's)."""
-    tables = library_pf_tables(space.layout, library)
+    ``library``: the TaskLibrary whose PF rules say what the goals mean (default: the package's).
+    ``masks``: a :class:`GoalMasks` of ``space`` to share."""
+    masks = masks or GoalMasks(space, library)
+    masks.prepare(goal for goal, p in goals if p >= NEGLIGIBLE)
     # From the initial state of an enumerated space (not a sample of placements): how far each state is.
     dist = distances(space) if getattr(space, "level_sizes", None) is not None else None
     by_mask: dict[bytes, list] = {}
@@ -124,7 +146,7 @@ def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpa
         if p < NEGLIGIBLE:
             key = f"#{k}".encode()  # kept apart: comparing it could not matter
         else:
-            key = _outcome_key(_asked(goal, space, tables, dist), space, tables)
+            key = _outcome_key(_asked(goal, masks, dist), masks)
         if key not in by_mask:
             by_mask[key] = [[], 0.0]
             order.append(key)

@@ -18,7 +18,7 @@ import torch
 
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
-from groundlang.confidence import group_goals, unachievable_goals
+from groundlang.confidence import GoalMasks, group_goals, unachievable_goals
 from groundlang.goal_plans import plan_for_goal, planning_space
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
@@ -276,15 +276,16 @@ class Learner:
             structures[0], batch, [r.probability for r in obs.readings])
         probs = probs[:J].numpy().astype(float)
         space = self._space(state)
+        masks = GoalMasks(space, self.library)
         if self.lm.achievable_goals:
             # Commands ask for what can be done: condition on the goal holding in some state the agent can
             # reach from here (a chair against the west wall cannot be stood left of).
-            out = unachievable_goals({i.goal for i in obs.interpretations}, space, self.library)
+            out = unachievable_goals({i.goal for i in obs.interpretations}, space, self.library, masks)
             keep = np.array([i.goal not in out for i in obs.interpretations])
             if out and probs[keep].sum() > 0:
                 probs = np.where(keep, probs, 0.0) / probs[keep].sum()
         post = Posterior(command, list(obs.interpretations), probs, list(obs.readings), reading_probs)
-        post.groups = group_goals(post.goals(), space, self.library)
+        post.groups = group_goals(post.goals(), space, self.library, masks)
         return post
 
     def _space(self, state: State, goal: tuple[Atom, ...] | None = None) -> StateSpace:
