@@ -61,7 +61,7 @@ class PairEvaluation:
     unseen_correct: int
     skipped_executions: int
     per_task: dict
-    failures: dict
+    failures: dict  # kind (FAILURE_KINDS) -> the relations left unmet ("agentInRoom+toyInRoom") -> executions
     seconds_training: float
     seconds_following: float
     demonstrations: str
@@ -106,12 +106,12 @@ class PairEvaluation:
         for task, (k, n) in sorted(self.per_task.items(), key=lambda item: -item[1][1]):
             lines.append(f"  {task:<40} {k / n:.2%} ({k}/{n})")
         if self.failures:
-            lines.append(f"failed executions by kind ({sum(self.failures.values())}; the relations unmet in brackets):")
+            total = sum(sum(of_kind.values()) for of_kind in self.failures.values())
+            lines.append(f"failed executions by kind ({total}; then by the relations left unmet):")
             for kind in FAILURE_KINDS:
-                of_kind = {key: k for key, k in self.failures.items() if key.split(" (")[0] == kind}
+                of_kind = self.failures.get(kind, {})
                 if of_kind:
-                    detail = ", ".join(f"{k} {key[len(kind) + 2:-1]}" for key, k in
-                                       sorted(of_kind.items(), key=lambda item: -item[1]))
+                    detail = ", ".join(f"{k} {unmet}" for unmet, k in sorted(of_kind.items(), key=lambda item: -item[1]))
                     lines.append(f"  {sum(of_kind.values()):>4} {kind}: {detail}")
         lines.append(f"published (Williams et al. 2018, Table II): F1 {PUBLISHED_F1:.2f} of validated parses, "
                      f"three pairs per command")
@@ -157,7 +157,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     seen = {c.text.strip().lower() for c in train}
     rows: list[dict] = []
     per_task: dict[str, list[int]] = defaultdict(lambda: [0, 0])
-    failures: dict[str, int] = defaultdict(int)
+    failures: dict[str, dict[str, int]] = defaultdict(dict)  # kind -> the relations left unmet -> count
     correct = n = commands_correct = scored = no_task = unseen_n = unseen_correct = skipped = 0
     for index, command in enumerate(test):
         task = pair_task([(p.start, p.end) for p in command.pairs], library)
@@ -184,7 +184,8 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                 if not hit:
                     kind, missing = why
                     row.update(failure=kind, unmet=sorted(map(str, missing)))
-                    failures[f"{kind} ({'+'.join(sorted({a.predicate for a in missing}))})"] += 1
+                    unmet = "+".join(sorted({a.predicate for a in missing})) or "(none)"
+                    failures[kind][unmet] = failures[kind].get(unmet, 0) + 1
                 n += 1
                 correct += hit
                 per_task[_task_kind(task)][0] += hit

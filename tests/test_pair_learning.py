@@ -271,10 +271,10 @@ def test_evaluate_counts_the_failed_executions_by_kind(tmp_path):
     run = _cli("evaluate", "--corpus", small, "--test", small, "--json", str(out))
     assert run.returncode == 0, run.stderr
     assert "per execution: 66.67% (4/6" in run.stdout
-    assert "failed executions by kind (2; the relations unmet in brackets):" in run.stdout
+    assert "failed executions by kind (2; then by the relations left unmet):" in run.stdout
     assert "     2 another object: 2 agentInRoom" in run.stdout
     data = json.loads(out.read_text())
-    assert data["failures"] == {"another object (agentInRoom)": 2}
+    assert data["failures"] == {"another object": {"agentInRoom": 2}}
     failed = [r for r in data["executions"] if not r["correct"]]
     assert [(r["index"], r["failure"], r["unmet"]) for r in failed] == [
         (0, "another object", ["agentInRoom(agent, roomIsLargest)"])] * 2
