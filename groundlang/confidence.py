@@ -30,7 +30,7 @@ from groundlang.model.statespace import StateSpace
 __all__ = [
     "GoalGroup", "group_goals", "expected_calibration_error", "risk_coverage", "accuracy_at_coverage",
     "auroc", "reliability", "calibration_report", "format_calibration", "choose_threshold", "unachievable_goals",
-    "GoalMasks",
+    "GoalMasks", "given_achievable",
 ]
 
 # Goals below this probability are not compared by their masks: they cannot change the
@@ -127,6 +127,17 @@ def unachievable_goals(goals: Sequence[tuple[Atom, ...]], space: StateSpace, lib
     goals = list(goals)
     masks.prepare(goals)
     return {goal for goal in goals if not masks.mask(goal).any()}
+
+
+def given_achievable(probabilities: np.ndarray, goals: Sequence[tuple[Atom, ...]], masks: GoalMasks) -> np.ndarray:
+    """``probabilities`` (of readings whose goals are ``goals``, one each) given that the goal can be
+    reached in ``masks``' space: a command asks for what can be done, so a goal that holds in no
+    reachable state (a chair against the west wall cannot be stood left of) gets none and the others
+    share its mass in proportion. Unchanged where no goal is ruled out, or every goal is."""
+    out = unachievable_goals(set(goals), masks.space, masks=masks)
+    keep = np.array([goal not in out for goal in goals], dtype=bool)
+    total = float(probabilities[keep].sum()) if out else 0.0
+    return np.where(keep, probabilities, 0.0) / total if total > 0 else probabilities
 
 
 def group_goals(goals: Sequence[tuple[tuple[Atom, ...], float]], space: StateSpace,

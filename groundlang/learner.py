@@ -13,12 +13,11 @@ import logging
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
-import numpy as np
 import torch
 
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
-from groundlang.confidence import GoalMasks, group_goals, unachievable_goals
+from groundlang.confidence import GoalMasks, given_achievable, group_goals
 from groundlang.goal_plans import plan_for_goal, planning_space
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
@@ -278,12 +277,7 @@ class Learner:
         space = self._space(state)
         masks = GoalMasks(space, self.library)
         if self.lm.achievable_goals:
-            # Commands ask for what can be done: condition on the goal holding in some state the agent can
-            # reach from here (a chair against the west wall cannot be stood left of).
-            out = unachievable_goals({i.goal for i in obs.interpretations}, space, self.library, masks)
-            keep = np.array([i.goal not in out for i in obs.interpretations])
-            if out and probs[keep].sum() > 0:
-                probs = np.where(keep, probs, 0.0) / probs[keep].sum()
+            probs = given_achievable(probs, [i.goal for i in obs.interpretations], masks)
         post = Posterior(command, list(obs.interpretations), probs, list(obs.readings), reading_probs)
         post.groups = group_goals(post.goals(), space, self.library, masks)
         return post

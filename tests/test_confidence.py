@@ -59,3 +59,27 @@ def test_goals_that_hold_in_the_same_states_count_as_one():
     assert [g.probability for g in groups] == [pytest.approx(0.65), pytest.approx(0.35)]
     assert groups[0].goals == (goals[0][0], goals[2][0]) and groups[0].goal == goals[0][0]
     assert groups[1] == GoalGroup((goals[1][0],), 0.35)
+
+
+def test_given_achievable_moves_the_mass_of_goals_out_of_reach_to_the_others():
+    import numpy as np
+
+    from groundlang.confidence import GoalMasks, given_achievable, unachievable_goals
+    from groundlang.model.relevance import placement_sample
+
+    state = parse_state(STUCK, "sokoban")
+    space = enumerate_states(state)
+    stuck1, agent2, stuck2 = (parse_goal(g) for g in ("toyInRoom(block0, room1)", "agentInRoom(agent0, room2)",
+                                                      "toyInRoom(block0, room2)"))
+    masks = GoalMasks(space)
+    assert unachievable_goals([stuck1, agent2, stuck2], space, masks=masks) == {stuck1, stuck2}
+    # readings of the same goal share it; the reachable goal takes the whole mass
+    probs = np.array([0.3, 0.1, 0.35, 0.25])
+    given = given_achievable(probs, [stuck1, stuck1, agent2, stuck2], masks)
+    assert given.tolist() == pytest.approx([0.0, 0.0, 1.0, 0.0])
+    # when no goal can be reached, nothing is ruled out (acting fails and says so)
+    assert given_achievable(np.array([0.6, 0.4]), [stuck1, stuck2], masks).tolist() == [0.6, 0.4]
+    # a sample of placements cannot say what is reachable: nothing changes
+    sample = placement_sample(state, count=256)
+    assert unachievable_goals([stuck1, agent2], sample) == set()
+    assert given_achievable(probs, [stuck1, stuck1, agent2, stuck2], GoalMasks(sample)).tolist() == probs.tolist()
