@@ -22,8 +22,7 @@ from groundlang.learner import Learner
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.statespace import StateSpaceError
 from groundlang.pair_corpus import training_instances
-from groundlang.model.world import State
-from groundlang.pair_tasks import REACHABILITY_MAX_STATES, lifted_facts, pair_task, satisfies
+from groundlang.pair_tasks import REACHABILITY_MAX_STATES, lifted_facts, pair_task
 
 __all__ = ["PairEvaluation", "evaluate_pairs", "failure_kind", "FAILURE_KINDS", "PUBLISHED_F1"]
 
@@ -124,23 +123,20 @@ def _task_kind(task) -> str:
     return "+".join(sorted({atom.predicate for atom in task})) or "(none)"
 
 
-def failure_kind(goal, task: frozenset[Atom], final: State, reached: bool, library) -> tuple[str, frozenset[Atom]]:
-    """Why following failed (a key of :data:`FAILURE_KINDS`) and the facts of ``task`` the final state lacks.
+def failure_kind(goal, task: frozenset[Atom], missing: frozenset[Atom], reached: bool) -> str:
+    """Why following failed (a key of :data:`FAILURE_KINDS`), from the goal acted on, what the pairs show
+    (``task``) and the part of it the final state lacks (``missing``).
 
     Told apart by relation (the predicate), not by what is said of the objects: when a relation the goal
     asked for is unmet, the goal's objects were not the pairs' ("another object"); else, when the goal's
     relations are all among those the pairs show, the unmet ones were not asked ("more than the goal");
     else the goal asked for a relation the pairs do not show ("another relation")."""
-    missing = task - lifted_facts(final, library)
     if not reached:
-        return "unreached", missing
-    unmet = {atom.predicate for atom in missing}
+        return "unreached"
     asked = {atom.predicate for atom in goal}
-    if unmet & asked:
-        return "another object", missing
-    if asked <= {atom.predicate for atom in task}:
-        return "more than the goal", missing
-    return "another relation", missing
+    if asked & {atom.predicate for atom in missing}:
+        return "another object"
+    return "more than the goal" if asked <= {atom.predicate for atom in task} else "another relation"
 
 
 def evaluate_pairs(train: list[Command], test: list[Command], library, demonstrations: str = "end-state",
@@ -169,20 +165,18 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                 result = learner.follow(command.text, pair.start)
             except StateSpaceError as exc:  # what neither the exact space nor the abstraction can hold
                 row.update(goal=None, final_state=None, skipped=str(exc))
-                hit = False
                 skipped += 1
-                why = ("skipped", task)
+                missing, kind = task, "skipped"
             else:
                 names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
                 goal = tuple(Atom(a.predicate, tuple(names.get(x, x) for x in a.args)) for a in result.goal)
                 row.update(goal=format_goal(goal), final_state=format_bdm_state(result.final_state, pair.toy_names))
-                hit = satisfies(result.final_state, task, library)
-                if task and not hit:
-                    why = failure_kind(result.goal, task, result.final_state, result.reached, library)
+                missing = task - lifted_facts(result.final_state, library)  # pair_tasks.satisfies, keeping what is unmet
+                kind = failure_kind(result.goal, task, missing, result.reached) if missing else None
+            hit = bool(task) and kind is None
             if task:
                 row["correct"] = hit
                 if not hit:
-                    kind, missing = why
                     row.update(failure=kind, unmet=sorted(map(str, missing)))
                     unmet = "+".join(sorted({a.predicate for a in missing})) or "(none)"
                     failures[kind][unmet] = failures[kind].get(unmet, 0) + 1

@@ -249,17 +249,22 @@ def test_a_failed_execution_is_told_by_kind_from_the_goal_the_task_and_the_final
     toys = start.layout.toy_names
     next_to = (Atom("agentNextToToy", ("agent0", toys[0])),)
     in_room = (Atom("agentInRoom", ("agent0", "room0")),)
-    # the start is not next to any chair: acting on next to, the relation was asked and not met there
-    assert failure_kind(next_to, task, start, True, williams_library) == ("another object", task)
-    assert failure_kind(in_room, task, start, True, williams_library)[0] == "another relation"
-    assert failure_kind(next_to, task, start, False, williams_library)[0] == "unreached"
-    # the pairs show one more relation than the goal asks (as a block moved into a room no word names)
     from groundlang.pair_tasks import lifted_facts
 
+    def kind(goal, task, final, reached=True):
+        return failure_kind(goal, task, task - lifted_facts(final, williams_library), reached)
+
+    # the start is not next to any chair: acting on next to, the relation was asked and not met there
+    assert task - lifted_facts(start, williams_library) == task
+    assert kind(next_to, task, start) == "another object"
+    assert kind(in_room, task, start) == "another relation"
+    assert kind(next_to, task, start, reached=False) == "unreached"
+    # the pairs show one more relation than the goal asks (as a block moved into a room no word names)
     extra = sorted(a for a in lifted_facts(start, williams_library) - lifted_facts(end, williams_library)
                    if a.predicate != "agentNextToToy")[0]
-    kind, unmet = failure_kind(next_to, task | {extra}, end, True, williams_library)
-    assert (kind, unmet) == ("more than the goal", frozenset({extra}))
+    shown = task | {extra}
+    assert shown - lifted_facts(end, williams_library) == {extra}
+    assert kind(next_to, shown, end) == "more than the goal"
     assert set(FAILURE_KINDS) >= {"another object", "another relation", "unreached", "more than the goal", "skipped"}
 
 
