@@ -271,15 +271,17 @@ def calibration_report(confidence: Sequence[float], correct: Sequence[bool],
     return report
 
 
-def format_calibration(report: dict, title: str = "confidence") -> str:
-    """A few lines of :func:`calibration_report` for a person: ECE, AUROC, accuracy at coverages."""
-    lines = [f"{title} ({report['n']} commands): expected calibration error {report['ece']:.3f}, "
+def format_calibration(report: dict, title: str = "confidence", unit: str = "commands") -> str:
+    """A few lines of :func:`calibration_report` for a person: ECE, AUROC, accuracy at coverages
+    (``unit``: what the report counts)."""
+    lines = [f"{title} ({report['n']} {unit}): expected calibration error {report['ece']:.3f}, "
              f"AUROC for correctness {report['auroc']:.3f}, mean confidence {report['mean_confidence']:.3f}"]
     for row in report["at_coverage"]:
         lines.append(f"  acting on the {row['reached']:.1%} most confident (asked {row['coverage']:.0%}): "
                      f"accuracy {row['accuracy']:.2%}")
     if "threshold" in report:
         t = report["threshold"]
+        accuracy = f"accuracy {t['accuracy']:.2%}" if t["acted"] else "none acted on"
         lines.append(f"  acting at confidence >= {t['min_confidence']:g} (--min-confidence): "
-                     f"{t['acted']} of {report['n']} ({t['coverage']:.1%}), accuracy {t['accuracy']:.2%}")
+                     f"{t['acted']} of {report['n']} ({t['coverage']:.1%}), {accuracy}")
     return "\n".join(lines)

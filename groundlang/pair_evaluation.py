@@ -17,8 +17,9 @@ from collections import defaultdict
 from dataclasses import asdict, dataclass, field
 
 from groundlang.bdm import Command, format_bdm_state
+from groundlang.confidence import calibration_report, format_calibration
 from groundlang.evaluation import wilson_interval
-from groundlang.learner import Learner
+from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.statespace import StateSpaceError
 from groundlang.pair_corpus import training_instances
@@ -66,6 +67,11 @@ class PairEvaluation:
     demonstrations: str
     layouts: str
     executions: list[dict] = field(default_factory=list)
+    # Confidence (the posterior probability of the goal acted on) against correctness
+    # (groundlang.confidence.calibration_report): per execution, and per command with the least
+    # confident of its executions (acting on a command means acting in every layout it comes with).
+    calibration: dict = field(default_factory=dict)
+    command_calibration: dict = field(default_factory=dict)
 
     @property
     def accuracy(self) -> float:
@@ -112,6 +118,11 @@ class PairEvaluation:
                 if of_kind:
                     detail = ", ".join(f"{k} {unmet}" for unmet, k in sorted(of_kind.items(), key=lambda item: -item[1]))
                     lines.append(f"  {sum(of_kind.values()):>4} {kind}: {detail}")
+        if self.calibration:
+            lines.append(format_calibration(self.calibration, "confidence", unit="executions"))
+        if self.command_calibration:
+            lines.append(format_calibration(self.command_calibration, "confidence per command (its least "
+                                            "confident layout)"))
         lines.append(f"published (Williams et al. 2018, Table II): F1 {PUBLISHED_F1:.2f} of validated parses, "
                      f"three pairs per command")
         lines.append(f"wall time: training {self.seconds_training:.1f} s, following {self.seconds_following:.1f} s")
@@ -141,8 +152,12 @@ def failure_kind(goal, task: frozenset[Atom], missing: frozenset[Atom], reached:
 
 def evaluate_pairs(train: list[Command], test: list[Command], library, demonstrations: str = "end-state",
                    layouts: str = "shared", skip_inconsistent: bool = False, learner_options: dict | None = None,
-                   max_states: int = REACHABILITY_MAX_STATES, progress: bool = False) -> PairEvaluation:
-    """Train on ``train``'s pairs, follow ``test``'s commands from each start state (module docstring)."""
+                   max_states: int = REACHABILITY_MAX_STATES, progress: bool = False,
+                   min_confidence: float = DEFAULT_MIN_CONFIDENCE) -> PairEvaluation:
+    """Train on ``train``'s pairs, follow ``test``'s commands from each start state (module docstring).
+
+    Every command is acted on; ``min_confidence`` is the threshold whose coverage and accuracy the
+    calibration report gives (what ``follow --min-confidence`` would act on), predictions unchanged."""
     started = time.perf_counter()
     made = training_instances(train, library, demonstrations, skip_inconsistent=skip_inconsistent, max_states=max_states,
                               layouts=layouts)
@@ -155,22 +170,26 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     per_task: dict[str, list[int]] = defaultdict(lambda: [0, 0])
     failures: dict[str, dict[str, int]] = defaultdict(dict)  # kind -> the relations left unmet -> count
     correct = n = commands_correct = scored = no_task = unseen_n = unseen_correct = skipped = 0
+    confident: list[tuple[float, bool]] = []  # (confidence, correct) per scored execution
+    command_confident: list[tuple[float, bool]] = []  # the same per scored command, its least confident layout
     for index, command in enumerate(test):
         task = pair_task([(p.start, p.end) for p in command.pairs], library)
         unseen = command.text.strip().lower() not in seen
         all_right = True
+        least = 1.0  # confidence of the command's least confident layout (0 for a skipped one)
         for k, pair in enumerate(command.pairs):
             row = {"index": index, "pair": k, "command": command.text}
             try:  # a layout too large to enumerate is planned in its relevance abstraction (model.relevance)
                 result = learner.follow(command.text, pair.start)
             except StateSpaceError as exc:  # what neither the exact space nor the abstraction can hold
-                row.update(goal=None, final_state=None, skipped=str(exc))
+                row.update(goal=None, final_state=None, skipped=str(exc), confidence=0.0)
                 skipped += 1
                 missing, kind = task, "skipped"
             else:
                 names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
                 goal = tuple(Atom(a.predicate, tuple(names.get(x, x) for x in a.args)) for a in result.goal)
-                row.update(goal=format_goal(goal), final_state=format_bdm_state(result.final_state, pair.toy_names))
+                row.update(goal=format_goal(goal), final_state=format_bdm_state(result.final_state, pair.toy_names),
+                           confidence=float(result.confidence))
                 missing = task - lifted_facts(result.final_state, library)  # pair_tasks.satisfies, keeping what is unmet
                 kind = failure_kind(result.goal, task, missing, result.reached) if missing else None
             hit = bool(task) and kind is None
@@ -182,19 +201,26 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                     failures[kind][unmet] = failures[kind].get(unmet, 0) + 1
                 n += 1
                 correct += hit
+                confident.append((row["confidence"], hit))
                 per_task[_task_kind(task)][0] += hit
                 per_task[_task_kind(task)][1] += 1
                 if unseen:
                     unseen_n += 1
                     unseen_correct += hit
             all_right &= hit
+            least = min(least, row["confidence"])
             rows.append(row)
         if task:
             scored += 1
             commands_correct += all_right
+            command_confident.append((least, all_right))
         else:
             no_task += 1
     finished = time.perf_counter()
+
+    def report(pairs: list[tuple[float, bool]]) -> dict:
+        return calibration_report(*zip(*pairs), threshold=min_confidence) if pairs else {}
+
     return PairEvaluation(
         train_commands=len(train), train_pairs=sum(len(getattr(i, "pairs", (i,))) for i in made.instances),
         train_skipped=made.skipped_counts(),
@@ -204,4 +230,5 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         per_task={k: tuple(v) for k, v in per_task.items()}, failures=dict(failures),
         seconds_training=trained - started, seconds_following=finished - trained,
         demonstrations=demonstrations, layouts=layouts, executions=rows,
+        calibration=report(confident), command_calibration=report(command_confident),
     )

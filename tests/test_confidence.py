@@ -7,7 +7,8 @@ import math
 import pytest
 
 from groundlang.confidence import (GoalGroup, accuracy_at_coverage, auroc, calibration_report, choose_threshold,
-                                   expected_calibration_error, group_goals, reliability, risk_coverage)
+                                   expected_calibration_error, format_calibration, group_goals, reliability,
+                                   risk_coverage)
 from groundlang.corpus import parse_state
 from groundlang.logic.atoms import parse_goal
 from groundlang.model.statespace import enumerate_states
@@ -48,6 +49,17 @@ def test_threshold_is_the_widest_that_reaches_the_target():
     report = calibration_report(conf, right, coverages=(0.6,), threshold=0.8)
     assert report["threshold"] == {"min_confidence": 0.8, "acted": 3, "coverage": 0.6, "accuracy": 1.0}
     assert report["at_coverage"] == [{"coverage": 0.6, "reached": 0.6, "accuracy": 1.0}]
+
+
+def test_the_report_says_what_it_counts_and_when_nothing_was_acted_on():
+    report = calibration_report([0.4, 0.6, 0.2], [True, False, True], threshold=0.7)
+    assert report["threshold"]["acted"] == 0 and math.isnan(report["threshold"]["accuracy"])
+    text = format_calibration(report, "confidence", unit="executions")
+    assert text.startswith("confidence (3 executions): expected calibration error")
+    assert "acting at confidence >= 0.7 (--min-confidence): 0 of 3 (0.0%), none acted on" in text
+    assert "nan" not in text
+    acted = format_calibration(calibration_report([0.8, 0.9, 0.2], [True, False, True], threshold=0.7))
+    assert "(3 commands)" in acted and "2 of 3 (66.7%), accuracy 50.00%" in acted
 
 
 def test_goals_that_hold_in_the_same_states_count_as_one():

@@ -270,10 +270,12 @@ def test_a_failed_execution_is_told_by_kind_from_the_goal_the_task_and_the_final
 
 def test_evaluate_counts_the_failed_executions_by_kind(tmp_path):
     """On the two-command fixture the shared meaning reads "the largest room" in the first layout only
-    (README): two executions go to another room; the CLI and the JSON say so by kind."""
+    (README): two executions go to another room; the CLI and the JSON say so by kind, and report how
+    confident each reading was against whether it was right (per execution, and per command by its
+    least confident layout)."""
     out = tmp_path / "result.json"
     small = str(FIXTURE / "small.bdm")
-    run = _cli("evaluate", "--corpus", small, "--test", small, "--json", str(out))
+    run = _cli("evaluate", "--corpus", small, "--test", small, "--json", str(out), "--min-confidence", "0.5")
     assert run.returncode == 0, run.stderr
     assert "per execution: 66.67% (4/6" in run.stdout
     assert "failed executions by kind (2; then by the relations left unmet):" in run.stdout
@@ -284,6 +286,23 @@ def test_evaluate_counts_the_failed_executions_by_kind(tmp_path):
     assert [(r["index"], r["failure"], r["unmet"]) for r in failed] == [
         (0, "another object", ["agentInRoom(agent, roomIsLargest)"])] * 2
     assert all("failure" not in r for r in data["executions"] if r["correct"])
+
+    rows = data["executions"]
+    assert all(0.0 < r["confidence"] <= 1.0 for r in rows)
+    acted = [r for r in rows if r["confidence"] >= 0.5]
+    report = data["calibration"]
+    assert report["n"] == 6 and report["threshold"]["min_confidence"] == 0.5
+    assert report["threshold"]["acted"] == len(acted)
+    if acted:
+        assert report["threshold"]["accuracy"] == pytest.approx(sum(r["correct"] for r in acted) / len(acted))
+    assert report["mean_confidence"] == pytest.approx(sum(r["confidence"] for r in rows) / 6)
+    least = [min(r["confidence"] for r in rows if r["index"] == i) for i in range(2)]
+    by_command = data["command_calibration"]
+    assert by_command["n"] == 2 and by_command["mean_confidence"] == pytest.approx(sum(least) / 2)
+    assert by_command["threshold"]["acted"] == sum(c >= 0.5 for c in least)
+    assert "confidence (6 executions): expected calibration error" in run.stdout
+    assert "confidence per command (its least confident layout) (2 commands)" in run.stdout
+    assert f"acting at confidence >= 0.5 (--min-confidence): {len(acted)} of 6" in run.stdout
 
 
 def test_following_reads_only_goals_the_agent_can_reach(williams_commands, williams_library):

@@ -166,7 +166,7 @@ def run_pairs(args: argparse.Namespace) -> int:
     result = evaluate_pairs(train, test, library, demonstrations=args.demonstrations,
                             layouts=args.layouts,
                             skip_inconsistent=args.skip_inconsistent, learner_options=options,
-                            progress=args.progress)
+                            progress=args.progress, min_confidence=args.min_confidence)
     print(result.summary())
     if args.json:
         write_atomically(Path(args.json), json.dumps(result.to_json(), indent=1).encode("utf-8"))
