@@ -13,6 +13,7 @@ What :class:`groundlang.logic.program.Program` is built from. Errors are ``AspEr
 from __future__ import annotations
 
 import errno
+import functools
 import os
 import re
 import stat
@@ -118,7 +119,17 @@ def _relocate(node, name: str) -> None:
 
 
 def parse_source(source: Source, allow_scripts: bool) -> list:
-    """Parse one source into AST statements, refusing scripts and includes."""
+    """Parse one source into AST statements, refusing scripts and includes.
+
+    A process loads the same library many times (every model loaded, every fold, every layout's
+    tables), and naming the locations of a parse walks its whole AST in Python: most of the time of
+    ``Learner.load``. So parses are kept, by name and text; the statements are only ever read."""
+    return list(_parsed(source.name, source.text, allow_scripts))
+
+
+@functools.lru_cache(maxsize=64)
+def _parsed(name: str, text: str, allow_scripts: bool) -> tuple:
+    source = Source(name, text)
     scrubbed = _COMMENT_OR_STRING.sub(_blank, source.text)
     m = _INCLUDE.search(scrubbed)
     if m:
@@ -153,4 +164,4 @@ def parse_source(source: Source, allow_scripts: bool) -> list:
                 "pass allow_scripts=True only for programs you trust"
             )
         _relocate(stm, source.name)
-    return statements
+    return tuple(statements)

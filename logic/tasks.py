@@ -18,6 +18,7 @@ world model.
 
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -333,6 +334,13 @@ def _source(path: str | Path) -> Source:
     return package_source(relative.as_posix()) if Path(path).is_file() else file_source(path)
 
 
+@functools.lru_cache(maxsize=32)
+def _lifted_tasks_of(sources: tuple[Source, ...], allow_scripts: bool, isolated: bool, time_limit: float | None):
+    """:func:`_read_lifted_tasks`, kept: a process loads one library many times (each model, each fold), a
+    user's in a child process each time. What it returns is immutable; errors are raised anew each load."""
+    return _read_lifted_tasks(Program(sources, allow_scripts, isolated), time_limit)
+
+
 class TaskLibrary:
     """Lifted tasks read from ASP: the default ``tasks.lp`` or user ``.lp`` files."""
 
@@ -353,7 +361,8 @@ class TaskLibrary:
             domain + self.sources + (package_source("tabulate.lp"),), allow_scripts, isolated
         )
         # relational_pfs: ((name, (class, class)), ...), the PFs of two objects that may describe one by the other.
-        self.tasks, self.spatial_pfs, self.relational_pfs = _read_lifted_tasks(self.program, time_limit)
+        lifted = _lifted_tasks_of(self.program.sources, allow_scripts, isolated, time_limit)
+        self.tasks, self.spatial_pfs, self.relational_pfs = lifted
 
     @classmethod
     def load(cls, paths: Iterable[str | Path] | None = None, allow_scripts: bool = False,

@@ -500,3 +500,29 @@ def test_an_environment_where_nothing_can_be_asked_is_still_described():
     assert found == []
     assert described["room0"] == {"colour": ("roomIsGreen",)}
     assert described["block1"] == {"colour": ("toyIsRed",), "shape": ("toyIsMoon",)}
+
+
+def test_a_library_loaded_again_is_read_once_and_a_changed_or_broken_one_anew(monkeypatch):
+    """Loading the same library text again (each model, each fold) reuses its lifted tasks; other text is
+    read anew, and an error is raised on every load, never remembered as a library."""
+    import uuid
+
+    import groundlang.logic.tasks as tasks_module
+
+    calls = []
+    original = tasks_module._read_lifted_tasks
+    monkeypatch.setattr(tasks_module, "_read_lifted_tasks", lambda *a: calls.append(1) or original(*a))
+    tag = uuid.uuid4().hex  # a comment no other test's library has, so nothing is kept from before
+    text = f'% {tag}\ntask(go). var(go, "A", agent). var(go, "R", room). goal(go, agentInRoom, ("A", "R")).\n'
+    first = TaskLibrary.from_text(text, "mine.lp")
+    again = TaskLibrary.from_text(text, "mine.lp")
+    assert len(calls) == 1 and again.tasks == first.tasks and [t.name for t in again.tasks] == ["go"]
+    changed = TaskLibrary.from_text(text.replace("task(go)", "task(go). task(went)")
+                                    .replace('var(go, "A"', 'var(went, "A", agent). var(went, "R", room). '
+                                             'goal(went, agentInRoom, ("A", "R")). var(go, "A"'), "mine.lp")
+    assert len(calls) == 2 and sorted(t.name for t in changed.tasks) == ["go", "went"]
+    broken = f"% {tag}\ntask(go). var(go, \"A\", agent). goal(go, noSuchPf, (\"A\",)).\n"
+    for _ in range(2):
+        with pytest.raises(AspError):
+            TaskLibrary.from_text(broken, "broken.lp")
+    assert len(calls) == 4
