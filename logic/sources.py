@@ -123,8 +123,14 @@ def parse_source(source: Source, allow_scripts: bool) -> list:
 
     A process loads the same library many times (every model loaded, every fold, every layout's
     tables), and naming the locations of a parse walks its whole AST in Python: most of the time of
-    ``Learner.load``. So parses are kept, by name and text; the statements are only ever read."""
-    return list(_parsed(source.name, source.text, allow_scripts))
+    ``Learner.load``. So parses are kept, by name and text; the statements are only ever read. Only
+    sources of up to ``KEPT_SOURCE_BYTES`` are kept, so the memory they hold stays bounded."""
+    parse = _parsed if len(source.text) <= KEPT_SOURCE_BYTES else _parsed.__wrapped__
+    return list(parse(source.name, source.text, allow_scripts))
+
+
+# Parses kept per process (64 sources at most, each this long at most): the package's files are a few KB.
+KEPT_SOURCE_BYTES = 256 * 2**10
 
 
 @functools.lru_cache(maxsize=64)

@@ -29,14 +29,8 @@ import clingo
 
 from .atoms import Atom, attribute_pf, format_goal
 from .classes import domain_classes
-from .program import (
-    DEFAULT_TIME_LIMIT,
-    AspError,
-    Program,
-    Source,
-    file_source,
-    package_source,
-)
+from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, file_source, package_source
+from . import sources as _sources
 
 __all__ = [
     "Variable",
@@ -361,7 +355,9 @@ class TaskLibrary:
             domain + self.sources + (package_source("tabulate.lp"),), allow_scripts, isolated
         )
         # relational_pfs: ((name, (class, class)), ...), the PFs of two objects that may describe one by the other.
-        lifted = _lifted_tasks_of(self.program.sources, allow_scripts, isolated, time_limit)
+        kept = sum(len(s.text) for s in self.program.sources) <= _sources.KEPT_SOURCE_BYTES
+        lifted = (_lifted_tasks_of if kept else _lifted_tasks_of.__wrapped__)(self.program.sources, allow_scripts,
+                                                                               isolated, time_limit)
         self.tasks, self.spatial_pfs, self.relational_pfs = lifted
 
     @classmethod

@@ -526,3 +526,11 @@ def test_a_library_loaded_again_is_read_once_and_a_changed_or_broken_one_anew(mo
         with pytest.raises(AspError):
             TaskLibrary.from_text(broken, "broken.lp")
     assert len(calls) == 4
+    # A long library is read anew each time, so that what is kept stays small.
+    import groundlang.logic.sources as sources_module
+
+    monkeypatch.setattr(sources_module, "KEPT_SOURCE_BYTES", 10)
+    for _ in range(2):
+        TaskLibrary.from_text(text.replace(tag, tag[::-1]), "mine.lp")
+    assert len(calls) == 6
+    assert sources_module._parsed.cache_info().currsize <= 64
