@@ -274,8 +274,11 @@ def calibration_report(confidence: Sequence[float], correct: Sequence[bool],
 def format_calibration(report: dict, title: str = "confidence", unit: str = "commands") -> str:
     """A few lines of :func:`calibration_report` for a person: ECE, AUROC, accuracy at coverages
     (``unit``: what the report counts)."""
-    lines = [f"{title} ({report['n']} {unit}): expected calibration error {report['ece']:.3f}, "
-             f"AUROC for correctness {report['auroc']:.3f}, mean confidence {report['mean_confidence']:.3f}"]
+    auroc = report["auroc"]
+    separation = ("- (every reading right, or every one wrong)" if math.isnan(auroc) else f"{auroc:.3f}")
+    counted = unit.removesuffix("s") if report["n"] == 1 else unit
+    lines = [f"{title} ({report['n']} {counted}): expected calibration error {report['ece']:.3f}, "
+             f"AUROC for correctness {separation}, mean confidence {report['mean_confidence']:.3f}"]
     for row in report["at_coverage"]:
         lines.append(f"  acting on the {row['reached']:.1%} most confident (asked {row['coverage']:.0%}): "
                      f"accuracy {row['accuracy']:.2%}")

@@ -60,6 +60,8 @@ def test_the_report_says_what_it_counts_and_when_nothing_was_acted_on():
     assert "nan" not in text
     acted = format_calibration(calibration_report([0.8, 0.9, 0.2], [True, False, True], threshold=0.7))
     assert "(3 commands)" in acted and "2 of 3 (66.7%), accuracy 50.00%" in acted
+    one = format_calibration(calibration_report([0.9], [True], threshold=0.7), unit="executions")
+    assert "(1 execution)" in one and "AUROC for correctness - (every reading right, or every one wrong)" in one
 
 
 def test_goals_that_hold_in_the_same_states_count_as_one():
