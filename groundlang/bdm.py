@@ -36,7 +36,9 @@ DEFAULT_PALETTE = "williams2018"
 # A command's text is one line; a state line of the published corpus is under 1 kB.
 _MAX_LINE = 1 << 16
 
-_OBJECT = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*\(\s*([A-Za-z_]+)\s*\)\s*:\s*\[(.*?)\]\s*")
+# An object's attributes hold no bracket: two objects run together ("...] ,block3 (block): [...", a space
+# missing before the comma) are refused, not read as one whose attributes the second overwrote.
+_OBJECT = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*\(\s*([A-Za-z_]+)\s*\)\s*:\s*\[([^\[\]]*)\]\s*")
 _ATTRIBUTE = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*:\s*\{([^{}]*)\}")
 # class -> the attributes groundlang reads (lower case); others are allowed and ignored.
 _NEEDED = {
@@ -93,7 +95,7 @@ def _int(text: str, where: str, attribute: str, name: str) -> int:
         raise CorpusError(f"{where}: {attribute} of {name} is {shown(text, 'digits')}; "
                           f"expected at most {MAX_COORDINATE}") from None
     except ValueError:
-        raise CorpusError(f"{where}: {attribute} of {name} is {text!r}; expected a whole number") from None
+        raise CorpusError(f"{where}: {attribute} of {name} is {text!r}; expected a whole number, 0 or more") from None
 
 
 def _number_order(name: str) -> tuple[int, str]:
@@ -117,12 +119,19 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
         if not chunk:
             continue
         m = _OBJECT.fullmatch(chunk)
+        if not m and (joined := re.search(r"\]\s*,?\s*([A-Za-z_][A-Za-z0-9_]*)\s*\(", chunk)):
+            raise CorpusError(f"{where}: object {joined.group(1)} runs into the one before it; objects are "
+                              "separated by ' , ' (a space on each side of the comma)")
         if not m:
             raise CorpusError(f"{where}: cannot read object {chunk[:60]!r}; expected NAME (CLASS): [attribute: {{value}} ...]")
         name, cls, body = m.groups()
         if cls not in _NEEDED:
             raise CorpusError(f"{where}: object {name} has class {cls!r}; expected one of {', '.join(_NEEDED)}")
-        attributes = {a.lower(): v.strip() for a, v in _ATTRIBUTE.findall(body)}
+        pairs = [(a.lower(), v.strip()) for a, v in _ATTRIBUTE.findall(body)]
+        attributes = dict(pairs)
+        if len(attributes) < len(pairs):
+            twice = sorted({a for a, _ in pairs if sum(b == a for b, _ in pairs) > 1})
+            raise CorpusError(f"{where}: {cls} {name} gives {', '.join(twice)} more than once")
         missing = [a for a in _NEEDED[cls] if a not in attributes]
         if missing:
             raise CorpusError(f"{where}: {cls} {name} has no {', '.join(missing)}")

@@ -29,6 +29,7 @@ from groundlang.inference.end_states import EndStateNoise
 from groundlang.inference.evidence_cache import EvidenceCache
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.relevance import abstraction_bound, exact_fits, relevant_toys
+from groundlang.model.state_search import StateKeyError
 from groundlang.model.statespace import StateSpaceError
 from groundlang.model.world import State, replay
 from groundlang.pair_tasks import REACHABILITY_MAX_STATES, shortest_actions
@@ -178,6 +179,9 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
             else:
                 try:  # enumerates the pair's states once: the reachability check and the evidence
                     evidence = cache.evidence(pair.start, pair.end, max_states)
+                except StateKeyError:  # more moving blocks than a state's key holds: too large, as above
+                    out.skipped.append((command, pair, "too large"))
+                    continue
                 except StateSpaceError:
                     instance = None
                 else:

@@ -22,7 +22,7 @@ import numpy as np
 from groundlang.model.world import ACTION_DELTAS
 
 __all__ = ["StateSpaceError", "DEFAULT_MAX_STATES", "MAX_STATES_VARIABLE", "default_max_states",
-           "describe_positions", "key_powers", "search", "state_count_bound", "too_many_states"]
+           "StateKeyError", "describe_positions", "key_powers", "search", "state_count_bound", "too_many_states"]
 
 logger = logging.getLogger(__name__)
 
@@ -55,6 +55,10 @@ class StateSpaceError(ValueError):
     """A state space that cannot be built, or a state that is not in it."""
 
 
+class StateKeyError(StateSpaceError):
+    """Too many moving objects for a state's key to fit in 64 bits: a space too large to build."""
+
+
 def describe_positions(positions: np.ndarray) -> str:
     """``agent0@(4,2) block0@(2,2)`` for error messages."""
     pos = np.asarray(positions)
@@ -63,6 +67,14 @@ def describe_positions(positions: np.ndarray) -> str:
 
 
 def key_powers(base: int, count: int) -> np.ndarray:
+    """The place values of a state's key: ``count`` positions, each one of ``base`` cells, as one int64.
+    StateSpaceError when the keys would not fit in 64 bits (too many moving objects for the cells)."""
+    if count > 1 and base ** count > np.iinfo(np.int64).max:
+        fits = 1
+        while base ** (fits + 1) <= np.iinfo(np.int64).max:
+            fits += 1
+        raise StateKeyError(f"{count} moving objects in a layout of {base} cells: its states cannot be keyed "
+                              f"in 64 bits (at most {fits} objects with the agent)")
     return np.array([base**j for j in range(count)], dtype=np.int64)
 
 

@@ -87,7 +87,10 @@ def test_check_reports_the_fixture():
     ("go\nAGENT_ROOM\nAGENT_ROOM\ntrue\n", "line 2: two objects are called agent0"),
     # a number too large is said to be too large, and its digits are never all converted
     ("go\nFAR\nFAR\ntrue\n", "x of agent0 is 99999999999999999999... (5000 digits); expected at most 1000"),
-    ("go\nNEGATIVE\nNEGATIVE\ntrue\n", "x of agent0 is '-1'; expected a whole number"),
+    ("go\nNEGATIVE\nNEGATIVE\ntrue\n", "x of agent0 is '-1'; expected a whole number, 0 or more"),
+    # a space missing before a comma: two objects run together, never read as one the second overwrote
+    ("go\nJOINED\nJOINED\ntrue\n", "line 2: object room0 runs into the one before it"),
+    ("go\nTWICE\nTWICE\ntrue\n", "line 2: agent agent0 gives x more than once"),
     ("go\nZEROS\nZEROS\ntrue\n", "x of agent0 is 00000000000000000000... (5004 digits); expected at most 1000"),
 ])
 def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
@@ -98,6 +101,8 @@ def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
             .replace("STATE", state).replace("AGENT_ROOM", state.replace("room0 (room)", "agent0 (room)"))
             .replace("FAR", state.replace("x: {1}", "x: {%s}" % ("9" * 5000)))
             .replace("NEGATIVE", state.replace("x: {1}", "x: {-1}"))
+            .replace("JOINED", state.replace("] , room0", "] ,room0"))
+            .replace("TWICE", state.replace("y: {1}", "y: {1} X: {3}"))
             .replace("ZEROS", state.replace("x: {1}", "x: {%s}" % ("0" * 5000 + "5000"))))
     path = tmp_path / "bad.bdm"
     path.write_text(text, encoding="utf-8")

@@ -333,3 +333,23 @@ def test_following_reads_only_goals_the_agent_can_reach(williams_commands, willi
     assert after[right] / before[right] == pytest.approx(1 / (1 - sum(before[g] for g in out)), rel=1e-4)
     assert off.follow(command, state).reason in ("unreachable", "goal") and on.follow(command, state).reached
     assert on.lm.settings()["achievable_goals"] and not off.lm.settings()["achievable_goals"]
+
+
+def test_a_pair_with_more_blocks_than_a_state_key_holds_is_skipped_as_too_large(williams_library):
+    """Eleven blocks and the agent: 50**12 keys (50 cells) overflow 64 bits. Such a pair is counted as too
+    large (as a layout too large to enumerate is), never a traceback; ten blocks still key."""
+    from groundlang.bdm import Command, Pair
+    from groundlang.model.state_search import StateKeyError, key_powers
+
+    assert key_powers(50, 11)[-1] == 50**10
+    with pytest.raises(StateKeyError, match=r"^12 moving objects in a layout of 50 cells: .*\(at most 11 objects"):
+        key_powers(50, 12)
+    blocks = " , ".join(f"b{i} (block): [x: {{{1 + i % 8}}} y: {{{1 + i // 8}}} shape: {{chair}} colour: {{red}} ]"
+                        for i in range(11))
+    line = ("{agent0 (agent): [x: {8} y: {8} ] , " + blocks
+            + " , room0 (room): [top: {9} left: {0} bottom: {0} right: {9} colour: {red} ] , }")
+    start, names = parse_bdm_state(line)
+    end, _ = parse_bdm_state(line.replace("x: {8} y: {8}", "x: {7} y: {8}", 1))
+    command = Command(Path("crowded.bdm"), 1, "go left", (Pair(start, end, 2, names),))
+    made = training_instances([command], williams_library, "end-state", cache_dir=False)
+    assert made.instances == [] and made.skipped_counts() == {"too large": 1}
