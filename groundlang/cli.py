@@ -77,5 +77,20 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+def run() -> None:
+    """The ``groundlang`` command: :func:`main`, then the process ends with its code. When a grounding
+    that timed out still runs (a layout too large for the time limit), the interpreter's normal exit
+    would wait on it or crash in clingo's native code: what was to be said is written, so the process
+    ends at once."""
+    from groundlang.logic.program import grounding_left_running
+
+    code = main()
+    if grounding_left_running():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

@@ -4,13 +4,14 @@ solve enumerating every answer set)."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable
 from itertools import combinations
 
 import clingo
 
 from .atoms import Atom
-from .program import AspError
+from .program import AspError, AspTimeout
 from .tasks import CLASS_ORDER, BindingConstraint, GroundedTask, TaskLibrary, _natural_key, _text, _tuple_args, pf_name
 
 __all__ = ["binding_constraints", "enumerate_groundings", "ground_environment", "Descriptions", "PFTerms", "Relations"]
@@ -100,7 +101,15 @@ def ground_environment(
     limit = library.time_limit if time_limit is None else time_limit
     unusable: set[tuple[str, str, clingo.Symbol]] = set()
     restrictable: dict[str, set[clingo.Symbol]] = {}
-    for model in library.grounding_program.solve(facts, models=0, time_limit=limit):
+    started = time.monotonic()
+    models = library.grounding_program.solve(facts, models=0, time_limit=limit)
+    for count, model in enumerate(models):
+        # Reading the answer sets counts against the time limit too: a layout with a thousand blocks has
+        # answer sets enough to take minutes in Python after clingo's own part has ended in time.
+        if limit is not None and count % 64 == 0 and time.monotonic() - started > limit:
+            raise AspTimeout(f"the groundings of {environment or 'the environment'} were not read within {limit:g} s "
+                             f"({count} of {len(models)} read): a layout with this many objects has too many "
+                             "tasks to list (raise the time limit if it is just large)")
         chosen, bind, goal, extra, holding = None, {}, [], [], []
         for sym in model:
             if sym not in decoded:

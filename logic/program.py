@@ -47,6 +47,7 @@ from groundlang.logic.sources import (
 )
 
 __all__ = [
+    "grounding_left_running",
     "AspError",
     "AspSyntaxError",
     "AspScriptRefused",
@@ -91,6 +92,16 @@ def _checked_time_limit(time_limit: float | None) -> float | None:
     return None if time_limit is None else float(time_limit)  # np.float32, Fraction: waits take floats
 
 
+# Groundings left running past their time limit (or an interrupt): clingo cannot stop one.
+_ABANDONED: list[threading.Thread] = []
+
+
+def grounding_left_running() -> bool:
+    """Whether a grounding this process gave up on still runs. Python's normal exit then waits on it or
+    crashes in clingo's native code as the interpreter is torn down: a program should end at once."""
+    return any(thread.is_alive() for thread in _ABANDONED)
+
+
 def _run_with_limit(work, time_limit: float | None, what: str) -> None:
     """Run ``work()`` in a daemon thread (clingo releases the GIL), wait at most ``time_limit`` s."""
     box: dict[str, BaseException] = {}
@@ -103,7 +114,11 @@ def _run_with_limit(work, time_limit: float | None, what: str) -> None:
 
     thread = threading.Thread(target=target, name="clingo", daemon=True)
     thread.start()
-    thread.join(time_limit)
+    try:
+        thread.join(time_limit)
+    finally:  # timed out, or interrupted while waiting: clingo's grounding cannot be stopped
+        if thread.is_alive():
+            _ABANDONED.append(thread)
     if thread.is_alive():
         raise AspTimeout(
             f"{what} did not finish within {time_limit:g} s; the program probably grounds "

@@ -305,3 +305,47 @@ def test_a_learner_without_its_training_palettes_is_not_saved(learner, tmp_path)
     with pytest.raises(ValueError, match=r"^cannot save a learner whose training palettes are unknown"):
         stripped.save(tmp_path / "m")
     assert not (tmp_path / "m").exists()
+
+
+# ------------------------------------------------- groundings too slow for the time limit, in clingo or after it
+WILLIAMS_ONE = FIXTURES / "williams2018" / "one.state"
+
+
+def test_the_groundings_of_a_layout_are_read_within_the_time_limit(monkeypatch):
+    """Clingo's own part ends in time, but reading a thousand blocks' answer sets took minutes: the time
+    limit counts them too, one line naming what was not read."""
+    import groundlang.logic.groundings as groundings
+    from groundlang.bdm_check import default_library
+    from groundlang.logic.program import AspTimeout
+    from groundlang.model.tasks import candidate_tasks
+
+    from groundlang.corpus import read_state_file
+
+    state = read_state_file(WILLIAMS_ONE, "williams2018")
+    clock = iter([0.0] + [100.0] * 10_000)  # the start, then every later reading far past the limit
+    monkeypatch.setattr(groundings.time, "monotonic", lambda: next(clock))
+    with pytest.raises(AspTimeout, match=r"were not read within 5 s \(0 of \d+ read\)"):
+        groundings.ground_environment(default_library(), "", time_limit=5.0)
+    monkeypatch.undo()
+    assert candidate_tasks(state, default_library())  # the same layout, read in time
+
+
+def test_a_grounding_left_running_past_the_limit_does_not_hold_the_command_up(tmp_path):
+    """A 1000 x 1000 room grounds for longer than a one-second limit, and clingo cannot be stopped: the
+    command says so in one line and ends at once (it crashed in clingo's native code, or hung, as the
+    interpreter was torn down around the grounding)."""
+    import subprocess
+    import sys
+
+    line = WILLIAMS_ONE.read_text()
+    big = tmp_path / "big.state"
+    head = line.split(" , ")[0]  # the agent
+    big.write_text("{" + head.lstrip("{") + " , room0 (room): [top: {1000} left: {0} bottom: {0} right: {1000} "
+                   "colour: {red} ] , }\n")
+    started = time.monotonic()
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "tasks", str(big), "--time-limit", "1"],
+                          capture_output=True, text=True, timeout=120)
+    took = time.monotonic() - started
+    assert done.returncode == 2, (done.returncode, done.stderr[-500:])
+    assert done.stderr.startswith("groundlang tasks: error: grounding ") and "within 1 s" in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and took < 60
