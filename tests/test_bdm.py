@@ -150,6 +150,20 @@ def test_a_fifo_or_device_is_refused_by_name(tmp_path):
             read_bdm(path)
 
 
+@pytest.mark.parametrize("command", ["show", "tasks"])
+def test_a_state_file_with_a_byte_order_mark_reads_and_an_empty_one_is_said_empty(tmp_path, capsys, command):
+    from groundlang.cli import main
+
+    line = (Path(__file__).parent / "fixtures" / "williams2018" / "one.state").read_bytes()
+    marked, empty = tmp_path / "marked.state", tmp_path / "empty.state"
+    marked.write_bytes(b"\xef\xbb\xbf" + line)
+    empty.write_bytes(b"\xef\xbb\xbf \n\n")
+    assert main([command, str(marked)]) == 0  # the Williams format, found behind the mark: no --palette
+    capsys.readouterr()
+    assert main([command, str(empty)]) == 2
+    assert capsys.readouterr().err == f"groundlang {command}: error: {empty}: the file is empty; expected one state line\n"
+
+
 def test_tasks_reads_a_burlap_state_line_with_the_corpus_domain_by_default(capsys):
     # A one-line .state file in the Williams et al. format works without --palette and --library: the
     # palette williams2018 and its domain's relations and tasks are the defaults for it.

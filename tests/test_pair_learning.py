@@ -163,6 +163,10 @@ def test_evaluate_refuses_a_test_file_for_a_text_corpus_in_one_line(args, messag
     (["--test", str(FIXTURE / "small.bdm"), "--holdout", "0.5"], "pass one of --test"),
     (["--test", str(FIXTURE / "small.bdm"), "--tuning"], "--tuning splits the training side of --holdout F"),
     (["--holdout", "0.5", "--tuning"], "must be below 0.5"),
+    # the fixture's two texts hash to about 0.31 and 0.59: splits that hold out neither, or leave none to train on
+    (["--holdout", "0.01"], "--holdout 0.01 holds out no command (no text falls in the held-out split)"),
+    (["--holdout", "0.99"], "--holdout 0.99 leaves no command to train on (every text falls in the held-out split)"),
+    (["--holdout", "0.4", "--tuning"], "leaves no command to train on (every text falls in the development or"),
 ])
 def test_evaluate_on_pairs_refuses_what_it_would_ignore(args, message):
     run = _cli("evaluate", "--corpus", str(FIXTURE / "small.bdm"), *args)

@@ -118,4 +118,15 @@ def is_burlap_state_file(path: str) -> bool:
     if Path(path).suffix not in (".state", ".bdm") or not Path(path).is_file():
         return False
     with open(path, "rb") as handle:
-        return handle.read(64).lstrip().startswith(b"{")
+        return handle.read(64).removeprefix(_BOM).lstrip().startswith(b"{")
+
+
+_BOM = b"\xef\xbb\xbf"  # a UTF-8 byte order mark, which some editors write first; the readers skip it
+
+
+def refuse_empty_state_file(path: str) -> None:
+    """One line for a state file with nothing in it (before asking for a palette it would not need)."""
+    if Path(path).suffix in (".state", ".bdm") and Path(path).is_file():
+        with open(path, "rb") as handle:
+            if not handle.read(1 << 16).removeprefix(_BOM).strip():
+                raise ValueError(f"{path}: the file is empty; expected one state line")

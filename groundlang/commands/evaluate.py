@@ -156,7 +156,15 @@ def run_pairs(args: argparse.Namespace) -> int:
     if args.test:
         test = read_pair_corpus(args.test, palette).commands
     else:
+        split = "the tuning split" if args.tuning else "the held-out split"
         train, test = held_out_by_text(train, args.holdout, tuning=args.tuning)
+        if not test:
+            raise ValueError(f"{args.corpus}: --holdout {args.holdout:g} holds out no command (no text falls in "
+                             f"{split}); nothing to score: hold out a larger fraction")
+        if not train:
+            where = "the development or the tuning split" if args.tuning else split
+            raise ValueError(f"{args.corpus}: --holdout {args.holdout:g} leaves no command to train on (every text "
+                             f"falls in {where}): hold out a smaller fraction")
     from groundlang.model.language_models import get_language_model
 
     options = {"language_model": get_language_model(args.language_model, **language_model_settings(args.lm_settings)),

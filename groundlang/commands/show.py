@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import PALETTE_HELP, is_burlap_state_file
+from groundlang.commands import PALETTE_HELP, is_burlap_state_file, refuse_empty_state_file
 from groundlang.corpus import read_instance, read_state_file
 
 
@@ -27,6 +27,7 @@ def run(args: argparse.Namespace) -> int:
     path = Path(args.file)
     if not path.exists():
         raise ValueError(f"{args.file}: No such file or directory")
+    refuse_empty_state_file(args.file)
     burlap = is_burlap_state_file(args.file)
     if path.suffix == ".bdm" and path.is_file() and not burlap:
         raise ValueError(f"{args.file}: line 1 is not a state line; show draws a one-line .bdm or .state file, "
