@@ -304,6 +304,9 @@ def read_state_file(path: str | Path, palette: str | Palette) -> State:
     lines = _read_lines(path)
     if not lines:
         raise CorpusError(f"{path}: the file is empty; expected one state line")
+    if len(lines) > 1 and path.suffix == ".bdm" and not lines[0].lstrip().startswith("{"):
+        raise CorpusError(f"{path}: a .bdm file of commands (line 1 is not a state line); expected one state "
+                          "line: a .state file or a one-line .bdm file")
     if len(lines) > 1:
         raise CorpusError(f"{path}, line 2: extra line; expected exactly one state line")
     if lines[0].lstrip().startswith("{"):  # a BURLAP state string, as the Williams et al. corpus writes them

@@ -212,3 +212,10 @@ def test_objects_are_ordered_by_the_number_in_their_name_however_long():
              (("room10", 0, 4), ("room" + "7" * 5000, 4, 8), ("room9", 8, 12))]
     state, _ = parse_bdm_state("{agent0 (agent): [x: {1} y: {1} ] , " + " , ".join(rooms) + " , }")
     assert [r.left for r in state.layout.rooms] == [8, 0, 4]
+
+
+def test_a_bdm_file_of_commands_where_one_state_is_wanted_is_said_to_be_one():
+    small = Path(__file__).parent / "fixtures" / "williams2018" / "small.bdm"
+    with pytest.raises(CorpusError, match=r"small\.bdm: a \.bdm file of commands \(line 1 is not a state line\); "
+                                          r"expected one state line"):
+        read_initial_state(small, "williams2018")

@@ -130,13 +130,14 @@ def test_show_a_one_line_bdm_state_file_without_a_palette(capsys, fixtures, tmp_
     assert (tmp_path / "one.png").read_bytes().startswith(b"\x89PNG")
 
 
+@pytest.mark.parametrize("command", ["show", "tasks"])
 @pytest.mark.parametrize("name, piece", [
-    ("small.bdm", "line 1 is not a state line; show draws a one-line .bdm or .state file"),
+    ("small.bdm", "line 1 is not a state line; {command} reads a one-line .bdm or .state file"),
     ("absent.bdm", "absent.bdm: No such file or directory"),
 ])
-def test_show_says_what_a_bdm_file_it_cannot_draw_is(capsys, fixtures, name, piece):
-    code, out, err = run(capsys, "show", str(fixtures / "williams2018" / name))
-    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and piece in err
+def test_show_and_tasks_say_what_a_bdm_file_they_cannot_read_is(capsys, fixtures, name, piece, command):
+    code, out, err = run(capsys, command, str(fixtures / "williams2018" / name))
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and piece.format(command=command) in err
 
 
 def test_check_example_corpus(capsys):

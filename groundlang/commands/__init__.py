@@ -124,9 +124,15 @@ def is_burlap_state_file(path: str) -> bool:
 _BOM = b"\xef\xbb\xbf"  # a UTF-8 byte order mark, which some editors write first; the readers skip it
 
 
-def refuse_empty_state_file(path: str) -> None:
-    """One line for a state file with nothing in it (before asking for a palette it would not need)."""
+def check_state_file(path: str, what: str) -> None:
+    """One line for a state file that is absent or has nothing in it, or a ``.bdm`` file of commands where
+    ``what`` (the command) wants one state: before asking for a palette none of them would need."""
+    if not Path(path).exists():
+        raise ValueError(f"{path}: No such file or directory")
     if Path(path).suffix in (".state", ".bdm") and Path(path).is_file():
         with open(path, "rb") as handle:
             if not handle.read(1 << 16).removeprefix(_BOM).strip():
                 raise ValueError(f"{path}: the file is empty; expected one state line")
+        if Path(path).suffix == ".bdm" and not is_burlap_state_file(path):
+            raise ValueError(f"{path}: line 1 is not a state line; {what} reads a one-line .bdm or .state file, "
+                             "or a corpus file (*.txt), not a .bdm file of commands")

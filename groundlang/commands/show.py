@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import PALETTE_HELP, is_burlap_state_file, refuse_empty_state_file
+from groundlang.commands import PALETTE_HELP, is_burlap_state_file, check_state_file
 from groundlang.corpus import read_instance, read_state_file
 
 
@@ -27,11 +27,8 @@ def run(args: argparse.Namespace) -> int:
     path = Path(args.file)
     if not path.exists():
         raise ValueError(f"{args.file}: No such file or directory")
-    refuse_empty_state_file(args.file)
+    check_state_file(args.file, "show")
     burlap = is_burlap_state_file(args.file)
-    if path.suffix == ".bdm" and path.is_file() and not burlap:
-        raise ValueError(f"{args.file}: line 1 is not a state line; show draws a one-line .bdm or .state file, "
-                         "or a corpus file (*.txt), not a .bdm file of commands")
     if args.palette is None and not burlap:
         raise ValueError(f"{args.file}: --palette is required for a file in the corpus's format (e.g. --palette sokoban)")
     if path.suffix in (".state", ".bdm"):

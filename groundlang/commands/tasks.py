@@ -10,7 +10,7 @@ import json
 from importlib.resources import files as resources
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import PALETTE_HELP, is_burlap_state_file, refuse_empty_state_file, positive_seconds
+from groundlang.commands import PALETTE_HELP, is_burlap_state_file, check_state_file, positive_seconds
 from groundlang.corpus import read_initial_state
 
 
@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.model.tasks import candidate_tasks, object_descriptions, object_relations
     from groundlang.model.world import object_class
 
-    refuse_empty_state_file(args.file)
+    check_state_file(args.file, "tasks")
     burlap = is_burlap_state_file(args.file)
     if args.palette is None and not burlap:
         raise ValueError(f"{args.file}: --palette is required for a state in the corpus's format "
