@@ -16,7 +16,7 @@ from importlib.resources import files
 
 from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.pair_tasks import pair_task, reachable
+from groundlang.pair_tasks import command_task, reachable
 
 __all__ = ["check_bdm", "default_library"]
 
@@ -54,7 +54,7 @@ def check_bdm(args: argparse.Namespace) -> int:
     for command, pair in unreachable:
         print(f"  {command.path}, line {pair.line}: {command.text!r}")
     print(f"pairs not checked (too large even for the relevance abstraction, or not reached in it): {unchecked}")
-    empty = [c for c in commands if not pair_task([(p.start, p.end) for p in c.pairs], library)]
+    empty = [c for c in commands if not command_task(c, library)]
     print(f"commands whose pairs show no task: {len(empty)}")
     for c in empty[:20]:
         print(f"  {c.path}, line {c.line}: {c.text!r}")

@@ -23,7 +23,7 @@ from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.statespace import StateSpaceError
 from groundlang.pair_corpus import training_instances
-from groundlang.pair_tasks import REACHABILITY_MAX_STATES, lifted_facts, pair_task
+from groundlang.pair_tasks import REACHABILITY_MAX_STATES, command_task, lifted_facts
 
 __all__ = ["PairEvaluation", "evaluate_pairs", "failure_kind", "FAILURE_KINDS", "PUBLISHED_F1"]
 
@@ -159,6 +159,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     Every command is acted on; ``min_confidence`` is the threshold whose coverage and accuracy the
     calibration report gives (what ``follow --min-confidence`` would act on), predictions unchanged."""
     started = time.perf_counter()
+    tasks = [command_task(command, library) for command in test]  # a test file's bad layout, before training
     made = training_instances(train, library, demonstrations, skip_inconsistent=skip_inconsistent, max_states=max_states,
                               layouts=layouts)
     if not made.instances:
@@ -172,8 +173,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     correct = n = commands_correct = scored = no_task = unseen_n = unseen_correct = skipped = 0
     confident: list[tuple[float, bool]] = []  # (confidence, correct) per scored execution
     command_confident: list[tuple[float, bool]] = []  # the same per scored command, its least confident layout
-    for index, command in enumerate(test):
-        task = pair_task([(p.start, p.end) for p in command.pairs], library)
+    for index, (command, task) in enumerate(zip(test, tasks)):
         unseen = command.text.strip().lower() not in seen
         all_right = True
         least = 1.0  # confidence of the command's least confident layout (0 for a skipped one)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from itertools import product
 
+from groundlang.logic.program import AspError
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.logic.atoms import Atom
 from groundlang.model.pf_tables import PFTables, library_pf_tables
@@ -21,7 +22,7 @@ from groundlang.model.relevance import AbstractStateSpace, state_space_for
 from groundlang.model.statespace import StateSpaceError
 from groundlang.model.world import State
 
-__all__ = ["lifted_facts", "pair_task", "satisfies", "reachable", "REACHABILITY_MAX_STATES"]
+__all__ = ["lifted_facts", "pair_task", "command_task", "satisfies", "reachable", "REACHABILITY_MAX_STATES"]
 
 # Upper bound (the enumerator's estimate) on the states a reachability check may enumerate: the 8x8
 # layouts with three blocks estimate 2.4 million and reach about 10^4; the 16x16 ones estimate 10^9 and
@@ -69,6 +70,19 @@ def pair_task(pairs, library: TaskLibrary | None = None) -> frozenset[Atom]:
     ends = frozenset.intersection(*(lifted_facts(end, library) for _, end in pairs))
     starts = frozenset.intersection(*(lifted_facts(start, library) for start, _ in pairs))
     return ends - starts
+
+
+def command_task(command, library: TaskLibrary | None = None) -> frozenset[Atom]:
+    """:func:`pair_task` of a ``.bdm`` command's pairs; a layout whose facts cannot be read (too many cells
+    to tabulate) is a ValueError naming the file and the pair's line."""
+    starts, ends = [], []
+    for pair in command.pairs:
+        try:
+            starts.append(lifted_facts(pair.start, library))
+            ends.append(lifted_facts(pair.end, library))
+        except AspError as exc:
+            raise ValueError(f"{command.path}, line {pair.line}: {exc}") from None
+    return frozenset.intersection(*ends) - frozenset.intersection(*starts)
 
 
 def satisfies(state: State, task: frozenset[Atom], library: TaskLibrary | None = None) -> bool:

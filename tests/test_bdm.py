@@ -219,3 +219,21 @@ def test_a_bdm_file_of_commands_where_one_state_is_wanted_is_said_to_be_one():
     with pytest.raises(CorpusError, match=r"small\.bdm: a \.bdm file of commands \(line 1 is not a state line\); "
                                           r"expected one state line"):
         read_initial_state(small, "williams2018")
+
+
+def test_a_layout_too_large_to_tabulate_is_named_by_file_and_line_before_training(tmp_path, capsys):
+    from groundlang.cli import main
+
+    line = (Path(__file__).parent / "fixtures" / "williams2018" / "one.state").read_text().strip()
+    agent = line.split(" , ")[0]
+    big = agent + " , room0 (room): [top: {200} left: {0} bottom: {0} right: {200} colour: {red} ] , }"
+    moved = big.replace(agent, agent.replace("x: {2}", "x: {3}"))
+    (tmp_path / "big.bdm").write_text(f"go right\n{big}\n{moved}\ntrue\n")
+    small = str(Path(__file__).parent / "fixtures" / "williams2018" / "small.bdm")
+    for command in (["check", str(tmp_path / "big.bdm")], ["evaluate", "--corpus", small, "--test", str(tmp_path / "big.bdm")]):
+        assert main(command) == 2
+        out, err = capsys.readouterr()
+        assert err.startswith(f"groundlang {command[0]}: error: {tmp_path / 'big.bdm'}, line 2: this layout has ")
+        assert len(err.strip().splitlines()) == 1
+        if command[0] == "evaluate":
+            assert out == ""  # refused with nothing on stdout: no training summary, no figures
