@@ -24,8 +24,16 @@ COMMANDS = ["demo", "check", "show", "parse", "domain", "tasks", "irl", "discove
 CACHING_COMMANDS = {"train", "evaluate", "discover", "ablate"}
 
 
+class _Parser(argparse.ArgumentParser):
+    """Bad arguments are one line, as every other bad input is (argparse printed its usage block first);
+    ``--help`` still prints the usage. Subcommands' parsers are of this class too."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="groundlang",
         description="Learn what verbal commands mean from demonstrations, then follow new ones.",
     )
