@@ -22,6 +22,7 @@ Toys are renamed ``block0, block1, ...`` in the order of their names' numbers (t
 from __future__ import annotations
 
 import re
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -128,10 +129,10 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
         if cls not in _NEEDED:
             raise CorpusError(f"{where}: object {name} has class {cls!r}; expected one of {', '.join(_NEEDED)}")
         pairs = [(a.lower(), v.strip()) for a, v in _ATTRIBUTE.findall(body)]
-        attributes = dict(pairs)
-        if len(attributes) < len(pairs):
-            twice = sorted({a for a, _ in pairs if sum(b == a for b, _ in pairs) > 1})
+        twice = sorted(a for a, n in Counter(a for a, _ in pairs).items() if n > 1)
+        if twice:
             raise CorpusError(f"{where}: {cls} {name} gives {', '.join(twice)} more than once")
+        attributes = dict(pairs)
         missing = [a for a in _NEEDED[cls] if a not in attributes]
         if missing:
             raise CorpusError(f"{where}: {cls} {name} has no {', '.join(missing)}")

@@ -64,25 +64,27 @@ def _relations(library: TaskLibrary | None) -> frozenset[str] | None:
     return frozenset(predicate for task in library.tasks for predicate, _ in task.goal)
 
 
-def pair_task(pairs, library: TaskLibrary | None = None) -> frozenset[Atom]:
+def pair_task(pairs, library: TaskLibrary | None = None, where: list[str] | None = None) -> frozenset[Atom]:
     """What ``pairs`` (``(start, end)`` States) show: the facts of every end state that do not hold of
-    every start state. Empty when the pairs agree on nothing that changed (a noisy command)."""
-    ends = frozenset.intersection(*(lifted_facts(end, library) for _, end in pairs))
-    starts = frozenset.intersection(*(lifted_facts(start, library) for start, _ in pairs))
-    return ends - starts
+    every start state. Empty when the pairs agree on nothing that changed (a noisy command). ``where``:
+    per pair, the place (file and line) named when its layout's facts cannot be read (too many cells to
+    tabulate): then a ValueError that names it."""
+    starts, ends = [], []
+    for k, (start, end) in enumerate(pairs):
+        try:
+            starts.append(lifted_facts(start, library))
+            ends.append(lifted_facts(end, library))
+        except AspError as exc:
+            if where is None:
+                raise
+            raise ValueError(f"{where[k]}: {exc}") from None
+    return frozenset.intersection(*ends) - frozenset.intersection(*starts)
 
 
 def command_task(command, library: TaskLibrary | None = None) -> frozenset[Atom]:
-    """:func:`pair_task` of a ``.bdm`` command's pairs; a layout whose facts cannot be read (too many cells
-    to tabulate) is a ValueError naming the file and the pair's line."""
-    starts, ends = [], []
-    for pair in command.pairs:
-        try:
-            starts.append(lifted_facts(pair.start, library))
-            ends.append(lifted_facts(pair.end, library))
-        except AspError as exc:
-            raise ValueError(f"{command.path}, line {pair.line}: {exc}") from None
-    return frozenset.intersection(*ends) - frozenset.intersection(*starts)
+    """:func:`pair_task` of a ``.bdm`` command's pairs, a layout it cannot read named by file and line."""
+    return pair_task([(p.start, p.end) for p in command.pairs], library,
+                     [f"{command.path}, line {p.line}" for p in command.pairs])
 
 
 def satisfies(state: State, task: frozenset[Atom], library: TaskLibrary | None = None) -> bool:

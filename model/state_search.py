@@ -68,11 +68,12 @@ def describe_positions(positions: np.ndarray) -> str:
 
 def key_powers(base: int, count: int) -> np.ndarray:
     """The place values of a state's key: ``count`` positions, each one of ``base`` cells, as one int64.
-    StateSpaceError when the keys would not fit in 64 bits (too many moving objects for the cells)."""
-    if count > 1 and base ** count > np.iinfo(np.int64).max:
-        fits = 1
-        while base ** (fits + 1) <= np.iinfo(np.int64).max:
-            fits += 1
+    StateKeyError when the keys would not fit in 64 bits (too many moving objects for the cells)."""
+    largest = int(np.iinfo(np.int64).max)
+    if count > 1 and base ** count > largest:
+        fits = count - 1
+        while base ** fits > largest:
+            fits -= 1
         raise StateKeyError(f"{count} moving objects in a layout of {base} cells: its states cannot be keyed "
                               f"in 64 bits (at most {fits} objects with the agent)")
     return np.array([base**j for j in range(count)], dtype=np.int64)

@@ -25,8 +25,6 @@ def run(args: argparse.Namespace) -> int:
     if args.out:
         check_picture_destination(args.out)
     path = Path(args.file)
-    if not path.exists():
-        raise ValueError(f"{args.file}: No such file or directory")
     check_state_file(args.file, "show")
     burlap = is_burlap_state_file(args.file)
     if args.palette is None and not burlap:
