@@ -63,6 +63,12 @@ def test_check_partial_labels(capsys, fixtures):
     [
         (["check", "{f}/no_corpus", "--palette", "sokoban"], ["no_corpus: no corpus files"]),
         (["check", "{f}/missing_folder", "--palette", "sokoban"], ["missing_folder: not a directory"]),
+        # What is wrong with the folder comes before asking for a palette it would not need.
+        (["check", "{f}/missing_folder"], ["missing_folder: No such file or directory"]),
+        (["check", "{f}/no_corpus"], ["no_corpus: no corpus files", "or .bdm files"]),
+        (["train", "{f}/no_corpus", "-o", "{f}/never_written"], ["no_corpus: no corpus files"]),
+        (["evaluate", "--corpus", "{f}/missing_folder"], ["missing_folder: No such file or directory"]),
+        (["check", "{f}/sokoban"], ["sokoban: --palette is required"]),
         (["check", "{f}/sokoban", "--palette", "sokoban2"], ["line 3", "colour index", "outside palette 'sokoban2'"]),
         (["check", "{f}/sokoban", "--palette", "sokoban", "--labels", "{f}/labels/unknown_prefix.csv"],
          ["prefixes star2blue_ name no files"]),

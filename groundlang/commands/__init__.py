@@ -124,6 +124,22 @@ def is_burlap_state_file(path: str) -> bool:
 _BOM = b"\xef\xbb\xbf"  # a UTF-8 byte order mark, which some editors write first; the readers skip it
 
 
+def require_palette(args, corpus: str) -> None:
+    """One line when a ``*.txt`` corpus is read without ``--palette``, saying first what is wrong with
+    ``corpus`` if anything: a path that does not exist, or a folder that holds no corpus file of either
+    format, is refused without asking for a palette it would not need. (With one, the corpus reader's
+    own messages say more.)"""
+    if args.palette is not None:
+        return
+    path = Path(corpus)
+    if not path.exists():
+        raise ValueError(f"{corpus}: No such file or directory")
+    if path.is_dir() and not any(p.suffix == ".txt" for p in path.iterdir()):
+        raise ValueError(f"{corpus}: no corpus files; expected corpus files (*.txt, with --palette) "
+                         "or .bdm files (Williams 2018)")
+    raise ValueError(f"{corpus}: --palette is required for a commands-to-tasks corpus (e.g. --palette sokoban)")
+
+
 def check_state_file(path: str, what: str) -> None:
     """One line for a state file that is absent or has nothing in it, or a ``.bdm`` file of commands where
     ``what`` (the command) wants one state: before asking for a palette none of them would need."""

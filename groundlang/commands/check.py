@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import PALETTE_HELP
+from groundlang.commands import PALETTE_HELP, require_palette
 from groundlang.corpus import read_corpus
 
 
@@ -40,8 +40,7 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.bdm_check import check_bdm
 
         return check_bdm(args)
-    if args.palette is None:
-        raise ValueError("--palette is required for a commands-to-tasks corpus (e.g. --palette sokoban)")
+    require_palette(args, args.directory)
     # Always collect every inconsistent file so the report lists them all; the flag decides the exit code.
     corpus = read_corpus(args.directory, args.palette, skip_inconsistent=True)
     ok = True

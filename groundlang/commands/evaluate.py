@@ -9,7 +9,7 @@ from pathlib import Path
 from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_em_acceleration_option,
                                  add_language_model_settings,
                                  add_lexicon_option, fraction, language_model_settings, open_fraction,
-                                 positive_int)
+                                 positive_int, require_palette)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
@@ -88,7 +88,8 @@ def run(args: argparse.Namespace) -> int:
     given = [f"--{name}" for name, default in _PAIR_OPTIONS.items() if getattr(args, name) != default]
     if given:
         raise ValueError(f"{', '.join(given)}: for a .bdm corpus of (start, end) pairs; {args.corpus} is a *.txt corpus")
-    if not args.palette or not args.labels:
+    require_palette(args, args.corpus)
+    if not args.labels:
         raise ValueError("a *.txt corpus needs --palette and --labels (the gold labels it is scored against)")
     # read here, before any work: a malformed word file is one error line, and workers get the words
     words = extra_words(args.lexicon)

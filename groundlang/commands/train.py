@@ -8,7 +8,8 @@ import time
 from groundlang.bdm import bdm_files
 from groundlang.corpus import read_corpus
 from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
-                                 add_em_acceleration_option, add_lexicon_option, language_model_settings, seed)
+                                 add_em_acceleration_option, add_lexicon_option, language_model_settings, require_palette,
+                                 seed)
 
 
 def register(subparsers) -> None:
@@ -45,8 +46,7 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     instances, library = _pairs(args) if bdm_files(args.corpus) else (None, None)
     if instances is None:
-        if not args.palette:
-            raise ValueError("--palette is required for a *.txt corpus (e.g. --palette sokoban)")
+        require_palette(args, args.corpus)
         corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
         if corpus.skipped:
             print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
