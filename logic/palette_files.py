@@ -26,7 +26,7 @@ class PaletteError(AspError):
 
 
 def palette_names() -> list[str]:
-    """The palettes the package ships (``sokoban``, ``sokoban2``), sorted."""
+    """The palettes the package ships (the stems of ``logic/palettes/*.lp``), sorted."""
     folder = files("groundlang.logic") / _PACKAGE_FOLDER
     return sorted(p.name[:-3] for p in folder.iterdir() if p.name.endswith(".lp"))
 

@@ -62,3 +62,11 @@ def test_the_cli_takes_a_palette_name_or_file_and_names_a_bad_one(tmp_path):
     missing = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(E), "--palette",
                               str(tmp_path / "none.lp")], capture_output=True, text=True)
     assert missing.returncode == 2 and "none.lp" in missing.stderr and "Traceback" not in missing.stderr
+
+
+def test_the_help_lists_every_palette_the_package_ships():
+    from groundlang.commands import PALETTE_HELP
+    from groundlang.logic.palette_files import palette_names
+
+    assert "williams2018" in palette_names()  # the folder is read, not a list kept by hand
+    assert f"ships ({', '.join(palette_names())};" in PALETTE_HELP
