@@ -19,9 +19,11 @@ demo: $(STAMP)
 	$(BIN)/groundlang demo --out demo.png
 
 # Two test processes (pytest-xdist): the suite is CPU-bound and single-threaded in most tests, so the
-# second core halves its wall time. `$(BIN)/python -m pytest -n 0` runs it in one process.
+# second core halves its wall time. A test file goes to one process (--dist loadfile): its module-scoped
+# fixtures (a trained model, a corpus evaluated once) are then built once, not once per process.
+# `$(BIN)/python -m pytest -n 0` runs it in one process.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -n 2
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile
 
 # The notebooks' .py files are their source: write each paired .ipynb from it (outputs stay stripped).
 notebooks: $(STAMP)
