@@ -19,7 +19,9 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import re
+import stat
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -80,14 +82,25 @@ def _check(category: str, words: Iterable[str], where: str) -> tuple[str, ...]:
     return tuple(out)
 
 
+# A word file lists a domain's words: a few KB. A wrong path (a log, /dev/zero) must not be read whole.
+MAX_WORD_FILE_BYTES = 4 * 2**20
+
+
 def read_word_file(path: str | Path) -> dict[str, tuple[str, ...]]:
     """Words by category from a word file (format: see the module docstring).
 
     Raises LexiconError naming the file and line of the first malformed line, OSError if unreadable.
     """
     path = Path(path)
+    # Non-blocking, so that a FIFO cannot hang the open; its kind is read from the open file.
+    with open(path, "rb", opener=lambda p, flags: os.open(p, flags | getattr(os, "O_NONBLOCK", 0))) as handle:
+        if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+            raise LexiconError(f"{path}: not a regular file (a FIFO or device); expected a word file")
+        data = handle.read(MAX_WORD_FILE_BYTES + 1)
+    if len(data) > MAX_WORD_FILE_BYTES:
+        raise LexiconError(f"{path}: a word file of more than {MAX_WORD_FILE_BYTES:,} bytes, the most allowed")
     try:
-        text = path.read_text(encoding="utf-8")
+        text = data.decode("utf-8").removeprefix("\ufeff")  # a byte order mark some editors write first
     except UnicodeDecodeError as exc:
         raise LexiconError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); a word file is "
                            "text with `CATEGORY: word word ...` lines") from None

@@ -231,7 +231,7 @@ def _fit_top_features(demo: _Demo, settings: DiscoverySettings) -> None:
     final, initial = features[states[-1]] > 0.5, features[states[0]] > 0.5
     top = [j for j in order if largest > 0 and fit.weights[j] >= settings.weight_margin * largest and final[j]]
     demo.top = tuple((atoms[j], float(fit.weights[j])) for j in top)
-    for k in range(1, settings.max_conjuncts + 1):
+    for k in range(1, min(settings.max_conjuncts, len(top)) + 1):  # no subset has more than len(top)
         for subset in combinations(top, k):
             if not all(initial[j] for j in subset):
                 demo.goals.append(tuple(atoms[j] for j in subset))

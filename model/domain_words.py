@@ -37,7 +37,7 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
         return {}
     if isinstance(sources, (str, Path, Mapping)):
         sources = [sources]
-    merged: dict[str, list[str]] = {}
+    merged: dict[str, dict[str, None]] = {}
     for source in sources:
         if isinstance(source, (str, Path)):
             words = read_word_file(source)
@@ -47,9 +47,8 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
             raise LexiconError(f"a lexicon is a word file's path or a mapping of categories to words, "
                                f"not {type(source).__name__}")
         for category, entries in words.items():
-            known = merged.setdefault(category, [])
-            known.extend(w for w in entries if w not in known)
-    return merged
+            merged.setdefault(category, {}).update(dict.fromkeys(entries))  # in order, once each
+    return {category: list(entries) for category, entries in merged.items()}
 
 
 def domain_lexicon(extra: Mapping[str, Iterable[str]] | None = None) -> Lexicon:

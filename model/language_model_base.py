@@ -110,9 +110,16 @@ class LanguageModel:
         return None
 
 
-def require_positive(model: str, name: str, value: float) -> None:
-    if not value > 0:  # also refuses NaN
-        raise ValueError(f"language model {model}: {name} must be > 0 (a Dirichlet concentration), not {value!r}")
+# The model's tensors are float32: a concentration outside this range rounds to 0 or to infinity there.
+CONCENTRATION_RANGE = (1e-30, 1e30)
+
+
+def require_positive(model: str, name: str, value: float, low: float = CONCENTRATION_RANGE[0]) -> None:
+    """A Dirichlet concentration (or what is added to one, ``low`` 0): within ``CONCENTRATION_RANGE``."""
+    if not low <= value <= CONCENTRATION_RANGE[1]:  # also refuses NaN
+        floor, what = ("> 0", "a Dirichlet concentration") if low else (">= 0", "added to a Dirichlet concentration")
+        raise ValueError(f"language model {model}: {name} must be {floor} ({what}), at most "
+                         f"{CONCENTRATION_RANGE[1]:g}{f' and at least {low:g}' if low else ''}, not {value!r}")
 
 
 NULL_MIXTURE = 0  # encode() interns the {NULL} mixture first

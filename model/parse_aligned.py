@@ -119,8 +119,7 @@ class ParseAligned(LanguageModel):
                             ("preposition_concentration", preposition_concentration)):
             if value is not None:
                 require_positive(self.name, name, value)
-        if not argument_bonus >= 0:
-            raise ValueError(f"language model {self.name}: argument_bonus must be >= 0, not {argument_bonus!r}")
+        require_positive(self.name, "argument_bonus", argument_bonus, low=0.0)
         super().__init__(word_concentration, schema_names=schema_names, achievable_goals=achievable_goals)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus

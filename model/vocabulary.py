@@ -42,6 +42,10 @@ def is_task_role(role: str) -> bool:
 # too many neighbours). Words the grammar's lexicon lists in disjoint categories stay apart ("back"
 # and "black").
 MIN_SPELLING_LENGTH = 4
+# Nor is a word longer than this: its one-edit neighbours number about 54 per letter, each as long as the
+# word, so the search would take memory in the square of its length (a pasted run of letters is not a typo
+# of a word people type in a command).
+MAX_SPELLING_LENGTH = 40
 # In training, a rare word is read as a common one from five letters only, as before this rule had a
 # length for use: a training alias changes what the model learns, not only how one command reads
 # ("moves" read as "move" merges two words' counts). Kept, not re-chosen: ABLATIONS.md.
@@ -63,7 +67,7 @@ def _neighbours(word: str, known: Callable[[str], bool], lexicon: Lexicon,
                 shortest: int = MIN_SPELLING_LENGTH) -> str | None:
     """The one word one edit from ``word`` that ``known`` accepts, or None (none, or several);
     words shorter than ``shortest`` letters are neither read as others nor read into."""
-    if len(word) < shortest or not word.isalpha():
+    if not shortest <= len(word) <= MAX_SPELLING_LENGTH or not word.isalpha():
         return None
     # Hurried typing keeps the first letter; an edit there makes other words ("reach", "peach").
     found = {w for w in _one_edit(word) if w[0] == word[0] and len(w) >= shortest and known(w)}

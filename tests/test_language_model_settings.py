@@ -33,10 +33,17 @@ def test_settings_make_the_model_they_name():
     ("parse", {"mention_phrases": "all"}, "language model parse: mention_phrases must be 'referring' or 'any', "
                                           "not 'all'"),
     ("parse", {"word_concentration": -1}, "language model parse: word_concentration must be > 0 (a Dirichlet "
-                                          "concentration), not -1"),
+                                          "concentration), at most 1e+30 and at least 1e-30, not -1"),
+    # Values the model's float32 tensors would round to 0 or to infinity (a torch error deep in training).
+    ("parse", {"word_concentration": 1e-300}, "word_concentration must be > 0 (a Dirichlet concentration), at "
+                                              "most 1e+30 and at least 1e-30, not 1e-300"),
+    ("parse", {"mention_concentration": 1e38}, "mention_concentration must be > 0"),
+    ("parse", {"argument_bonus": 1e308}, "argument_bonus must be >= 0 (added to a Dirichlet concentration), at "
+                                         "most 1e+30, not 1e+308"),
     ("bow", {"word_concentration": 0}, "language model bow: word_concentration must be > 0"),
     ("parse", {"align_concentration": float("nan")}, "setting align_concentration: expected a number, not nan"),
-    ("parse", {"argument_bonus": -0.5}, "language model parse: argument_bonus must be >= 0, not -0.5"),
+    ("parse", {"argument_bonus": -0.5}, "language model parse: argument_bonus must be >= 0 (added to a Dirichlet concentration), "
+                                           "at most 1e+30, not -0.5"),
     ("lstm", {}, "unknown language model 'lstm'; expected one of bow, ibm2, parse"),
 ])
 def test_a_bad_setting_is_refused_with_the_model_and_the_setting_named(name, settings, message):

@@ -1,0 +1,82 @@
+"""Inputs whose size a user controls cost time and memory bounded by what they mean, not by their size:
+an overlong word in a command, a word file that is not a file of words, many words in one, and a
+conjunction size beyond what any demonstration offers."""
+
+from __future__ import annotations
+
+import os
+import time
+import tracemalloc
+from collections import Counter
+
+import pytest
+
+from groundlang.corpus import example_corpus_path, read_corpus
+from groundlang.grammar.lexicon import Lexicon, LexiconError, read_word_file
+from groundlang.inference.discovery import DiscoverySettings, _Demo, _fit_top_features
+from groundlang.model.domain_words import extra_words
+from groundlang.model.vocabulary import MAX_SPELLING_LENGTH, Vocabulary, _neighbours
+
+
+def test_an_overlong_word_is_not_searched_for_a_typo():
+    known = {"x" * MAX_SPELLING_LENGTH}.__contains__
+    # At the limit a typo is still read as the word meant (one letter inserted) ...
+    assert _neighbours("x" * (MAX_SPELLING_LENGTH - 1), known, Lexicon.english()) == "x" * MAX_SPELLING_LENGTH
+    # ... beyond it the word is not searched: its neighbours would take memory in the square of its length.
+    tracemalloc.start()
+    assert _neighbours("x" * 100_000, known, Lexicon.english()) is None
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert peak < 10 * 2**20
+
+
+def test_training_reads_an_overlong_word_in_bounded_memory():
+    vocab = Vocabulary()
+    tracemalloc.start()
+    vocab.read_misspellings(Counter({"white": 40, "whlite": 1, "w" * 100_000: 1}))
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert vocab.aliases == {"whlite": "white"} and peak < 10 * 2**20
+
+
+def test_a_word_file_that_is_a_fifo_or_too_large_is_refused_in_one_line(tmp_path):
+    fifo = tmp_path / "words.fifo"
+    os.mkfifo(fifo)
+    with pytest.raises(LexiconError, match="not a regular file"):
+        read_word_file(fifo)  # returns at once: no writer is waited for
+    with pytest.raises(LexiconError, match="not a regular file"):
+        read_word_file("/dev/zero")
+    big = tmp_path / "big.words"
+    big.write_text("NOUN: mug\n" * 500_000)
+    with pytest.raises(LexiconError, match="a word file of more than 4,194,304 bytes"):
+        read_word_file(big)
+
+
+def test_a_word_file_behind_a_byte_order_mark_is_read(tmp_path):
+    path = tmp_path / "bom.words"
+    path.write_bytes(b"\xef\xbb\xbfNOUN: mug\n")
+    assert read_word_file(path) == {"NOUN": ("mug",)}
+
+
+def test_many_words_merge_in_linear_time_in_order_once_each(tmp_path):
+    words = [f"w{i}" for i in range(60_000)]
+    first, second = tmp_path / "a.words", tmp_path / "b.words"
+    first.write_text("NOUN: " + " ".join(words) + "\n")
+    second.write_text("NOUN: w5 extra w0\nADJ: w1\n")
+    started = time.perf_counter()
+    merged = extra_words([first, second])
+    assert time.perf_counter() - started < 5  # quadratic merging took minutes at this size
+    assert merged["NOUN"] == words + ["extra"] and merged["ADJ"] == ["w1"]
+
+
+@pytest.mark.slow
+def test_a_conjunction_size_beyond_the_top_features_gives_the_same_candidates():
+    inst = read_corpus(example_corpus_path(), "sokoban").instances[0]
+    found = []
+    for max_conjuncts in (3, 10**14):  # the second took hours before: every size up to it was tried
+        demo = _Demo(inst, (inst.name,))
+        started = time.perf_counter()
+        _fit_top_features(demo, DiscoverySettings(max_conjuncts=max_conjuncts))
+        found.append((demo.top, demo.goals, time.perf_counter() - started))
+    assert len(found[0][0]) <= 3 and found[0][1]  # 3 covers every subset of the top features here
+    assert found[0][:2] == found[1][:2]
