@@ -167,7 +167,8 @@ def _parsed(name: str, text: str, allow_scripts: bool) -> tuple:
         if stm.ast_type == ast.ASTType.Script and not allow_scripts:
             raise AspScriptRefused(
                 f"{source.name}:{stm.location.begin.line}: #script blocks are refused; "
-                "pass allow_scripts=True only for programs you trust"
+                "allow them only for programs you trust "
+                "(allow_scripts=True in Python; --allow-scripts of tasks and domain)"
             )
         _relocate(stm, source.name)
     return tuple(statements)

@@ -70,8 +70,9 @@ def test_unsafe_variable_names_file_line_and_variable():
 
 def test_script_is_refused_without_opt_in():
     text = 'a.\n#script (python)\nimport os\nos.system("touch /tmp/groundlang-pwned")\n#end.\n'
-    with pytest.raises(AspScriptRefused, match=r"^evil\.lp:2: #script blocks are refused"):
+    with pytest.raises(AspScriptRefused, match=r"^evil\.lp:2: #script blocks are refused") as refused:
         Program((Source("evil.lp", text),))
+    assert "--allow-scripts of tasks and domain" in str(refused.value)  # the option a shell user has
 
 
 def test_script_passes_the_check_with_opt_in():

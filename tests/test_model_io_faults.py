@@ -323,3 +323,27 @@ def test_cli_follow_in_a_state_of_another_palette_is_one_line(learners, tmp_path
     code = main(["follow", "go to the red room", "--env", str(other), "--palette", "sokoban2", "--model", str(model)])
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("groundlang follow: error: follow: the state is of palette 'sokoban2'")
+
+
+def _edit_palette(model, **entry):
+    meta = json.loads((model / "model.json").read_text())
+    meta["palettes"][0].update(entry)
+    (model / "model.json").write_text(json.dumps(meta))
+
+
+def test_a_palette_name_read_from_a_model_is_never_opened_as_a_path(learners, tmp_path, capsys):
+    model = learners[0].save(tmp_path / "m")
+    _edit_palette(model, name="/etc/passwd")
+    code = main(["follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model", str(model)])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "the model was trained on palette '/etc/passwd', which the package does not ship" in err
+    assert "pass its .lp file" in err
+
+
+def test_a_model_whose_palette_has_the_name_but_not_the_values_says_so(learners, tmp_path, capsys):
+    model = learners[0].save(tmp_path / "m")
+    _edit_palette(model, colours=[])
+    code = main(["follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model", str(model)])
+    err = capsys.readouterr().err
+    assert code == 2 and "trained on palette sokoban of the same name but other colours or shapes" in err

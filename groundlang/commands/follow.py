@@ -129,6 +129,11 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--palette is needed: the model was trained on {len(trained)} palettes "
                              f"({', '.join(trained) or 'none recorded'})")
         palette = trained[0]
+        from groundlang.logic.palette_files import palette_names
+
+        if palette not in palette_names():  # a name read from the model is never opened as a path
+            raise ValueError(f"--palette is needed: the model was trained on palette {palette!r}, which the "
+                             f"package does not ship ({', '.join(palette_names())}); pass its .lp file")
     state = read_initial_state(args.env, palette)
     if args.lexicon:
         learner.add_words(args.lexicon)
