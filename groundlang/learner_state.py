@@ -62,9 +62,12 @@ def learner_from_state(cls, state: dict, where: str):
     ``Learner.from_state_dict``."""
     if not isinstance(state["lexicon"], dict):  # never a path: loading a model reads no other file
         raise ValueError(f"lexicon is {type(state['lexicon']).__name__}, expected words by category")
-    for key in ("language_model_settings", "training", "planning"):
-        if not isinstance(state[key], dict):
-            raise ValueError(f"{key} is {type(state[key]).__name__}, expected names with values")
+    for key, kind, expected in (("language_model_settings", dict, "names with values"),
+                                ("training", dict, "names with values"), ("planning", dict, "names with values"),
+                                ("vocabulary", dict, "names with values"), ("language_model", str, "a name"),
+                                ("task_library", str, "the text of an ASP program")):
+        if not isinstance(state[key], kind):
+            raise ValueError(f"{key} is {type(state[key]).__name__}, expected {expected}")
     learner = cls(
         get_language_model(state["language_model"], **state["language_model_settings"]),
         library=TaskLibrary.from_text(state["task_library"], f"{where}:task_library"),

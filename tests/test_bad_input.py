@@ -600,13 +600,20 @@ def test_fuzz_model_json_fields(trained_model, tmp_path_factory, key, value, dro
     _loads_or_refuses(d)
 
 
-@pytest.mark.parametrize("key", ["language_model_settings", "training", "planning"])
-def test_a_model_json_section_that_is_not_names_with_values_is_named(trained_model, tmp_path_factory, key):
+@pytest.mark.parametrize("key, value, expected", [
+    ("language_model_settings", [1, 2], "list, expected names with values"),
+    ("training", [1, 2], "list, expected names with values"),
+    ("planning", [1, 2], "list, expected names with values"),
+    ("vocabulary", "words", "str, expected names with values"),
+    ("language_model", ["parse"], "list, expected a name"),
+    ("task_library", 3, "int, expected the text of an ASP program"),
+])
+def test_a_model_json_section_of_the_wrong_kind_is_named(trained_model, tmp_path_factory, key, value, expected):
     d = _fresh_copy(trained_model, tmp_path_factory)
     meta = json.loads((d / "model.json").read_text())
-    meta[key] = [1, 2]
+    meta[key] = value
     (d / "model.json").write_text(json.dumps(meta))
-    with pytest.raises(ModelFormatError, match=f"{key} is list, expected names with values"):
+    with pytest.raises(ModelFormatError, match=f"{key} is {expected}"):
         Learner.load(d)
 
 
