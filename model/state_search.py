@@ -43,9 +43,10 @@ MAX_STATES_VARIABLE = "GROUNDLANG_MAX_STATES"
 
 def default_max_states() -> int:
     """``$GROUNDLANG_MAX_STATES`` when set (a positive integer), else DEFAULT_MAX_STATES."""
-    text = os.environ.get(MAX_STATES_VARIABLE, "").replace("_", "").replace(",", "").strip()
-    if not text:
+    given = os.environ.get(MAX_STATES_VARIABLE, "").strip()
+    if not given:
         return DEFAULT_MAX_STATES
+    text = given.replace("_", "").replace(",", "")  # digit groups, "1_000_000"; nothing but them is an error
     if not text.isdigit() or int(text) < 1:
         raise StateSpaceError(f"{MAX_STATES_VARIABLE}={os.environ[MAX_STATES_VARIABLE]!r}: expected a positive integer")
     return int(text)

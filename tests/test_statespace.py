@@ -262,3 +262,16 @@ def test_corpus_demonstrations_are_enumerated(shared_corpus):
             files += 1
     assert files == 480
     assert len(spaces) == 6
+
+
+@pytest.mark.parametrize("given, expected", [("", 5_000_000), ("  ", 5_000_000), ("1_000", 1000), ("2,500", 2500),
+                                             ("_", None), (",", None), ("0", None), ("abc", None)])
+def test_the_state_limit_from_the_environment(monkeypatch, given, expected):
+    from groundlang.model.state_search import default_max_states
+
+    monkeypatch.setenv("GROUNDLANG_MAX_STATES", given)
+    if expected is None:  # digit separators alone are not a number: refused, not read as unset
+        with pytest.raises(StateSpaceError, match=f"GROUNDLANG_MAX_STATES='{given}': expected a positive integer"):
+            default_max_states()
+    else:
+        assert default_max_states() == expected
