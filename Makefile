@@ -19,11 +19,11 @@ demo: $(STAMP)
 	$(BIN)/groundlang demo --out demo.png
 
 # Two test processes (pytest-xdist): the suite is CPU-bound and single-threaded in most tests, so the
-# second core halves its wall time. A test file goes to one process (--dist loadfile): its module-scoped
-# fixtures (a trained model, a corpus evaluated once) are then built once, not once per process.
-# `$(BIN)/python -m pytest -n 0` runs it in one process.
+# second core halves its wall time. Tests are spread one by one (--dist loadgroup), but a module marked
+# xdist_group runs in one process, so that its costly module fixture (the harder corpus evaluated under the
+# train protocol) is built once, not once per process. `$(BIN)/python -m pytest -n 0` runs it in one process.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -n 2 --dist loadfile
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
 # The notebooks' .py files are their source: write each paired .ipynb from it (outputs stay stripped).
 notebooks: $(STAMP)

@@ -30,6 +30,10 @@ from groundlang.model.world import Action, replay
 
 FIXTURES = Path(__file__).parent / "fixtures"
 CORPUS = FIXTURES / "sokoban2_corpus"
+
+# One test process for the module (make test's --dist loadgroup): the train-protocol evaluation and the
+# behaviour cache its module fixtures build are then built once, not once in each process.
+pytestmark = pytest.mark.xdist_group("harder_corpus")
 LAYOUTS = ("L1", "L2", "L3")
 
 
