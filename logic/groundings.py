@@ -94,6 +94,8 @@ def ground_environment(
             return kind, (_text(args[0]), args[1])
         if kind in ("pf_of_no_class", "attribute_pf_not_unary") and len(args) == 2:
             return kind, (str(args[0]), str(args[1]))
+        if kind in ("pf_of_two_arities", "holds_of_other_arity") and len(args) == 3:
+            return kind, (str(args[0]), args[1].number, args[2].number)
         if kind in ("goal_atom", "constraint_atom", "goal_atom_holds") and len(args) == 2:
             return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
         return "other", None  # atoms a user library shows for its own purposes
@@ -145,6 +147,13 @@ def ground_environment(
                            f"{first} PF {second} takes more than one argument; colour and shape PFs describe "
                            f"one object, e.g. pf({first}, {second}, (toy,))")
                 raise AspError(f"{library.program.user_names}{where}: {problem}")
+            elif kind in ("pf_of_two_arities", "holds_of_other_arity"):
+                name, first, second = value
+                problem = (f"PF {name} is declared with {first} and with {second} arguments"
+                           if kind == "pf_of_two_arities" else
+                           f"holds({name}, ...) has {first} argument{'s' if first > 1 else ''} where pf/3 declares "
+                           f"{name} with {second}; its rules and its declaration must agree")
+                raise AspError(f"{library.program.user_names}: {problem}")
         if chosen is None:
             continue  # the answer set of no task: descriptions and diagnostics only
         lifted = tasks[chosen]

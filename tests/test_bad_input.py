@@ -319,6 +319,12 @@ ROWS += [
     Row("asp/PF over a class no object has", (*_TASKS, str(BAD / "pf_of_no_class.lp")),
         pieces=(f"{BAD / 'pf_of_no_class.lp'} (palette sokoban): PF toyHue(", "is declared over class lamp, "
                 "which no object has")),
+    Row("asp/holds/2 rule with another arity than the PF's declaration", (*_TASKS, str(BAD / "holds_other_arity.lp")),
+        pieces=(f"{BAD / 'holds_other_arity.lp'}: holds(agentNear, ...) has 2 arguments where pf/3 declares "
+                "agentNear with 1",)),
+    Row("asp/a PF declared with two arities (a library redeclaring one of pfs.lp)",
+        (*_TASKS, str(BAD / "pf_two_arities.lp")),
+        pieces=(f"{BAD / 'pf_two_arities.lp'}: PF agentInRoom is declared with 1 and with 2 arguments",)),
     Row("asp/colour PF of two arguments, through discover --pfs",
         ("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "--restrict",
          "--pfs", str(BAD / "colour_pf_binary.lp"), "-o", "{tmp}/x.lp"),
