@@ -92,7 +92,8 @@ def read_word_file(path: str | Path) -> dict[str, tuple[str, ...]]:
     Raises LexiconError naming the file and line of the first malformed line, OSError if unreadable.
     """
     path = Path(path)
-    # Non-blocking, so that a FIFO cannot hang the open; its kind is read from the open file.
+    # logic.storage.read_limited's twin (grammar imports no other layer): opened non-blocking, so that a
+    # FIFO cannot hang the open; its kind is read from the open file; no more than the limit is read.
     with open(path, "rb", opener=lambda p, flags: os.open(p, flags | getattr(os, "O_NONBLOCK", 0))) as handle:
         if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
             raise LexiconError(f"{path}: not a regular file (a FIFO or device); expected a word file")

@@ -254,7 +254,8 @@ class Learner:
         seen = {"name": palette.name, "colours": list(palette.colours), "shapes": list(palette.shapes)}
         if self.palettes is not None and seen not in self.palettes:
             trained = ", ".join(p["name"] for p in self.palettes)
-            same_name = " of the same name but other colours or shapes" if palette.name in trained.split(", ") else ""
+            same_name = (" of the same name but other colours or shapes"
+                         if any(p["name"] == palette.name for p in self.palettes) else "")
             raise ValueError(f"{method}: the state is of palette {palette.name!r}; this model was trained on "
                              f"palette {trained}{same_name} (colours and shapes must be the same to read its words)")
 

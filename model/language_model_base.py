@@ -114,12 +114,15 @@ class LanguageModel:
 CONCENTRATION_RANGE = (1e-30, 1e30)
 
 
-def require_positive(model: str, name: str, value: float, low: float = CONCENTRATION_RANGE[0]) -> None:
-    """A Dirichlet concentration (or what is added to one, ``low`` 0): within ``CONCENTRATION_RANGE``."""
-    if not low <= value <= CONCENTRATION_RANGE[1]:  # also refuses NaN
-        floor, what = ("> 0", "a Dirichlet concentration") if low else (">= 0", "added to a Dirichlet concentration")
-        raise ValueError(f"language model {model}: {name} must be {floor} ({what}), at most "
-                         f"{CONCENTRATION_RANGE[1]:g}{f' and at least {low:g}' if low else ''}, not {value!r}")
+def require_positive(model: str, name: str, value: float, added: bool = False) -> None:
+    """A Dirichlet concentration within ``CONCENTRATION_RANGE``; with ``added``, a value added to one,
+    which may be 0."""
+    low, high = (0.0 if added else CONCENTRATION_RANGE[0]), CONCENTRATION_RANGE[1]
+    if low <= value <= high:  # NaN fails both comparisons
+        return
+    rule = (f">= 0 (added to a Dirichlet concentration), at most {high:g}" if added else
+            f"> 0 (a Dirichlet concentration), at most {high:g} and at least {low:g}")
+    raise ValueError(f"language model {model}: {name} must be {rule}, not {value!r}")
 
 
 NULL_MIXTURE = 0  # encode() interns the {NULL} mixture first

@@ -119,7 +119,7 @@ class ParseAligned(LanguageModel):
                             ("preposition_concentration", preposition_concentration)):
             if value is not None:
                 require_positive(self.name, name, value)
-        require_positive(self.name, "argument_bonus", argument_bonus, low=0.0)
+        require_positive(self.name, "argument_bonus", argument_bonus, added=True)
         super().__init__(word_concentration, schema_names=schema_names, achievable_goals=achievable_goals)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus

@@ -9,6 +9,8 @@ import argparse
 import math
 from pathlib import Path
 
+from groundlang.logic.palette_files import palette_names
+
 LANGUAGE_MODEL_NAMES = ("bow", "ibm2", "parse")  # == tuple(groundlang.model.language_models.LANGUAGE_MODELS)
 
 
@@ -99,17 +101,8 @@ def add_em_acceleration_option(parser) -> None:
                              "after another (default squarem; both reach the same MAP)")
 
 
-def _shipped_palettes() -> str:
-    """The palettes in the package's folder, read off the folder (a palette added there is listed without
-    an edit here) and without importing the ASP layer, which --help does not need."""
-    from importlib.util import find_spec
-
-    spec = find_spec("groundlang.logic")
-    folders = [Path(p) / "palettes" for p in (spec.submodule_search_locations or [])] if spec else []
-    return ", ".join(sorted(p.stem for f in folders if f.is_dir() for p in f.glob("*.lp"))) or "none found"
-
-
-PALETTE_HELP = (f"colour and shape values of the files: a palette the package ships ({_shipped_palettes()}; "
+# Read off the package's folder: a palette added there is listed without an edit here.
+PALETTE_HELP = (f"colour and shape values of the files: a palette the package ships ({', '.join(palette_names())}; "
                 "groundlang/logic/palettes/) or the path of a .lp file of value(Attribute, Index, Name) facts")
 
 

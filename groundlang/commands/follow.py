@@ -113,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import format_state, read_initial_state
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
+    from groundlang.logic.palette_files import palette_names
     from groundlang.wording import goal_phrase, labelled_goal
 
     if args.learn and not args.ask:
@@ -129,11 +130,10 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--palette is needed: the model was trained on {len(trained)} palettes "
                              f"({', '.join(trained) or 'none recorded'})")
         palette = trained[0]
-        from groundlang.logic.palette_files import palette_names
-
-        if palette not in palette_names():  # a name read from the model is never opened as a path
+        shipped = palette_names()
+        if palette not in shipped:  # a name read from the model is never opened as a path
             raise ValueError(f"--palette is needed: the model was trained on palette {palette!r}, which the "
-                             f"package does not ship ({', '.join(palette_names())}); pass its .lp file")
+                             f"package does not ship ({', '.join(shipped)}); pass its .lp file")
     state = read_initial_state(args.env, palette)
     if args.lexicon:
         learner.add_words(args.lexicon)
