@@ -182,6 +182,11 @@ def test_cli_train_follow_lexicon(tmp_path, capsys):
     assert out["interpretations"][0]["goal"].startswith("toyInRoom(block0, ")
     assert sum(i["probability"] for i in out["interpretations"]) <= 1.0 + 1e-6
     assert (tmp_path / "f.png").stat().st_size > 1000
+    # a command holding a terminal escape sequence is echoed with the escape visible, not obeyed
+    assert main(["follow", "\x1b[2Jtake the star to the red room", "--env", str(EXAMPLES / "novel_b.state"),
+                 "--palette", "sokoban", "--model", str(model)]) == 0
+    shown = capsys.readouterr().out
+    assert "\x1b" not in shown and "command: '\\x1b[2Jtake the star to the red room'" in shown
     assert main(["--quiet", "lexicon", str(model), "--words", "red", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["red"][0][0] == "roomIsRed"
     assert main(["--quiet", "lexicon", str(model), "--words", "red", "purple", "--top", "1"]) == 0

@@ -140,7 +140,10 @@ def run(args: argparse.Namespace) -> int:
     threshold = None if args.guess else args.min_confidence
     result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
     if not args.json:
-        print(f"command: {args.command_text}")
+        # Shown as typed unless it holds control characters, which a terminal would obey (an escape
+        # sequence clears the screen): then as a Python string literal, every character visible.
+        text = args.command_text
+        print(f"command: {text if text.isprintable() else ascii(text)}")
     if result.abstained and args.ask and not args.json:
         answered = _ask(learner, result, state, args.max_steps)
         if answered is None:
