@@ -96,8 +96,6 @@ def ground_environment(
             return kind, (str(args[0]), str(args[1]))
         if kind in ("pf_of_two_arities", "holds_of_other_arity") and len(args) == 3:
             return kind, (str(args[0]), args[1].number, args[2].number)
-        if kind == "holds_of_other_class" and len(args) == 3:
-            return kind, (str(args[0]), _text(args[1]), str(args[2]))
         if kind in ("goal_atom", "constraint_atom", "goal_atom_holds") and len(args) == 2:
             return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
         return "other", None  # atoms a user library shows for its own purposes
@@ -156,10 +154,6 @@ def ground_environment(
                            f"holds({name}, ...) has {first} argument{'s' if first > 1 else ''} where pf/3 declares "
                            f"{name} with {second}; its rules and its declaration must agree")
                 raise AspError(f"{library.program.user_names}: {problem}")
-            elif kind == "holds_of_other_class":
-                name, obj, cls = value
-                raise AspError(f"{library.program.user_names}: holds({name}, ...) holds of {obj}, which is not of class "
-                               f"{cls} as pf/3 declares; its rules and its declaration must agree")
         if chosen is None:
             continue  # the answer set of no task: descriptions and diagnostics only
         lifted = tasks[chosen]

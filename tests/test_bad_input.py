@@ -322,14 +322,6 @@ ROWS += [
     Row("asp/holds/2 rule with another arity than the PF's declaration", (*_TASKS, str(BAD / "holds_other_arity.lp")),
         pieces=(f"{BAD / 'holds_other_arity.lp'}: holds(agentNear, ...) has 2 arguments where pf/3 declares "
                 "agentNear with 1",)),
-    Row("asp/holds/2 rule over an object of another class than the PF's declaration",
-        (*_TASKS, str(BAD / "holds_other_class.lp")),
-        pieces=(f"{BAD / 'holds_other_class.lp'}: holds(agentNear, ...) holds of room0, which is not of class "
-                "agent as pf/3 declares",)),
-    Row("asp/train with a holds/2 rule over an object of another class (before: trained a goal that never holds)",
-        ("train", str(FIXTURES / "sokoban"), "--palette", "sokoban", "--library", str(BAD / "holds_other_class.lp"),
-         "-o", "{tmp}/model"),
-        pieces=(f"{BAD / 'holds_other_class.lp'}: holds(agentNear, ...) holds of room0",), absent=("{tmp}/model",)),
     Row("asp/a PF declared with two arities (a library redeclaring one of pfs.lp)",
         (*_TASKS, str(BAD / "pf_two_arities.lp")),
         pieces=(f"{BAD / 'pf_two_arities.lp'}: PF agentInRoom is declared with 1 and with 2 arguments",)),
