@@ -159,15 +159,17 @@ def evaluate(
     instances = list(corpus.instances)
     if len(instances) < 2:
         raise ValueError(f"{corpus.directory}: evaluation needs at least two instances, found {len(instances)}")
+    # Labels may name the PFs of the library the learner is given, not only the package's.
+    library = (learner_options or {}).get("library")
     golds = []
     for inst in instances:
-        gold = label_for(inst, labels)
+        gold = label_for(inst, labels, library)
         if gold is None:
             raise ValueError(f"{inst.path}: no gold label for prefix {inst.prefix!r}")
         golds.append(gold)
     for name, state in novel_states:  # reject bad layouts before any work
         for inst, gold in zip(instances, golds):
-            translate_goal(gold, inst.initial_state, state, name)
+            translate_goal(gold, inst.initial_state, state, name, library)
 
     training = list(range(len(instances)))
     if train_indices is not None:

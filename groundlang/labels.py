@@ -125,15 +125,17 @@ def goal_holds(goal: tuple[Atom, ...] | list[Atom], state: State, library=None) 
         raise LabelError(f"goal: {exc}") from None
 
 
-def label_for(instance: Instance, labels: Labels | dict) -> tuple[Atom, ...] | None:
+def label_for(instance: Instance, labels: Labels | dict, library=None) -> tuple[Atom, ...] | None:
     """The gold goal of an instance (by file prefix), or None when it is unlabelled.
 
+    ``library``: a TaskLibrary whose own PF rules a goal may use (a user's ``agentAboveToy``).
     Raises LabelError when the goal names an object the instance does not have.
     """
     goal = labels.get(instance.prefix)
     if goal is not None:
         source = getattr(labels, "path", "labels")
-        check_goal_objects(goal, instance.initial_state, f"{source}: goal of {instance.prefix!r} for {instance.path}")
+        check_goal_objects(goal, instance.initial_state, f"{source}: goal of {instance.prefix!r} for {instance.path}",
+                           library)
     return goal
 
 
@@ -162,20 +164,21 @@ def check_label_prefixes(corpus: Corpus, labels: Labels | dict) -> None:
         )
 
 
-def label_coverage(corpus: Corpus, labels: Labels | dict) -> LabelCoverage:
-    """Match labels to a corpus and check each goal in the instance's final state.
+def label_coverage(corpus: Corpus, labels: Labels | dict, library=None) -> LabelCoverage:
+    """Match labels to a corpus and check each goal in the instance's final state (as ``library``'s PF
+    rules define it, when given).
 
     Raises LabelError when a labelled prefix has no files in the corpus or a goal names a missing object.
     """
     check_label_prefixes(corpus, labels)
     cov = LabelCoverage(total=len(corpus.instances), labelled=0, holding=0)
     for inst in corpus.instances:
-        goal = label_for(inst, labels)
+        goal = label_for(inst, labels, library)
         if goal is None:
             cov.unlabelled.append(inst)
             continue
         cov.labelled += 1
-        if goal_holds(goal, inst.final_state):
+        if goal_holds(goal, inst.final_state, library):
             cov.holding += 1
         else:
             cov.failing.append((inst, goal))

@@ -109,3 +109,20 @@ def test_leave_one_out_beats_the_published_ibm_model_2(shared_corpus, folder, me
     # Measured with this code; a few folds' EM stops may differ (3 novel executions per command).
     assert result.correct >= measured - 3
     assert result.novel_correct >= measured_novel - 9
+
+
+def test_cli_evaluate_trains_and_scores_with_the_users_library(tmp_path, capsys, fixtures):
+    """--library on a *.txt corpus is the learner's library, and labels may name its PFs (it was ignored:
+    the package's tasks were learned and a label of the user's PF refused as unknown)."""
+    from importlib.resources import files
+
+    csv = tmp_path / "labels.csv"
+    csv.write_text('prefix,goal\nagent2red_,"agentInRoom(agent0, room1)"\n'
+                   'star2green_,"agentNextToToy(agent0, block0)"\n', encoding="utf-8")
+    out = tmp_path / "r.json"
+    code = main(["--quiet", "evaluate", "--corpus", str(fixtures / "sokoban"), "--palette", "sokoban",
+                 "--labels", str(csv), "--protocol", "train", "--json", str(out),
+                 "--library", str(files("groundlang.logic") / "tasks.lp"), "--library", str(EXAMPLES / "next_to.lp")])
+    assert code == 0, capsys.readouterr().err
+    data = json.loads(out.read_text())
+    assert data["n"] == data["correct"] == 4 and set(data["per_task"]) == {"agentInRoom(agent, red)", "agentNextToToy(agent, star)"}

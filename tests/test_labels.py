@@ -194,3 +194,24 @@ def test_evaluate_refuses_labels_of_another_corpus_as_check_does(tmp_path):
         done = subprocess.run([sys.executable, "-m", "groundlang.cli", *argv], capture_output=True, text=True)
         assert done.returncode == 2 and len(done.stderr.splitlines()) == 1, done.stderr
         assert "prefixes other0_, other100_, other101_, other102_, other103_, ... (1000 in all) name no files" in done.stderr
+
+
+def test_labels_may_name_a_user_librarys_pf(tmp_path, fixtures):
+    """A goal of a PF the user's library defines (agentNextToToy, examples/next_to.lp) is checked against
+    final states with that library, by check --labels --library as by the Python call."""
+    from groundlang.cli import main
+    from groundlang.corpus import example_corpus_path
+    from groundlang.logic.tasks import TaskLibrary
+
+    csv = tmp_path / "labels.csv"
+    csv.write_text('prefix,goal\nagent2red_,"agentInRoom(agent0, room1)"\n'
+                   'star2green_,"agentNextToToy(agent0, block0)"\n', encoding="utf-8")
+    corpus = read_corpus(fixtures / "sokoban", "sokoban")
+    labels = read_labels(csv)
+    with pytest.raises(LabelError, match="unknown predicate 'agentNextToToy'"):
+        label_coverage(corpus, labels)  # the package's PFs alone do not define it
+    library = TaskLibrary.load([example_corpus_path() / "next_to.lp"])
+    cov = label_coverage(corpus, labels, library)
+    assert (cov.labelled, cov.holding) == (4, 4)  # each push ends with the agent beside the star
+    assert main(["check", str(fixtures / "sokoban"), "--palette", "sokoban", "--labels", str(csv),
+                 "--library", str(example_corpus_path() / "next_to.lp")]) == 0

@@ -25,8 +25,8 @@ def register(subparsers) -> None:
     p.add_argument("--format", choices=("commands-to-tasks", "williams2018"),
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
     p.add_argument("--library", metavar="LP", action="append",
-                   help="task library .lp file for the tasks .bdm pairs show (repeatable; default: "
-                        "groundlang/logic/domains/williams2018.lp)")
+                   help="task library .lp file (repeatable): for the tasks .bdm pairs show (default: "
+                        "groundlang/logic/domains/williams2018.lp), or whose PFs --labels may use")
     p.add_argument("--labels", metavar="CSV", help="gold labels (prefix,goal) to check against final states")
     p.add_argument("--skip-inconsistent", action="store_true",
                    help="skip demonstrations that do not replay (counted) instead of failing")
@@ -66,7 +66,12 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.labels import label_coverage, read_labels
 
         labels = read_labels(args.labels)
-        cov = label_coverage(corpus, labels)
+        library = None
+        if args.library:  # labels may name the library's own PFs
+            from groundlang.logic.tasks import TaskLibrary
+
+            library = TaskLibrary.load(args.library)
+        cov = label_coverage(corpus, labels, library)
         print(f"labelled: {cov.labelled}/{cov.total} files ({len(labels)} prefixes in {labels.path.name})")
         print(f"goal holds in final state: {cov.holding}/{cov.labelled}")
         for inst, goal in cov.failing:

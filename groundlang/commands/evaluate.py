@@ -33,7 +33,8 @@ def register(subparsers) -> None:
     p.add_argument("--format", choices=["commands-to-tasks", "williams2018"],
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
     p.add_argument("--library", metavar="LP", action="append",
-                   help="task library .lp file (repeatable; default for .bdm: the package's williams2018 domain)")
+                   help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the package's "
+                        "williams2018 domain); labels may use its PFs")
     p.add_argument("--demonstrations", choices=["end-state", "shortest-plan"], default="end-state",
                    help="how a (start, end) pair without a trajectory is evidence (default end-state: the end "
                         "state's likelihood under each task; shortest-plan: a synthesised shortest plan)")
@@ -97,12 +98,17 @@ def run(args: argparse.Namespace) -> int:
     labels = read_labels(args.labels)
     check_label_prefixes(corpus, labels)  # as check does: labels of another corpus are refused, not ignored
     novel = read_novel_states(args.novel_envs, args.palette) if args.novel_envs else []
+    options = {"em_acceleration": args.em_acceleration, **({"lexicon": words} if words else {})}
+    if args.library:  # trained, followed and scored with the user's PFs and tasks, as train would
+        from groundlang.logic.tasks import TaskLibrary
+
+        options["library"] = TaskLibrary.load(args.library)
     result = evaluate(
         corpus, labels, protocol=args.protocol or "loo", language_model=args.language_model,
         novel_states=novel, workers=args.workers, ray_address=args.ray,
         progress=args.progress, limit=args.limit, warm_start=not args.cold_folds,
         language_model_settings=language_model_settings(args.lm_settings),
-        learner_options={"em_acceleration": args.em_acceleration, **({"lexicon": words} if words else {})},
+        learner_options=options,
         min_confidence=args.min_confidence,
     )
     print(result.summary())
