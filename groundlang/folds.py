@@ -4,6 +4,7 @@ in forked worker processes or on a Ray cluster. :func:`groundlang.evaluation.eva
 from __future__ import annotations
 
 import multiprocessing
+import os
 import time
 
 from groundlang.corpus import Instance
@@ -86,7 +87,16 @@ def _init_worker(context: dict) -> None:
     _CONTEXT.update(context)
 
 
+def usable_workers(workers: int, folds: int) -> int:
+    """How many processes to fork for ``workers`` asked: no more than there are folds to run or cores to run
+    them on. A pool forks every process it is asked for at once, so an unbounded ``--workers`` (100000)
+    would fork that many copies of this process, folds or not; beyond the cores they only share them."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return max(1, min(workers, folds, cores))
+
+
 def run_folds(context: dict, indices: list[int], workers: int, ray_address: str | None, progress: bool) -> list[dict]:
+    workers = usable_workers(workers, len(indices))
     if ray_address is not None:
         from groundlang.distributed import run_on_ray
 

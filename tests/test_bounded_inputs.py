@@ -1,6 +1,6 @@
 """Inputs whose size a user controls cost time and memory bounded by what they mean, not by their size:
 an overlong word in a command, a word file that is not a file of words, many words in one, and a
-conjunction size beyond what any demonstration offers."""
+conjunction size beyond what any demonstration offers; and more worker processes than folds or cores."""
 
 from __future__ import annotations
 
@@ -80,3 +80,33 @@ def test_a_conjunction_size_beyond_the_top_features_gives_the_same_candidates():
         found.append((demo.top, demo.goals, time.perf_counter() - started))
     assert len(found[0][0]) <= 3 and found[0][1]  # 3 covers every subset of the top features here
     assert found[0][:2] == found[1][:2]
+
+
+def test_workers_beyond_the_folds_or_cores_fork_no_more_processes(monkeypatch, capsys):
+    """--workers 100000 forked 100000 copies of the process for 4 folds (a load average of 350 here)."""
+    import multiprocessing
+
+    from groundlang.cli import main
+
+    pools = []
+
+    class Refused(Exception):
+        pass
+
+    class Context:
+        def Pool(self, processes, *args):  # noqa: N802 (multiprocessing's name)
+            pools.append(processes)
+            raise Refused  # a test must not fork: the size asked for is all it checks
+
+    monkeypatch.setattr(multiprocessing, "get_context", lambda method: Context())
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2, 3, 4, 5, 6, 7}, raising=False)
+    corpus = os.path.join(os.path.dirname(__file__), "fixtures", "sokoban")  # 4 instances: 4 folds
+    with pytest.raises(Refused):
+        main(["--quiet", "evaluate", "--corpus", corpus, "--palette", "sokoban", "--labels",
+              os.path.join(corpus, "labels.csv"), "--workers", "100000"])
+    assert pools == [4]
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})
+    with pytest.raises(Refused):
+        main(["--quiet", "evaluate", "--corpus", corpus, "--palette", "sokoban", "--labels",
+              os.path.join(corpus, "labels.csv"), "--workers", "100000"])
+    assert pools == [4, 2]

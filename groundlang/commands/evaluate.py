@@ -44,7 +44,7 @@ def register(subparsers) -> None:
     add_language_model_settings(p)
     add_lexicon_option(p)
     add_em_acceleration_option(p)
-    p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes)")
+    p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes; no more than the folds or the cores)")
     p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
     p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
     p.add_argument("--limit", type=positive_int, help="score only the first N held-out instances")
