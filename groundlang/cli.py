@@ -55,7 +55,12 @@ def _said(exc: BaseException) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    try:  # importing the subcommands takes seconds on a busy machine: Ctrl-C then was a traceback
+        with terminate_as_interrupt():
+            parser = build_parser()
+    except KeyboardInterrupt:
+        print("groundlang: interrupted while starting; nothing was written", file=sys.stderr)
+        return 130
     args = parser.parse_args(argv)
     # Progress bars only where a person watches a terminal: quiet in CI, in
     # pipes and under --quiet.
@@ -66,9 +71,10 @@ def main(argv: list[str] | None = None) -> int:
     caching = args.command in CACHING_COMMANDS
     cache_entries_before = 0
     try:
-        cache_entries_before = cache_entry_count(args) if caching else 0  # a bad cache folder is an error line
-        # SIGTERM (a scheduler, `kill`) stops a run the way Ctrl-C does.
+        # SIGTERM (a scheduler, `kill`) stops a run the way Ctrl-C does, from the first import of torch on
+        # (cache_entry_count's, seconds on a busy machine).
         with terminate_as_interrupt():
+            cache_entries_before = cache_entry_count(args) if caching else 0  # a bad cache folder is an error line
             return int(args.func(args) or 0)
     except BrokenPipeError:
         # The reader went away (`groundlang tasks ... | head`): nothing left to say, to anyone.

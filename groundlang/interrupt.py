@@ -132,10 +132,12 @@ def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: 
             if attr == "output":
                 what = _OUTPUT_KIND.get(getattr(args, "command", None), what)
             parts.append(_describe_output(Path(value), what, started))
-    if uses_cache and getattr(args, "no_cache", False) is not True:
-        from groundlang.inference.likelihoods import cache_directory
-
-        root = cache_directory(getattr(args, "cache_dir", None))
+    # Only when the cache's module was imported whole: an interrupt during its import (torch's takes seconds)
+    # leaves torch half-initialised, and importing it again here crashed the process (SystemError, SIGSEGV,
+    # abort) instead of saying what was kept. A failed import is not in sys.modules: no entry was written.
+    likelihoods = sys.modules.get("groundlang.inference.likelihoods")
+    if uses_cache and getattr(args, "no_cache", False) is not True and likelihoods is not None:
+        root = likelihoods.cache_directory(getattr(args, "cache_dir", None))
         count = cache_entry_count(args) - cache_entries_before
         if count:
             entries = "entry is" if count == 1 else "entries are"

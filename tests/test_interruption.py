@@ -263,3 +263,46 @@ def test_nested_deferral_waits_for_the_outermost_block(tmp_path):
                 write_atomically(tmp_path / "b", b"2")
             (tmp_path / "c").write_bytes(b"3")  # the inner deferral passed the signal on, not raising
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "b", "c"]
+
+
+def test_an_interrupt_while_starting_is_one_line(monkeypatch, capsys):
+    """Ctrl-C while the subcommands were imported (seconds on a busy machine) printed a traceback."""
+    import groundlang.cli
+
+    def build_parser():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(groundlang.cli, "build_parser", build_parser)
+    try:
+        code = main(["train"])
+    except KeyboardInterrupt:
+        pytest.fail("the interrupt escaped main: Python printed its traceback")
+    assert code == 130
+    assert capsys.readouterr().err == "groundlang: interrupted while starting; nothing was written\n"
+
+
+def test_sigterm_is_an_interrupt_while_the_cache_is_first_read(tmp_path, monkeypatch, capsys):
+    """Counting the cache imports torch (seconds); a SIGTERM then killed the run without a word (exit 143)."""
+    import groundlang.cli
+
+    handlers = []
+    monkeypatch.setattr(groundlang.cli, "cache_entry_count",
+                        lambda args: handlers.append(signal.getsignal(signal.SIGTERM)) or 0)
+    monkeypatch.setattr(groundlang.cli.importlib.import_module("groundlang.commands.train"), "run",
+                        lambda args: 0)
+    main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "model")])
+    assert handlers and callable(handlers[0]) and handlers[0] is not signal.SIG_DFL
+
+
+def test_an_interrupt_during_the_cache_modules_import_does_not_import_it_again(tmp_path, monkeypatch):
+    """A Ctrl-C while inference.likelihoods imported torch: what_was_kept imported it again, over a
+    half-initialised torch, and the process died (SystemError, SIGSEGV or abort) instead of saying what it
+    kept. A failed import leaves no module in sys.modules; None there makes importing it an error."""
+    monkeypatch.setitem(sys.modules, "groundlang.inference.likelihoods", None)
+
+    class Args:
+        command = "train"
+        output = str(tmp_path / "model")
+        cache_dir = str(tmp_path / "cache")
+
+    assert what_was_kept(Args(), time.time(), uses_cache=True) == f"nothing written to {tmp_path / 'model'}"
