@@ -31,7 +31,8 @@ from groundlang.logic.tasks import pf_name
 from .geometry import fact, layout_facts, palette_facts
 from .world import Layout
 
-__all__ = ["PFTables", "TabulationError", "pf_tables", "library_pf_tables", "tabulation_program", "MAX_TABLE_CELLS"]
+__all__ = ["PFTables", "TabulationError", "pf_tables", "library_pf_tables", "tabulation_program", "MAX_TABLE_CELLS",
+           "MAX_TABULATED_COPIES"]
 
 # Entries of one atom's table (cells to the power of its movable arguments): two movable arguments
 # on a 32x32 grid are 10^6; three are refused here rather than grounded for minutes.
@@ -39,6 +40,11 @@ MAX_TABLE_CELLS = 1 << 24
 # Walkable cells a layout may have to be tabulated: every movable object is copied onto each, and a
 # PF of two movable objects joins two such sets (4096^2 = MAX_TABLE_CELLS). Checked before grounding.
 MAX_TABULATED_CELLS = 1 << 12
+# Copies of movable objects on cells a layout's tabulation may make (cells x movable objects): the facts
+# are written and parsed before grounding, outside its time limit, at about 0.1 ms and 1 kB each; 850
+# blocks on 1,521 cells took 159 s and 1.2 GB before the limit could act. The published corpus's layouts
+# need at most 800 (16x16, three blocks), the 32x32 fixture of five toys 5,400.
+MAX_TABULATED_COPIES = 1 << 15
 
 
 class TabulationError(AspError):
@@ -215,6 +221,11 @@ def pf_tables(layout: Layout, program: Program | None = None,
     if cells > MAX_TABULATED_CELLS:
         raise TabulationError(f"this layout has {cells:,} walkable cells; PFs are tabulated for at most "
                               f"{MAX_TABULATED_CELLS:,} (every movable object is copied onto each cell)")
+    moving = len(layout.movable_names)
+    if cells * moving > MAX_TABULATED_COPIES:
+        raise TabulationError(f"this layout has {moving:,} movable objects on {cells:,} walkable cells; PFs are "
+                              f"tabulated for at most {MAX_TABULATED_COPIES:,} objects x cells (every movable "
+                              "object is copied onto each cell)")
     declared = _declarations(program, palette_facts(layout), time_limit)
     for n, movers in declared.movers.items():
         if cells ** movers > MAX_TABLE_CELLS:

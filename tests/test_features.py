@@ -237,3 +237,21 @@ def test_a_layout_too_large_to_tabulate_is_refused_before_grounding(fixtures):
     # Refused by its size, not after grounding (which took minutes and gigabytes).
     with pytest.raises(TabulationError, match="162,793 walkable cells; PFs are tabulated for at most 4,096"):
         pf_tables(state.layout)
+
+
+def test_a_layout_of_too_many_movable_objects_is_refused_before_its_facts_are_written(monkeypatch):
+    """850 blocks in a 40x40 room (a 115 kB .bdm line) took 159 s and 1.2 GB writing and parsing the copies
+    of every block on every cell, before the grounding's time limit could act."""
+    import groundlang.model.pf_tables as tables
+    from groundlang.bdm import parse_bdm_state
+    from groundlang.model.pf_tables import MAX_TABULATED_COPIES, TabulationError
+
+    blocks = [f"block{k} (block): [x: {{{1 + k // 38}}} y: {{{2 + k % 38}}} shape: {{chair}} colour: {{red}} ]"
+              for k in range(850)]
+    line = ("{agent0 (agent): [x: {1} y: {1} ] , " + " , ".join(blocks)
+            + " , room0 (room): [top: {40} left: {0} bottom: {0} right: {40} colour: {red} ] , }")
+    state, _ = parse_bdm_state(line)
+    monkeypatch.setattr(tables, "_copies", lambda layout: pytest.fail("wrote the copies"))
+    with pytest.raises(TabulationError, match=f"851 movable objects on 1,521 walkable cells; PFs are tabulated "
+                                              f"for at most {MAX_TABULATED_COPIES:,} objects x cells"):
+        pf_tables(state.layout)
