@@ -24,7 +24,8 @@ from pathlib import Path
 from groundlang.bdm import parse_bdm_state
 from groundlang.logic.storage import read_limited, write_atomically
 from groundlang.model.world import Action, Layout, Palette, State, WorldError, get_palette, step
-from groundlang.state_line import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, format_state, parse_state, shared_cell
+from groundlang.state_line import (MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, format_state, parse_state, shared_cell,
+                                   shown)
 
 __all__ = [
     "CorpusError",
@@ -160,7 +161,7 @@ def _parse_actions(text: str, path: Path) -> tuple[Action, ...]:
             actions.append(Action.parse(word))
         except WorldError:
             raise CorpusError(
-                f"{path}, line 2: action {i} is {word.strip()!r}; expected one of north, south, east, west"
+                f"{path}, line 2: action {i} is {shown(word.strip())!r}; expected one of north, south, east, west"
             ) from None
     return tuple(actions)
 

@@ -52,9 +52,9 @@ def coordinate(text: str, signed: bool = True) -> int:
     return -int(digits) if text.startswith("-") else int(digits)
 
 
-def shown(text: str, unit: str = "characters") -> str:
+def shown(text: str, unit: str = "characters", limit: int = 20) -> str:
     """``text`` as an error message quotes it: whole when short, else its start and its length."""
-    return text if len(text) <= 20 else f"{text[:20]}... ({len(text)} {unit})"
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} {unit})"
 
 
 def _integer(text: str, where: str, name: str, obj: str) -> int:
@@ -81,17 +81,18 @@ def parse_state(line: str, palette: str | Palette, where: str = "state", shared_
     rooms, doors, toys, agents = [], [], [], []
     for token in tokens:
         parts = token.split(",")
+        quoted = shown(token, limit=60)  # a token of megabytes (a line without spaces) is quoted by its start
         kind = _KIND_ALIASES.get(parts[0], parts[0])
         if kind not in _FIELDS:
             raise CorpusError(
-                f"{where}: unknown object kind {parts[0]!r} in {token!r}; "
+                f"{where}: unknown object kind {shown(parts[0])!r} in {quoted!r}; "
                 "expected room, door, block (or toy) or agent"
             )
-        names, shown = _FIELDS[kind]
+        names, expected = _FIELDS[kind]
         if len(parts) != len(names) + 1:
             raise CorpusError(
-                f"{where}: {token!r} has {len(parts)} comma-separated fields; expected "
-                f"{len(names) + 1} ({shown})"
+                f"{where}: {quoted!r} has {len(parts)} comma-separated fields; expected "
+                f"{len(names) + 1} ({expected})"
             )
         v = {n: _integer(t, where, n, token) for n, t in zip(names, parts[1:])}
         try:
@@ -104,7 +105,7 @@ def parse_state(line: str, palette: str | Palette, where: str = "state", shared_
             else:
                 agents.append(Agent(v["X"], v["Y"]))
         except WorldError as exc:
-            raise CorpusError(f"{where}: {token!r}: {exc}") from None
+            raise CorpusError(f"{where}: {quoted!r}: {exc}") from None
     if len(agents) != 1:
         raise CorpusError(f"{where}: found {len(agents)} agents; expected exactly one agent,X,Y")
     layout = Layout(tuple(rooms), tuple(doors), tuple((t.colour, t.shape) for t in toys), palette)

@@ -110,3 +110,35 @@ def test_workers_beyond_the_folds_or_cores_fork_no_more_processes(monkeypatch, c
         main(["--quiet", "evaluate", "--corpus", corpus, "--palette", "sokoban", "--labels",
               os.path.join(corpus, "labels.csv"), "--workers", "100000"])
     assert pools == [4, 2]
+
+
+@pytest.mark.parametrize("line, message", [
+    ("room,1,0,4,4,0 agent,1,1 " + "blah" * 250_000,
+     "unknown object kind 'blahblahblahblahblah... (1000000 characters)' in 'blahblahblahblahblahblahblahblahblah"
+     "blahblahblahblahblahblah... (1000000 characters)'; expected room, door, block (or toy) or agent"),
+    ("room,1,0,4,4,0 agent,1,1 door" + ",1" * 250_000,
+     "'door,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1... (500004 characters)' has 250001 "
+     "comma-separated fields; expected 5 (door,LEFT,TOP,RIGHT,BOTTOM)"),
+])
+def test_an_error_quotes_a_huge_token_of_a_state_line_by_its_start(tmp_path, line, message):
+    """A state line without spaces (megabytes in one token) was quoted whole: a 6 MB error line."""
+    from groundlang.corpus import CorpusError, read_state_file
+
+    path = tmp_path / "x.state"
+    path.write_text(line + "\n")
+    with pytest.raises(CorpusError) as error:
+        read_state_file(path, "sokoban")
+    assert str(error.value) == f"{path}, line 1: {message}"
+
+
+def test_an_error_quotes_a_huge_action_by_its_start(tmp_path):
+    from groundlang.corpus import CorpusError, read_instance
+
+    lines = (example_corpus_path() / "agent2blue_0.txt").read_text().split("\n")
+    lines[1] = "north" * 200_000 + "," + lines[1]
+    path = tmp_path / "agent2blue_0.txt"
+    path.write_text("\n".join(lines))
+    with pytest.raises(CorpusError) as error:
+        read_instance(path, "sokoban")
+    assert str(error.value) == (f"{path}, line 2: action 1 is 'northnorthnorthnorth... (1000000 characters)'; "
+                                "expected one of north, south, east, west")
