@@ -121,8 +121,8 @@ def _run_with_limit(work, time_limit: float | None, what: str) -> None:
             _ABANDONED.append(thread)
     if thread.is_alive():
         raise AspTimeout(
-            f"{what} did not finish within {time_limit:g} s; the program probably grounds "
-            "infinitely many atoms (raise time_limit if it is just large)"
+            f"{what} did not finish within {time_limit:g} s; the program grounds too many atoms: infinitely "
+            "many (a rule without a bound), or a large layout's many (raise time_limit if it is just large)"
         )
     if "error" in box:
         raise box["error"]

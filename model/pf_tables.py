@@ -43,8 +43,10 @@ MAX_TABULATED_CELLS = 1 << 12
 # Copies of movable objects on cells a layout's tabulation may make (cells x movable objects): the facts
 # are written and parsed before grounding, outside its time limit, at about 0.1 ms and 1 kB each; 850
 # blocks on 1,521 cells took 159 s and 1.2 GB before the limit could act. The published corpus's layouts
-# need at most 800 (16x16, three blocks), the 32x32 fixture of five toys 5,400.
-MAX_TABULATED_COPIES = 1 << 15
+# need at most 800 (16x16, three blocks), the 32x32 fixture of five toys 5,400; a 64x64 room with four
+# toys (19,845) already does not ground within the default 10 s, so this bound only stops what a raised
+# time limit could not finish in minutes.
+MAX_TABULATED_COPIES = 1 << 16
 
 
 class TabulationError(AspError):

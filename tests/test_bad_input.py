@@ -336,7 +336,7 @@ ROWS += [
          "-o", "{tmp}/model"),
         pieces=(f"{BAD / 'no_tasks.lp'}: the task library declares no task/1",), absent=("{tmp}/model",)),
     Row("asp/never finishes grounding", (*_TASKS, str(BAD / "never_grounds.lp"), "--time-limit", "1"),
-        pieces=("never_grounds.lp", "did not finish within 1 s", "grounds infinitely many atoms")),
+        pieces=("never_grounds.lp", "did not finish within 1 s", "grounds too many atoms: infinitely many")),
 ]
 
 # Output paths: refused before the work, naming the option (before, a folder given to --json lost a whole
