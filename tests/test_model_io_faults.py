@@ -331,14 +331,40 @@ def _edit_palette(model, **entry):
     (model / "model.json").write_text(json.dumps(meta))
 
 
-def test_a_palette_name_read_from_a_model_is_never_opened_as_a_path(learners, tmp_path, capsys):
+def test_a_palette_name_read_from_a_model_is_never_opened_as_a_path(learners, tmp_path, capsys, monkeypatch):
+    """A palette the package does not ship is the values the model records; its name is a label only."""
+    import groundlang.model.palette as palette_module
+
     model = learners[0].save(tmp_path / "m")
     _edit_palette(model, name="/etc/passwd")
-    code = main(["follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model", str(model)])
-    err = capsys.readouterr().err
-    assert code == 2 and len(err.splitlines()) == 1
-    assert "the model was trained on palette '/etc/passwd', which the package does not ship" in err
-    assert "pass its .lp file" in err
+    monkeypatch.setattr(palette_module, "read_palette", lambda name: pytest.fail(f"opened {name}"))
+    code = main(["--quiet", "follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model",
+                 str(model), "--json", "--guess"])
+    assert code == 0, capsys.readouterr().err
+    assert json.loads(capsys.readouterr().out)["reached"] is True
+
+
+def test_a_model_of_a_users_palette_follows_without_its_file(tmp_path, capsys):
+    """Trained on a palette file of one's own (a colour added), the model follows with no --palette: its
+    record of the values is the palette, so the file may be gone."""
+    from importlib.resources import files
+
+    lilac = tmp_path / "lilac.lp"
+    lilac.write_text((files("groundlang.logic") / "palettes" / "sokoban.lp").read_text() + "value(colour, 13, lilac).\n")
+    corpus = tmp_path / "corpus"
+    corpus.mkdir()
+    for path in EXAMPLES.glob("*.txt"):
+        (corpus / path.name).write_text(path.read_text())
+    assert main(["--quiet", "train", str(corpus), "--palette", str(lilac), "-o", str(tmp_path / "m")]) == 0
+    lilac.unlink()
+    capsys.readouterr()
+    state = tmp_path / "lilac.state"
+    state.write_text((EXAMPLES / "novel_a.state").read_text().replace("room,1,0,10", "room,13,0,10", 1))
+    code = main(["--quiet", "follow", "go to the red room", "--env", str(state), "--model", str(tmp_path / "m"),
+                 "--json", "--guess"])
+    assert code == 0, capsys.readouterr().err
+    out = json.loads(capsys.readouterr().out)
+    assert out["reached"] is True and out["interpretations"][0]["goal"].startswith("agentInRoom(")
 
 
 def test_a_model_whose_palette_has_the_name_but_not_the_values_says_so(learners, tmp_path, capsys):

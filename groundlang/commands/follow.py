@@ -33,7 +33,8 @@ def register(subparsers) -> None:
     p.add_argument("command_text", metavar="COMMAND", help="the command, in quotes")
     p.add_argument("--env", required=True, metavar="FILE",
                    help="the initial state: a corpus file (its first state) or a one-line .state file")
-    p.add_argument("--palette", help=PALETTE_HELP + " (default: the model's, when it was trained on one)")
+    p.add_argument("--palette", help=PALETTE_HELP + " (default: the model's, when it was trained on one; a palette file "
+                   "of your own is read from the values the model records)")
     p.add_argument("--model", required=True, metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
     p.add_argument("--out", metavar="PNG", help="draw the executed trajectory here (.png, .svg or .pdf; default: no picture)")
     p.add_argument("--top", type=positive_int, default=5, help="how many goals to list with their probabilities (default 5)")
@@ -114,6 +115,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
     from groundlang.logic.palette_files import palette_names
+    from groundlang.model.palette import Palette
     from groundlang.wording import goal_phrase, labelled_goal
 
     if args.learn and not args.ask:
@@ -130,10 +132,11 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--palette is needed: the model was trained on {len(trained)} palettes "
                              f"({', '.join(trained) or 'none recorded'})")
         palette = trained[0]
-        shipped = palette_names()
-        if palette not in shipped:  # a name read from the model is never opened as a path
-            raise ValueError(f"--palette is needed: the model was trained on palette {palette!r}, which the "
-                             f"package does not ship ({', '.join(shipped)}); pass its .lp file")
+        if palette not in palette_names():
+            # A user's palette: the model's record of its values is the palette (its name, read from the
+            # model, is never opened as a path); only the drawing hints of its file (glyph/2, rgb/2) are not kept.
+            record = learner.palettes[0]
+            palette = Palette(record["name"], tuple(record["colours"]), tuple(record["shapes"]))
     state = read_initial_state(args.env, palette)
     if args.lexicon:
         learner.add_words(args.lexicon)
