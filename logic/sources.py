@@ -53,6 +53,16 @@ def package_source(filename: str) -> Source:
     return Source(f"groundlang.logic/{filename}", resource.read_text(encoding="utf-8"))
 
 
+def library_names() -> dict[str, str]:
+    """The task libraries the package ships, by the name ``--library`` may give them (as ``--palette`` takes a
+    palette's): ``tasks`` (``logic/tasks.lp``, the default) and each domain of ``logic/domains``
+    (``williams2018``). A name, not a path, so that they can be named after an install that is not editable."""
+    names = {"tasks": "tasks.lp"}
+    domains = files("groundlang.logic") / "domains"
+    names.update({p.name[:-3]: f"domains/{p.name}" for p in domains.iterdir() if p.name.endswith(".lp")})
+    return names
+
+
 # A task library is a few KB; a wrong path (a log, /dev/zero) must not be read whole.
 MAX_PROGRAM_BYTES = 4 * 2**20
 

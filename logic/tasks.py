@@ -318,8 +318,14 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
 
 
 def _source(path: str | Path) -> Source:
-    """A library file: one the package ships (``logic/domains/williams2018.lp``) is read as the package's
-    own, solved in-process; any other is a user's, solved in a child process that can be killed."""
+    """A library file: one the package ships (``logic/domains/williams2018.lp``, or by its name,
+    ``williams2018``) is read as the package's own, solved in-process; any other is a user's, solved in a
+    child process that can be killed."""
+    if not Path(path).exists() and Path(path).name == str(path) and not Path(path).suffix:  # a bare name
+        shipped = _sources.library_names()
+        if str(path) not in shipped:
+            raise FileNotFoundError(2, f"no such file, nor a library the package ships ({', '.join(shipped)})", str(path))
+        return package_source(shipped[str(path)])
     own = Path(str(files("groundlang.logic"))).resolve()
     try:
         relative = Path(path).resolve().relative_to(own)

@@ -534,3 +534,22 @@ def test_a_library_loaded_again_is_read_once_and_a_changed_or_broken_one_anew(mo
         TaskLibrary.from_text(text.replace(tag, tag[::-1]), "mine.lp")
     assert len(calls) == 6
     assert sources_module._parsed.cache_info().currsize <= 64
+
+
+def test_a_shipped_library_is_named_as_a_palette_is(tmp_path, monkeypatch):
+    """``--library tasks`` / ``williams2018`` name the package's libraries wherever it is installed; a file of
+    that name in the working folder still wins, and an unknown bare name lists the shipped ones."""
+    default = TaskLibrary.load()
+    assert TaskLibrary.load(["tasks"]).names == default.names
+    assert [s.name for s in TaskLibrary.load(["tasks"]).sources] == [s.name for s in default.sources]
+    williams = TaskLibrary.load(["williams2018"])
+    assert {"agentLeftOfToy", "agentRightOfToy", "agentNextToToy"} <= set(williams.names)
+    assert williams.sources[0].name == "groundlang.logic/domains/williams2018.lp"
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "tasks").write_text("task(mine). var(mine, \"A\", agent). var(mine, \"R\", room).\n"
+                                   "goal(mine, agentInRoom, (\"A\", \"R\")).\n")
+    assert TaskLibrary.load(["tasks"]).sources[0].name == "tasks"  # the file, not the package's
+    with pytest.raises(FileNotFoundError) as caught:
+        TaskLibrary.load(["taskz"])
+    assert caught.value.filename == "taskz"
+    assert caught.value.strerror == "no such file, nor a library the package ships (tasks, williams2018)"

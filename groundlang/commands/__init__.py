@@ -10,6 +10,7 @@ import math
 from pathlib import Path
 
 from groundlang.logic.palette_files import palette_names
+from groundlang.logic.sources import library_names
 
 LANGUAGE_MODEL_NAMES = ("bow", "ibm2", "parse")  # == tuple(groundlang.model.language_models.LANGUAGE_MODELS)
 
@@ -104,6 +105,10 @@ def add_em_acceleration_option(parser) -> None:
 # Read off the package's folder: a palette added there is listed without an edit here.
 PALETTE_HELP = (f"colour and shape values of the files: a palette the package ships ({', '.join(palette_names())}; "
                 "groundlang/logic/palettes/) or the path of a .lp file of value(Attribute, Index, Name) facts")
+
+
+LIBRARY_NAMES = (f"; a file, or a library the package ships by name ({', '.join(library_names())}), which "
+                 "replaces the default: name tasks too to add to its tasks")
 
 
 def add_lexicon_option(parser) -> None:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import PALETTE_HELP, require_palette
+from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, require_palette
 from groundlang.corpus import read_corpus
 
 
@@ -26,7 +26,7 @@ def register(subparsers) -> None:
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
     p.add_argument("--library", metavar="LP", action="append",
                    help="task library .lp file (repeatable): for the tasks .bdm pairs show (default: "
-                        "groundlang/logic/domains/williams2018.lp), or whose PFs --labels may use")
+                        "williams2018), or whose PFs --labels may use" + LIBRARY_NAMES)
     p.add_argument("--labels", metavar="CSV", help="gold labels (prefix,goal) to check against final states")
     p.add_argument("--skip-inconsistent", action="store_true",
                    help="skip demonstrations that do not replay (counted) instead of failing")

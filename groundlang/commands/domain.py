@@ -5,14 +5,14 @@ from __future__ import annotations
 import argparse
 import json
 
-from groundlang.commands import PALETTE_HELP, positive_seconds
+from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, positive_seconds
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("domain", help="print the domain's schema: classes, palette, PFs by class, tasks")
     p.add_argument("--palette", default="sokoban", help=PALETTE_HELP + " (default: sokoban)")
     p.add_argument("--library", metavar="LP", action="append",
-                   help="task library .lp file (repeatable; default: groundlang's tasks.lp)")
+                   help="task library .lp file (repeatable; default: groundlang's tasks.lp)" + LIBRARY_NAMES)
     p.add_argument("--allow-scripts", action="store_true",
                    help="let library files run #script blocks (only for files you trust)")
     p.add_argument("--time-limit", type=positive_seconds, default=10.0,

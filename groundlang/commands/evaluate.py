@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_em_acceleration_option,
+from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_em_acceleration_option,
                                  add_language_model_settings,
                                  add_lexicon_option, fraction, language_model_settings, open_fraction,
                                  positive_int, require_palette)
@@ -34,7 +34,7 @@ def register(subparsers) -> None:
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
     p.add_argument("--library", metavar="LP", action="append",
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the package's "
-                        "williams2018 domain); labels may use its PFs")
+                        "williams2018 domain); labels may use its PFs" + LIBRARY_NAMES)
     p.add_argument("--demonstrations", choices=["end-state", "shortest-plan"], default="end-state",
                    help="how a (start, end) pair without a trajectory is evidence (default end-state: the end "
                         "state's likelihood under each task; shortest-plan: a synthesised shortest plan)")

@@ -10,7 +10,7 @@ import json
 from importlib.resources import files as resources
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import PALETTE_HELP, is_burlap_state_file, check_state_file, positive_seconds
+from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, is_burlap_state_file, check_state_file, positive_seconds
 from groundlang.corpus import read_initial_state
 
 
@@ -23,7 +23,7 @@ def register(subparsers) -> None:
     p.add_argument("--palette", help=PALETTE_HELP + "; required but for a BURLAP state line (default williams2018)")
     p.add_argument("--library", metavar="LP", action="append",
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp, or for a BURLAP "
-                   "state line the williams2018 domain)")
+                   "state line the williams2018 domain)" + LIBRARY_NAMES)
     p.add_argument("--allow-scripts", action="store_true",
                    help="let library files run #script blocks (only for files you trust)")
     p.add_argument("--time-limit", type=positive_seconds, default=10.0, metavar="SECONDS",

@@ -7,7 +7,7 @@ import time
 
 from groundlang.bdm import bdm_files
 from groundlang.corpus import read_corpus
-from groundlang.commands import (PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
+from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
                                  add_em_acceleration_option, add_lexicon_option, language_model_settings, require_palette,
                                  seed)
 
@@ -21,7 +21,8 @@ def register(subparsers) -> None:
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES), help="language model: bow, ibm2 or parse (default parse)")
     add_language_model_settings(p)
     add_lexicon_option(p)
-    p.add_argument("--library", metavar="LP", action="append", help="task library .lp file(s) instead of the default")
+    p.add_argument("--library", metavar="LP", action="append", help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the "
+                   "williams2018 domain)" + LIBRARY_NAMES)
     p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
     p.add_argument("--cache-dir", metavar="DIR", help="cache of behaviour likelihoods and .bdm pairs' end-state evidence "
                    "(default $GROUNDLANG_CACHE or ./.groundlang-cache)")
