@@ -63,6 +63,23 @@ def library_names() -> dict[str, str]:
     return names
 
 
+def library_source(path: str | Path) -> Source:
+    """A library file: one the package ships (``logic/domains/williams2018.lp``, or by its name,
+    ``williams2018``) is read as the package's own, solved in-process; any other is a user's, solved in a
+    child process that can be killed."""
+    if not Path(path).exists() and Path(path).name == str(path) and not Path(path).suffix:  # a bare name
+        shipped = library_names()
+        if str(path) not in shipped:
+            raise FileNotFoundError(2, f"no such file, nor a library the package ships ({', '.join(shipped)})", str(path))
+        return package_source(shipped[str(path)])
+    own = Path(str(files("groundlang.logic"))).resolve()
+    try:
+        relative = Path(path).resolve().relative_to(own)
+    except (ValueError, OSError):
+        return file_source(path)
+    return package_source(relative.as_posix()) if Path(path).is_file() else file_source(path)
+
+
 # A task library is a few KB; a wrong path (a log, /dev/zero) must not be read whole.
 MAX_PROGRAM_BYTES = 4 * 2**20
 

@@ -21,7 +21,6 @@ from __future__ import annotations
 import functools
 import re
 from dataclasses import dataclass, field
-from importlib.resources import files
 from pathlib import Path
 from typing import Iterable, Sequence
 
@@ -29,7 +28,7 @@ import clingo
 
 from .atoms import Atom, attribute_pf, format_goal
 from .classes import domain_classes
-from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, file_source, package_source
+from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, package_source
 from . import sources as _sources
 
 __all__ = [
@@ -317,23 +316,6 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     return tuple(tasks), tuple(sorted(spatial)), tuple(sorted(relational))
 
 
-def _source(path: str | Path) -> Source:
-    """A library file: one the package ships (``logic/domains/williams2018.lp``, or by its name,
-    ``williams2018``) is read as the package's own, solved in-process; any other is a user's, solved in a
-    child process that can be killed."""
-    if not Path(path).exists() and Path(path).name == str(path) and not Path(path).suffix:  # a bare name
-        shipped = _sources.library_names()
-        if str(path) not in shipped:
-            raise FileNotFoundError(2, f"no such file, nor a library the package ships ({', '.join(shipped)})", str(path))
-        return package_source(shipped[str(path)])
-    own = Path(str(files("groundlang.logic"))).resolve()
-    try:
-        relative = Path(path).resolve().relative_to(own)
-    except (ValueError, OSError):
-        return file_source(path)
-    return package_source(relative.as_posix()) if Path(path).is_file() else file_source(path)
-
-
 @functools.lru_cache(maxsize=32)
 def _lifted_tasks_of(sources: tuple[Source, ...], allow_scripts: bool, isolated: bool, time_limit: float | None):
     """:func:`_read_lifted_tasks`, kept: a process loads one library many times (each model, each fold), a
@@ -373,7 +355,7 @@ class TaskLibrary:
         if paths is None:
             return cls((package_source("tasks.lp"),), allow_scripts=allow_scripts,
                        time_limit=time_limit)
-        return cls([_source(p) for p in paths], allow_scripts=allow_scripts,
+        return cls([_sources.library_source(p) for p in paths], allow_scripts=allow_scripts,
                    time_limit=time_limit)
 
     @classmethod
