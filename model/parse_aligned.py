@@ -33,11 +33,11 @@ from groundlang.model.language_model_base import (NULL_MIXTURE, LanguageModel, g
                                                   mixture_log_emissions, require_positive)
 from groundlang.model.mentions import mention_factor
 from groundlang.model.parse_encoding import CLAUSE_ARITY_BINS, ParseBatch, encode_parse_fields
-from groundlang.model.phrase_keys import PhraseKeys
+from groundlang.model.phrase_keys import PhraseKeys, bare_preposition
 from groundlang.model.relational import is_relational_role
 from groundlang.model.vocabulary import is_task_role
 
-__all__ = ["ParseAligned"]
+__all__ = ["ParseAligned", "preposition_table", "preposition_tasks"]
 
 
 class ParseAligned(LanguageModel):
@@ -351,3 +351,30 @@ class ParseAligned(LanguageModel):
         # shifted by its largest term, and a padded 0 would shift a real -150 to nothing.
         padded = batch.reading_logp <= PAD_LOGIT
         return self._words_given_reading(g, batch)[0].masked_fill(padded[:, None, :], PAD_LOGIT), batch.reading_logp
+
+
+def preposition_table(g: dict, vocab) -> tuple[list[str], list[str], torch.Tensor]:
+    """``(lifted tasks, prepositions, P(L | preposition) [tasks, prepositions])`` from the parse model's
+    table ``P(preposition | L)`` under a uniform prior over L: what "left of" was learned to say.
+
+    The prepositions are those training gave mass to (the rule :func:`word_meanings` uses for words);
+    the unseen and direct-object keys are left out (neither is a word, and a direct object generates no
+    key), and so are the keys the alignment table uses (``to|last``): this table is indexed by the bare
+    preposition. Empty for globals without the table (``preposition_concentration`` None, another model)."""
+    if "preposition" not in g or not vocab.tasks:
+        return [], [], torch.zeros(0, 0)
+    by_task = g["preposition"].detach().double()  # [L, P]
+    learned = by_task.max(0).values > 3.0 / by_task.shape[1]
+    shown = [k for k, prep in enumerate(vocab.preps) if k >= 2 and learned[k] and bare_preposition(prep) == prep]
+    given = by_task / by_task.sum(0, keepdim=True).clamp_min(1e-300)
+    return list(vocab.tasks), [vocab.preps[k] for k in shown], given[:, shown]
+
+
+def preposition_tasks(g: dict, vocab, top: int = 3) -> dict[str, list[tuple[str, float]]]:
+    """Each preposition of :func:`preposition_table` with its ``top`` most probable lifted tasks."""
+    tasks, preps, given = preposition_table(g, vocab)
+    out = {}
+    for j, prep in enumerate(preps):
+        order = torch.argsort(given[:, j], descending=True)[:top]
+        out[prep] = [(tasks[int(t)], float(given[t, j])) for t in order]
+    return out

@@ -106,21 +106,19 @@ ax.set_title("P(meaning | word), top 3 per word"); fig.tight_layout()
 # %% [markdown]
 # ### What the prepositions say
 #
-# A relation is said by a preposition: the grammar reads "to the left of", "left of" and "next to" as one preposition each (`grammar/english.words`), so "left" has no entry of its own above and "next" only from readings that split "next to". The parse model generates each phrase's preposition given the lifted task, `P(preposition | L)` (`preposition_concentration`, `model/parse_aligned.py`). Its learned table is the `preposition` entry of `Learner.globals` (`[lifted tasks, prepositions]`, in the order of `Learner.vocab.tasks` and `Learner.vocab.preps`). The model's prior over lifted tasks is uniform, so `P(L | preposition)` is that table normalised over tasks. Shown: the prepositions training gave mass to (the rule `Learner.lexicon` uses for words).
+# A relation is said by a preposition: the grammar reads "to the left of", "left of" and "next to" as one preposition each (`grammar/english.words`), so "left" has no entry of its own above and "next" only from readings that split "next to". The parse model generates each phrase's preposition given the lifted task, `P(preposition | L)` (`preposition_concentration`, `model/parse_aligned.py`). Its learned table is the `preposition` entry of `Learner.globals` (`[lifted tasks, prepositions]`, in the order of `Learner.vocab.tasks` and `Learner.vocab.preps`). The model's prior over lifted tasks is uniform, so `P(L | preposition)` is that table normalised over tasks (`preposition_table`; `groundlang lexicon MODEL --prepositions` prints it). Shown: the prepositions training gave mass to (the rule `Learner.lexicon` uses for words).
 
 # %%
-by_task = learner.globals["preposition"].detach()  # [tasks, preps]: P(preposition | L)
-tasks, preps = list(learner.vocab.tasks), list(learner.vocab.preps)
-learned = by_task.max(0).values > 3.0 / by_task.shape[1]
-given = by_task / by_task.sum(0, keepdim=True)  # [tasks, preps]: P(L | preposition), uniform prior over L
-shown = [k for k in range(len(preps)) if learned[k]]
+from groundlang.model.parse_aligned import preposition_table
+
+tasks, preps, given = preposition_table(learner.globals, learner.vocab)  # given: P(L | preposition) [tasks, preps]
 print(f"{'preposition':22s}", "  ".join(f"{t:>15s}" for t in tasks))
-for k in shown:
-    print(f"{preps[k]:22s}", "  ".join(f"{float(given[t, k]):15.2f}" for t in range(len(tasks))))
-fig, ax = plt.subplots(figsize=(1.5 + 0.9 * len(tasks), 0.8 + 0.35 * len(shown)))
-ax.imshow(given[:, shown].T.numpy(), cmap="Blues", vmin=0, vmax=1, aspect="auto")
+for k, prep in enumerate(preps):
+    print(f"{prep:22s}", "  ".join(f"{float(given[t, k]):15.2f}" for t in range(len(tasks))))
+fig, ax = plt.subplots(figsize=(1.5 + 0.9 * len(tasks), 0.8 + 0.35 * len(preps)))
+ax.imshow(given.T.numpy(), cmap="Blues", vmin=0, vmax=1, aspect="auto")
 ax.set_xticks(range(len(tasks)), tasks, rotation=30, ha="right")
-ax.set_yticks(range(len(shown)), [preps[k] for k in shown])
+ax.set_yticks(range(len(preps)), preps)
 ax.set_title("P(lifted task | preposition)"); fig.tight_layout()
 
 # %% [markdown]

@@ -189,6 +189,12 @@ def test_cli_train_follow_lexicon(tmp_path, capsys):
     assert "\x1b" not in shown and "command: '\\x1b[2Jtake the star to the red room'" in shown
     assert main(["--quiet", "lexicon", str(model), "--words", "red", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["red"][0][0] == "roomIsRed"
+    # what a preposition says of the lifted task: P(L | preposition), every task of the library once
+    assert main(["--quiet", "lexicon", str(model), "--prepositions", "--json", "--words", "to", "into"]) == 0
+    said = json.loads(capsys.readouterr().out)
+    assert set(said) == {"to", "into"} and said["into"][0][0] == "toyToRoom"
+    assert sorted(t for t, _ in said["to"]) == ["agentToRoom", "toyToRoom", "toyToRoomAgentToRoom"]
+    assert sum(q for _, q in said["to"]) == pytest.approx(1.0)
     assert main(["--quiet", "lexicon", str(model), "--words", "red", "purple", "--top", "1"]) == 0
     assert capsys.readouterr().out.splitlines() == [
         "word             meanings, most probable first",

@@ -5,6 +5,11 @@ semantic tokens (``roomIsRed``, ``toyToRoom``, ``CLASS:room``, ``NULL``);
 below it each token shown is explained once, in words read from the domain's
 schema (:func:`groundlang.wording.token_meanings`), so a reader need not know
 the names. ``--json`` prints ``{word: [[token, probability], ...]}`` only.
+
+A relation is learned by the parse model as what its preposition says of the lifted task
+(``P(preposition | L)``), not as a preposition word's token: the table ends with each preposition's
+most probable lifted tasks, ``P(L | preposition)`` under a uniform prior over L
+(:func:`groundlang.model.parse_aligned.preposition_tasks`); ``--prepositions`` prints that table alone.
 """
 
 from __future__ import annotations
@@ -22,6 +27,9 @@ def register(subparsers) -> None:
     p.add_argument("--words", nargs="*", metavar="WORD", help="only these words (default: every word the model knows)")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object {word: [[meaning, probability], ...]} instead of a table")
+    p.add_argument("--prepositions", action="store_true",
+                   help="the prepositions' table only: the lifted tasks each says, P(task | preposition) (the parse "
+                        "model's; with --json, {preposition: [[task, probability], ...]})")
     p.set_defaults(func=run)
 
 
@@ -44,11 +52,33 @@ def _schemas(learner) -> list:
             for p in learner.palettes]
 
 
+def _print_prepositions(prepositions: dict, learner) -> None:
+    if not prepositions:
+        print(f"no preposition table: the model's language model is {learner.lm.name!r}, or "
+              "preposition_concentration is off, or no preposition asked was seen in training")
+        return
+    width = max(16, *(len(p) + 1 for p in prepositions))  # multiword ones: to_the_right_side_of
+    print(f"{'preposition':<{width}} lifted tasks it says, most probable first")
+    for prep, tasks in prepositions.items():
+        print(f"{prep:<{width}} {', '.join(f'{t} {q:.2f}' for t, q in tasks)}")
+
+
 def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
+    from groundlang.model.parse_aligned import preposition_tasks
     from groundlang.wording import token_meanings
 
     learner = Learner.load(args.model)
+    prepositions = preposition_tasks(learner.globals, learner.vocab, top=args.top)
+    if args.words:  # a multiword preposition is one token: "next to" is next_to
+        asked = {"_".join(w.split()) for w in args.words}
+        prepositions = {p: tasks for p, tasks in prepositions.items() if p in asked}
+    if args.prepositions:
+        if args.json:
+            print(json.dumps({p: [[t, q] for t, q in tasks] for p, tasks in prepositions.items()}))
+        else:
+            _print_prepositions(prepositions, learner)
+        return 0
     lexicon = learner.lexicon(top=args.top)
     if args.words:
         lexicon = {w: lexicon.get(w, []) for w in args.words}
@@ -59,6 +89,9 @@ def run(args: argparse.Namespace) -> int:
     for word, meanings in lexicon.items():
         text = ", ".join(f"{token} {p:.2f}" for token, p in meanings) or "(unknown word)"
         print(f"{word:<16} {text}")
+    if prepositions:  # relations are learned there, not as a preposition word's tokens above
+        print()
+        _print_prepositions(prepositions, learner)
     # Each name once, in the order the table first shows it: the table stays compact and scannable.
     explained = token_meanings((t for meanings in lexicon.values() for t, _ in meanings), _schemas(learner))
     if explained:
