@@ -169,7 +169,9 @@ def evaluate(
         golds.append(gold)
     for name, state in novel_states:  # reject bad layouts before any work
         for inst, gold in zip(instances, golds):
-            translate_goal(gold, inst.initial_state, state, name, library)
+            # Named by the layout and by the instance whose label it is: the label's goal carried over fails.
+            translate_goal(gold, inst.initial_state, state, f"{name} (the label of {inst.prefix!r}, {inst.path.name})",
+                           library)
 
     training = list(range(len(instances)))
     if train_indices is not None:
