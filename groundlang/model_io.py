@@ -20,6 +20,7 @@ checked against those the vocabulary implies before the array is read.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import io
 import json
@@ -106,7 +107,8 @@ def write_model(state: dict, directory: str | Path) -> Path:
     }
     # Interrupts are held back so that the clean-up after the commit is not skipped; a kill -9 may still
     # land anywhere, and leaves the old model or the new one, plus files the next save removes.
-    with deferred_interrupts():
+    directory.mkdir(parents=True, exist_ok=True)  # to be locked
+    with folder_lock(directory, exclusive=True), deferred_interrupts():
         storage.write_atomically(directory / tensor_name, tensors)
         # The folder is synced after each rename: after a power cut, model.json must not name tensors whose
         # rename was lost, nor the old tensors be gone while the old model.json is back.
@@ -115,6 +117,26 @@ def write_model(state: dict, directory: str | Path) -> Path:
         _sync_folder(directory)
         _remove_leftovers(directory, keep=tensor_name)
     return directory
+
+
+@contextlib.contextmanager
+def folder_lock(directory: Path, exclusive: bool):
+    """A save holds its model folder alone, a load shares it with other loads. Without it, of two saves
+    into one folder at once, one's clean-up could remove the tensor file the other's model.json is about
+    to name (both would say they saved; the model would not load), and a load could read a model.json
+    whose tensors a save has just replaced. An advisory ``flock`` on the folder itself, so no lock file
+    is left behind; where the platform has none, nothing is locked."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        yield
+        return
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        yield
+    finally:
+        os.close(fd)  # and with it the lock
 
 
 def _sync_folder(directory: Path) -> None:
@@ -168,6 +190,13 @@ def read_model(directory: str | Path, from_state_dict: Callable[[dict], T]) -> T
     checked against the shape the learner's vocabulary implies before it is read. Raises ModelFormatError
     on anything amiss."""
     directory = Path(directory)
+    if not directory.is_dir():  # said by _read_json; a FIFO must not be opened to be locked
+        return _read_model(directory, from_state_dict)
+    with folder_lock(directory, exclusive=False):
+        return _read_model(directory, from_state_dict)
+
+
+def _read_model(directory: Path, from_state_dict: Callable[[dict], T]) -> T:
     meta = _read_json(directory)
     try:
         fields = {k: v for k, v in meta.items() if k not in ("format", "version", "globals_file", "globals_sha256")}

@@ -158,6 +158,26 @@ def test_a_save_removes_temporary_files_of_interrupted_saves_and_keeps_others(le
     assert sorted(p.name for p in model.iterdir()) == [".notes", f"globals-{_digest(old)}.npz", "model.json"]
 
 
+def test_a_save_waits_for_a_load_and_a_load_for_a_save_of_the_same_folder(learners, tmp_path):
+    """Two saves into one folder at once could let one's clean-up remove the tensors the other's model.json
+    names; a save and a load likewise. The folder is locked: held by another, a save waits until it is free."""
+    import fcntl
+    import threading
+
+    old, new = learners
+    model = old.save(tmp_path / "m")
+    held = os.open(model, os.O_RDONLY)
+    fcntl.flock(held, fcntl.LOCK_SH)  # as a load in progress holds it
+    saving = threading.Thread(target=new.save, args=(model,))
+    saving.start()
+    saving.join(1.0)
+    assert saving.is_alive() and _same_globals(Learner.load(model), old)  # loads share the lock; the save waits
+    os.close(held)
+    saving.join(60)
+    assert not saving.is_alive() and _same_globals(Learner.load(model), new)
+    assert len(_tensor_files(model)) == 1
+
+
 # ----------------------------------------------------------------- hostile models, bounded
 def _edit(d: Path, change) -> None:
     meta = json.loads((d / "model.json").read_text())
