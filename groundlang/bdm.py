@@ -26,7 +26,7 @@ from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
-from groundlang.state_line import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, coordinate, shown
+from groundlang.state_line import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, coordinate, shown, text_lines
 from groundlang.logic.storage import FileRefused, read_limited
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
@@ -197,7 +197,7 @@ def read_bdm(path: str | Path, palette: str | Palette = DEFAULT_PALETTE) -> list
     except UnicodeDecodeError as exc:
         line = data.count(b"\n", 0, exc.start) + 1
         raise CorpusError(f"{path}, line {line}: not UTF-8 text") from None
-    lines = text.splitlines()
+    lines = text_lines(text)
     commands: list[Command] = []
     i = 0
     while i < len(lines):

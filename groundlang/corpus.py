@@ -25,7 +25,7 @@ from groundlang.bdm import parse_bdm_state
 from groundlang.logic.storage import read_limited, write_atomically
 from groundlang.model.world import Action, Layout, Palette, State, WorldError, get_palette, step
 from groundlang.state_line import (MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, format_state, parse_state, shared_cell,
-                                   shown)
+                                   shown, text_lines)
 
 __all__ = [
     "CorpusError",
@@ -142,7 +142,7 @@ def _read_lines(path: Path) -> list[str]:
             "expected a UTF-8 text file"
         ) from None
     text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
-    lines = [ln[:-1] if ln.endswith("\r") else ln for ln in text.split("\n")]
+    lines = text_lines(text)
     while lines and not lines[-1].strip():
         lines.pop()
     return lines

@@ -15,7 +15,7 @@ import re
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
 __all__ = ["CorpusError", "MAX_COORDINATE", "MAX_FILE_BYTES", "coordinate", "parse_state", "format_state", "shared_cell",
-           "shown"]
+           "shown", "text_lines"]
 
 # Coordinates beyond this are refused: a layout's grids are allocated densely,
 # so one absurd number in a file must not become a gigabyte array.
@@ -50,6 +50,16 @@ def coordinate(text: str, signed: bool = True) -> int:
     if len(digits) > len(str(MAX_COORDINATE)) or int(digits) > MAX_COORDINATE:
         raise OverflowError(text)
     return -int(digits) if text.startswith("-") else int(digits)
+
+
+_LINE_END = re.compile(r"\r\n|\r|\n")
+
+
+def text_lines(text: str) -> list[str]:
+    """A corpus file's lines as an editor numbers them: split at the ends of line an editor writes (LF, CRLF,
+    and CR alone), not at the other separators ``str.splitlines`` knows (U+2028, form feed, NEL), which a
+    command may hold and which would shift every line number an error gives after them."""
+    return _LINE_END.split(text)
 
 
 def shown(text: str, unit: str = "characters", limit: int = 20) -> str:

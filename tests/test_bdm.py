@@ -92,6 +92,10 @@ def test_check_reports_the_fixture():
     ("go\nJOINED\nJOINED\ntrue\n", "line 2: object room0 runs into the one before it"),
     ("go\nTWICE\nTWICE\ntrue\n", "line 2: agent agent0 gives x more than once"),
     ("go\nZEROS\nZEROS\ntrue\n", "x of agent0 is 00000000000000000000... (5004 digits); expected at most 1000"),
+    # a separator inside a command that str.splitlines would take for a line end (U+2028, form feed, NEL)
+    # does not shift the line numbers after it; a file with CR alone as its line end is read as an editor shows it
+    ("go\u2028now\x0cplease\x85\nSTATE\nSTATE\nfalse\n", "line 4: expected the word true"),
+    ("go\rSTATE\rSTATE\rfalse\r", "line 4: expected the word true"),
 ])
 def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
     room = "room0 (room): [top: {4} left: {0} bottom: {0} right: {4} colour: {%s} ]"

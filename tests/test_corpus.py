@@ -305,6 +305,20 @@ def test_a_byte_order_mark_is_read_as_nothing(fixtures, tmp_path):
     assert read_state_file(path, "sokoban") == read_state_file(fixtures / "novel_envs" / "novel_a.state", "sokoban")
 
 
+def test_line_ends_are_the_editors_and_only_those(tmp_path):
+    """CR alone (an old Mac's line end) ends a line as LF and CRLF do; U+2028 or a form feed in the command
+    does not, so the line numbers of errors after it stay right."""
+    for name, text in (("lf", _GOOD), ("crlf", _GOOD.replace("\n", "\r\n")), ("cr", _GOOD.replace("\n", "\r"))):
+        path = tmp_path / f"{name}.txt"
+        path.write_bytes(text.encode("utf-8"))
+        inst = read_instance(path, "sokoban")
+        assert inst.command == "go to the red room" and len(inst.states) == 4, name
+    bad = tmp_path / "separator.txt"
+    bad.write_text(_GOOD.replace("go to", "go\u2028to\x0c").replace("agent,5,2", "agent,9,2"), encoding="utf-8")
+    with pytest.raises(CorpusError, match=r", line 6: "):
+        read_instance(bad, "sokoban")
+
+
 @pytest.mark.parametrize("line", [
     # the crowd corpus's layout: one-cell doors in shared walls, one two-cell door reaching into a room
     "room,5,0,10,6,4 room,10,6,10,10,4 room,1,0,4,10,0 door,3,4,3,3 door,8,4,8,3 door,5,6,6,6 agent,8,6",
