@@ -36,7 +36,13 @@ __all__ = [
     "step",
     "replay",
     "WorldError",
+    "MAX_LAYOUT_OBJECTS",
 ]
+
+# Rooms, doors and toys a layout may have: checking a layout costs time in their number (rooms pairwise), and
+# 100,000 doors in one state line took 25 s to refuse. Chosen on no figure: the corpora's layouts have at most
+# a dozen, and 4,000 doors are checked in about a second.
+MAX_LAYOUT_OBJECTS = 4096
 
 
 # The world's kinds of object, as the classes of logic/domain.lp (class/1) call them, and the prefix of
@@ -204,6 +210,10 @@ class Layout:
     def _validate(self) -> None:
         if not self.rooms:
             raise WorldError("a layout needs at least one room")
+        count = len(self.rooms) + len(self.doors) + len(self.toy_attributes)
+        if count > MAX_LAYOUT_OBJECTS:  # checking them costs time in their number (rooms: its square)
+            raise WorldError(f"the layout has {count:,} rooms, doors and toys ({len(self.rooms):,}, {len(self.doors):,}, "
+                             f"{len(self.toy_attributes):,}); at most {MAX_LAYOUT_OBJECTS:,} are read")
         for i, r in enumerate(self.rooms):
             if r.right - r.left < 2 or r.top - r.bottom < 2:
                 raise WorldError(
