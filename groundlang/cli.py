@@ -55,7 +55,7 @@ def _said(exc: BaseException) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    try:  # importing the subcommands takes seconds on a busy machine: Ctrl-C then was a traceback
+    try:  # importing the subcommands takes seconds on a busy machine: an interrupt then is one line too
         with terminate_as_interrupt():
             parser = build_parser()
     except KeyboardInterrupt:
@@ -69,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=level, format="%(message)s")
     started = time.time()
     caching = args.command in CACHING_COMMANDS
-    cache_entries_before = 0
+    cache_entries_before = None  # until counted: an interrupt before then cannot tell new entries from old
     try:
         # SIGTERM (a scheduler, `kill`) stops a run the way Ctrl-C does, from the first import of torch on
         # (cache_entry_count's, seconds on a busy machine).

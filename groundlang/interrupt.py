@@ -118,12 +118,13 @@ _OUTPUTS = (("output", "output"), ("json", "result"), ("out", "picture"))
 _OUTPUT_KIND = {"train": "model", "discover": "task library"}
 
 
-def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: int = 0) -> str:
+def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: int | None = 0) -> str:
     """One line saying what an interrupted command left behind.
 
     ``started`` is ``time.time()`` at the start; ``cache_entries_before`` is
     :func:`cache_entry_count` then (counting, not mtimes, tells which entries
-    are new: a run that starts right after another must not claim its entries).
+    are new: a run that starts right after another must not claim its entries), None when the
+    interrupt came before it was counted.
     """
     parts = []
     for attr, what in _OUTPUTS:
@@ -133,10 +134,12 @@ def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: 
                 what = _OUTPUT_KIND.get(getattr(args, "command", None), what)
             parts.append(_describe_output(Path(value), what, started))
     # Only when the cache's module was imported whole: an interrupt during its import (torch's takes seconds)
-    # leaves torch half-initialised, and importing it again here crashed the process (SystemError, SIGSEGV,
-    # abort) instead of saying what was kept. A failed import is not in sys.modules: no entry was written.
+    # leaves torch half-initialised, and importing it again can crash the process in native code. A failed
+    # import is not in sys.modules: no entry was written. Nor before the entries at the start were counted
+    # (``cache_entries_before`` None): every entry would be taken for a new one.
     likelihoods = sys.modules.get("groundlang.inference.likelihoods")
-    if uses_cache and getattr(args, "no_cache", False) is not True and likelihoods is not None:
+    if (uses_cache and getattr(args, "no_cache", False) is not True and likelihoods is not None
+            and cache_entries_before is not None):
         root = likelihoods.cache_directory(getattr(args, "cache_dir", None))
         count = cache_entry_count(args) - cache_entries_before
         if count:

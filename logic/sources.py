@@ -67,7 +67,9 @@ def library_source(path: str | Path) -> Source:
     """A library file: one the package ships (``logic/domains/williams2018.lp``, or by its name,
     ``williams2018``) is read as the package's own, solved in-process; any other is a user's, solved in a
     child process that can be killed."""
-    if not Path(path).exists() and Path(path).name == str(path) and not Path(path).suffix:  # a bare name
+    # A bare name (no folder, no suffix) that is not a file: the package's library of that name, even where a
+    # folder of that name is in the working folder.
+    if not Path(path).is_file() and Path(path).name == str(path) and not Path(path).suffix:
         shipped = library_names()
         if str(path) not in shipped:
             raise FileNotFoundError(2, f"no such file, nor a library the package ships ({', '.join(shipped)})", str(path))

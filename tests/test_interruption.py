@@ -116,6 +116,8 @@ def test_cli_reports_what_an_interrupted_train_kept(tmp_path, monkeypatch, capsy
 
 
 def test_what_was_kept_describes_each_output(tmp_path):
+    import groundlang.inference.likelihoods  # noqa: F401  entries are counted once the cache's module is loaded
+
     class Args:
         command = "train"
         output = str(tmp_path / "model")
@@ -139,6 +141,8 @@ def test_what_was_kept_describes_each_output(tmp_path):
         f"nothing written to {tmp_path / 'result.json'}; "
         f"1 new behaviour-likelihood cache entry is kept in {tmp_path / 'cache'} (a rerun resumes from them)"
     )
+    # interrupted before the entries at the start were counted: none is claimed as new
+    assert "cache" not in what_was_kept(Args, start, uses_cache=True, cache_entries_before=None)
 
 
 # ----------------------------------------------------------------- real processes

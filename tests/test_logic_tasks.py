@@ -549,6 +549,9 @@ def test_a_shipped_library_is_named_as_a_palette_is(tmp_path, monkeypatch):
     (tmp_path / "tasks").write_text("task(mine). var(mine, \"A\", agent). var(mine, \"R\", room).\n"
                                    "goal(mine, agentInRoom, (\"A\", \"R\")).\n")
     assert TaskLibrary.load(["tasks"]).sources[0].name == "tasks"  # the file, not the package's
+    (tmp_path / "tasks").unlink()
+    (tmp_path / "tasks").mkdir()  # a folder of that name is not a library file: the name is the package's
+    assert TaskLibrary.load(["tasks"]).names == default.names
     with pytest.raises(FileNotFoundError) as caught:
         TaskLibrary.load(["taskz"])
     assert caught.value.filename == "taskz"

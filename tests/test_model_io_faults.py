@@ -369,7 +369,7 @@ def test_a_model_of_a_users_palette_follows_without_its_file(tmp_path, capsys):
     record of the values is the palette, so the file may be gone."""
     from importlib.resources import files
 
-    lilac = tmp_path / "lilac.lp"
+    lilac = tmp_path / "sokoban.lp"  # a copy of the shipped palette, under its name, with a colour added
     lilac.write_text((files("groundlang.logic") / "palettes" / "sokoban.lp").read_text() + "value(colour, 13, lilac).\n")
     corpus = tmp_path / "corpus"
     corpus.mkdir()
@@ -387,9 +387,12 @@ def test_a_model_of_a_users_palette_follows_without_its_file(tmp_path, capsys):
     assert out["reached"] is True and out["interpretations"][0]["goal"].startswith("agentInRoom(")
 
 
-def test_a_model_whose_palette_has_the_name_but_not_the_values_says_so(learners, tmp_path, capsys):
+def test_a_model_whose_palette_record_cannot_be_a_palette_is_refused_at_load(learners, tmp_path, capsys):
     model = learners[0].save(tmp_path / "m")
-    _edit_palette(model, colours=[])
-    code = main(["follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model", str(model)])
-    err = capsys.readouterr().err
-    assert code == 2 and "trained on palette sokoban of the same name but other colours or shapes" in err
+    for colours, piece in (([], "at least one"), (["red", "red"], "distinct"), (["Red"], "'Red' is not one")):
+        _edit_palette(model, colours=colours)
+        code = main(["follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model", str(model)])
+        err = capsys.readouterr().err
+        assert code == 2 and len(err.splitlines()) == 1 and f"{model}" in err and piece in err, err
+
+

@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
     from groundlang.logic.palette_files import palette_names
-    from groundlang.model.palette import Palette
+    from groundlang.model.palette import Palette, get_palette
     from groundlang.wording import goal_phrase, labelled_goal
 
     if args.learn and not args.ask:
@@ -131,12 +131,13 @@ def run(args: argparse.Namespace) -> int:
         if len(trained) != 1:
             raise ValueError(f"--palette is needed: the model was trained on {len(trained)} palettes "
                              f"({', '.join(trained) or 'none recorded'})")
-        palette = trained[0]
-        if palette not in palette_names():
-            # A user's palette: the model's record of its values is the palette (its name, read from the
-            # model, is never opened as a path); only the drawing hints of its file (glyph/2, rgb/2) are not kept.
-            record = learner.palettes[0]
-            palette = Palette(record["name"], tuple(record["colours"]), tuple(record["shapes"]))
+        # The model's record of the values is the palette: a file of one's own (even a copy of a shipped one
+        # under its name) needs no --palette, and a shipped palette changed since keeps the model's meaning. The
+        # name is never opened as a path; a shipped palette of the same values lends its drawing hints.
+        record = learner.palettes[0]
+        palette = Palette(record["name"], tuple(record["colours"]), tuple(record["shapes"]))
+        if palette.name in palette_names() and get_palette(palette.name) == palette:
+            palette = get_palette(palette.name)
     state = read_initial_state(args.env, palette)
     if args.lexicon:
         learner.add_words(args.lexicon)
