@@ -1,14 +1,17 @@
-"""Planning for a grounded goal in a state: the state space to plan in, and the plan carried out.
+"""Planning for a grounded goal in a state: the state space to plan in, the states to end in, and the
+plan carried out.
 
 Plans depend on the world only, never on the words: :class:`groundlang.learner.Learner` keeps them
-per (state, goal, step limit).
+per (state, goal or states to end in, step limit).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from groundlang.confidence import NEGLIGIBLE, GoalMasks
 from groundlang.inference.acting import rollout, rollout_states, stop_before
+from groundlang.inference.end_states import distances
 from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
@@ -18,7 +21,7 @@ from groundlang.model.relevance import exact_fits, placement_sample, pushes_scen
 from groundlang.model.statespace import StateSpace
 from groundlang.model.world import State
 
-__all__ = ["planning_space", "plan_for_goal"]
+__all__ = ["planning_space", "plan_for_goal", "plan_for_states", "expected_success_states"]
 
 
 def planning_space(state: State, goal: tuple[Atom, ...] | None, library: TaskLibrary) -> StateSpace:
@@ -33,7 +36,13 @@ def plan_for_goal(space: StateSpace, state: State, goal: tuple[Atom, ...], libra
                   settings: TaskSettings, max_steps: int) -> tuple[list, list, bool, str]:
     """Plan for ``goal`` in ``space`` (built from ``state``) and act: ``(states, actions, reached, reason)``,
     at most ``max_steps`` moves, stopping before a move that would push a toy the space holds still."""
-    mask = goal_mask(space, goal, pf_tables(state.layout, library.tabulation_program))
+    return plan_for_states(space, goal_mask(space, goal, pf_tables(state.layout, library.tabulation_program)),
+                           settings, max_steps)
+
+
+def plan_for_states(space: StateSpace, mask: np.ndarray, settings: TaskSettings,
+                    max_steps: int) -> tuple[list, list, bool, str]:
+    """Plan to end in a state of ``mask`` (``[S]`` bool over ``space``) and act, as :func:`plan_for_goal`."""
     solved = solve_task(space.next_state, mask, settings)
     trajectory = rollout(space.next_state, solved, 0, goal_mask=mask, max_steps=max_steps)
     trajectory = stop_before(trajectory, pushes_scenery(space, trajectory.states[:-1], trajectory.actions))
@@ -43,3 +52,29 @@ def plan_for_goal(space: StateSpace, state: State, goal: tuple[Atom, ...], libra
     # (in a relevance abstraction: none that leaves the toys it holds still where they are).
     reason = trajectory.reason if reached or bool(np.asarray(mask).any()) else "unreachable"
     return states, actions, reached, reason
+
+
+def expected_success_states(goals, space: StateSpace, library: TaskLibrary,
+                            step_cost: float) -> tuple[np.ndarray, tuple[Atom, ...]] | None:
+    """Where to end so that the final state most probably satisfies what was meant: the reachable states
+    ``s`` of most ``sum_g P(g | words) [s satisfies g] - step_cost * steps(s)``, over the posterior's goals
+    ``goals`` (``Posterior.goals()``), and the most probable goal the nearest of them satisfies (what is
+    said to be acted on). The goal acted on alone is the special case of a posterior sure of it; where
+    two goals can hold at once ("next to the chair", "right of the chair"), ending where both hold wins
+    the mass of both. ``step_cost``: how much probability of success one more step is worth (0: none; a
+    step then only breaks ties). None where ``space`` is not enumerated from the start (a relevance
+    abstraction or a sample of placements): its states' distances are not the world's."""
+    if getattr(space, "level_sizes", None) is None:
+        return None
+    kept = [(goal, p) for goal, p in goals if p >= NEGLIGIBLE]
+    masks = GoalMasks(space, library)
+    masks.prepare(goal for goal, _ in kept)
+    dist = distances(space)
+    score = np.zeros(space.num_states)
+    for goal, p in kept:
+        score += p * masks.mask(goal)
+    value = np.where(dist >= 0, score - step_cost * dist, -np.inf)
+    target = value >= value.max() - 1e-9
+    nearest = int(np.flatnonzero(target)[np.argmin(dist[target])])
+    said = next((goal for goal, _ in kept if masks.mask(goal)[nearest]), kept[0][0] if kept else ())
+    return target, said

@@ -18,7 +18,7 @@ import torch
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import GoalMasks, given_achievable, group_goals
-from groundlang.goal_plans import plan_for_goal, planning_space
+from groundlang.goal_plans import expected_success_states, plan_for_goal, plan_for_states, planning_space
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings
@@ -296,7 +296,9 @@ class Learner:
 
     def follow(self, command: str, state: State, max_steps: int = 200,
                min_confidence: float | None = None) -> FollowResult:
-        """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act.
+        """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act; with the
+        language model's ``expected_success`` (the default), plan to end where the goals of the whole
+        posterior most probably hold (:func:`groundlang.goal_plans.expected_success_states`).
 
         ``max_steps``: a positive integer. The state space is sized (and refused when no method can
         plan in it) before the command is interpreted, which on a large layout is the slow part; where
@@ -318,6 +320,10 @@ class Learner:
             return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
                                 question=question(choices, unknown, state, self.library),
                                 choices=choices, unknown_words=unknown)
+        ending = self.lm.expected_success and expected_success_states(post.goals(), self._space(state), self.library,
+                                                                      self.lm.step_cost)
+        if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
+            return self._act(command, state, post, ending[1], max_steps, ending[0])
         return self._act(command, state, post, post.best_goal, max_steps)
 
     def clarify(self, result: FollowResult, answer: str, max_steps: int = 200) -> FollowResult:
@@ -346,11 +352,14 @@ class Learner:
     def _knows(self, word: str) -> bool:
         return self.vocab is not None and self.vocab.word_id(word) != 0
 
-    def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int) -> FollowResult:
-        key = (state, goal, max_steps)
+    def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int,
+             ending=None) -> FollowResult:
+        """Plan for ``goal``, or to end in a state of ``ending`` (``[S]`` bool over ``self._space(state)``)."""
+        key = (state, goal, max_steps, None if ending is None else ending.tobytes())
         if key not in self._plans:  # plans depend on the world only, never on the words
-            self._plans[key] = plan_for_goal(self._space(state, goal), state, goal, self.library, self.settings,
-                                             max_steps)
+            self._plans[key] = (plan_for_goal(self._space(state, goal), state, goal, self.library, self.settings,
+                                              max_steps) if ending is None else
+                                plan_for_states(self._space(state), ending, self.settings, max_steps))
         states, actions, reached, reason = self._plans[key]
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library))

@@ -36,7 +36,7 @@ class LanguageModel:
     parser_weights = None  # overrides of the grammar's rule weights (grammar.parser.DEFAULT_WEIGHTS)
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False,
-                 achievable_goals: bool = True):
+                 achievable_goals: bool = True, expected_success: bool = True, step_cost: float = 0.005):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
         "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
         ``name_share``, and its learned words otherwise: the names a domain's author gives are words
@@ -44,17 +44,26 @@ class LanguageModel:
         could explain for free, a room is not called "chair", and a value training never showed ("the
         yellow room") is read by its name. ``achievable_goals``: a command asks for what can be done, so
         following it conditions the posterior on the goal holding in some state reachable from the start
-        (where the whole state space is enumerated; ``Learner.posterior``)."""
+        (where the whole state space is enumerated; ``Learner.posterior``). ``expected_success``: following
+        ends where what was meant most probably holds, over the whole posterior, not only where its most
+        probable goal does (``goal_plans.expected_success_states``); ``step_cost``, at least 0, is how much
+        probability of success a step is worth there."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
         self.null_token = null_token
         self.schema_names = schema_names
         self.achievable_goals = achievable_goals
+        if not 0.0 <= step_cost <= 1.0:  # NaN fails both; a step worth more than certain success is no cost
+            raise ValueError(f"language model {self.name}: step_cost must be between 0 and 1 (probability of "
+                             f"success per step), not {step_cost!r}")
+        self.expected_success = expected_success
+        self.step_cost = step_cost
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
-                "schema_names": self.schema_names, "achievable_goals": self.achievable_goals}
+                "schema_names": self.schema_names, "achievable_goals": self.achievable_goals,
+                "expected_success": self.expected_success, "step_cost": self.step_cost}
 
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""

@@ -71,6 +71,8 @@ class ParseAligned(LanguageModel):
         mention_task_objects: bool = True,
         parser_weights: dict | None = None,
         achievable_goals: bool = True,
+        expected_success: bool = True,
+        step_cost: float = 0.005,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -120,7 +122,8 @@ class ParseAligned(LanguageModel):
             if value is not None:
                 require_positive(self.name, name, value)
         require_positive(self.name, "argument_bonus", argument_bonus, added=True)
-        super().__init__(word_concentration, schema_names=schema_names, achievable_goals=achievable_goals)
+        super().__init__(word_concentration, schema_names=schema_names, achievable_goals=achievable_goals,
+                         expected_success=expected_success, step_cost=step_cost)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus
         self.mention_concentration = mention_concentration
@@ -173,6 +176,8 @@ class ParseAligned(LanguageModel):
             "relational_descriptions": self.relational_descriptions,
             "schema_names": self.schema_names,
             "achievable_goals": self.achievable_goals,
+            "expected_success": self.expected_success,
+            "step_cost": self.step_cost,
             "last_phrase_key": self.last_phrase_key,
             "object_key": self.object_key,
             "last_passes_over_source": self.last_passes_over_source,
