@@ -195,6 +195,12 @@ def test_cli_train_follow_lexicon(tmp_path, capsys):
     assert set(said) == {"to", "into"} and said["into"][0][0] == "toyToRoom"
     assert sorted(t for t, _ in said["to"]) == ["agentToRoom", "toyToRoom", "toyToRoomAgentToRoom"]
     assert sum(q for _, q in said["to"]) == pytest.approx(1.0)
+    assert main(["--quiet", "lexicon", str(model), "--prepositions", "--words", "into", "zzz"]) == 0
+    table = capsys.readouterr().out.splitlines()
+    assert table[0].split() == ["preposition", "lifted", "tasks", "it", "says,", "most", "probable", "first"]
+    assert len(table) == 2 and table[1].startswith("into") and "toyToRoom" in table[1]
+    assert main(["--quiet", "lexicon", str(model), "--prepositions", "--words", "zzz"]) == 0
+    assert capsys.readouterr().out == "no preposition table: none of the prepositions asked was seen in training\n"
     assert main(["--quiet", "lexicon", str(model), "--words", "red", "purple", "--top", "1"]) == 0
     assert capsys.readouterr().out.splitlines() == [
         "word             meanings, most probable first",
