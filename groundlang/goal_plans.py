@@ -63,7 +63,9 @@ def expected_success_states(goals, space: StateSpace, library: TaskLibrary,
     two goals can hold at once ("next to the chair", "right of the chair"), ending where both hold wins
     the mass of both. ``step_cost``: how much probability of success one more step is worth (0: none; a
     step then only breaks ties). None where ``space`` is not enumerated from the start (a relevance
-    abstraction or a sample of placements): its states' distances are not the world's."""
+    abstraction or a sample of placements): its states' distances are not the world's; and None where
+    no goal holds in a reachable state, or none where the cost leaves the agent: acting on the most
+    probable goal then says what cannot be done."""
     if getattr(space, "level_sizes", None) is None:
         return None
     kept = [(goal, p) for goal, p in goals if p >= NEGLIGIBLE]
@@ -73,8 +75,10 @@ def expected_success_states(goals, space: StateSpace, library: TaskLibrary,
     score = np.zeros(space.num_states)
     for goal, p in kept:
         score += p * masks.mask(goal)
+    if not (score[dist >= 0] > 0).any():
+        return None  # no goal holds where the agent can go: the goal acted on is said to be out of reach
     value = np.where(dist >= 0, score - step_cost * dist, -np.inf)
     target = value >= value.max() - 1e-9
     nearest = int(np.flatnonzero(target)[np.argmin(dist[target])])
-    said = next((goal for goal, _ in kept if masks.mask(goal)[nearest]), kept[0][0] if kept else ())
-    return target, said
+    said = next((goal for goal, _ in kept if masks.mask(goal)[nearest]), None)
+    return None if said is None else (target, said)

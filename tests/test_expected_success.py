@@ -69,3 +69,18 @@ def test_the_settings_are_checked_and_kept():
             get_language_model("parse", step_cost=bad)
     with pytest.raises(ValueError, match="step_cost: expected a number, not nan"):
         get_language_model("parse", step_cost=float("nan"))
+
+
+def test_no_goal_within_reach_leaves_the_goal_acted_on_to_say_so():
+    """Walled in, the agent can reach no state where a goal holds: staying put must not count as success."""
+    from pathlib import Path
+
+    walled = read_state_file(Path(__file__).parent / "fixtures" / "bad_input" / "walled_in.state", "sokoban")
+    space = planning_space(walled, None, LIBRARY)
+    goals = [(parse_goal("agentInRoom(agent0, room1)"), 0.9), (parse_goal("agentInRoom(agent0, room0)"), 0.1)]
+    assert not _mask_of(walled, space, "agentInRoom(agent0, room1)")[distances(space) >= 0].any()
+    assert expected_success_states(goals[:1], space, LIBRARY, step_cost=0.005) is None
+
+
+def _mask_of(state, space, goal: str) -> np.ndarray:
+    return goal_mask(space, parse_goal(goal), pf_tables(state.layout, LIBRARY.tabulation_program))
