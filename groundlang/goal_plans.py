@@ -54,11 +54,11 @@ def plan_for_states(space: StateSpace, mask: np.ndarray, settings: TaskSettings,
     return states, actions, reached, reason
 
 
-def expected_success_states(goals, space: StateSpace, library: TaskLibrary,
-                            step_cost: float) -> tuple[np.ndarray, tuple[Atom, ...]] | None:
+def expected_success_states(goals, masks: GoalMasks, step_cost: float) -> tuple[np.ndarray, tuple[Atom, ...]] | None:
     """Where to end so that the final state most probably satisfies what was meant: the reachable states
     ``s`` of most ``sum_g P(g | words) [s satisfies g] - step_cost * steps(s)``, over the posterior's goals
-    ``goals`` (``Posterior.goals()``), and the most probable goal the nearest of them satisfies (what is
+    ``goals`` (``Posterior.goals()``) as ``masks`` says where they hold over its space (shared with the
+    posterior that grouped them), and the most probable goal the nearest of them satisfies (what is
     said to be acted on). The goal acted on alone is the special case of a posterior sure of it; where
     two goals can hold at once ("next to the chair", "right of the chair"), ending where both hold wins
     the mass of both. ``step_cost``: how much probability of success one more step is worth (0: none; a
@@ -66,10 +66,10 @@ def expected_success_states(goals, space: StateSpace, library: TaskLibrary,
     abstraction or a sample of placements): its states' distances are not the world's; and None where
     no goal holds in a reachable state, or none where the cost leaves the agent: acting on the most
     probable goal then says what cannot be done."""
+    space = masks.space
     if getattr(space, "level_sizes", None) is None:
         return None
     kept = [(goal, p) for goal, p in goals if p >= NEGLIGIBLE]
-    masks = GoalMasks(space, library)
     masks.prepare(goal for goal, _ in kept)
     dist = distances(space)
     score = np.zeros(space.num_states)

@@ -107,6 +107,7 @@ class Learner:
         self._interp_cache: dict[tuple[State, bool], list[Interpretation]] = {}
         self._plans: dict = {}
         self._spaces: dict[State, StateSpace] = {}
+        self._masks: GoalMasks | None = None  # of the last space read: follow's goals are its posterior's
 
     def add_words(self, lexicon: WordSource | Sequence[WordSource]) -> "Learner":
         """Let the parser know more words (word files or words by category, as ``Learner(lexicon=...)``),
@@ -277,7 +278,7 @@ class Learner:
             structures[0], batch, [r.probability for r in obs.readings])
         probs = probs[:J].numpy().astype(float)
         space = self._space(state)
-        masks = GoalMasks(space, self.library)
+        masks = self._goal_masks(space)
         if self.lm.achievable_goals:
             probs = given_achievable(probs, [i.goal for i in obs.interpretations], masks)
         post = Posterior(command, list(obs.interpretations), probs, list(obs.readings), reading_probs)
@@ -293,6 +294,13 @@ class Learner:
                 self._spaces.pop(next(iter(self._spaces)))
             self._spaces[key] = planning_space(state, goal, self.library)
         return self._spaces[key]
+
+    def _goal_masks(self, space: StateSpace) -> GoalMasks:
+        """Where goals hold over ``space``, kept for the last space: following reads again the columns its
+        posterior computed (every goal's atoms over every state, the costly part)."""
+        if self._masks is None or self._masks.space is not space:
+            self._masks = GoalMasks(space, self.library)
+        return self._masks
 
     def follow(self, command: str, state: State, max_steps: int = 200,
                min_confidence: float | None = None) -> FollowResult:
@@ -320,7 +328,7 @@ class Learner:
             return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
                                 question=question(choices, unknown, state, self.library),
                                 choices=choices, unknown_words=unknown)
-        ending = self.lm.expected_success and expected_success_states(post.goals(), self._space(state), self.library,
+        ending = self.lm.expected_success and expected_success_states(post.goals(), self._goal_masks(self._space(state)),
                                                                       self.lm.step_cost)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
             return self._act(command, state, post, ending[1], max_steps, ending[0])

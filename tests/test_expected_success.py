@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from groundlang.confidence import GoalMasks
 from groundlang.corpus import example_corpus_path, read_state_file
 from groundlang.goal_plans import expected_success_states, planning_space
 from groundlang.inference.end_states import distances
@@ -32,11 +33,11 @@ def test_two_goals_that_can_hold_at_once_are_both_ended_in(space):
     """0.6 the star in the red room, 0.4 the agent there: ending where both hold succeeds with 1.0, not 0.6."""
     star, agent = "toyInRoom(block0, room2)", "agentInRoom(agent0, room2)"
     goals = [(parse_goal(star), 0.6), (parse_goal(agent), 0.4)]
-    target, said = expected_success_states(goals, space, LIBRARY, step_cost=0.0)
+    target, said = expected_success_states(goals, GoalMasks(space, LIBRARY), step_cost=0.0)
     assert target.any() and (target <= (_mask(space, star) & _mask(space, agent))).all()
     assert said == parse_goal(star)
     # the most probable goal alone is the special case of a posterior sure of it: its nearest states
-    alone, _ = expected_success_states([(parse_goal(star), 1.0)], space, LIBRARY, step_cost=0.0)
+    alone, _ = expected_success_states([(parse_goal(star), 1.0)], GoalMasks(space, LIBRARY), step_cost=0.0)
     assert (alone == _mask(space, star)).all()
 
 
@@ -46,17 +47,17 @@ def test_a_step_cost_keeps_a_small_share_from_buying_a_long_detour(space):
     star, agent = "toyInRoom(block0, room2)", "agentInRoom(agent0, room2)"
     goals = [(parse_goal(agent), 0.99), (parse_goal(star), 0.01)]
     dist = distances(space)
-    costly, said = expected_success_states(goals, space, LIBRARY, step_cost=0.005)
+    costly, said = expected_success_states(goals, GoalMasks(space, LIBRARY), step_cost=0.005)
     assert said == parse_goal(agent) and not (costly & _mask(space, star)).any()
     reach = _mask(space, agent) & (dist >= 0)
     assert dist[costly].max() == dist[reach].min()  # the nearest states where the agent is in the red room
-    free, _ = expected_success_states(goals, space, LIBRARY, step_cost=0.0)
+    free, _ = expected_success_states(goals, GoalMasks(space, LIBRARY), step_cost=0.0)
     assert (free <= _mask(space, star) & _mask(space, agent)).all()
 
 
 def test_goals_that_cannot_hold_at_once_go_with_the_more_probable(space):
     goals = [(parse_goal("agentInRoom(agent0, room0)"), 0.45), (parse_goal("agentInRoom(agent0, room2)"), 0.55)]
-    target, said = expected_success_states(goals, space, LIBRARY, step_cost=0.005)
+    target, said = expected_success_states(goals, GoalMasks(space, LIBRARY), step_cost=0.005)
     assert said == parse_goal("agentInRoom(agent0, room2)") and (target <= _mask(space, "agentInRoom(agent0, room2)")).all()
 
 
@@ -77,9 +78,9 @@ def test_no_goal_within_reach_leaves_the_goal_acted_on_to_say_so():
 
     walled = read_state_file(Path(__file__).parent / "fixtures" / "bad_input" / "walled_in.state", "sokoban")
     space = planning_space(walled, None, LIBRARY)
-    goals = [(parse_goal("agentInRoom(agent0, room1)"), 0.9), (parse_goal("agentInRoom(agent0, room0)"), 0.1)]
-    assert not _mask_of(walled, space, "agentInRoom(agent0, room1)")[distances(space) >= 0].any()
-    assert expected_success_states(goals[:1], space, LIBRARY, step_cost=0.005) is None
+    red = "agentInRoom(agent0, room1)"
+    assert not _mask_of(walled, space, red)[distances(space) >= 0].any()
+    assert expected_success_states([(parse_goal(red), 1.0)], GoalMasks(space, LIBRARY), step_cost=0.005) is None
 
 
 def _mask_of(state, space, goal: str) -> np.ndarray:
