@@ -363,7 +363,7 @@ class Learner:
     def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int,
              ending=None) -> FollowResult:
         """Plan for ``goal``, or to end in a state of ``ending`` (``[S]`` bool over ``self._space(state)``)."""
-        key = (state, goal, max_steps, None if ending is None else ending.tobytes())
+        key = (state, goal if ending is None else ending.tobytes(), max_steps)  # the plan is the target's alone
         if key not in self._plans:  # plans depend on the world only, never on the words
             self._plans[key] = (plan_for_goal(self._space(state, goal), state, goal, self.library, self.settings,
                                               max_steps) if ending is None else

@@ -7,18 +7,14 @@ a file is untrusted: every field is checked here before anything is built from i
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from groundlang.inference.em import EM_ACCELERATIONS
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.geometry import ASP_CONSTANT
 from groundlang.model.language_models import get_language_model
 from groundlang.model.vocabulary import Vocabulary
-
-# A palette value as an ASP constant (model.geometry's rule): what a state's attributes become.
-_VALUE = re.compile(r"[a-z][A-Za-z0-9_]*")
 
 __all__ = ["learner_state", "learner_from_state", "check_count", "check_training_options"]
 
@@ -102,7 +98,7 @@ def _checked_palettes(palettes) -> list[dict]:
             raise ValueError("each palette must be {name: str, colours: [str], shapes: [str]}")
         for field in ("colours", "shapes"):  # a state is read with them (follow): each a value, once
             values = p[field]
-            odd = next((v for v in values if not _VALUE.fullmatch(v)), None)
+            odd = next((v for v in values if not ASP_CONSTANT.match(v)), None)
             if not values or odd is not None or len(set(values)) != len(values):
                 raise ValueError(f"palette {p['name']!r}: {field} must be distinct lowerCamelCase names, at least "
                                  f"one" + (f" ({odd!r} is not one)" if odd is not None else ""))

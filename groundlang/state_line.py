@@ -68,7 +68,7 @@ def shown(text: str, unit: str = "characters", limit: int = 20) -> str:
 
 
 def _integer(text: str, where: str, name: str, obj: str) -> int:
-    obj = obj if len(obj) <= 60 else f"{obj[:60]}..."  # the message stays one readable line
+    """``text`` as a coordinate; ``obj``, the token it is a field of, as :func:`shown` quotes it."""
     try:
         return coordinate(text)
     except OverflowError:
@@ -104,7 +104,7 @@ def parse_state(line: str, palette: str | Palette, where: str = "state", shared_
                 f"{where}: {quoted!r} has {len(parts)} comma-separated fields; expected "
                 f"{len(names) + 1} ({expected})"
             )
-        v = {n: _integer(t, where, n, token) for n, t in zip(names, parts[1:])}
+        v = {n: _integer(t, where, n, quoted) for n, t in zip(names, parts[1:])}
         try:
             if kind == "room":
                 rooms.append(Room(palette.colour(v["COLOUR"]), v["LEFT"], v["TOP"], v["RIGHT"], v["BOTTOM"]))

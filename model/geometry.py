@@ -18,14 +18,14 @@ from groundlang.logic.program import DEFAULT_TIME_LIMIT, AspError, Program, pack
 
 from .world import Layout, State
 
-__all__ = ["CellTables", "cell_tables", "layout_facts", "state_facts", "domain_program"]
+__all__ = ["ASP_CONSTANT", "CellTables", "cell_tables", "layout_facts", "state_facts", "domain_program"]
 
-_CONSTANT = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
+ASP_CONSTANT = re.compile(r"[a-z][A-Za-z0-9_]*\Z")  # an attribute value as a state's facts write it
 
 
 def _constant(value: str, what: str) -> str:
     """An attribute value as an ASP constant (palette names are lower camel case)."""
-    if not _CONSTANT.match(value):
+    if not ASP_CONSTANT.match(value):
         raise AspError(f"{what} {value!r} cannot be an ASP constant (expected lowerCamelCase)")
     return value
 

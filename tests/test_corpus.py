@@ -332,7 +332,8 @@ def test_doors_between_two_rooms_are_accepted(line):
 
 @pytest.mark.parametrize("x, piece", [
     ("0" * 5000 + "9", None),  # leading zeros are only zeros: x = 9
-    ("9" * 5000, "field X of 'agent," + "9" * 54 + "...' is 99999999999999999999... (5000 digits); expected at most"),
+    ("9" * 5000, "field X of 'agent," + "9" * 54 + "... (5008 characters)' is 99999999999999999999... (5000 digits); "
+     "expected at most"),
     ("12345678", "is 12345678; expected at most 1000 in size"),
 ])
 def test_a_coordinate_of_many_digits_is_read_or_refused_without_converting_them_all(tmp_path, x, piece):

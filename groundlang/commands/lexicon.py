@@ -54,10 +54,12 @@ def _schemas(learner) -> list:
 
 def _print_prepositions(prepositions: dict, learner) -> None:
     if not prepositions:
-        concentration = getattr(learner.lm, "preposition_concentration", None)
-        why = (f"the model's language model, {learner.lm.name}, has none" if not hasattr(learner.lm, "preposition_concentration")
-               else "its preposition_concentration is off" if concentration is None
-               else "none of the prepositions asked was seen in training")
+        if not hasattr(learner.lm, "preposition_concentration"):
+            why = f"the model's language model, {learner.lm.name}, has none"
+        elif learner.lm.preposition_concentration is None:
+            why = "its preposition_concentration is off"
+        else:
+            why = "none of the prepositions asked was seen in training"
         print(f"no preposition table: {why}")
         return
     width = max(16, *(len(p) + 1 for p in prepositions))  # multiword ones: to_the_right_side_of
