@@ -118,8 +118,8 @@ def billion(learner: Learner, library, repeats: int) -> None:
     cold, result = seconds(lambda: learner.follow(command, state))
 
     def replan():  # the learner's remembered plans and spaces dropped: the solve is timed again
-        learner._plans.clear()
-        learner._spaces.clear()
+        learner._world.plans.clear()
+        learner._world.spaces.clear()
         return learner.follow(command, state)
 
     warm, _ = seconds(replan, repeats)

@@ -1,8 +1,8 @@
 """Planning for a grounded goal in a state: the state space to plan in, the states to end in, and the
 plan carried out.
 
-Plans depend on the world only, never on the words: :class:`groundlang.learner.Learner` keeps them
-per (state, goal or states to end in, step limit).
+Plans depend on the world only, never on the words: :class:`WorldPlans` keeps them per (state, goal or
+states to end in, step limit), with the state spaces they were made in, for a learner's ``follow``.
 """
 
 from __future__ import annotations
@@ -21,7 +21,10 @@ from groundlang.model.relevance import exact_fits, placement_sample, pushes_scen
 from groundlang.model.statespace import StateSpace
 from groundlang.model.world import State
 
-__all__ = ["planning_space", "plan_for_goal", "plan_for_states", "expected_success_states"]
+__all__ = ["planning_space", "plan_for_goal", "plan_for_states", "expected_success_states", "WorldPlans"]
+
+# State spaces kept for grouping goals and planning (crowd layouts: about 100 states each).
+_SPACES_KEPT = 16
 
 
 def planning_space(state: State, goal: tuple[Atom, ...] | None, library: TaskLibrary) -> StateSpace:
@@ -82,3 +85,44 @@ def expected_success_states(goals, masks: GoalMasks, step_cost: float) -> tuple[
     nearest = int(np.flatnonzero(target)[np.argmin(dist[target])])
     said = next((goal for goal, _ in kept if masks.mask(goal)[nearest]), None)
     return None if said is None else (target, said)
+
+
+class WorldPlans:
+    """What following keeps of the world between commands: the last few state spaces, where goals hold
+    over the last one read (following reads again the columns its posterior computed: every goal's
+    atoms over every state, the costly part), and the plans made, by target. Nothing here depends on
+    the words, so a plan serves every command that ends in the same states."""
+
+    def __init__(self, library: TaskLibrary, settings: TaskSettings):
+        self.library = library
+        self.settings = settings
+        self.plans: dict = {}
+        self.spaces: dict = {}
+        self._masks: GoalMasks | None = None
+
+    def space(self, state: State, goal: tuple[Atom, ...] | None = None) -> StateSpace:
+        """The state space to plan for ``goal`` in, or to compare goals in (``goal`` None); see
+        :func:`planning_space`. The last few are kept."""
+        key = state if exact_fits(state) else (state, goal)
+        if key not in self.spaces:
+            if len(self.spaces) >= _SPACES_KEPT:
+                self.spaces.pop(next(iter(self.spaces)))
+            self.spaces[key] = planning_space(state, goal, self.library)
+        return self.spaces[key]
+
+    def goal_masks(self, space: StateSpace) -> GoalMasks:
+        """Where goals hold over ``space``, kept for the last space."""
+        if self._masks is None or self._masks.space is not space:
+            self._masks = GoalMasks(space, self.library)
+        return self._masks
+
+    def act(self, state: State, goal: tuple[Atom, ...], max_steps: int,
+            ending: np.ndarray | None = None) -> tuple[list, list, bool, str]:
+        """Plan for ``goal``, or to end in a state of ``ending`` (``[S]`` bool over ``self.space(state)``), and
+        act: ``(states, actions, reached, reason)`` as :func:`plan_for_goal`."""
+        key = (state, goal if ending is None else ending.tobytes(), max_steps)  # the plan is the target's alone
+        if key not in self.plans:
+            self.plans[key] = (plan_for_goal(self.space(state, goal), state, goal, self.library, self.settings,
+                                             max_steps) if ending is None else
+                               plan_for_states(self.space(state), ending, self.settings, max_steps))
+        return self.plans[key]

@@ -17,8 +17,8 @@ import torch
 
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
-from groundlang.confidence import GoalMasks, given_achievable, group_goals
-from groundlang.goal_plans import expected_success_states, plan_for_goal, plan_for_states, planning_space
+from groundlang.confidence import given_achievable, group_goals
+from groundlang.goal_plans import WorldPlans, expected_success_states
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings
@@ -31,8 +31,7 @@ from groundlang.model.interpretations import Interpretation, interpretations, wi
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.language_model_base import word_meanings
 from groundlang.model.language_models import BagOfWords, LanguageModel, get_language_model
-from groundlang.model.relevance import check_abstraction_possible, exact_fits
-from groundlang.model.statespace import StateSpace
+from groundlang.model.relevance import check_abstraction_possible
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
 from groundlang.learner_state import check_count, check_training_options, learner_from_state, learner_state
@@ -45,8 +44,6 @@ __all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError", "AnswerErro
 
 # follow's default threshold on the CLI: chosen on held-out data (see README, "Knowing when it does not know").
 DEFAULT_MIN_CONFIDENCE = 0.7
-# State spaces kept per learner for grouping goals and planning (crowd layouts: about 100 states each).
-_SPACES_KEPT = 16
 
 log = logging.getLogger(__name__)
 
@@ -105,9 +102,7 @@ class Learner:
         self.globals: dict[str, torch.Tensor] | None = None
         self.fit_result: FitResult | None = None
         self._interp_cache: dict[tuple[State, bool], list[Interpretation]] = {}
-        self._plans: dict = {}
-        self._spaces: dict[State, StateSpace] = {}
-        self._masks: GoalMasks | None = None  # of the last space read: follow's goals are its posterior's
+        self._world = WorldPlans(self.library, self.settings)  # spaces and plans: the world's, not the words'
 
     def add_words(self, lexicon: WordSource | Sequence[WordSource]) -> "Learner":
         """Let the parser know more words (word files or words by category, as ``Learner(lexicon=...)``),
@@ -277,30 +272,13 @@ class Learner:
         reading_probs = None if structures is None else per_parser_reading(
             structures[0], batch, [r.probability for r in obs.readings])
         probs = probs[:J].numpy().astype(float)
-        space = self._space(state)
-        masks = self._goal_masks(space)
+        space = self._world.space(state)
+        masks = self._world.goal_masks(space)
         if self.lm.achievable_goals:
             probs = given_achievable(probs, [i.goal for i in obs.interpretations], masks)
         post = Posterior(command, list(obs.interpretations), probs, list(obs.readings), reading_probs)
         post.groups = group_goals(post.goals(), space, self.library, masks)
         return post
-
-    def _space(self, state: State, goal: tuple[Atom, ...] | None = None) -> StateSpace:
-        """The state space to plan for ``goal`` in, or to compare goals in (``goal`` None); see
-        :func:`groundlang.goal_plans.planning_space`. The last few are kept."""
-        key = state if exact_fits(state) else (state, goal)
-        if key not in self._spaces:
-            if len(self._spaces) >= _SPACES_KEPT:
-                self._spaces.pop(next(iter(self._spaces)))
-            self._spaces[key] = planning_space(state, goal, self.library)
-        return self._spaces[key]
-
-    def _goal_masks(self, space: StateSpace) -> GoalMasks:
-        """Where goals hold over ``space``, kept for the last space: following reads again the columns its
-        posterior computed (every goal's atoms over every state, the costly part)."""
-        if self._masks is None or self._masks.space is not space:
-            self._masks = GoalMasks(space, self.library)
-        return self._masks
 
     def follow(self, command: str, state: State, max_steps: int = 200,
                min_confidence: float | None = None) -> FollowResult:
@@ -328,8 +306,8 @@ class Learner:
             return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
                                 question=question(choices, unknown, state, self.library),
                                 choices=choices, unknown_words=unknown)
-        ending = self.lm.expected_success and expected_success_states(post.goals(), self._goal_masks(self._space(state)),
-                                                                      self.lm.step_cost)
+        ending = self.lm.expected_success and expected_success_states(
+            post.goals(), self._world.goal_masks(self._world.space(state)), self.lm.step_cost)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
             return self._act(command, state, post, ending[1], max_steps, ending[0])
         return self._act(command, state, post, post.best_goal, max_steps)
@@ -362,13 +340,8 @@ class Learner:
 
     def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int,
              ending=None) -> FollowResult:
-        """Plan for ``goal``, or to end in a state of ``ending`` (``[S]`` bool over ``self._space(state)``)."""
-        key = (state, goal if ending is None else ending.tobytes(), max_steps)  # the plan is the target's alone
-        if key not in self._plans:  # plans depend on the world only, never on the words
-            self._plans[key] = (plan_for_goal(self._space(state, goal), state, goal, self.library, self.settings,
-                                              max_steps) if ending is None else
-                                plan_for_states(self._space(state), ending, self.settings, max_steps))
-        states, actions, reached, reason = self._plans[key]
+        """Plan for ``goal``, or to end in a state of ``ending`` (:meth:`WorldPlans.act`)."""
+        states, actions, reached, reason = self._world.act(state, goal, max_steps, ending)
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library))
 

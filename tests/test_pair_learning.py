@@ -331,12 +331,12 @@ def test_following_reads_only_goals_the_agent_can_reach(williams_commands, willi
     on = Learner(library=williams_library, cache_dir=False).fit(instances)
     off = Learner(get_language_model("parse", achievable_goals=False), library=williams_library,
                   cache_dir=False).fit(instances)
-    assert unachievable_goals([left, right], on._space(state), williams_library) == {left}
+    assert unachievable_goals([left, right], on._world.space(state), williams_library) == {left}
     command = "go to the left of the chair"
     before, after = dict(off.posterior(command, state).goals()), dict(on.posterior(command, state).goals())
     assert before[left] > 0.01 and after[left] == 0.0
     assert sum(after.values()) == pytest.approx(1.0)
-    out = unachievable_goals(list(before), on._space(state), williams_library)
+    out = unachievable_goals(list(before), on._world.space(state), williams_library)
     assert left in out and all(after[g] == 0.0 for g in out)
     # conditioning: every reachable goal's share grows by one factor, 1 / P(reachable)
     assert after[right] / before[right] == pytest.approx(1 / (1 - sum(before[g] for g in out)), rel=1e-4)

@@ -194,3 +194,16 @@ def test_the_worlds_kinds_of_object_are_the_classes_domain_lp_declares():
     assert [object_class(n) for n in ("agent0", "room12", "door0", "block3")] == ["agent", "room", "door", "toy"]
     with pytest.raises(ValueError):
         object_class("blocky")
+
+
+def test_parse_reads_the_words_beside_the_library(domain):
+    """``parse --library`` parses as a learner trained with that library: its word file's nouns are nouns."""
+    def readings(*library):
+        done = subprocess.run([sys.executable, "-m", "groundlang.cli", "parse", "go to the biggest mugs", *library],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        return [line.strip() for line in done.stdout.splitlines()[1:]]
+
+    # Without the file "mugs" is an unknown word, read as a noun or as a modifier of an elided one.
+    assert readings() == ["0.667  go(mugs1), P1(mugs1, biggest)", "0.333  go(mugs1), P1(mugs1, biggest), P2(mugs1, mugs)"]
+    assert readings("--library", str(domain / "pfs.lp")) == ["1.000  go(mugs1), P1(mugs1, biggest)"]

@@ -3,6 +3,7 @@
     groundlang parse "push the star into the green room" [--json]
     groundlang parse --file commands.txt          # every non-empty line
     groundlang parse --file CORPUS_DIR            # the first line of every *.txt file below the folder
+    groundlang parse --library williams2018 "stand left of the red chair"   # with the library's word file
 
 With ``--file`` a summary follows: how many commands got a full parse, how many only the fallback.
 """
@@ -14,7 +15,7 @@ import json
 import sys
 from pathlib import Path
 
-from groundlang.commands import add_lexicon_option, positive_int
+from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, positive_int
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import parse
 from groundlang.logic.storage import read_limited
@@ -29,6 +30,9 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true", help="one JSON object per command")
     p.add_argument("--max-readings", type=positive_int, default=8, help="readings kept per command (default 8)")
     add_lexicon_option(p)
+    p.add_argument("--library", metavar="LP", action="append",
+                   help="task library .lp file (repeatable): the words of its word file (mine.words beside "
+                        "mine.lp) join the parser's, as a learner trained with it reads them" + LIBRARY_NAMES)
     p.set_defaults(func=run)
 
 
@@ -58,8 +62,14 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--max-readings must be >= 1, got {args.max_readings}")
     from groundlang.model.domain_words import domain_lexicon, extra_words
 
-    # the words a learner parses with: English, the Cleanup World's, and --lexicon files
-    words = domain_lexicon(extra_words(args.lexicon))
+    # the words a learner parses with: English, the Cleanup World's, the library's word files, --lexicon files
+    beside = []
+    if args.library:
+        from groundlang.logic.tasks import TaskLibrary
+        from groundlang.training_vocabulary import word_files_beside
+
+        beside = word_files_beside(TaskLibrary.load(args.library))
+    words = domain_lexicon(extra_words([*beside, *args.lexicon]))
     items = [("argument", args.text)] if args.file is None else _commands(args.file)
     full = fallback = empty = 0
     for source, command in items:
