@@ -12,7 +12,7 @@ from __future__ import annotations
 from itertools import combinations, permutations
 from typing import Mapping, Sequence
 
-from groundlang.logic.atoms import Atom, attribute_pf
+from groundlang.logic.atoms import Atom
 from groundlang.logic.classes import domain_classes
 from groundlang.logic.tasks import CLASS_ORDER, LiftedTask, Variable
 

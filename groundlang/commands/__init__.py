@@ -111,6 +111,15 @@ LIBRARY_NAMES = (f"; a file, or a library the package ships by name ({', '.join(
                  "replaces the default: name tasks too to add to its tasks")
 
 
+def library_given(args: argparse.Namespace):
+    """The TaskLibrary of the ``--library`` files given, or None (the command's default) without one."""
+    if not args.library:
+        return None
+    from groundlang.logic.tasks import TaskLibrary
+
+    return TaskLibrary.load(args.library)
+
+
 def add_lexicon_option(parser) -> None:
     """``--lexicon FILE`` (repeatable): a word file whose words the parser should know too."""
     parser.add_argument(

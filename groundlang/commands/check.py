@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, require_palette
+from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, library_given, require_palette
 from groundlang.corpus import read_corpus
 
 
@@ -66,12 +66,7 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.labels import label_coverage, read_labels
 
         labels = read_labels(args.labels)
-        library = None
-        if args.library:  # labels may name the library's own PFs
-            from groundlang.logic.tasks import TaskLibrary
-
-            library = TaskLibrary.load(args.library)
-        cov = label_coverage(corpus, labels, library)
+        cov = label_coverage(corpus, labels, library_given(args))  # labels may name the library's own PFs
         print(f"labelled: {cov.labelled}/{cov.total} files ({len(labels)} prefixes in {labels.path.name})")
         print(f"goal holds in final state: {cov.holding}/{cov.labelled}")
         for inst, goal in cov.failing:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_em_acceleration_option,
                                  add_language_model_settings,
-                                 add_lexicon_option, fraction, language_model_settings, open_fraction,
+                                 add_lexicon_option, fraction, language_model_settings, library_given, open_fraction,
                                  positive_int, require_palette)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
@@ -100,9 +100,7 @@ def run(args: argparse.Namespace) -> int:
     novel = read_novel_states(args.novel_envs, args.palette) if args.novel_envs else []
     options = {"em_acceleration": args.em_acceleration, **({"lexicon": words} if words else {})}
     if args.library:  # trained, followed and scored with the user's PFs and tasks, as train would
-        from groundlang.logic.tasks import TaskLibrary
-
-        options["library"] = TaskLibrary.load(args.library)
+        options["library"] = library_given(args)
     result = evaluate(
         corpus, labels, protocol=args.protocol or "loo", language_model=args.language_model,
         novel_states=novel, workers=args.workers, ray_address=args.ray,

@@ -15,7 +15,7 @@ import json
 import sys
 from pathlib import Path
 
-from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, positive_int
+from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, library_given, positive_int
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import parse
 from groundlang.logic.storage import read_limited
@@ -63,12 +63,10 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.model.domain_words import domain_lexicon, extra_words
 
     # the words a learner parses with: English, the Cleanup World's, the library's word files, --lexicon files
-    beside = []
-    if args.library:
-        from groundlang.logic.tasks import TaskLibrary
-        from groundlang.training_vocabulary import word_files_beside
+    from groundlang.training_vocabulary import word_files_beside
 
-        beside = word_files_beside(TaskLibrary.load(args.library))
+    library = library_given(args)
+    beside = word_files_beside(library) if library is not None else []
     words = domain_lexicon(extra_words([*beside, *args.lexicon]))
     items = [("argument", args.text)] if args.file is None else _commands(args.file)
     full = fallback = empty = 0

@@ -8,7 +8,8 @@ import time
 from groundlang.bdm import bdm_files
 from groundlang.corpus import read_corpus
 from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
-                                 add_em_acceleration_option, add_lexicon_option, language_model_settings, require_palette,
+                                 add_em_acceleration_option, add_lexicon_option, language_model_settings, library_given,
+                                 require_palette,
                                  seed)
 
 
@@ -34,7 +35,6 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
-    from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.domain_words import extra_words
     from groundlang.model.language_models import get_language_model
 
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         if corpus.skipped:
             print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
         instances = corpus.instances
-        library = TaskLibrary.load(args.library) if args.library else None
+        library = library_given(args)
     learner = Learner(lm, library=library, seed=args.seed, lexicon=words, cache_dir=_cache(args),
                       em_acceleration=args.em_acceleration)
     learner.fit(instances, progress=args.progress)
