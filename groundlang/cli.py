@@ -66,7 +66,10 @@ def main(argv: list[str] | None = None) -> int:
     # pipes and under --quiet.
     args.progress = not args.quiet and sys.stderr.isatty()
     level = logging.WARNING if args.quiet else (logging.DEBUG if args.verbose else logging.INFO)
-    logging.basicConfig(level=level, format="%(message)s")
+    # The level is groundlang's own: torch's loggers stay at WARNING (at exit it logs its FakeTensor cache
+    # statistics at INFO, which are not this run's to show).
+    logging.basicConfig(level=logging.WARNING, format="%(message)s")
+    logging.getLogger("groundlang").setLevel(level)
     started = time.time()
     caching = args.command in CACHING_COMMANDS
     cache_entries_before = None  # until counted: an interrupt before then cannot tell new entries from old

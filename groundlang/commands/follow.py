@@ -191,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
         _print_question(result, state, learner.library)
         _refuse(result, args)
         return ASKED
-    print(f"plan ({len(result.actions)} steps): {', '.join(a.word for a in result.actions) or '(none)'}")
+    print(f"plan ({len(result.actions)} step{'' if len(result.actions) == 1 else 's'}): {', '.join(a.word for a in result.actions) or '(none)'}")
     print(f"goal {labelled_goal(result.goal, state, learner.library)}: "
           f"{'reached' if result.reached else 'NOT reached'} ({result.reason})")
     if args.out:
