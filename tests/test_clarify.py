@@ -142,6 +142,7 @@ def test_cli_ask_reads_the_answer_from_stdin(model_dir, capsys, monkeypatch):
     assert _follow(model_dir, "go to the purple room", "--ask") == 0
     out = capsys.readouterr().out
     assert "names none of the choices" in out  # the first answer, asked again
+    assert "goal that differs); acting on the answer\nplan (1 step): west" in out
     assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room1): reached (goal)" in out
     monkeypatch.setattr("sys.stdin", io.StringIO(""))  # end of input: nothing done
     assert _follow(model_dir, "go to the purple room", "--ask") == 3

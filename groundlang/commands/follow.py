@@ -148,6 +148,7 @@ def run(args: argparse.Namespace) -> int:
         # sequence clears the screen): then as a Python string literal, every character visible.
         text = args.command_text
         print(f"command: {text if text.isprintable() else ascii(text)}")
+    answered = None
     if result.abstained and args.ask and not args.json:
         answered = _ask(learner, result, state, args.max_steps)
         if answered is None:
@@ -186,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
     for goal, p in goals:
         print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library)}")
     print(f"confidence {result.posterior.confidence:.2f} (margin {result.posterior.margin:.2f} over the next "
-          f"goal that differs)")
+          f"goal that differs)" + ("; acting on the answer" if answered is not None else ""))
     if result.abstained:
         _print_question(result, state, learner.library)
         _refuse(result, args)
