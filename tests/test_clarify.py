@@ -147,3 +147,16 @@ def test_cli_ask_reads_the_answer_from_stdin(model_dir, capsys, monkeypatch):
     monkeypatch.setattr("sys.stdin", io.StringIO(""))  # end of input: nothing done
     assert _follow(model_dir, "go to the purple room", "--ask") == 3
     assert capsys.readouterr().err.strip() == "groundlang follow: no answer named a choice; nothing done"
+
+
+def test_cli_ask_refuses_an_overlong_answer_without_reading_it_whole(model_dir, capsys, monkeypatch):
+    import io
+
+    from groundlang.commands.follow import MAX_ANSWER_CHARS
+
+    monkeypatch.setattr("sys.stdin", io.StringIO("x" * (50 * MAX_ANSWER_CHARS) + "\nthe blue one\n"))
+    assert _follow(model_dir, "go to the purple room", "--ask") == 0
+    out = capsys.readouterr().out
+    assert f"an answer is at most {MAX_ANSWER_CHARS} characters" in out
+    assert "x" * (MAX_ANSWER_CHARS + 1) not in out  # not echoed whole
+    assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room1): reached (goal)" in out

@@ -21,6 +21,9 @@ ASKED = 3
 # here: building the parser stays light; a test checks they agree).
 DEFAULT_MIN_CONFIDENCE = 0.7
 ANSWER_TRIES = 3
+# An answer names one of a few choices ("the blue one", "2"); a longer line is no answer, and reading it
+# whole would hold whatever a pipe sends in memory.
+MAX_ANSWER_CHARS = 1000
 
 
 def register(subparsers) -> None:
@@ -80,10 +83,15 @@ def _ask(learner, result, state, max_steps: int):
     _print_question(result, state, learner.library)
     for _ in range(ANSWER_TRIES):
         print("answer> ", end="", flush=True)
-        line = sys.stdin.readline()
+        line = sys.stdin.readline(MAX_ANSWER_CHARS + 1)
         if not line:
             print()
             return None
+        if len(line) > MAX_ANSWER_CHARS and not line.endswith("\n"):
+            while (rest := sys.stdin.readline(1 << 16)) and not rest.endswith("\n"):
+                pass  # the rest of the line, read in bounded pieces and dropped
+            print(f"\n  an answer is at most {MAX_ANSWER_CHARS} characters: a choice's number or its words")
+            continue
         if not sys.stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read
             print(line.strip())
         try:
