@@ -39,10 +39,11 @@ import torch
 from groundlang.interrupt import deferred_interrupts
 from groundlang.logic import storage
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "write_model", "read_model"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "write_model", "read_model",
+           "signed"]
 
 FORMAT = "groundlang-model"
-FORMAT_VERSION = 14  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases; 13: the words added to the lexicon (``lexicon``), multiword prepositions joined into one token; 14: content-named tensor file, palettes recorded
+FORMAT_VERSION = 15  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases; 13: the words added to the lexicon (``lexicon``), multiword prepositions joined into one token; 14: content-named tensor file, palettes recorded; 15: model.json records the hash of its own fields (content_sha256)
 log = logging.getLogger(__name__)
 T = TypeVar("T")
 
@@ -89,6 +90,22 @@ def check_model_destination(directory: str | Path, option: str = "") -> Path:
     return directory
 
 
+# The field of model.json that holds the hash of all its others: damage to the words or settings a
+# model is read with (a flipped byte, a line lost) is refused like damage to its tensors.
+CONTENT_HASH = "content_sha256"
+
+
+def _content_digest(meta: dict) -> str:
+    rest = {k: v for k, v in meta.items() if k != CONTENT_HASH}
+    return hashlib.sha256(json.dumps(rest, sort_keys=True, separators=(",", ":")).encode("utf-8")).hexdigest()
+
+
+def signed(meta: dict) -> dict:
+    """``meta`` (a model.json's fields) with the hash of its fields recorded: what a program that rewrites
+    a model.json on purpose writes back, so that it loads (its values are still checked as read)."""
+    return {**meta, CONTENT_HASH: _content_digest(meta)}
+
+
 def write_model(state: dict, directory: str | Path) -> Path:
     """Write a learner's ``state_dict()`` to ``directory`` (created if needed; see
     :func:`check_model_destination`); returns the directory."""
@@ -98,13 +115,13 @@ def write_model(state: dict, directory: str | Path) -> Path:
     tensors = buffer.getvalue()
     digest = hashlib.sha256(tensors).hexdigest()
     tensor_name = f"globals-{digest[:16]}.npz"
-    meta = {
+    meta = signed({
         "format": FORMAT,
         "version": FORMAT_VERSION,
         **{k: v for k, v in state.items() if k != "globals"},
         "globals_file": tensor_name,
         "globals_sha256": digest,
-    }
+    })
     # Interrupts are held back so that the clean-up after the commit is not skipped; a kill -9 may still
     # land anywhere, and leaves the old model or the new one, plus files the next save removes.
     directory.mkdir(parents=True, exist_ok=True)  # to be locked
@@ -181,6 +198,9 @@ def _read_json(directory: Path, any_version: bool = False) -> dict:
             f"{path}: model format version {meta.get('version')!r}, this groundlang reads version {FORMAT_VERSION}; "
             "train the model again with `groundlang train`"
         )
+    if not any_version and meta.get(CONTENT_HASH) != _content_digest(meta):
+        raise ModelFormatError(f"{path}: contents do not match the hash it records ({CONTENT_HASH}): damaged, or "
+                               "edited by hand; save the model again, or write it with groundlang.model_io.signed")
     return meta
 
 
@@ -199,7 +219,8 @@ def read_model(directory: str | Path, from_state_dict: Callable[[dict], T]) -> T
 def _read_model(directory: Path, from_state_dict: Callable[[dict], T]) -> T:
     meta = _read_json(directory)
     try:
-        fields = {k: v for k, v in meta.items() if k not in ("format", "version", "globals_file", "globals_sha256")}
+        fields = {k: v for k, v in meta.items()
+                  if k not in ("format", "version", "globals_file", "globals_sha256", CONTENT_HASH)}
         learner = from_state_dict(fields, where=f"{directory / MODEL_JSON}")
         tensor_name = meta["globals_file"]
         if not isinstance(tensor_name, str) or not _TENSOR_FILE.fullmatch(tensor_name):

@@ -30,7 +30,7 @@ from hypothesis import strategies as st
 from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus
 from groundlang.learner import Learner
-from groundlang.model_io import FORMAT_VERSION, ModelFormatError
+from groundlang.model_io import FORMAT_VERSION, ModelFormatError, signed
 from test_corpus import MALFORMED  # the corpus-file rows and their messages, shared with test_corpus
 
 TESTS = Path(__file__).parent
@@ -59,7 +59,7 @@ def _edit_meta(d: Path, change: Callable[[dict], None]) -> None:
     """Rewrite model.json with ``change`` applied to its contents."""
     meta = json.loads((d / "model.json").read_text())
     change(meta)
-    (d / "model.json").write_text(json.dumps(meta))
+    (d / "model.json").write_text(json.dumps(signed(meta)))
 
 
 def _tensors(d: Path) -> Path:
@@ -611,7 +611,7 @@ def test_fuzz_model_json_fields(trained_model, tmp_path_factory, key, value, dro
         meta.pop(key)
     else:
         meta[key] = value
-    (d / "model.json").write_text(json.dumps(meta))
+    (d / "model.json").write_text(json.dumps(signed(meta)))
     _loads_or_refuses(d)
 
 
@@ -627,7 +627,7 @@ def test_a_model_json_section_of_the_wrong_kind_is_named(trained_model, tmp_path
     d = _fresh_copy(trained_model, tmp_path_factory)
     meta = json.loads((d / "model.json").read_text())
     meta[key] = value
-    (d / "model.json").write_text(json.dumps(meta))
+    (d / "model.json").write_text(json.dumps(signed(meta)))
     with pytest.raises(ModelFormatError, match=f"{key} is {expected}"):
         Learner.load(d)
 

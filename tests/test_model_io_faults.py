@@ -27,7 +27,7 @@ from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
 from groundlang.learner import Learner
 from groundlang.logic import storage
-from groundlang.model_io import ModelFormatError
+from groundlang.model_io import ModelFormatError, signed
 
 EXAMPLES = example_corpus_path()
 REPO = Path(__file__).parent.parent
@@ -182,7 +182,7 @@ def test_a_save_waits_for_a_load_and_a_load_for_a_save_of_the_same_folder(learne
 def _edit(d: Path, change) -> None:
     meta = json.loads((d / "model.json").read_text())
     change(meta)
-    (d / "model.json").write_text(json.dumps(meta))
+    (d / "model.json").write_text(json.dumps(signed(meta)))
 
 
 def _npy_header(shape: tuple[int, ...], dtype: str = "<f4") -> bytes:
@@ -348,7 +348,7 @@ def test_cli_follow_in_a_state_of_another_palette_is_one_line(learners, tmp_path
 def _edit_palette(model, **entry):
     meta = json.loads((model / "model.json").read_text())
     meta["palettes"][0].update(entry)
-    (model / "model.json").write_text(json.dumps(meta))
+    (model / "model.json").write_text(json.dumps(signed(meta)))
 
 
 def test_a_palette_name_read_from_a_model_is_never_opened_as_a_path(learners, tmp_path, capsys, monkeypatch):
@@ -396,3 +396,26 @@ def test_a_model_whose_palette_record_cannot_be_a_palette_is_refused_at_load(lea
         assert code == 2 and len(err.splitlines()) == 1 and f"{model}" in err and piece in err, err
 
 
+
+
+@pytest.mark.parametrize("damage", ["two words swapped", "one letter changed", "a setting changed"])
+def test_damage_to_model_json_is_refused(learners, tmp_path, damage):
+    """model.json records the hash of its fields: an edit that leaves valid JSON of valid values (two words
+    of the vocabulary swapped would read every command differently) is refused, naming the file."""
+    model = learners[0].save(tmp_path / "m")
+    text = (model / "model.json").read_text()
+    meta = json.loads(text)
+    words = meta["vocabulary"]["words"]
+    if damage == "two words swapped":
+        a, b = words[1], words[2]
+        text = text.replace(json.dumps(a), "\0").replace(json.dumps(b), json.dumps(a)).replace("\0", json.dumps(b))
+    elif damage == "one letter changed":
+        text = text.replace(json.dumps(words[1]), json.dumps(words[1][:-1] + "q"), 1)
+    else:
+        text = text.replace('"word_concentration": ', '"word_concentration": 1', 1)
+    assert text != (model / "model.json").read_text()
+    (model / "model.json").write_text(text)
+    with pytest.raises(ModelFormatError, match=r"model.json: contents do not match the hash it records"):
+        Learner.load(model)
+    (model / "model.json").write_text(json.dumps(signed({k: v for k, v in json.loads(text).items()})))
+    Learner.load(model)  # written on purpose, and still valid: it loads
