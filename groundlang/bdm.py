@@ -9,6 +9,8 @@ A ``.bdm`` file holds blocks separated by blank lines::
     ---                  (between pairs)
     ...                  (three pairs per command in the published corpus)
 
+Blank lines beside a ``---`` do not end the command: a ``---`` promises another pair of the same one.
+
 A state is ``{agent0 (agent): [x: {5} y: {6} direction: {south} ] , room0 (room): [top: {4} left: {0}
 bottom: {0} right: {8} colour: {red} ] , block0 (block): [x: {6} y: {6} shape: {chair} colour: {blue} ]
 , ... , }``: objects ``NAME (CLASS): [attribute: {value} ...]``; colours and shapes are names of the
@@ -206,7 +208,11 @@ def read_bdm(path: str | Path, palette: str | Palette = DEFAULT_PALETTE) -> list
             continue
         start_line = i + 1
         block = []
-        while i < len(lines) and lines[i].strip():
+        while i < len(lines):
+            if not lines[i].strip():
+                i = _past_blank_beside_separator(lines, i, block)
+                if not lines[i].strip():
+                    break
             if len(lines[i]) > _MAX_LINE:
                 raise CorpusError(f"{path}, line {i + 1}: a line of {len(lines[i])} characters; expected at most {_MAX_LINE}")
             block.append((i + 1, lines[i].strip()))
@@ -215,6 +221,21 @@ def read_bdm(path: str | Path, palette: str | Palette = DEFAULT_PALETTE) -> list
     if not commands:
         raise CorpusError(f"{path}: no command in the file; expected blocks of a command and (start, end) pairs")
     return commands
+
+
+def _past_blank_beside_separator(lines: list[str], i: int, block: list[tuple[int, str]]) -> int:
+    """Where the block continues past the blank line ``i``: a ``---`` only ever separates two pairs of one
+    command, so blank lines before it, or between it and the start state after it, are read through (a
+    stray blank line there is not a new command whose text is ``---``). Else ``i`` itself: the block ends."""
+    j = i
+    while j < len(lines) and not lines[j].strip():
+        j += 1
+    if j == len(lines):
+        return i
+    after = lines[j].strip()
+    if after == "---" or (block[-1][1] == "---" and after.startswith("{")):
+        return j
+    return i
 
 
 def _in_layout_of(first: State, names: tuple[str, ...], last: State, end_names: tuple[str, ...]) -> State | None:
@@ -236,6 +257,9 @@ def _in_layout_of(first: State, names: tuple[str, ...], last: State, end_names: 
 
 def _command(path: Path, line: int, block: list[tuple[int, str]], palette) -> Command:
     text = block[0][1]
+    if text == "---":
+        raise CorpusError(f"{path}, line {line}: --- where a command was expected; --- separates two pairs of one "
+                          "command, after its text")
     if text.startswith("{"):
         raise CorpusError(f"{path}, line {line}: a block starts with a state; expected the command first")
     pairs = []
@@ -261,6 +285,11 @@ def _command(path: Path, line: int, block: list[tuple[int, str]], palette) -> Co
             if rest[k][1] != "---":
                 raise CorpusError(f"{path}, line {rest[k][0]}: expected --- between pairs, found {rest[k][1][:40]!r}")
             k += 1
+            # A file cut off after a separator would otherwise lose the pair it promised silently.
+            if k == len(rest) or not rest[k][1].startswith("{"):
+                found = f" (line {rest[k][0]} is {rest[k][1][:40]!r}, not a start state)" if k < len(rest) else ""
+                raise CorpusError(f"{path}, line {rest[k - 1][0]}: --- at line {rest[k - 1][0]} is followed by no "
+                                  f"pair{found}; --- separates two pairs of one command (remove it, or add the pair)")
     if not pairs:
         raise CorpusError(f"{path}, line {line}: the command {text[:40]!r} has no (start, end) pair")
     return Command(path, line, text, tuple(pairs))

@@ -96,6 +96,13 @@ def test_check_reports_the_fixture():
     # does not shift the line numbers after it; a file with CR alone as its line end is read as an editor shows it
     ("go\u2028now\x0cplease\x85\nSTATE\nSTATE\nfalse\n", "line 4: expected the word true"),
     ("go\rSTATE\rSTATE\rfalse\r", "line 4: expected the word true"),
+    # a --- promises another pair: a file cut off after one is refused, not read as one pair fewer
+    ("go\nSTATE\nSTATE\ntrue\n---\n", "line 5: --- at line 5 is followed by no pair"),
+    ("go\nSTATE\nSTATE\ntrue\n---\n\nmore\nSTATE\nSTATE\ntrue\n", "line 5: --- at line 5 is followed by no pair;"),
+    ("go\nSTATE\nSTATE\ntrue\n---\nmore\nSTATE\nSTATE\ntrue\n", "line 5: --- at line 5 is followed by no pair (line 6 is 'more'"),
+    # --- is never a command's text
+    ("---\nSTATE\nSTATE\ntrue\n", "line 1: --- where a command was expected"),
+    ("\n---\n\ngo\nSTATE\nSTATE\ntrue\n", "line 2: --- where a command was expected"),
 ])
 def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
     room = "room0 (room): [top: {4} left: {0} bottom: {0} right: {4} colour: {%s} ]"
@@ -113,6 +120,17 @@ def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
     with pytest.raises(CorpusError) as info:
         read_bdm(path)
     assert piece in str(info.value) and str(path) in str(info.value)
+
+
+def test_blank_lines_beside_a_separator_do_not_end_the_command(tmp_path):
+    """A stray blank line before or after a --- was read as a new command whose text is ---."""
+    lines = (FIXTURE / "small.bdm").read_text(encoding="utf-8").splitlines()
+    path = tmp_path / "blank.bdm"
+    path.write_text("\n".join(lines[:4] + [""] + lines[4:5] + ["", ""] + lines[5:]) + "\n", encoding="utf-8")
+    commands, fixture = read_bdm(path), read_bdm(FIXTURE / "small.bdm")
+    assert [c.text for c in commands] == [c.text for c in fixture]
+    assert [[p.start for p in c.pairs] for c in commands] == [[p.start for p in c.pairs] for c in fixture]
+    assert [p.line for p in commands[0].pairs] == [2, 9, 13]
 
 
 @pytest.mark.slow
