@@ -176,9 +176,13 @@ def test_evaluate_on_pairs_refuses_what_it_would_ignore(args, message):
 def test_evaluate_on_pairs_needs_a_test_file_or_a_split():
     run = _cli("evaluate", "--corpus", str(FIXTURE / "small.bdm"))
     assert run.returncode != 0 and "--test TEST.bdm and --holdout F" in run.stderr and "Traceback" not in run.stderr
+
+def test_shortest_plan_demonstrations_without_separate_layouts_are_refused_in_the_options_names():
     run = _cli("evaluate", "--corpus", str(FIXTURE / "small.bdm"), "--holdout", "0.5",
                "--demonstrations", "shortest-plan")
-    assert run.returncode != 0 and "layouts='separate'" in run.stderr and "Traceback" not in run.stderr
+    assert run.returncode == 2 and "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1
+    assert "--demonstrations shortest-plan: --layouts shared (the default)" in run.stderr
+    assert "pass --layouts separate" in run.stderr and "layouts='" not in run.stderr  # not the Python call's words
 
 
 SHARED = Path(__file__).parent.parent.parent / "shared" / "data" / "williams2018" / "train"

@@ -153,6 +153,10 @@ def run_pairs(args: argparse.Namespace) -> int:
     if given:
         raise ValueError(f"{', '.join(given)}: for a *.txt corpus with labels; a .bdm corpus is scored by what its "
                          "test pairs show")
+    if args.layouts == "shared" and args.demonstrations != "end-state":
+        # Said here in the options' names: training_instances would say it in its arguments' (layouts='shared').
+        raise ValueError(f"--demonstrations {args.demonstrations}: --layouts shared (the default) multiplies "
+                         "end-state evidence across a command's layouts; pass --layouts separate too")
     palette = args.palette or DEFAULT_PALETTE
     words = extra_words(args.lexicon)
     library = default_library(args.library)
