@@ -27,7 +27,7 @@ from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
 from groundlang.model.encoding import Batch, Observation
-from groundlang.model.interpretations import Interpretation, interpretations, without_unbroken_held_parts
+from groundlang.model.interpretations import Interpretation, NoTaskError, interpretations, without_unbroken_held_parts
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.language_model_base import word_meanings
 from groundlang.model.language_models import BagOfWords, LanguageModel, get_language_model
@@ -144,7 +144,13 @@ class Learner:
         if any(words.values()):
             self.add_words(words)
         shown = [getattr(inst, "actions", None) is not None for inst in instances]
-        interps = [self._interpretations(inst.initial_state, demonstrated=all(shown)) for inst in instances]
+        interps = []
+        for inst in instances:
+            try:
+                interps.append(self._interpretations(inst.initial_state, demonstrated=all(shown)))
+            except NoTaskError as exc:  # one state of many: say whose (corpus readers leave most such out)
+                where = f"{inst.path}, line {inst.line}" if hasattr(inst, "line") else str(inst.path)
+                raise NoTaskError(f"{where}: {exc}") from None
         if not any(shown):  # (start, end) pairs: end states' likelihoods (inference.end_states, shared_meaning)
             behaviour = end_state_behaviour(instances, interps, self.library)
         elif all(shown):

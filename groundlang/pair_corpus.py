@@ -13,7 +13,8 @@ once per distinct pair and kept in the cache folder (``inference.evidence_cache`
 to enumerate is scored, with end-state evidence, in the relevance abstraction where the toys it moves
 move (``inference.shared_meaning``); one too large even for that is skipped and counted; one whose end
 state cannot be reached from its start is an inconsistent demonstration (an error naming file and
-line, or skipped with ``skip_inconsistent``).
+line, or skipped with ``skip_inconsistent``), and so is one whose start state admits no task of the
+library (every grounding impossible or already true): it can be evidence of no reading.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.relevance import abstraction_bound, exact_fits, relevant_toys
 from groundlang.model.state_search import StateKeyError
 from groundlang.model.statespace import StateSpaceError
+from groundlang.model.tasks import candidate_tasks
 from groundlang.model.world import State, replay
 from groundlang.pair_tasks import REACHABILITY_MAX_STATES, shortest_actions
 
@@ -151,8 +153,9 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
                        skip_inconsistent: bool = False, max_states: int = REACHABILITY_MAX_STATES,
                        layouts: str = "shared", cache_dir=None) -> TrainingPairs:
     """The instances of ``commands``' pairs (see the module docstring); pairs too large to enumerate are
-    skipped as ``"too large"``, unreachable ones raise InconsistentDemonstration unless
-    ``skip_inconsistent`` (then skipped as ``"unreachable"``). With ``layouts="shared"`` (end-state
+    skipped as ``"too large"``, unreachable ones and those whose start state admits no task raise
+    InconsistentDemonstration unless ``skip_inconsistent`` (then skipped as ``"unreachable"`` or
+    ``"no task"``). With ``layouts="shared"`` (end-state
     evidence only) a command's usable pairs make one :class:`PairedCommand`. End-state evidence is read
     from and written to the cache folder ``cache_dir`` (``inference.evidence_cache``; None: the
     default, False: none)."""
@@ -195,6 +198,14 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
                         Path(command.path), pair.line, 0)
                 out.skipped.append((command, pair, "unreachable"))
                 continue
+            if not _admits_task(instance, library):
+                if not skip_inconsistent:
+                    raise InconsistentDemonstration(
+                        f"{command.path}, line {pair.line}: no task of the library can be carried out from the start "
+                        "state (every grounding is impossible or already true), so the pair is evidence of none "
+                        "(pass --skip-inconsistent to skip such pairs)", Path(command.path), pair.line, 0)
+                out.skipped.append((command, pair, "no task"))
+                continue
             usable.append(instance)
         if layouts == "shared" and usable:
             usable = [PairedCommand(command.path, command.line, command.text,
@@ -205,6 +216,15 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
     if cache is not None:
         cache.report()
     return out
+
+
+def _admits_task(instance, library: TaskLibrary) -> bool:
+    """Whether some task can be asked in the instance's start state. Training would otherwise stop at
+    the first state that admits none (interpretations' NoTaskError), naming no file or line."""
+    evidence = getattr(instance, "evidence", ())
+    if evidence:  # end-state evidence already holds the start's candidate goals: no second solve
+        return bool(evidence[0].goals)
+    return bool(candidate_tasks(instance.initial_state, library))
 
 
 def _fits(pair, demonstrations: str, max_states: int) -> bool:

@@ -4,7 +4,8 @@ Train on every usable pair of the training commands (``pair_corpus``), then foll
 from each of its start states. An execution is correct when its final state satisfies the task the
 test command's pairs show (``pair_tasks.pair_task``: the relations that hold in all its end states and
 not in all its start states, the data README's rule); a command is correct when all its executions
-are. A test command whose pairs show no task cannot be scored and is counted apart. A layout too large
+are. A test command whose pairs show no task cannot be scored and is counted apart, and so is an
+execution from a start state that admits no task of the library (nothing to follow). A layout too large
 to enumerate is followed in its relevance abstraction; one too large even for that is counted as
 skipped (and wrong), never dropped silently. Training skips pairs too large to enumerate (counted).
 """
@@ -21,6 +22,7 @@ from groundlang.confidence import calibration_report, format_calibration
 from groundlang.evaluation import wilson_interval
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
 from groundlang.logic.atoms import Atom, format_goal
+from groundlang.model.interpretations import NoTaskError
 from groundlang.model.statespace import StateSpaceError
 from groundlang.pair_corpus import training_instances
 from groundlang.pair_tasks import REACHABILITY_MAX_STATES, command_task, lifted_facts
@@ -66,6 +68,7 @@ class PairEvaluation:
     seconds_following: float
     demonstrations: str
     layouts: str
+    no_task_executions: int = 0  # from a start state that admits no task: not scored
     executions: list[dict] = field(default_factory=list)
     # Confidence (the posterior probability of the goal acted on) against correctness
     # (groundlang.confidence.calibration_report): per execution, and per command with the least
@@ -104,6 +107,9 @@ class PairEvaluation:
             f"per command (every pair right): {share(self.commands_correct, self.scored_commands)}",
             f"commands whose text is not in training, per execution: {share(self.unseen_correct, self.unseen_n)}",
         ]
+        if self.no_task_executions:
+            lines.append(f"executions not scored (their start state admits no task of the library): "
+                         f"{self.no_task_executions}")
         if self.skipped_executions:
             lines.append(f"executions skipped (too large even for the relevance abstraction; counted wrong "
                          f"above): {self.skipped_executions}")
@@ -170,17 +176,23 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     rows: list[dict] = []
     per_task: dict[str, list[int]] = defaultdict(lambda: [0, 0])
     failures: dict[str, dict[str, int]] = defaultdict(dict)  # kind -> the relations left unmet -> count
-    correct = n = commands_correct = scored = no_task = unseen_n = unseen_correct = skipped = 0
+    correct = n = commands_correct = scored = no_task = unseen_n = unseen_correct = skipped = unscored = 0
     confident: list[tuple[float, bool]] = []  # (confidence, correct) per scored execution
     command_confident: list[tuple[float, bool]] = []  # the same per scored command, its least confident layout
     for index, (command, task) in enumerate(zip(test, tasks)):
         unseen = command.text.strip().lower() not in seen
         all_right = True
         least = 1.0  # confidence of the command's least confident layout (0 for a skipped one)
+        followed = 0  # executions of the command that could be scored
         for k, pair in enumerate(command.pairs):
             row = {"index": index, "pair": k, "command": command.text}
             try:  # a layout too large to enumerate is planned in its relevance abstraction (model.relevance)
                 result = learner.follow(command.text, pair.start)
+            except NoTaskError as exc:  # nothing can be asked there, so no reading is right or wrong
+                row.update(goal=None, final_state=None, not_scored=f"{command.path}, line {pair.line}: {exc}")
+                unscored += 1
+                rows.append(row)
+                continue
             except StateSpaceError as exc:  # what neither the exact space nor the abstraction can hold
                 row.update(goal=None, final_state=None, skipped=str(exc), confidence=0.0)
                 skipped += 1
@@ -209,13 +221,15 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                     unseen_correct += hit
             all_right &= hit
             least = min(least, row["confidence"])
+            followed += 1
             rows.append(row)
-        if task:
+        if task and followed:
             scored += 1
             commands_correct += all_right
             command_confident.append((least, all_right))
-        else:
+        elif not task:
             no_task += 1
+        # (A task shown, yet no start state admits one: its executions are counted as not scored.)
     finished = time.perf_counter()
 
     def report(pairs: list[tuple[float, bool]]) -> dict:
@@ -229,6 +243,6 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         unseen_n=unseen_n, unseen_correct=unseen_correct, skipped_executions=skipped,
         per_task={k: tuple(v) for k, v in per_task.items()}, failures=dict(failures),
         seconds_training=trained - started, seconds_following=finished - trained,
-        demonstrations=demonstrations, layouts=layouts, executions=rows,
+        demonstrations=demonstrations, layouts=layouts, no_task_executions=unscored, executions=rows,
         calibration=report(confident), command_calibration=report(command_confident),
     )

@@ -66,6 +66,7 @@ from groundlang.model.world import WORLD_CLASSES, State
 
 __all__ = [
     "Interpretation",
+    "NoTaskError",
     "RoleBinding",
     "interpretations",
     "unbroken_held_parts",
@@ -219,6 +220,12 @@ def start_rooms(state: State) -> tuple[frozenset[str], bool]:
     return frozenset(names), False
 
 
+class NoTaskError(ValueError):
+    """No task of the library can be asked in a state: every grounding is impossible or already true.
+    Its own class so that a caller reading many states (training, evaluation) can say which one, or
+    leave that one out, without catching every ValueError."""
+
+
 def interpretations(state: State, library: TaskLibrary, enumerate_constraints: bool = True,
                     relation_words: bool = False, relational: bool = False,
                     held_parts: bool = False, demonstrated: bool = False, start_role: bool = True,
@@ -252,7 +259,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     ``bystander_roles`` gives each class of bystander a role of its own (``other:room``); without it they
     share :data:`BYSTANDER_ROLE` (the parse model's settings of these names).
 
-    Raises ValueError when no lifted task has a grounding that is not already
+    Raises NoTaskError (a ValueError) when no lifted task has a grounding that is not already
     true in ``state`` (nothing could be asked of the agent).
     """
     candidates = [
@@ -261,7 +268,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
         if len(task.goal) == 1 or not task.holding or held_parts
     ]
     if not candidates:
-        raise ValueError(
+        raise NoTaskError(
             "no task of the library can be carried out from this state "
             "(every grounding is impossible or already true)"
         )

@@ -366,3 +366,65 @@ def test_a_pair_with_more_blocks_than_a_state_key_holds_is_skipped_as_too_large(
     command = Command(Path("crowded.bdm"), 1, "go left", (Pair(start, end, 2, names),))
     made = training_instances([command], williams_library, "end-state", cache_dir=False)
     assert made.instances == [] and made.skipped_counts() == {"too large": 1}
+
+
+# One room with the agent in it: "go to the red room" is already true, and nothing else can be asked.
+NO_TASK = ("{agent0 (agent): [x: {1} y: {1} ] , room0 (room): [top: {4} left: {0} bottom: {0} right: {4} "
+           "colour: {red} ] , }")
+
+
+def _no_task_command():
+    from groundlang.bdm import Command, Pair
+
+    state, names = parse_bdm_state(NO_TASK)
+    return Command(Path("x.bdm"), 27, "go to the red room", (Pair(state, state, 28, names),))
+
+
+@pytest.mark.parametrize("demonstrations, layouts", [("end-state", "shared"), ("shortest-plan", "separate")])
+def test_a_pair_whose_start_admits_no_task_is_refused_by_line_or_skipped_as_no_task(
+        williams_commands, williams_library, demonstrations, layouts):
+    """Training stopped at such a pair naming no file or line, even with skip_inconsistent: like an
+    unreachable pair, it is now refused by its line, or skipped and counted."""
+    from groundlang.corpus import InconsistentDemonstration
+
+    commands = [williams_commands[0], _no_task_command()]
+    with pytest.raises(InconsistentDemonstration, match=r"^x\.bdm, line 28: no task of the library can be carried "
+                                                        r"out from the start state .*pass --skip-inconsistent"):
+        training_instances(commands, williams_library, demonstrations, layouts=layouts, cache_dir=False)
+    made = training_instances(commands, williams_library, demonstrations, skip_inconsistent=True, layouts=layouts,
+                              cache_dir=False)
+    assert made.skipped_counts() == {"no task": 1} and set(made.commands) == {0}
+
+
+def test_fitting_on_a_state_that_admits_no_task_names_its_file_and_line(williams_library):
+    """The learner's own check, for instances no corpus reader left out (a library with held parts)."""
+    from groundlang.learner import Learner
+    from groundlang.model.interpretations import NoTaskError
+
+    state, _ = parse_bdm_state(NO_TASK)
+    instance = PairInstance(Path("x.bdm"), 28, "go to the red room", state, state)
+    with pytest.raises(NoTaskError, match=r"^x\.bdm, line 28: no task of the library can be carried out"):
+        Learner(library=williams_library, cache_dir=False).fit([instance])
+
+
+def test_an_execution_whose_start_admits_no_task_is_not_scored_and_follow_names_the_state_file(
+        williams_commands, williams_library, tmp_path, capsys):
+    from groundlang.cli import main
+    from groundlang.learner import Learner
+    from groundlang.pair_evaluation import evaluate_pairs
+
+    result = evaluate_pairs(williams_commands, [_no_task_command()], williams_library,
+                            learner_options={"cache_dir": False})
+    assert (result.no_task_executions, result.executions_n, result.no_task_commands) == (1, 0, 1)
+    (row,) = result.executions
+    assert row["goal"] is None and "correct" not in row
+    assert row["not_scored"].startswith("x.bdm, line 28: no task of the library can be carried out")
+    assert "executions not scored (their start state admits no task of the library): 1" in result.summary()
+    Learner(library=williams_library, cache_dir=False).fit(
+        training_instances(williams_commands, williams_library, cache_dir=False).instances).save(tmp_path / "model")
+    (tmp_path / "red.state").write_text(NO_TASK + "\n", encoding="utf-8")
+    assert main(["follow", "--model", str(tmp_path / "model"), "--env", str(tmp_path / "red.state"),
+                 "go to the red room"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"groundlang follow: error: {tmp_path / 'red.state'}: no task of the library can be carried out "
+                   "from this state (every grounding is impossible or already true)")

@@ -46,7 +46,7 @@ def register(subparsers) -> None:
     add_em_acceleration_option(p)
     p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes; no more than the folds or the cores)")
     p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
-    p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
+    p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics, and .bdm pairs whose start state admits no task, instead of stopping")
     p.add_argument("--limit", type=positive_int, help="score only the first N held-out instances (a *.txt corpus with labels; a .bdm "
                    "corpus is scored by its test pairs, every one)")
     p.add_argument("--cold-folds", action="store_true",

@@ -123,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
     from groundlang.logic.palette_files import palette_names
+    from groundlang.model.interpretations import NoTaskError
     from groundlang.model.palette import Palette, get_palette
     from groundlang.wording import goal_phrase, labelled_goal
 
@@ -150,7 +151,10 @@ def run(args: argparse.Namespace) -> int:
     if args.lexicon:
         learner.add_words(args.lexicon)
     threshold = None if args.guess else args.min_confidence
-    result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
+    try:
+        result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
+    except NoTaskError as exc:  # the state is at fault, not the command or the model: name its file
+        raise NoTaskError(f"{args.env}: {exc}") from None
     if not args.json:
         # Shown as typed unless it holds control characters, which a terminal would obey (an escape
         # sequence clears the screen): then as a Python string literal, every character visible.

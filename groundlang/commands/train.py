@@ -24,7 +24,7 @@ def register(subparsers) -> None:
     add_lexicon_option(p)
     p.add_argument("--library", metavar="LP", action="append", help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the "
                    "williams2018 domain)" + LIBRARY_NAMES)
-    p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
+    p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics, and .bdm pairs whose start state admits no task, instead of stopping")
     p.add_argument("--cache-dir", metavar="DIR", help="cache of behaviour likelihoods and .bdm pairs' end-state evidence "
                    "(default $GROUNDLANG_CACHE or ./.groundlang-cache)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write that cache")
