@@ -25,7 +25,7 @@ from pyro.infer.autoguide.initialization import init_to_mean, init_to_value
 from pyro import poutine
 from pyro.poutine.util import site_is_subsample
 
-from groundlang.inference.em import EM_ACCELERATIONS, run_em
+from groundlang.inference.em import EM_ACCELERATIONS, normalise_rows, run_em
 from groundlang.model.encoding import Batch
 from groundlang.model.generative import LOCAL_SITES, global_sizes, instance_model
 from groundlang.model.language_models import LanguageModel
@@ -178,7 +178,9 @@ def _fit_em(model, sites, lm, steps, init, tol, progress, acceleration) -> FitRe
             counts = {name: (leaf * leaf.grad).clamp_min(1e-12) for name, leaf in leaves.items()}
         if bar is not None:  # one tick per EM step, accepted or not
             bar.update(1)
-        return {name: c / c.sum(-1, keepdim=True) for name, c in counts.items()}, -float(objective.detach())
+        # Normalised in float64 (normalise_rows): float32 rows of a large vocabulary drift outside the
+        # tolerance of Pyro's Simplex check, which the next step's log_prob of the Dirichlet prior applies.
+        return {name: normalise_rows(c) for name, c in counts.items()}, -float(objective.detach())
 
     def tick(loss: float) -> None:
         if bar is not None:
