@@ -6,7 +6,7 @@
 
 matplotlib is imported inside the functions (Agg, no pyplot, no display);
 files are written atomically (a temporary file in the same folder, then
-``os.replace``).
+``os.replace``; a FIFO or a device is written into, see logic.storage).
 """
 
 from __future__ import annotations
@@ -62,10 +62,16 @@ def save_animation(path: str | Path, states: Sequence[State], title: str | None 
     draw(0)
     fig.tight_layout()
     animation = FuncAnimation(fig, draw, frames=frames, blit=False, repeat=False)
+    import tempfile
+
     from groundlang.logic.storage import atomic_path
 
-    with atomic_path(path, suffix=".gif") as tmp:
-        animation.save(str(tmp), writer=PillowWriter(fps=fps), dpi=dpi)
+    # Drawn into a private file first: the GIF writer seeks, which a FIFO given as the path cannot.
+    with tempfile.TemporaryDirectory(prefix="groundlang-gif-") as folder:
+        drawn = Path(folder) / "animation.gif"
+        animation.save(str(drawn), writer=PillowWriter(fps=fps), dpi=dpi)
+        with atomic_path(path, suffix=".gif") as tmp, open(tmp, "wb") as handle:
+            handle.write(drawn.read_bytes())
     return path
 
 

@@ -126,11 +126,12 @@ def write_model(state: dict, directory: str | Path) -> Path:
     # land anywhere, and leaves the old model or the new one, plus files the next save removes.
     directory.mkdir(parents=True, exist_ok=True)  # to be locked
     with folder_lock(directory, exclusive=True), deferred_interrupts():
-        storage.write_atomically(directory / tensor_name, tensors)
+        storage.write_atomically(directory / tensor_name, tensors, follow=False)
         # The folder is synced after each rename: after a power cut, model.json must not name tensors whose
         # rename was lost, nor the old tensors be gone while the old model.json is back.
         _sync_folder(directory)
-        storage.write_atomically(directory / MODEL_JSON, json.dumps(meta, indent=1).encode("utf-8"))  # the commit
+        meta_bytes = json.dumps(meta, indent=1).encode("utf-8")
+        storage.write_atomically(directory / MODEL_JSON, meta_bytes, follow=False)  # the commit
         _sync_folder(directory)
         _remove_leftovers(directory, keep=tensor_name)
     return directory

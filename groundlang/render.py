@@ -6,6 +6,7 @@ pyplot), so importing this module costs nothing and needs no display.
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
@@ -227,9 +228,12 @@ def save_picture(path: str | Path, state: State, trajectory=None, title: str | N
     draw_state(state, ax=ax, trajectory=trajectory, title=title)
     from groundlang.logic.storage import atomic_path
 
-    with atomic_path(path) as tmp:
-        # "tight" grows the canvas to take in the legend below the map and a long title.
-        fig.savefig(tmp, format=fmt, dpi=100, bbox_inches="tight", pad_inches=0.15)
+    # Drawn in memory first: the PNG writer seeks, which a FIFO given as --out cannot.
+    image = io.BytesIO()
+    # "tight" grows the canvas to take in the legend below the map and a long title.
+    fig.savefig(image, format=fmt, dpi=100, bbox_inches="tight", pad_inches=0.15)
+    with atomic_path(path) as tmp, open(tmp, "wb") as handle:
+        handle.write(image.getvalue())
     return path
 
 

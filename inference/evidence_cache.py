@@ -171,7 +171,7 @@ class EvidenceCache:
         contents = _contents(evidence)
         entry = {"key": key, **contents, "checksum": _checksum(key, contents)}
         try:
-            write_atomically(path, json.dumps(entry, separators=(",", ":")), durable=False)
+            write_atomically(path, json.dumps(entry, separators=(",", ":")), durable=False, follow=False)
         except OSError as exc:
             logger.warning("evidence cache %s cannot be written (%s: %s); going on without writing to it",
                            self.root, exc.filename or self.root, exc.strerror or exc)

@@ -169,7 +169,8 @@ def _write_entry(path: Path, key: str, value: float, goal: Sequence[Atom]) -> No
     value = float(value)
     entry = {"key": key, "goal": " ".join(str(a) for a in goal), "log_likelihood": value,
              "checksum": _checksum(key, repr(value))}
-    write_atomically(path, json.dumps(entry), durable=False)  # a lost entry is recomputed: no fsync per entry
+    # A lost entry is recomputed: no fsync per entry. An entry is ours: a FIFO planted there is replaced.
+    write_atomically(path, json.dumps(entry), durable=False, follow=False)
 
 
 def behaviour_likelihood_table(

@@ -5,7 +5,12 @@ renamed onto the target only when writing succeeded, so an interruption or
 a crash leaves the previous file (or none), never half of one. Temporary
 files are created private to the owner and then get the permissions a
 plain ``open`` would give. Every OS error raised while writing names the
-path it concerns (a full disk says which file it was writing).
+path the caller gave (a full disk says which file it was writing, never
+the temporary file's name). A symlink is written through: its target is
+replaced, in the target's folder. A character device or a FIFO
+(``/dev/null``, a pipe) is written into as ``>`` would, since renaming onto
+it would replace the device itself; a folder, a socket or a block device
+is refused.
 
 :func:`read_limited` is how groundlang reads a file a user names: regular
 files only (a FIFO would hang, ``/dev/zero`` would fill memory) and at most
@@ -78,22 +83,66 @@ _CREATE_FLAGS = os.O_RDWR | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0
 _ATTEMPTS = 100
 
 
+def _target(path: Path) -> tuple[Path, os.stat_result | None]:
+    """Where writing ``path`` lands (a symlink's target, as ``open`` follows it) and its status (None if it
+    does not exist yet); refused where no file can be written: a folder, a socket, a block device."""
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    try:
+        info = os.stat(target)
+    except (FileNotFoundError, NotADirectoryError):  # below a file: check_folder or mkdir says so
+        return target, None
+    except OSError as exc:  # a symlink loop: name what the user gave
+        raise OSError(exc.errno, exc.strerror, str(path)) from None
+    if stat.S_ISDIR(info.st_mode):
+        raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+    if stat.S_ISSOCK(info.st_mode) or stat.S_ISBLK(info.st_mode):  # overwriting a disk is never what was meant
+        raise FileRefused(f"{path}: {_kind(info.st_mode)}; expected the path of a file to write")
+    return target, info
+
+
+def _naming(exc: BaseException, given: Path, names: set[str]) -> BaseException:
+    """``exc`` naming ``given`` where it names one of ``names`` (the temporary file, a symlink's target) or
+    no file at all (a failed write or fsync: a full disk); other exceptions as they are."""
+    if not isinstance(exc, OSError) or exc.errno is None:
+        return exc
+    if exc.filename is not None and str(exc.filename) not in names:
+        return exc
+    return OSError(exc.errno, exc.strerror or str(exc), str(given))  # the subclass its errno gives
+
+
 @contextmanager
-def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]:
+def atomic_path(path: str | os.PathLike, suffix: str = ".tmp", *, follow: bool = True) -> Iterator[Path]:
     """Yield a temporary path in ``path``'s folder; rename it onto ``path`` if the block succeeds.
 
     The folder is created if needed. On any exception (KeyboardInterrupt
-    included) the temporary file is removed and ``path`` is left untouched.
-    The temporary file is named before it is created and created inside the
-    guarded region, so an interrupt arriving at any point, even right after
-    the file appears, cannot leave it behind (one interrupt landing between
-    the system call's return and the assignment of its descriptor leaks that
-    descriptor until the process ends; Python gives no way to close it).
-    The caller writes the yielded path by name: whoever can write to the
-    folder could swap it for a symlink before that (the file's own mode is
-    set through its descriptor, never by name).
+    included) the temporary file is removed and ``path`` is left untouched;
+    an OSError naming the temporary file (or no file) is raised naming
+    ``path``. A symlink ``path`` is resolved and its target replaced; an
+    existing character device or FIFO is yielded itself, to be written into
+    (no rename). The temporary file is named before it is created and
+    created inside the guarded region, so an interrupt arriving at any
+    point, even right after the file appears, cannot leave it behind (one
+    interrupt landing between the system call's return and the assignment
+    of its descriptor leaks that descriptor until the process ends; Python
+    gives no way to close it). The caller writes the yielded path by name:
+    whoever can write to the folder could swap it for a symlink before that
+    (the file's own mode is set through its descriptor, never by name).
+    ``follow=False`` is for the program's own files (cache entries, a
+    model's files): whatever is at ``path``, a symlink or a FIFO planted in
+    a cache included, is replaced, never written through or into, so it can
+    neither hang the write nor send it elsewhere.
     """
-    path = Path(path)
+    given = Path(path)
+    path, info = _target(given) if follow else (given, None)
+    if info is not None and not stat.S_ISREG(info.st_mode):
+        try:
+            yield path
+        except BaseException as exc:
+            renamed = _naming(exc, given, {str(path)})
+            if renamed is exc:
+                raise
+            raise renamed from exc
+        return
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp: Path | None = None  # set before the file is created: cleanup must know the name
     fd: int | None = None
@@ -113,16 +162,21 @@ def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]
         os.close(opened)
         yield tmp
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         if fd is not None:
             with suppress(OSError):
                 os.close(fd)
         if tmp is not None:
-            tmp.unlink(missing_ok=True)
-        raise
+            with suppress(OSError):
+                tmp.unlink(missing_ok=True)
+        renamed = _naming(exc, given, {str(path), *([str(tmp)] if tmp is not None else [])})
+        if renamed is exc:
+            raise
+        raise renamed from exc
 
 
-def write_atomically(path: str | os.PathLike, data: bytes | str, *, durable: bool = True) -> Path:
+def write_atomically(path: str | os.PathLike, data: bytes | str, *, durable: bool = True,
+                     follow: bool = True) -> Path:
     """Write bytes, or text as UTF-8 with ``\\n`` line ends, to ``path`` atomically; returns the path.
 
     The rename is atomic either way: readers see the old file or the new
@@ -133,22 +187,17 @@ def write_atomically(path: str | os.PathLike, data: bytes | str, *, durable: boo
     behaviour-likelihood cache passes ``durable=False``, since an entry lost
     in a power cut is recomputed (and one that comes back empty is logged
     and recomputed) while a model is not, and an fsync per entry is slow.
+    A device or FIFO (see :func:`atomic_path`, also for ``follow``) is
+    written into, not synced.
     """
     path = Path(path)
     payload = data.encode("utf-8") if isinstance(data, str) else data
-    try:
-        with atomic_path(path) as tmp:
-            with open(tmp, "wb") as handle:
-                handle.write(payload)
-                if durable:
-                    handle.flush()
-                    os.fsync(handle.fileno())
-    except OSError as exc:
-        # A failed write or fsync (a full disk) names no file, and one in a folder that cannot take a file
-        # names the temporary file next to the target: name the target, which is what the user gave.
-        if exc.filename is None or Path(exc.filename).parent == path.parent and Path(exc.filename).name != path.name:
-            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
-        raise
+    with atomic_path(path, follow=follow) as tmp:
+        with open(tmp, "wb") as handle:
+            handle.write(payload)
+            if durable and stat.S_ISREG(os.fstat(handle.fileno()).st_mode):  # fsync of /dev/null is EINVAL
+                handle.flush()
+                os.fsync(handle.fileno())
     return path
 
 

@@ -39,6 +39,24 @@ def test_gif_has_one_frame_per_state_and_pauses_at_the_end(demo, tmp_path):
     assert first.shape == last.shape and (first != last).any()  # the agent moved
 
 
+
+def test_a_gif_is_written_into_a_fifo_not_over_it(demo, tmp_path):
+    """The GIF writer seeks, which a FIFO cannot: the animation is drawn into a private file first."""
+    import stat
+    import time
+
+    from test_render import _read_fifo
+
+    read = _read_fifo(tmp_path / "demo.gif")
+    save_animation(tmp_path / "demo.gif", demo.states[:2], hold_last=0)
+    for _ in range(100):
+        if read:
+            break
+        time.sleep(0.05)
+    assert read and read[0].startswith(b"GIF89a")
+    assert stat.S_ISFIFO((tmp_path / "demo.gif").lstat().st_mode)
+    assert [p.name for p in tmp_path.iterdir()] == ["demo.gif"]
+
 def test_bad_paths_and_empty_trajectories_are_value_errors(demo, tmp_path):
     with pytest.raises(ValueError, match="GIF"):
         save_animation(tmp_path / "demo.png", demo.states)

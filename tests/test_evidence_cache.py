@@ -103,7 +103,7 @@ def test_a_folder_that_cannot_be_written_is_a_warning(williams_commands, william
                                                       caplog):
     writes = []
 
-    def full(path, data, durable=True):
+    def full(path, data, **options):
         writes.append(path)
         raise OSError(28, "No space left on device", str(path))
 

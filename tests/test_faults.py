@@ -103,7 +103,7 @@ def test_an_unwritable_cache_is_one_warning_and_the_run_goes_on(instances, tmp_p
     goals = [_goals(i) for i in subset]
     uncached = behaviour_likelihood_table(subset, goals, cache_dir=False)
 
-    def read_only(path, data, durable=True):
+    def read_only(path, data, **options):
         raise OSError(errno.EROFS, "Read-only file system", str(path))
 
     monkeypatch.setattr(likelihoods, "write_atomically", read_only)
@@ -121,10 +121,10 @@ def test_cli_train_with_a_full_cache_folder_trains_and_warns(tmp_path, monkeypat
     monkeypatch.setenv("GROUNDLANG_CACHE", str(tmp_path / "cache"))
     real = storage.write_atomically
 
-    def full(path, data, durable=True):
+    def full(path, data, **options):
         if "behaviour" in Path(path).parts:
             raise OSError(errno.ENOSPC, "No space left on device", str(path))
-        return real(path, data, durable=durable)
+        return real(path, data, **options)
 
     monkeypatch.setattr(likelihoods, "write_atomically", full)
     with caplog.at_level(logging.WARNING, logger=LOG):
@@ -349,3 +349,18 @@ def test_a_grounding_left_running_past_the_limit_does_not_hold_the_command_up(tm
     assert done.returncode == 2, (done.returncode, done.stderr[-500:])
     assert done.stderr.startswith("groundlang tasks: error: grounding ") and "within 1 s" in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1 and took < 60
+
+
+def test_a_cache_entry_that_is_a_fifo_is_replaced_not_written_into(tmp_path):
+    """User-named outputs are written into a FIFO (storage.atomic_path); a cache entry is the program's
+    own file, and writing into a FIFO planted there would wait for a reader for ever."""
+    import threading
+
+    entry = tmp_path / "entry.json"
+    os.mkfifo(entry)
+    rescue = threading.Timer(10, lambda: entry.is_fifo() and entry.read_bytes())  # a failure, not a hang
+    rescue.daemon = True
+    rescue.start()
+    likelihoods._write_entry(entry, "k", -1.5, ["x"])
+    rescue.cancel()
+    assert entry.is_file() and likelihoods._read_entry(entry, "k") == -1.5

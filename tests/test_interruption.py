@@ -82,8 +82,8 @@ def test_save_interrupted_between_its_two_files_still_writes_both(learner, tmp_p
     real = storage.write_atomically
     calls = []
 
-    def write_then_interrupt(path, data):
-        real(path, data)
+    def write_then_interrupt(path, data, **options):
+        real(path, data, **options)
         calls.append(Path(path).name)
         if len(calls) == 1:
             _signal_self(signal.SIGINT)

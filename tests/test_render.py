@@ -97,6 +97,35 @@ def test_save_picture_png_atomic(fixtures, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["chair.png", "s.svg"]
 
 
+
+def _read_fifo(path):
+    """A FIFO at ``path`` and a thread reading it whole into the returned list."""
+    import os
+    import threading
+
+    os.mkfifo(path)
+    read: list[bytes] = []
+    threading.Thread(target=lambda: read.append(path.read_bytes()), daemon=True).start()
+    return read
+
+
+def test_a_picture_is_written_into_a_fifo_not_over_it(fixtures, tmp_path):
+    """``show --out FIFO`` replaced the FIFO once the atomic write left it alone, the PNG writer then said
+    "File or stream is not seekable" without a path: the picture is drawn in memory, then written."""
+    import stat
+    import time
+
+    state = read_state_file(fixtures / "small.state", "sokoban")
+    read = _read_fifo(tmp_path / "picture.png")
+    save_picture(tmp_path / "picture.png", state)
+    for _ in range(100):
+        if read:
+            break
+        time.sleep(0.05)
+    assert read and read[0].startswith(PNG_MAGIC)
+    assert stat.S_ISFIFO((tmp_path / "picture.png").lstat().st_mode)
+    assert [p.name for p in tmp_path.iterdir()] == ["picture.png"]
+
 def test_render_import_does_not_load_matplotlib():
     code = "import sys, groundlang.render, groundlang.corpus; print('matplotlib' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

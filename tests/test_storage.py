@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
+from pathlib import Path
 
 import pytest
 
@@ -123,3 +125,101 @@ def test_the_temporary_file_mode_is_set_through_its_descriptor_not_its_name(tmp_
     write_atomically(tmp_path / "out.txt", "x")
     assert not called
     assert (tmp_path / "out.txt").read_text() == "x"
+
+
+# ----------------------------------------------------------------- destinations that are not plain files
+def _no_rename(monkeypatch):
+    monkeypatch.setattr(os, "replace", lambda *a, **k: pytest.fail(f"renamed onto {a[1]}"))
+
+
+def test_a_symlink_is_written_through_in_its_target_folder(tmp_path):
+    """Before, the link itself was replaced by a regular file and its target kept the old contents."""
+    (tmp_path / "real").mkdir()
+    (tmp_path / "links").mkdir()
+    target = _previous(tmp_path / "real")
+    link = tmp_path / "links" / "result.json"
+    link.symlink_to(target)
+    with atomic_path(link) as tmp:
+        assert tmp.parent == target.parent  # renamed within the target's folder: atomic
+        tmp.write_bytes(b"new")
+    assert link.is_symlink() and target.read_bytes() == b"new"
+    assert sorted(p.name for p in (tmp_path / "real").iterdir()) == [target.name]
+    assert sorted(p.name for p in (tmp_path / "links").iterdir()) == [link.name]
+
+
+def test_a_fifo_is_written_into_not_replaced(tmp_path, monkeypatch):
+    import threading
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    read = []
+    reader = threading.Thread(target=lambda: read.append(fifo.read_bytes()), daemon=True)
+    reader.start()
+    _no_rename(monkeypatch)
+    write_atomically(fifo, "through the pipe\n")  # durable: a FIFO cannot be fsynced, and is not
+    reader.join(10)
+    assert read == [b"through the pipe\n"]
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe"]
+
+
+def test_a_character_device_is_written_into_never_renamed_onto(monkeypatch):
+    """As root, ``evaluate --json /dev/full`` made /dev/full an ordinary file. /dev/null is written here only
+    because the rename is made to fail first: the device cannot be replaced."""
+    if not stat.S_ISCHR(os.stat("/dev/null").st_mode):
+        pytest.skip("no /dev/null character device")
+    _no_rename(monkeypatch)
+    monkeypatch.setattr(os, "open", lambda *a, **k: pytest.fail("a temporary file was created"))
+    assert storage.check_destination("/dev/null", "--json") == Path("/dev/null")
+    with atomic_path("/dev/null") as path:
+        assert path == Path("/dev/null")
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
+
+
+def test_a_full_device_is_one_error_naming_it(monkeypatch):
+    if not os.path.exists("/dev/full") or not stat.S_ISCHR(os.stat("/dev/full").st_mode):
+        pytest.skip("no /dev/full character device")
+    _no_rename(monkeypatch)
+    with pytest.raises(OSError) as caught:
+        write_atomically("/dev/full", b"x" * 10)
+    assert caught.value.errno == errno.ENOSPC and caught.value.filename == "/dev/full"
+    assert stat.S_ISCHR(os.stat("/dev/full").st_mode)
+
+
+def test_a_folder_or_a_socket_is_refused_naming_it(tmp_path):
+    import socket
+
+    with pytest.raises(IsADirectoryError) as caught:
+        write_atomically(tmp_path, b"x")
+    assert caught.value.filename == str(tmp_path)
+    sock = tmp_path / "s"
+    server = socket.socket(socket.AF_UNIX)
+    try:
+        server.bind(str(sock))
+        with pytest.raises(storage.FileRefused, match=f"{sock}: a socket; expected the path of a file to write"):
+            write_atomically(sock, b"x")
+    finally:
+        server.close()
+
+
+# ----------------------------------------------------------------- errors name the path the caller gave
+_PROC = Path("/proc/self").is_dir()
+
+
+def test_an_error_naming_the_temporary_file_names_the_target(tmp_path):
+    """``show --out /proc/x.png`` said "/proc/.x.png.7a3e....tmp: No such file or directory"."""
+    target = tmp_path / "picture.png"
+    with pytest.raises(OSError) as caught:
+        with atomic_path(target) as tmp:
+            raise OSError(errno.ENOSPC, "No space left on device", str(tmp))  # what a failed savefig raises
+    assert caught.value.filename == str(target) and caught.value.errno == errno.ENOSPC
+    assert isinstance(caught.value, OSError) and ".tmp" not in str(caught.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not _PROC, reason="needs /proc, where no file can be created")
+def test_a_folder_that_takes_no_file_is_named_as_given():
+    with pytest.raises(OSError) as caught:  # no such file (root) or permission denied
+        with atomic_path("/proc/x.png") as tmp:
+            tmp.write_bytes(b"x")
+    assert caught.value.filename == "/proc/x.png" and caught.value.filename2 is None
