@@ -66,14 +66,16 @@ def check_model_destination(directory: str | Path, option: str = "") -> Path:
     """``directory`` as a place to write a model, refused if writing there would mix the model with other
     files or overwrite a file that is not a groundlang model's: it must be new, empty, or hold only a model
     (of any format version: saving replaces it). ``train -o model`` run at the repository root would
-    otherwise have written into the ``model/`` source package. ``groundlang train`` asks before it trains;
-    ``option`` ("-o") starts its messages."""
+    otherwise have written into the ``model/`` source package. Missing folders are created when saving;
+    the nearest existing one must take a file. ``groundlang train`` asks before it trains; ``option``
+    ("-o") starts its messages."""
     directory = Path(directory)
     where = f"{option} {directory}".strip()
     try:
         storage.check_folder(directory, where)
     except ValueError as exc:
         raise ModelFormatError(f"{exc}; a model is written to a folder") from None
+    storage.check_writable(directory, MODEL_JSON, where)  # /proc/m, a read-only mount: now, not after training
     if not directory.is_dir():
         return directory
     others = sorted(p.name for p in directory.iterdir() if p.name != MODEL_JSON

@@ -27,7 +27,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-__all__ = ["FileRefused", "atomic_path", "check_destination", "check_folder", "read_limited", "write_atomically"]
+__all__ = ["FileRefused", "atomic_path", "check_destination", "check_folder", "check_writable", "read_limited",
+           "write_atomically"]
 
 
 class FileRefused(ValueError):
@@ -215,12 +216,42 @@ def check_folder(path: str | os.PathLike, what: str, named: str | os.PathLike | 
     return path
 
 
+def check_writable(folder: str | os.PathLike, name: str, what: str) -> Path:
+    """``folder`` as one a file ``name`` can be created in, found out by creating and removing a probe file
+    there (a permission bit says nothing to root, nor about /proc or a read-only mount); ValueError starting
+    with ``what`` if it cannot. A folder that does not exist yet is probed in its nearest existing folder,
+    where writing would create it."""
+    folder = Path(folder)
+    existing = next((step for step in (folder, *folder.parents) if step.is_dir()), Path("."))
+    # Named like atomic_path's temporary files, so a probe left by a kill -9 is a leftover they clean up.
+    probe = existing / f".{name}.{secrets.token_hex(8)}.tmp"
+    try:
+        fd = os.open(probe, _CREATE_FLAGS, 0o600)
+    except OSError as exc:
+        raise ValueError(f"{what}: cannot create a file in {existing} ({exc.strerror or exc})") from None
+    try:
+        os.close(fd)
+    finally:
+        probe.unlink(missing_ok=True)
+    return folder
+
+
 def check_destination(path: str | os.PathLike, option: str) -> Path:
     """``path`` as a file to write later, refused now (naming ``option``) if it cannot be: an existing
-    folder, or a path through a file. Commands check their outputs before the work, so a long run is
-    not lost to a typo at the end."""
+    folder, socket or block device, a path through a file, or a folder no file can be created in
+    (missing folders are created when writing, as ``train -o`` creates its model's). Commands check their
+    outputs before the work, so a long run is not lost to a typo at the end. A device or FIFO is written
+    into and needs no probe (opening a FIFO here would wait for a reader)."""
     path = Path(path)
     if path.is_dir():
         raise ValueError(f"{option} {path}: is a folder; expected the path of a file to write")
-    check_folder(path.parent, f"{option} {path}", named=path)
+    try:
+        target, info = _target(path)
+    except FileRefused as exc:
+        raise ValueError(f"{option} {exc}") from None
+    except OSError as exc:
+        raise ValueError(f"{option} {path}: {exc.strerror or exc}") from None
+    check_folder(target.parent, f"{option} {path}", named=path)
+    if info is None or stat.S_ISREG(info.st_mode):
+        check_writable(target.parent, target.name, f"{option} {path}")
     return path

@@ -684,6 +684,34 @@ def test_an_unwritable_result_path_is_refused_before_the_evaluation_runs(tmp_pat
     assert f"--json {tmp_path}: is a folder" in capsys.readouterr().err
 
 
+_WILLIAMS_CORPUS = ("--corpus", str(_WILLIAMS_SMALL), "--test", str(_WILLIAMS_SMALL))
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs /proc, where no file can be created")
+@pytest.mark.parametrize("argv, work, said", [
+    (("evaluate", *_WILLIAMS_CORPUS, "--json", "/proc/x.json"), "groundlang.pair_evaluation.evaluate_pairs",
+     "--json /proc/x.json: cannot create a file in /proc"),
+    (("evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban", "--labels",
+      str(FIXTURES / "sokoban" / "labels.csv"), "--json", "/proc/new/x.json"), "groundlang.evaluation.evaluate",
+     "--json /proc/new/x.json: cannot create a file in /proc"),
+    (("train", str(_WILLIAMS_SMALL), "--no-cache", "-o", "/proc/m"), "groundlang.learner.Learner.fit",
+     "-o /proc/m: cannot create a file in /proc"),
+    (("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "/proc/x.lp"),
+     "groundlang.inference.discovery.discover_tasks", "-o /proc/x.lp: cannot create a file in /proc"),
+    (("show", str(_SMALL), "--palette", "sokoban", "--out", "/proc/x.png"), "groundlang.render.save_picture",
+     "--out /proc/x.png: cannot create a file in /proc"),
+])
+def test_an_output_no_file_can_be_created_in_is_refused_before_the_work(argv, work, said, capsys, monkeypatch):
+    """Before, /proc/x.json passed the check: the whole evaluation (or training) ran, then the write failed,
+    and show named its temporary file (/proc/.x.png.7a3e....tmp)."""
+    monkeypatch.setattr(work, lambda *a, **k: pytest.fail(f"{work} ran before the output was checked"))
+    code = main(["--quiet", *argv])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.startswith(f"groundlang {argv[0]}: error: {said} (") and len(err.splitlines()) == 1, err
+    assert ".tmp" not in err
+
+
 @pytest.mark.parametrize("isolated", [False, True])
 def test_numpy_and_fraction_time_limits_are_seconds_too(isolated):
     from fractions import Fraction

@@ -198,6 +198,8 @@ def test_a_folder_or_a_socket_is_refused_naming_it(tmp_path):
         server.bind(str(sock))
         with pytest.raises(storage.FileRefused, match=f"{sock}: a socket; expected the path of a file to write"):
             write_atomically(sock, b"x")
+        with pytest.raises(ValueError, match=f"--json {sock}: a socket"):
+            storage.check_destination(sock, "--json")
     finally:
         server.close()
 
@@ -223,3 +225,28 @@ def test_a_folder_that_takes_no_file_is_named_as_given():
         with atomic_path("/proc/x.png") as tmp:
             tmp.write_bytes(b"x")
     assert caught.value.filename == "/proc/x.png" and caught.value.filename2 is None
+
+
+# ----------------------------------------------------------------- destinations checked before the work
+@pytest.mark.skipif(not _PROC, reason="needs /proc, where no file can be created")
+@pytest.mark.parametrize("given", ["/proc/x.json", "/proc/new/folder/x.json"])
+def test_a_destination_no_file_can_be_created_in_is_refused_by_check_destination(given):
+    """Before, only folders and paths through a file were refused: /proc/x.json passed the check and the
+    write failed after the whole evaluation."""
+    with pytest.raises(ValueError, match=f"^--json {given}: cannot create a file in /proc "):
+        storage.check_destination(given, "--json")
+
+
+def test_check_destination_leaves_nothing_and_creates_no_folder(tmp_path):
+    assert storage.check_destination(tmp_path / "a" / "b" / "r.json", "--json") == tmp_path / "a" / "b" / "r.json"
+    assert list(tmp_path.iterdir()) == []  # probed in tmp_path, where the folders would be made
+    write_atomically(tmp_path / "a" / "b" / "r.json", "{}")  # and the write makes them, as train -o does
+    assert (tmp_path / "a" / "b" / "r.json").read_text() == "{}"
+
+
+@pytest.mark.skipif(not _PROC, reason="needs /proc, where no file can be created")
+def test_a_model_destination_no_file_can_be_created_in_is_refused():
+    from groundlang.model_io import check_model_destination
+
+    with pytest.raises(ValueError, match="^-o /proc/m: cannot create a file in /proc "):
+        check_model_destination("/proc/m", "-o")
