@@ -35,7 +35,8 @@ def register(subparsers) -> None:
     )
     p.add_argument("command_text", metavar="COMMAND", help="the command, in quotes")
     p.add_argument("--env", required=True, metavar="FILE",
-                   help="the initial state: a corpus file (its first state) or a one-line .state file")
+                   help="the initial state: a corpus file (*.txt: its first state), a one-line .state file, or a "
+                        "one-line .bdm file (a state in the Williams et al. format)")
     p.add_argument("--palette", help=PALETTE_HELP + " (default: the model's, when it was trained on one; a palette file "
                    "of your own is read from the values the model records)")
     p.add_argument("--model", required=True, metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
