@@ -87,18 +87,20 @@ _ATTEMPTS = 100
 def _target(path: Path) -> tuple[Path, os.stat_result | None]:
     """Where writing ``path`` lands (a symlink's target, as ``open`` follows it) and its status (None if it
     does not exist yet); refused where no file can be written: a folder, a socket, a block device."""
-    target = Path(os.path.realpath(path)) if path.is_symlink() else path
     try:
-        info = os.stat(target)
+        info = os.stat(path)  # through symlinks, as open goes
     except (FileNotFoundError, NotADirectoryError):  # below a file: check_folder or mkdir says so
-        return target, None
+        info = None
     except OSError as exc:  # a symlink loop: name what the user gave
         raise OSError(exc.errno, exc.strerror, str(path)) from None
-    if stat.S_ISDIR(info.st_mode):
+    if info is not None and stat.S_ISDIR(info.st_mode):
         raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
-    if stat.S_ISSOCK(info.st_mode) or stat.S_ISBLK(info.st_mode):  # overwriting a disk is never what was meant
-        raise FileRefused(f"{path}: {_kind(info.st_mode)}; expected the path of a file to write")
-    return target, info
+    if info is not None and (stat.S_ISSOCK(info.st_mode) or stat.S_ISBLK(info.st_mode)):
+        raise FileRefused(f"{path}: {_kind(info.st_mode)}; expected the path of a file to write")  # never a disk
+    if info is not None and not stat.S_ISREG(info.st_mode):
+        # Written into by the name given: /dev/stdout's link ends in a pipe no path names.
+        return path, info
+    return (Path(os.path.realpath(path)) if path.is_symlink() else path), info
 
 
 def _naming(exc: BaseException, given: Path, names: set[str]) -> BaseException:
@@ -251,7 +253,7 @@ def check_destination(path: str | os.PathLike, option: str) -> Path:
         raise ValueError(f"{option} {exc}") from None
     except OSError as exc:
         raise ValueError(f"{option} {path}: {exc.strerror or exc}") from None
-    check_folder(target.parent, f"{option} {path}", named=path)
     if info is None or stat.S_ISREG(info.st_mode):
+        check_folder(target.parent, f"{option} {path}", named=path)
         check_writable(target.parent, target.name, f"{option} {path}")
     return path

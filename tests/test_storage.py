@@ -250,3 +250,16 @@ def test_a_model_destination_no_file_can_be_created_in_is_refused():
 
     with pytest.raises(ValueError, match="^-o /proc/m: cannot create a file in /proc "):
         check_model_destination("/proc/m", "-o")
+
+
+def test_dev_stdout_is_written_into_when_it_is_a_pipe():
+    """/dev/stdout links to /proc/self/fd/1, whose link ends in a pipe no path names: the result is
+    written into it by the name given (``--json /dev/stdout``), neither probed nor resolved."""
+    import subprocess
+    import sys
+
+    script = ("from groundlang.logic.storage import check_destination, write_atomically; "
+              "check_destination('/dev/stdout', '--json'); write_atomically('/dev/stdout', 'hello\\n')")
+    done = subprocess.run([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == "hello\n"
