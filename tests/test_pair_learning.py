@@ -134,7 +134,9 @@ def test_evaluate_with_a_test_file_writes_one_row_per_execution(tmp_path, willia
     assert run.returncode == 0, run.stderr
     assert "per execution: 100.00% (6/6" in run.stdout and "per command (every pair right): 100.00% (2/2" in run.stdout
     assert "F1 0.82" in run.stdout
-    data = json.loads(out.read_text())
+    # Strict JSON: every execution right leaves no AUROC, written null (JSON has no NaN).
+    data = json.loads(out.read_text(), parse_constant=lambda name: pytest.fail(f"{name} in the JSON"))
+    assert data["calibration"]["auroc"] is None
     assert (data["executions_n"], data["executions_correct"], data["commands_correct"]) == (6, 6, 2)
     rows = data["executions"]
     assert [(r["index"], r["pair"]) for r in rows] == [(i, k) for i in range(2) for k in range(3)]

@@ -6,6 +6,7 @@ match the library's.
 """
 
 import argparse
+import json
 import math
 from pathlib import Path
 
@@ -109,6 +110,21 @@ PALETTE_HELP = (f"colour and shape values of the files: a palette the package sh
 
 LIBRARY_NAMES = (f"; a file, or a library the package ships by name ({', '.join(library_names())}), which "
                  "replaces the default: name tasks too to add to its tasks")
+
+
+def json_bytes(data) -> bytes:
+    """``data`` as JSON text for a result file, a figure without a value (NaN: no reading acted on at a
+    threshold) written as null: JSON has no NaN, and jq or a browser refuse the file that holds one."""
+    def finite(value):
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        if isinstance(value, dict):
+            return {k: finite(v) for k, v in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [finite(v) for v in value]
+        return value
+
+    return json.dumps(finite(data), indent=1, allow_nan=False).encode("utf-8")
 
 
 def library_given(args: argparse.Namespace):

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_em_acceleration_option,
                                  add_language_model_settings,
-                                 add_lexicon_option, fraction, language_model_settings, library_given, open_fraction,
+                                 add_lexicon_option, fraction, json_bytes, language_model_settings, library_given,
+                                 open_fraction,
                                  positive_int, require_palette)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
@@ -121,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
         data = result.to_json()
         if rows:
             data["published"] = rows
-        write_atomically(Path(args.json), json.dumps(data, indent=1).encode("utf-8"))
+        write_atomically(Path(args.json), json_bytes(data))
         print(f"result written to {args.json}")
     return 0 if not result.failed_folds else 1
 
@@ -187,6 +187,6 @@ def run_pairs(args: argparse.Namespace) -> int:
                             progress=args.progress, min_confidence=args.min_confidence)
     print(result.summary())
     if args.json:
-        write_atomically(Path(args.json), json.dumps(result.to_json(), indent=1).encode("utf-8"))
+        write_atomically(Path(args.json), json_bytes(result.to_json()))
         print(f"result written to {args.json}")
     return 0
