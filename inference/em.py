@@ -95,13 +95,12 @@ def normalise_rows(x: torch.Tensor) -> torch.Tensor:
     """``x`` (non-negative, a positive total per row) with each row divided by its total, in ``x``'s dtype.
 
     The total and the division are taken in float64 and rounded to ``x``'s dtype once, per entry, so a
-    float32 row sums to 1 within 2**-24 however many entries it has. Summed and divided in float32, a row
-    of a few hundred words with counts from 0.05 to hundreds sums to 1 only within ~1e-6, and the float32
-    sum Pyro's ``Simplex`` check takes adds its own rounding: a 500-word vocabulary's ``phi`` failed that
-    check (``|sum - 1| < 1e-6``) at some corpus sizes and not others."""
+    float32 row sums to 1 within 2**-24 however many entries it has: summed in float32, a row of hundreds
+    of words with counts from 0.05 to hundreds is off by ~1e-6, the tolerance of Pyro's ``Simplex``
+    check, which adds rounding of its own."""
     x64 = x.double()
     return (x64 / x64.sum(-1, keepdim=True)).to(x.dtype)
 
 
 def _on_simplex(x: torch.Tensor) -> torch.Tensor:
-    return normalise_rows(x.double().clamp_min(_FLOOR)).to(x.dtype)
+    return normalise_rows(x.clamp_min(_FLOOR))

@@ -93,14 +93,13 @@ def _target(path: Path) -> tuple[Path, os.stat_result | None]:
         info = None
     except OSError as exc:  # a symlink loop: name what the user gave
         raise OSError(exc.errno, exc.strerror, str(path)) from None
-    if info is not None and stat.S_ISDIR(info.st_mode):
+    if info is None or stat.S_ISREG(info.st_mode):
+        return (Path(os.path.realpath(path)) if path.is_symlink() else path), info
+    if stat.S_ISDIR(info.st_mode):
         raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
-    if info is not None and (stat.S_ISSOCK(info.st_mode) or stat.S_ISBLK(info.st_mode)):
-        raise FileRefused(f"{path}: {_kind(info.st_mode)}; expected the path of a file to write")  # never a disk
-    if info is not None and not stat.S_ISREG(info.st_mode):
-        # Written into by the name given: /dev/stdout's link ends in a pipe no path names.
-        return path, info
-    return (Path(os.path.realpath(path)) if path.is_symlink() else path), info
+    if stat.S_ISSOCK(info.st_mode) or stat.S_ISBLK(info.st_mode):  # overwriting a disk is never what was meant
+        raise FileRefused(f"{path}: {_kind(info.st_mode)}; expected the path of a file to write")
+    return path, info  # written into by the name given: /dev/stdout's link ends in a pipe no path names
 
 
 def _naming(exc: BaseException, given: Path, names: set[str]) -> BaseException:
