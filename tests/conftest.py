@@ -57,6 +57,18 @@ def _pyro_state():
     pyro.clear_param_store()
 
 
+@pytest.fixture(autouse=True)
+def _groundlang_log_level():
+    """The CLI sets the `groundlang` logger's level (WARNING under --quiet); a test calling it in-process
+    must not decide what a later test's caplog sees."""
+    import logging
+
+    log = logging.getLogger("groundlang")
+    level = log.level
+    yield
+    log.setLevel(level)
+
+
 def _shortest_plan(start, goal, library):
     """A shortest plan to ``goal`` under ``library``'s PFs (soft value iteration, greedy rollout): states
     and actions. (``groundlang.examples.build.shortest_demonstration`` knows only the package's PFs.)"""

@@ -91,7 +91,7 @@ def test_relevant_toys_are_those_the_goal_names_and_the_demonstration_moves(sixt
 def test_the_method_is_exact_where_it_fits_and_the_abstraction_otherwise(sixteen, caplog):
     small = read_state_file(FIXTURES / "two_toys.state", "sokoban")
     assert not isinstance(state_space_for(small, parse_goal("agentInRoom(agent0, room1)")), AbstractStateSpace)
-    with caplog.at_level(logging.INFO, logger="groundlang.model.relevance"):
+    with caplog.at_level(logging.DEBUG, logger="groundlang.model.relevance"):
         space = state_space_for(sixteen, parse_goal("toyInRoom(block0, room2)"))
     assert isinstance(space, AbstractStateSpace) and space.relevant == (0,)
     assert "relevance abstraction, 41006 states (whole layout up to 1,714,870,920 > max_states=5,000,000" in caplog.text
