@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench notebooks clean
+.PHONY: test-slow demo test bench notebooks clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -22,8 +22,13 @@ demo: $(STAMP)
 # second core halves its wall time. Tests are spread one by one (--dist loadgroup), but a module marked
 # xdist_group runs in one process, so that its costly module fixture (the harder corpus evaluated under the
 # train protocol) is built once, not once per process. `$(BIN)/python -m pytest -n 0` runs it in one process.
+# `make test` leaves out the tests marked slow (whole corpora evaluated, notebooks run, fuzzing): under ten
+# minutes on 2 cores. `make test-slow` runs only those; CI runs both.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m "not slow"
+
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m slow
 
 # The notebooks' .py files are their source: write each paired .ipynb from it (outputs stay stripped).
 notebooks: $(STAMP)

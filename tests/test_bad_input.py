@@ -573,6 +573,7 @@ def test_fuzz_model_json_bytes(trained_model, tmp_path_factory, data):
     _loads_or_refuses(d)
 
 
+@pytest.mark.slow
 @FUZZ
 @given(data=st.one_of(
     st.binary(max_size=400),

@@ -21,6 +21,7 @@ def _grid(width: int, height: int) -> np.ndarray:
     return np.stack([north, south, east, west], axis=1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("absorbing", [False, True])
 @pytest.mark.parametrize("backend", ["eager", "compiled"])
 def test_each_block_gets_the_policy_its_own_solve_gives(absorbing, backend):

@@ -56,6 +56,7 @@ def example():
     return read_corpus(path, "sokoban"), read_labels(path / "labels.csv")
 
 
+@pytest.mark.slow
 def test_results_in_index_order_with_one_init_per_worker_and_errors_as_records(ray_local):
     from groundlang.distributed import run_on_ray
 

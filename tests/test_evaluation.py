@@ -54,6 +54,7 @@ def test_ambiguous_or_already_true_novel_layouts_are_refused(corpus):
         translate_goal(parse_goal(f"agentInRoom(agent0, {green})"), source, started)
 
 
+@pytest.mark.slow
 def test_leave_one_out_on_the_example_corpus(corpus):
     labels = read_labels(EXAMPLES / "labels.csv")
     novel = [(p.name, read_state_file(p, "sokoban")) for p in sorted(NOVEL.glob("*.state"))]

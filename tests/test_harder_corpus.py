@@ -91,6 +91,7 @@ def _records(result) -> dict[str, dict]:
 # ---------------------------------------------------------------- the corpus
 
 
+@pytest.mark.slow
 def test_generator_reproduces_the_fixture_byte_for_byte(tmp_path):
     paths = _load_builder().build(tmp_path)
     assert len(paths) == 120 + 1 + 3
@@ -140,6 +141,7 @@ def test_state_spaces_stay_small(corpus):
 # ---------------------------------------------------------------- evaluation
 
 
+@pytest.mark.slow
 def test_train_protocol(train_result, corpus, labels):
     result = train_result
     assert result.n == 120 and not result.failed_folds
@@ -156,6 +158,7 @@ def test_train_protocol(train_result, corpus, labels):
     assert all(records[i.name]["correct"] for i in corpus.instances if i.prefix.startswith("L3"))
 
 
+@pytest.mark.slow
 def test_conjunctions_whose_agent_part_holds_at_the_start(train_result, corpus, labels):
     # The agent starts inside the room it must end in: that part holds at the start and the plan breaks
     # it ("take the bag to the blue room and then come back to the green room"). Read as the toy goal
@@ -184,6 +187,7 @@ def _start(corpus, prefix):
     return next(i for i in corpus.instances if i.prefix == prefix).initial_state
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", [
     "push the blue bag into the blue room and then come back to the green room",  # toy clause first
     "come back to the green room after you take the bag to the blue room",  # agent clause first
@@ -198,6 +202,7 @@ def test_a_conjunction_held_out_is_followed_so_both_parts_hold(l1_learner, corpu
     assert not goal_holds(gold[1:], result.states[len(result.states) // 2])  # the agent left the room on the way
 
 
+@pytest.mark.slow
 def test_a_clause_the_goal_does_not_need_is_not_forced_onto_a_part(l1_learner, corpus):
     # "... and then come back", said in a doorway, names no room: the words are the frame's, and the
     # reading stays the toy goal alone, as probable as without the clause.
@@ -249,6 +254,7 @@ def test_unbroken_held_parts_rule_readings_out_of_training(corpus):
     assert not any(o for i, o in zip(interps, out) if not i.task.holding)
 
 
+@pytest.mark.slow
 def test_toys_named_by_colour_are_picked_right(train_result, corpus, labels):
     records = _records(train_result)
     by_colour = [i for i in corpus.instances if _toy_reference(i, labels) == "colour"]
@@ -256,6 +262,7 @@ def test_toys_named_by_colour_are_picked_right(train_result, corpus, labels):
     assert [i.name for i in by_colour if not records[i.name]["correct"]] == []
 
 
+@pytest.mark.slow
 def test_toys_named_by_shape_alone_are_picked_right(train_result, corpus, labels):
     records = _records(train_result)
     by_shape = [i for i in corpus.instances if _toy_reference(i, labels) == "shape"]

@@ -21,6 +21,7 @@ def examples():
     return read_corpus(EXAMPLES, "sokoban").instances
 
 
+@pytest.mark.slow
 def test_a_fold_is_scored_by_a_model_that_never_saw_it(examples):
     """Fold k holds instances n with n mod folds == k; the model of fold k is trained on the others."""
     result = held_out_likelihood(examples, folds=3)
@@ -38,6 +39,7 @@ def test_a_fold_is_scored_by_a_model_that_never_saw_it(examples):
     assert math.isfinite(result.joint) and result.joint < result.words < 0
 
 
+@pytest.mark.slow
 def test_a_switch_is_compared_with_the_defaults(examples):
     (row,) = compare_switches(examples, ["object_key"], folds=3)
     assert (row.setting, row.default, row.value) == ("object_key", True, False)

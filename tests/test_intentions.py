@@ -31,6 +31,7 @@ def _demos(space, goal, starts, seed):
     return out
 
 
+@pytest.mark.slow
 def test_em_separates_demonstrations_of_two_goals():
     from groundlang.logic.atoms import parse_atom
     from groundlang.model.features import feature_matrix, goal_mask, position_atoms

@@ -180,6 +180,7 @@ def test_the_corpus_spelling_of_toys_is_read_in_any_predicate():
         "toyInRoom", "toyInDoor", "agentTouchingToy", "toyIsStar", "agentNextToToy", "blocky", "roomIsDarkGray"]
 
 
+@pytest.mark.slow
 def test_evaluate_refuses_labels_of_another_corpus_as_check_does(tmp_path):
     import subprocess
     import sys

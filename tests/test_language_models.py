@@ -75,6 +75,7 @@ def _alignments(batch, joint, g, i, j, r):
         yield states, p, weight
 
 
+@pytest.mark.slow
 def test_mention_model_equals_summing_over_every_alignment(setting):
     learner, observations, batch, g = setting
     _, with_mentions, joint = learner.lm.reading_table(g, batch)

@@ -61,6 +61,7 @@ def test_log_likelihood_equals_the_planner_policy_on_the_demonstrations():
         assert float(per_demo[d]) == pytest.approx(expected, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_a_weight_of_two_equals_a_duplicated_demonstration():
     rng = np.random.default_rng(1)
     ns = rng.integers(0, 20, (20, 4))

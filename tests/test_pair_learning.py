@@ -127,6 +127,7 @@ def _cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "groundlang.cli", *args], capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow
 def test_evaluate_with_a_test_file_writes_one_row_per_execution(tmp_path, williams_commands, williams_library):
     out = tmp_path / "result.json"
     small = str(FIXTURE / "small.bdm")
@@ -223,6 +224,7 @@ def test_evaluate_on_a_held_out_split_of_the_shared_corpus(tmp_path):
     assert data["executions_correct"] >= 110 - 3, run.stdout
 
 
+@pytest.mark.slow
 def test_train_on_pairs_then_follow_with_the_models_palette(tmp_path):
     model = tmp_path / "model"
     run = _cli("train", str(FIXTURE / "small.bdm"), "-o", str(model))
@@ -278,6 +280,7 @@ def test_a_failed_execution_is_told_by_kind_from_the_goal_the_task_and_the_final
     assert set(FAILURE_KINDS) >= {"another object", "another relation", "unreached", "more than the goal", "skipped"}
 
 
+@pytest.mark.slow
 def test_evaluate_counts_the_failed_executions_by_kind(tmp_path):
     """On the two-command fixture the shared meaning reads "the largest room" in the first layout only
     (README): acting on the most probable goal alone, two executions go to another room; the CLI and the JSON say so by kind, and report how

@@ -7,6 +7,8 @@ import shutil
 from pathlib import Path
 from types import SimpleNamespace
 
+import pytest
+
 from groundlang.cli import main
 from groundlang.corpus import example_corpus_path
 from groundlang.published import REFERENCES, comparison, format_comparison
@@ -43,6 +45,7 @@ def test_nothing_is_compared_for_other_corpora_protocols_or_runs_without_novel_l
     assert format_comparison([]) == ""
 
 
+@pytest.mark.slow
 def test_cli_evaluate_prints_and_writes_the_comparison_for_a_folder_of_the_rss_corpus(tmp_path, capsys):
     # The shipped example corpus under the simplified folder's name (the comparison keys on the name).
     folder = tmp_path / "allTurkTrainLimitedCommand"
@@ -76,6 +79,7 @@ def test_the_crowd_corpus_is_looked_for_beside_the_clone_or_where_the_variable_s
     assert crowd_corpus_path(repo) == tmp_path / "elsewhere"
 
 
+@pytest.mark.slow
 def test_the_parse_benchmark_skips_without_the_corpus_so_make_bench_runs_the_others(tmp_path):
     import os
     import subprocess

@@ -226,6 +226,7 @@ def test_a_williams_pair_in_a_16x16_layout_with_three_blocks_is_reached():
     assert len(actions) == 26 and replay(pair.start, actions)[-1] == pair.end
 
 
+@pytest.mark.slow
 def test_the_williams_corpus_16x16_pairs_are_checked():
     if not SHARED_WILLIAMS.is_dir():
         pytest.skip(f"Williams et al. 2018 corpus not found at {SHARED_WILLIAMS} (it is not part of the repository)")
