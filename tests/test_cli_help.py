@@ -27,3 +27,20 @@ def test_the_log_level_is_groundlangs_own():
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert "OURS" in done.stderr and "LEAKED" not in done.stderr
+
+
+def test_json_output_is_strict_json_everywhere():
+    """JSON has no NaN: a figure without a value is null in every command's JSON, printed or written."""
+    import json
+    import math
+    from pathlib import Path
+
+    from groundlang.commands import json_bytes, json_text
+
+    data = {"auroc": math.nan, "rows": [1.5, -math.inf, {"x": (math.inf, 2)}], "name": "a"}
+    strict = json.loads(json_text(data), parse_constant=lambda c: (_ for _ in ()).throw(ValueError(c)))
+    assert strict == {"auroc": None, "rows": [1.5, None, {"x": [None, 2]}], "name": "a"}
+    assert json.loads(json_bytes(data)) == strict and json_bytes(data).startswith(b"{\n")
+    # no command writes JSON past json_text: a json.dumps there could write NaN again
+    commands = Path(__file__).parent.parent / "groundlang" / "commands"
+    assert [p.name for p in commands.glob("*.py") if p.name != "__init__.py" and "json.dumps" in p.read_text()] == []

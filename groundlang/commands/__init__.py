@@ -112,9 +112,9 @@ LIBRARY_NAMES = (f"; a file, or a library the package ships by name ({', '.join(
                  "replaces the default: name tasks too to add to its tasks")
 
 
-def json_bytes(data) -> bytes:
-    """``data`` as JSON text for a result file, a figure without a value (NaN: no reading acted on at a
-    threshold) written as null: JSON has no NaN, and jq or a browser refuse the file that holds one."""
+def json_text(data, indent: int | None = None) -> str:
+    """``data`` as strict JSON text, a figure without a value (NaN: no reading acted on at a threshold, an
+    infinite log-likelihood) written as null: JSON has no NaN, and jq or a browser refuse text that holds one."""
     def finite(value):
         if isinstance(value, float) and not math.isfinite(value):
             return None
@@ -124,7 +124,12 @@ def json_bytes(data) -> bytes:
             return [finite(v) for v in value]
         return value
 
-    return json.dumps(finite(data), indent=1, allow_nan=False).encode("utf-8")
+    return json.dumps(finite(data), indent=indent, allow_nan=False)
+
+
+def json_bytes(data) -> bytes:
+    """``data`` as the JSON text of a result file (:func:`json_text`, indented)."""
+    return json_text(data, indent=1).encode("utf-8")
 
 
 def library_given(args: argparse.Namespace):

@@ -4,10 +4,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from groundlang.commands import (PALETTE_HELP, add_language_model_settings, add_lexicon_option,
+from groundlang.commands import (PALETTE_HELP, add_language_model_settings, add_lexicon_option, json_bytes,
                                  language_model_settings, positive_int, seed)
 
 
@@ -117,8 +116,7 @@ def run_held_out(args: argparse.Namespace, words: dict) -> int:
                  "default_joint": r.on.joint, "value_joint": r.off.joint, "default_words": r.on.words,
                  "value_words": r.off.words, "default_demonstrations": r.on.demonstrations,
                  "value_demonstrations": r.off.demonstrations} for r in rows]
-        write_atomically(Path(args.json), json.dumps({"folds": args.folds, "n": len(corpus.instances),
-                                                      "rows": data}, indent=1).encode("utf-8"))
+        write_atomically(Path(args.json), json_bytes({"folds": args.folds, "n": len(corpus.instances), "rows": data}))
         print(f"rows written to {args.json}")
     return 0
 
@@ -158,7 +156,7 @@ def run(args: argparse.Namespace) -> int:
     print(result.table())
     print(f"wall time {result.seconds:.1f} s")
     if args.json:
-        write_atomically(Path(args.json), json.dumps(result.to_json(), indent=1).encode("utf-8"))
+        write_atomically(Path(args.json), json_bytes(result.to_json()))
         print(f"rows written to {args.json}")
     if args.plot:
         write_plot(result, Path(args.plot))

@@ -14,10 +14,9 @@ that explain it; ``--json`` prints
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
-from groundlang.commands import PALETTE_HELP, fraction, positive_int
+from groundlang.commands import PALETTE_HELP, fraction, json_text, positive_int
 
 
 def register(subparsers) -> None:
@@ -64,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     path = write_library(discovery, args.output)
     seconds = time.perf_counter() - start
     if args.json:
-        print(json.dumps({"output": str(path), **discovery.to_json(), "seconds": seconds}))
+        print(json_text({"output": str(path), **discovery.to_json(), "seconds": seconds}))
         return 0
     print(f"{len(corpus.instances)} instances, {len(discovery.demonstrations)} distinct demonstrations")
     for r in discovery.demonstrations:

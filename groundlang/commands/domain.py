@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 
-from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, positive_seconds
+from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, json_text, positive_seconds
 
 
 def register(subparsers) -> None:
@@ -28,7 +27,7 @@ def run(args: argparse.Namespace) -> int:
     library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
     schema = domain_schema(library, args.palette)
     if args.json:
-        print(json.dumps({
+        print(json_text({
             "classes": list(schema.classes),
             "movable": sorted(schema.movable),
             "palette": {"name": schema.palette, "values": {a: list(v) for a, v in schema.values.items()}},

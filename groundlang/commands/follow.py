@@ -10,10 +10,9 @@ the model saved over ``--model``, so that the command is understood next time.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
-from groundlang.commands import PALETTE_HELP, add_lexicon_option, fraction, positive_int
+from groundlang.commands import PALETTE_HELP, add_lexicon_option, fraction, json_text, positive_int
 
 # Exit code of a command that asked instead of acting (documented in the README).
 ASKED = 3
@@ -191,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
             data.update(goal=format_goal(result.goal), goal_words=result.goal_words,
                         actions=[a.word for a in result.actions], final_state=format_state(result.final_state),
                         reached=result.reached, reason=result.reason)
-        print(json.dumps(data))
+        print(json_text(data))
         if result.abstained:
             _refuse(result, args)
             return ASKED

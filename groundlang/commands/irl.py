@@ -19,10 +19,9 @@ groundlang names them: compare with labels after ``parse_atom``).
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
-from groundlang.commands import PALETTE_HELP
+from groundlang.commands import PALETTE_HELP, json_text
 
 
 def register(subparsers) -> None:
@@ -102,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
 
     result = fit_file(args.file, args.palette)
     if args.json:
-        print(json.dumps(result))
+        print(json_text(result))
         return 0
     words = result["words"]
     best = result["ranking"][0]

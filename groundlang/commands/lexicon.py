@@ -15,9 +15,8 @@ most probable lifted tasks, ``P(L | preposition)`` under a uniform prior over L
 from __future__ import annotations
 
 import argparse
-import json
 
-from groundlang.commands import positive_int
+from groundlang.commands import json_text, positive_int
 
 
 def register(subparsers) -> None:
@@ -80,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
         prepositions = {p: tasks for p, tasks in prepositions.items() if p in asked}
     if args.prepositions:
         if args.json:
-            print(json.dumps({p: [[t, q] for t, q in tasks] for p, tasks in prepositions.items()}))
+            print(json_text({p: [[t, q] for t, q in tasks] for p, tasks in prepositions.items()}))
         else:
             _print_prepositions(prepositions, learner)
         return 0
@@ -88,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     if args.words:
         lexicon = {w: lexicon.get(w, []) for w in args.words}
     if args.json:
-        print(json.dumps({w: [[t, p] for t, p in m] for w, m in lexicon.items()}))
+        print(json_text({w: [[t, p] for t, p in m] for w, m in lexicon.items()}))
         return 0
     print(f"{WORD_HEADING:<16} {MEANINGS_HEADING}")
     for word, meanings in lexicon.items():

@@ -11,11 +11,10 @@ With ``--file`` a summary follows: how many commands got a full parse, how many 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
-from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, library_given, positive_int
+from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, json_text, library_given, positive_int
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import parse
 from groundlang.logic.storage import read_limited
@@ -83,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         else:
             full += 1
         if args.json:
-            print(json.dumps({"command": command, "readings": [r.to_json() for r in readings]}))
+            print(json_text({"command": command, "readings": [r.to_json() for r in readings]}))
         else:
             print(command)
             for r in readings:

@@ -6,11 +6,11 @@ or more objects that holds."""
 from __future__ import annotations
 
 import argparse
-import json
 from importlib.resources import files as resources
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, is_burlap_state_file, check_state_file, positive_seconds
+from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, check_state_file, is_burlap_state_file, json_text,
+                                 positive_seconds)
 from groundlang.corpus import read_initial_state
 
 
@@ -84,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
             "described_by_relation": by_relation,
             "relations": {obj: [str(a) for a in atoms] for obj, atoms in relations.items()},
         }
-        print(json.dumps(out, indent=1))
+        print(json_text(out, indent=1))
         return 0
     print(f"lifted tasks ({len(library.tasks)}):")
     for t in library.tasks:
