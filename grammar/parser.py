@@ -63,10 +63,27 @@ CATEGORY_RULES: dict[str, frozenset[str]] = {
 
 _TOKEN = re.compile(r"\w+(?:'\w+)*|\.{2,}|[^\w\s]")
 _CLITIC = re.compile(r"^(\w+)('(?:re|s|m|ll|ve|d))$")
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")  # Unicode's category Cc
 
 
 class ParseError(ValueError):
-    """A command that cannot be parsed at all (empty or whitespace-only)."""
+    """A command that cannot be parsed at all (empty, whitespace or punctuation only)."""
+
+
+def command_fault(command: str) -> str | None:
+    """Why ``command`` cannot be read as a command, or None: text without a word says nothing to read."""
+    text = _without_control(command)
+    if not text.strip():
+        return "is empty or only whitespace"
+    if not re.search(r"\w", text):
+        return f"has no word, only punctuation ({text.strip()[:40]!r})"
+    return None
+
+
+def _without_control(text: str) -> str:
+    """Control characters (a NUL from a binary file, a terminal's escape, a stray carriage return) as spaces:
+    no part of what a person wrote, and read as punctuation one would become a word of the vocabulary."""
+    return _CONTROL.sub(" ", text)
 
 
 Word = tuple[str, frozenset[str]]
@@ -77,7 +94,7 @@ def tokenise(command: str, word_lexicon: Lexicon | None = None) -> list[str]:
     clitics like 're split off, multiword entries such as "left of" joined into ``left_of``) and
     punctuation. ``word_lexicon``: the words known (default: English, :meth:`Lexicon.english`)."""
     words = word_lexicon or Lexicon.english()
-    text = command.lower().replace("\u2019", "'").replace("\u2018", "'")
+    text = _without_control(command).lower().replace("\u2019", "'").replace("\u2018", "'")
     text = re.sub(r"(?<=\w)-(?=\w)", " ", text)
     out: list[str] = []
     for tok in _TOKEN.findall(text):
@@ -256,9 +273,10 @@ def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None =
     if max_readings < 1:
         raise ValueError(f"parse: max_readings must be >= 1, got {max_readings}")
     words = word_lexicon or Lexicon.english()
+    fault = command_fault(command)
+    if fault:
+        raise ParseError(f"cannot parse the command: it {fault}")
     tokens = tokenise(command, words)
-    if not tokens:
-        raise ParseError("cannot parse an empty command (the text is empty or only whitespace)")
     cats = tag(tokens, words)
     tags = tuple(_class_name(c).replace("_", "|") if c else "PUNCT" for c in cats)
     beam = 2 * max_readings + 4

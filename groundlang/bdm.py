@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from groundlang.state_line import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, coordinate, shown, text_lines
+from groundlang.grammar.parser import command_fault
 from groundlang.logic.storage import FileRefused, read_limited
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
@@ -262,6 +263,9 @@ def _command(path: Path, line: int, block: list[tuple[int, str]], palette) -> Co
                           "command, after its text")
     if text.startswith("{"):
         raise CorpusError(f"{path}, line {line}: a block starts with a state; expected the command first")
+    fault = command_fault(text)
+    if fault:
+        raise CorpusError(f"{path}, line {line}: the command {fault}; expected the command's words")
     pairs = []
     rest = block[1:]
     k = 0

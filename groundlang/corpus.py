@@ -22,6 +22,7 @@ from importlib.resources import files
 from pathlib import Path
 
 from groundlang.bdm import parse_bdm_state
+from groundlang.grammar.parser import command_fault
 from groundlang.logic.storage import read_limited, write_atomically
 from groundlang.model.world import Action, Layout, Palette, State, WorldError, get_palette, step
 from groundlang.state_line import (MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, format_state, parse_state, shared_cell,
@@ -199,8 +200,9 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
     if len(lines) < 2:
         raise CorpusError(f"{path}, line 2: missing; expected the actions (comma separated) after the command")
     command = lines[0].strip()
-    if not command:
-        raise CorpusError(f"{path}, line 1: the command is empty; expected the command's words")
+    fault = command_fault(command)
+    if fault:
+        raise CorpusError(f"{path}, line 1: the command {fault}; expected the command's words")
     actions = _parse_actions(lines[1], path)
     state_lines = lines[2:]
     needed = len(actions) + 1

@@ -250,9 +250,9 @@ for _via, _argv in (("parse", lambda c: ("parse", c, "--json")),
                     ("follow", lambda c: _follow(c, NOVEL, "--json", "--guess"))):
     ROWS += [
         Row(f"command/{_via}/empty", _argv(""),
-            pieces=("cannot parse an empty command (the text is empty or only whitespace)",)),
+            pieces=("cannot parse the command: it is empty or only whitespace",)),
         Row(f"command/{_via}/whitespace only", _argv(" \t\n  "),
-            pieces=("cannot parse an empty command (the text is empty or only whitespace)",)),
+            pieces=("cannot parse the command: it is empty or only whitespace",)),
         Row(f"command/{_via}/10,000 words (works)", _argv(TEN_THOUSAND), code=0,
             check=_parsed if _via == "parse" else _works()),
         Row(f"command/{_via}/control characters (works)", _argv(CONTROL), code=0,

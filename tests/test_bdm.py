@@ -103,6 +103,9 @@ def test_check_reports_the_fixture():
     # --- is never a command's text
     ("---\nSTATE\nSTATE\ntrue\n", "line 1: --- where a command was expected"),
     ("\n---\n\ngo\nSTATE\nSTATE\ntrue\n", "line 2: --- where a command was expected"),
+    # a command needs a word: punctuation or control characters alone say nothing to learn from
+    ("go\nSTATE\nSTATE\ntrue\n\n?! ...\nSTATE\nSTATE\ntrue\n", "line 6: the command has no word, only punctuation ('?! ...')"),
+    ("\x00\x07\nSTATE\nSTATE\ntrue\n", "line 1: the command is empty or only whitespace"),
 ])
 def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
     room = "room0 (room): [top: {4} left: {0} bottom: {0} right: {4} colour: {%s} ]"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -352,3 +353,13 @@ def test_cli_parse_corpus_folder(tmp_path, capsys):
     assert [json.loads(line)["command"] for line in captured.out.splitlines()] == [
         "push star into orange room", "walk to beige room"]
     assert captured.err.strip().endswith("2 commands: 2 full parse, 0 fallback only")
+
+
+def test_a_command_without_a_word_is_refused_and_control_characters_are_spaces():
+    for text, said in (("?!., ;", "it has no word, only punctuation ('?!., ;')"),
+                       ("\x00\x1b \t", "it is empty or only whitespace")):
+        with pytest.raises(ParseError, match=re.escape(said)):
+            parser.parse(text)
+    # a NUL or a terminal's escape is no token (it would become a word of the vocabulary), and no word is cut
+    assert parser.tokenise("go\x00 to the\x07 red\x1b[31m room\r") == ["go", "to", "the", "red", "[", "31m", "room"]
+    assert parser.parse("go\x00to the red room")[0].logical_form.words == parser.parse("go to the red room")[0].logical_form.words

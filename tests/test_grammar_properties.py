@@ -1,8 +1,9 @@
-"""Property tests for the command parser: any text gives readings or the one clear empty-input error."""
+"""Property tests for the command parser: any text gives readings or the one clear error for text without a word."""
 
 from __future__ import annotations
 
 import math
+import re
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -16,8 +17,10 @@ VOCAB = ("go push the star into to green room and , . n from orange take it walk
 def check(text: str) -> None:
     try:
         readings = parse(text, max_readings=4)
-    except ParseError as exc:  # the one allowed error: nothing but whitespace
-        assert not text.strip() and "empty" in str(exc)
+    except ParseError as exc:  # the one allowed error: no word (whitespace, punctuation, control characters)
+        assert not re.search(r"\w", text)
+        assert ("empty or only whitespace" if not re.sub(r"[\x00-\x1f\x7f-\x9f]", "", text).strip()
+                else "has no word, only punctuation") in str(exc)
         return
     assert 1 <= len(readings) <= 4
     assert math.isclose(sum(r.probability for r in readings), 1.0, rel_tol=1e-9)

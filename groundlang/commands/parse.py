@@ -16,7 +16,7 @@ from pathlib import Path
 
 from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, json_text, library_given, positive_int
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
-from groundlang.grammar.parser import parse
+from groundlang.grammar.parser import ParseError, command_fault, parse
 from groundlang.logic.storage import read_limited
 
 
@@ -70,11 +70,12 @@ def run(args: argparse.Namespace) -> int:
     items = [("argument", args.text)] if args.file is None else _commands(args.file)
     full = fallback = empty = 0
     for source, command in items:
-        if not command.strip():
+        fault = command_fault(command)
+        if fault:
             if args.file is None:
-                parse(command, word_lexicon=words)  # raises the clear ParseError for an empty command
+                raise ParseError(f"cannot parse the command: it {fault}")
             empty += 1
-            print(f"{source}: empty command, skipped", file=sys.stderr)
+            print(f"{source}: the command {fault}, skipped", file=sys.stderr)
             continue
         readings = parse(command, max_readings=args.max_readings, word_lexicon=words)
         if readings[0].logical_form.fallback:
@@ -91,6 +92,6 @@ def run(args: argparse.Namespace) -> int:
     if args.file is not None:
         total = full + fallback
         summary = (f"{total} commands: {full} full parse, {fallback} fallback only"
-                   + (f", {empty} empty skipped" if empty else ""))
+                   + (f", {empty} without words skipped" if empty else ""))
         print(summary, file=sys.stderr if args.json else sys.stdout)
     return 0
