@@ -126,6 +126,7 @@ class EvidenceCache:
         self.root = None if cache_dir is False else cache_directory(cache_dir)
         self.digest = library_digest(library)
         self.hits = self.computed = self.damaged = 0
+        self._writable = True  # until a write fails: a cache that cannot be written is still read
         self._first_damaged: tuple[Path, str] | None = None
         self._memory: OrderedDict[str, LayoutEvidence] = OrderedDict()
 
@@ -149,7 +150,7 @@ class EvidenceCache:
         else:
             found = LayoutEvidence(start, end, self.library, self.noise, max_states)
             self.computed += 1
-            if self.root is not None:
+            if self.root is not None and self._writable:
                 self._write(path, key, found)
         self._memory[key] = found
         if len(self._memory) > REMEMBERED:
@@ -175,7 +176,7 @@ class EvidenceCache:
         except OSError as exc:
             logger.warning("evidence cache %s cannot be written (%s: %s); going on without writing to it",
                            self.root, exc.filename or self.root, exc.strerror or exc)
-            self.root = None
+            self._writable = False
 
     def report(self) -> None:
         """One warning for damaged entries (how many, the first and why), one info line of counts."""

@@ -116,6 +116,21 @@ def test_a_folder_that_cannot_be_written_is_a_warning(williams_commands, william
     assert len(caplog.records) == 1 and "cannot be written" in caplog.records[0].getMessage()
 
 
+def test_a_cache_that_cannot_be_written_is_still_read(williams_commands, williams_library, tmp_path, monkeypatch):
+    # a warm cache on a full disk (or a read-only share): the entries there are read after a write fails
+    pairs = _pairs(williams_commands)
+    EvidenceCache(williams_library, EndStateNoise(), tmp_path).evidence(*pairs[0])
+
+    def full(path, data, **options):
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(evidence_cache, "write_atomically", full)
+    cache = EvidenceCache(williams_library, EndStateNoise(), tmp_path)
+    cache.evidence(*pairs[1])  # not cached: computed, its write fails
+    cache.evidence(*pairs[0])
+    assert (cache.computed, cache.hits) == (1, 1)
+
+
 def test_a_cache_folder_that_is_a_file_is_refused(williams_library, tmp_path):
     (tmp_path / "cache").write_text("")
     with pytest.raises(ValueError, match="is a file, not a folder"):
