@@ -83,8 +83,14 @@ def expected_success_states(goals, masks: GoalMasks, step_cost: float) -> tuple[
     value = np.where(dist >= 0, score - step_cost * dist, -np.inf)
     target = value >= value.max() - 1e-9
     nearest = int(np.flatnonzero(target)[np.argmin(dist[target])])
-    said = next((goal for goal, _ in kept if masks.mask(goal)[nearest]), None)
+    said = goal_holding_at(kept, masks, nearest)
     return None if said is None else (target, said)
+
+
+def goal_holding_at(goals, masks: GoalMasks, index: int) -> tuple[Atom, ...] | None:
+    """The most probable of ``goals`` (``(goal, probability)``, most probable first) of a share of at least
+    NEGLIGIBLE that holds in the state ``index`` of ``masks.space``; None where none does."""
+    return next((goal for goal, p in goals if p >= NEGLIGIBLE and masks.mask(goal)[index]), None)
 
 
 class WorldPlans:

@@ -18,7 +18,7 @@ import torch
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import given_achievable, group_goals
-from groundlang.goal_plans import WorldPlans, expected_success_states
+from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings
@@ -312,10 +312,10 @@ class Learner:
             return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
                                 question=question(choices, unknown, state, self.library),
                                 choices=choices, unknown_words=unknown)
-        ending = self.lm.expected_success and expected_success_states(
-            post.goals(), self._world.goal_masks(self._world.space(state)), self.lm.step_cost)
+        masks = self._world.goal_masks(self._world.space(state))
+        ending = self.lm.expected_success and expected_success_states(post.goals(), masks, self.lm.step_cost)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
-            return self._act(command, state, post, ending[1], max_steps, ending[0])
+            return self._act(command, state, post, ending[1], max_steps, ending[0], masks)
         return self._act(command, state, post, post.best_goal, max_steps)
 
     def clarify(self, result: FollowResult, answer: str, max_steps: int = 200) -> FollowResult:
@@ -345,9 +345,14 @@ class Learner:
         return self.vocab is not None and self.vocab.word_id(word) != 0
 
     def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int,
-             ending=None) -> FollowResult:
-        """Plan for ``goal``, or to end in a state of ``ending`` (:meth:`WorldPlans.act`)."""
+             ending=None, masks=None) -> FollowResult:
+        """Plan for ``goal``, or to end in a state of ``ending`` (:meth:`WorldPlans.act`; ``masks`` the goals'
+        over its space)."""
         states, actions, reached, reason = self._world.act(state, goal, max_steps, ending)
+        if ending is not None and reached:
+            # Every state of ``ending`` is worth the same and the plan may end in any of them, not only
+            # where ``goal`` holds: the goal said to be acted on is the one that holds where it ends.
+            goal = goal_holding_at(post.goals(), masks, masks.space.index_of(states[-1])) or goal
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library))
 
