@@ -329,10 +329,12 @@ def policy(learner, command: str, state) -> CommandPolicy:
     """Wrap a trained :class:`groundlang.Learner` into a callable ``observation -> action``.
 
     ``state`` is the initial :class:`State` or a reset :class:`CleanupEnv`
-    (its current state). The reading of the command and the plan are the
-    ones :meth:`Learner.follow` uses (most probable grounded goal, soft value
-    iteration with the learner's settings). Raises NotFittedError for an
-    untrained learner.
+    (its current state). It acts on the posterior's most probable grounded
+    goal (:meth:`Learner.posterior`), planned by soft value iteration with the
+    learner's settings: what :meth:`Learner.follow` does with the language
+    model's ``expected_success`` off (with it on, ``follow`` ends where the
+    goals of the whole posterior most probably hold). Raises NotFittedError
+    for an untrained learner.
     """
     from groundlang.inference.planning import solve_task
     from groundlang.model.features import goal_mask

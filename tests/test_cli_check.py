@@ -170,3 +170,11 @@ def test_check_shared_corpus(capsys, shared_corpus, folder, commands):
         "labelled: 240/240 files (6 prefixes in labels.csv)",
         "goal holds in final state: 240/240",
     ]
+
+
+def test_check_reads_a_library_given_without_labels(capsys, tmp_path):
+    # the library is part of what is checked: a script in it is refused whether or not --labels uses it
+    bad = tmp_path / "bad.lp"
+    bad.write_text("#script (python)\nimport os\n#end.\n")
+    code, out, err = run(capsys, "check", str(example_corpus_path()), "--palette", "sokoban", "--library", str(bad))
+    assert code == 2 and f"{bad}:1: #script blocks are refused" in err and out == ""

@@ -129,7 +129,7 @@ def json_text(data, indent: int | None = None) -> str:
 
 def json_bytes(data) -> bytes:
     """``data`` as the JSON text of a result file (:func:`json_text`, indented)."""
-    return json_text(data, indent=1).encode("utf-8")
+    return (json_text(data, indent=1) + "\n").encode("utf-8")
 
 
 def library_given(args: argparse.Namespace):

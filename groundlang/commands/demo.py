@@ -35,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
     corpus = read_corpus(folder, "sokoban")
     coverage = label_coverage(corpus, read_labels(folder / "labels.csv"))
     print(f"example corpus: {len(corpus)} instances, {len(corpus.commands())} distinct commands, "
-          f"{len(corpus.distinct_layouts())} layouts; every demonstration replays; "
+          f"{len(corpus.distinct_layouts())} layout{'s' * (len(corpus.distinct_layouts()) != 1)}; every demonstration replays; "
           f"gold goal holds at the end of {coverage.holding}/{coverage.total}")
     started = time.perf_counter()
     learner = Learner(args.language_model).fit(corpus.instances, progress=args.progress)

@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
                                  max_tasks=args.max_tasks, restrict=args.restrict)
     cache = False if args.no_cache else args.cache_dir
     quiet = args.json or getattr(args, "quiet", False)
-    discovery = discover_tasks(corpus.instances, settings, cache_dir=cache, progress=not quiet, pfs=pfs)
+    discovery = discover_tasks(corpus.instances, settings, cache_dir=cache, progress=not quiet and getattr(args, "progress", False), pfs=pfs)
     path = write_library(discovery, args.output)
     seconds = time.perf_counter() - start
     if args.json:

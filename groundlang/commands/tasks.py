@@ -94,10 +94,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {g.task}: {g.goal_text}")
         for c in constraints:
             print(f"      {c}")
-    print(f"unary PFs of each object in the initial state, by class ({len(described)} objects):")
+    print(f"unary PFs of each object in the initial state, by class ({len(described)} object{'s' * (len(described) != 1)}):")
     for obj, by_class in described.items():
         print(f"  {obj}: " + "; ".join(f"{cls} {', '.join(pfs)}" for cls, pfs in by_class.items()))
-    print(f"relations that may describe an object by another, in the initial state ({len(by_relation)} objects):")
+    print(f"relations that may describe an object by another, in the initial state ({len(by_relation)} object{'s' * (len(by_relation) != 1)}):")
     for obj, atoms in by_relation.items():
         print(f"  {obj}: " + ", ".join(atoms))
     if untabulated:
