@@ -235,6 +235,11 @@ def test_train_on_pairs_then_follow_with_the_models_palette(tmp_path):
     assert run.returncode == 0, run.stderr
     result = json.loads(run.stdout)
     assert result["goal"].startswith("agentNextToToy(agent0, block0)") and result["reached"]
+    # a multiword preposition asked of the word table is sent to the preposition table, where it is learned
+    run = _cli("--quiet", "lexicon", str(model), "--words", "next to")
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.splitlines()[1].split(maxsplit=2) == ["next", "to", "(a preposition: see the table below)"]
+    assert any(line.startswith("next_to") and "agentNextToToy" in line for line in run.stdout.splitlines())
 
 
 def test_a_pair_of_a_billion_states_is_scored_in_its_relevance_abstraction(williams_library):

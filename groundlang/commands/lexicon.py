@@ -91,7 +91,9 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(f"{WORD_HEADING:<16} {MEANINGS_HEADING}")
     for word, meanings in lexicon.items():
-        text = ", ".join(f"{token} {p:.2f}" for token, p in meanings) or "(unknown word)"
+        preposition = "_".join(word.split()) in prepositions  # learned in the preposition table below
+        text = (", ".join(f"{token} {p:.2f}" for token, p in meanings)
+                or ("(a preposition: see the table below)" if preposition else "(unknown word)"))
         print(f"{word:<16} {text}")
     if prepositions:  # relations are learned there, not as a preposition word's tokens above
         print()
