@@ -40,7 +40,7 @@ from groundlang.inference.planning import TaskSettings
 from groundlang.model.features import goal_mask
 from groundlang.model.relevance import (abstract_space_uncached, abstraction_bound, announce, relevant_toys,
                                         state_space_for)
-from groundlang.model.state_search import default_max_states
+from groundlang.model.state_search import count_text, default_max_states
 from groundlang.model.statespace import state_count_bound, trajectory_indices
 from groundlang.model.world import ACTION_DELTAS
 
@@ -174,7 +174,7 @@ def approximate_likelihoods(initial, goals: Sequence[tuple], states: Sequence, a
     exact = state_count_bound(int(initial.layout.walkable.sum()), len(initial.toys))
     announce(initial.layout, max_states, "behaviour likelihoods: approximate (the whole layout up to %s states, %s "
              "max_states=%s): %d goal(s) stepwise (toys the demonstration moves and the goal does not name at "
-             "the placements it needs), %d in a relevance abstraction; %s states solved together", f"{exact:,}",
+             "the placements it needs), %d in a relevance abstraction; %s states solved together", count_text(exact),
              ">" if exact > max_states else "<=", f"{max_states:,}", used_steps, len(goals) - used_steps,
              f"{sum(s.num_states for s, _ in blocks):,}")
     # the demonstration's states in each block: the only rows of the policy its likelihood reads

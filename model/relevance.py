@@ -40,7 +40,7 @@ import numpy as np
 from groundlang.logic.atoms import Atom, parse_atom
 
 from .pf_tables import MAX_TABULATED_CELLS
-from .state_search import MAX_STATES_VARIABLE, default_max_states, key_powers, search, state_count_bound
+from .state_search import MAX_STATES_VARIABLE, count_text, default_max_states, key_powers, search, state_count_bound
 from .statespace import StateSpace, StateSpaceError, enumerate_states
 from .world import ACTION_DELTAS, State
 
@@ -135,12 +135,12 @@ def check_abstraction_possible(state: State, max_states: int | None = None) -> i
     if exact <= max_states:
         return exact
     if cells > MAX_TABULATED_CELLS:
-        raise StateSpaceError(f"this layout could reach up to {exact:,} states ({cells} walkable cells, "
+        raise StateSpaceError(f"this layout could reach up to {count_text(exact)} states ({cells} walkable cells, "
                               f"{toys} toy(s)), more than max_states={max_states:,}, and its cells are more than "
                               f"the relevance abstraction's PF tables are built for ({MAX_TABULATED_CELLS:,})")
     bound = abstraction_bound(state, ())
     if bound > max_states:
-        raise StateSpaceError(f"even the agent alone could reach {bound:,} cells here, more than max_states="
+        raise StateSpaceError(f"even the agent alone could reach {count_text(bound)} cells here, more than max_states="
                               f"{max_states:,}; set {MAX_STATES_VARIABLE}={bound} (or more) to allow it")
     return bound
 
@@ -227,7 +227,7 @@ def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstration
     exact = state_count_bound(cells, toys)
     if method == "exact" or (method == "auto" and exact <= max_states):
         # debug, not info: the usual case, and the CLI shows info lines
-        logger.debug("state space: exact enumeration (at most %s states <= max_states=%s)", f"{exact:,}",
+        logger.debug("state space: exact enumeration (at most %s states <= max_states=%s)", count_text(exact),
                      f"{max_states:,}")
         return enumerate_states(state, max_states)
     demonstrations = list(demonstrations)
@@ -239,12 +239,12 @@ def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstration
         # where the goal wants it from the start (moving it could only undo that) or in a goal the
         # demonstration does not pursue; either way it is scored as a wall rather than refused.
         logger.debug("goal %s: toys it names that the demonstration leaves in place are walls (%s states > %s)",
-                     _goal_text(goal), f"{bound:,}", f"{max_states:,}")
+                     _goal_text(goal), count_text(bound), f"{max_states:,}")
         relevant, bound = moved, abstraction_bound(state, moved)
     if bound > max_states:
         raise StateSpaceError(
-            f"too many states for goal {_goal_text(goal)}: the layout could reach {exact:,} ({cells} cells, {toys} "
-            f"toy(s)) and the abstraction moving the agent and {len(relevant)} toy(s) {bound:,}, both more than "
+            f"too many states for goal {_goal_text(goal)}: the layout could reach {count_text(exact)} ({cells} cells, {toys} "
+            f"toy(s)) and the abstraction moving the agent and {len(relevant)} toy(s) {count_text(bound)}, both more than "
             f"max_states={max_states:,}; set {MAX_STATES_VARIABLE}={bound} (or more) to allow the abstraction")
     space = abstract_space(state, relevant, max_states)
     # widening needs room for at least one more toy

@@ -124,6 +124,15 @@ def state_count_bound(num_cells: int, num_toys: int) -> int:
     return math.perm(num_cells, num_toys + 1) if num_cells >= num_toys + 1 else 0
 
 
+def count_text(n: int) -> str:
+    """``n`` for a message: with thousands separators, or as a power of ten past 10^15 (a layout of a thousand
+    toys bounds its states by a number of thousands of digits, more than a line should hold or Python
+    converts to text)."""
+    if n < 10**15:
+        return f"{n:,}"
+    return f"about 10^{int(n.bit_length() * math.log10(2))}"
+
+
 def _pair_tables(neighbour: np.ndarray, powers: np.ndarray, dtype: type) -> list[np.ndarray]:
     """Per-toy transition tables indexed by (agent cell, toy cell) pairs, ``[W * W, 4]``.
 
@@ -156,9 +165,9 @@ def _pair_tables(neighbour: np.ndarray, powers: np.ndarray, dtype: type) -> list
 
 
 def too_many_states(bound: int, num_cells: int, num_toys: int, max_states: int) -> str:
-    return (f"this layout could reach up to {bound:,} states ({num_cells} walkable cells, "
+    return (f"this layout could reach up to {count_text(bound)} states ({num_cells} walkable cells, "
             f"{num_toys} toy(s)), more than max_states={max_states:,}; "
-            f"pass max_states={bound:,} (or more) to enumerate_states, or set "
+            f"pass max_states={count_text(bound)} (or more) to enumerate_states, or set "
             f"{MAX_STATES_VARIABLE}={bound} in the environment, to allow it")
 
 

@@ -364,3 +364,18 @@ def test_a_cache_entry_that_is_a_fifo_is_replaced_not_written_into(tmp_path):
     likelihoods._write_entry(entry, "k", -1.5, ["x"])
     rescue.cancel()
     assert entry.is_file() and likelihoods._read_entry(entry, "k") == -1.5
+
+
+def test_a_layout_of_a_thousand_toys_is_refused_in_one_short_line():
+    # the bound on its states has thousands of digits: more than a line holds or Python turns into text
+    from groundlang.model.relevance import check_abstraction_possible
+    from groundlang.model.state_search import count_text, state_count_bound
+
+    assert count_text(5_000_000) == "5,000,000" and count_text(10**15 - 1) == "999,999,999,999,999"
+    assert count_text(state_count_bound(39601, 1500)) == "about 10^6888"
+    cells = [(x, y) for y in range(1, 10) for x in range(1, 199)][:1500]
+    layout = Layout((Room("red", 0, 200, 200, 0),), (), (("red", "star"),) * len(cells), get_palette("sokoban"))
+    state = State(layout, Agent(100, 100), tuple(Toy("red", "star", x, y) for x, y in cells))
+    with pytest.raises(StateSpaceError) as refused:
+        check_abstraction_possible(state)  # what follow asks first
+    assert "could reach up to about 10^" in str(refused.value) and len(str(refused.value)) < 400
