@@ -75,7 +75,7 @@ def command_fault(command: str) -> str | None:
     text = _without_control(command)
     if not text.strip():
         return "is empty or only whitespace"
-    if not re.search(r"\w", text):
+    if not re.search(r"[^\W_]", text):  # a letter or a digit: "____" is no more a word than "----"
         return f"has no word, only punctuation ({text.strip()[:40]!r})"
     return None
 

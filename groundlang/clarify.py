@@ -111,7 +111,7 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     if not text:
         raise AnswerError("empty answer: expected a number or words naming one of the choices")
     phrases = option_phrases(choices, state, library)
-    if text.isdigit():
+    if text.isdecimal():  # int() reads every decimal digit ("٣"), not every digit ("²")
         k = int(text)
         if not 1 <= k <= len(choices):
             raise AnswerError(f"answer {k}: expected a number from 1 to {len(choices)}")

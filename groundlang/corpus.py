@@ -26,7 +26,7 @@ from groundlang.grammar.parser import command_fault
 from groundlang.logic.storage import read_limited, write_atomically
 from groundlang.model.world import Action, Layout, Palette, State, WorldError, get_palette, step
 from groundlang.state_line import (MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, format_state, parse_state, shared_cell,
-                                   shown, text_lines)
+                                   shown, text_lines, utf8_text)
 
 __all__ = [
     "CorpusError",
@@ -133,17 +133,7 @@ class Corpus:
 def _read_lines(path: Path) -> list[str]:
     """Decode a file as UTF-8 and split it into lines (CRLF and a leading byte-order mark accepted, trailing
     blank lines dropped)."""
-    data = read_limited(path, MAX_FILE_BYTES, "a corpus or state file")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise CorpusError(
-            f"{path}, line {line}: byte 0x{data[exc.start]:02x} at offset {exc.start} is not UTF-8; "
-            "expected a UTF-8 text file"
-        ) from None
-    text = text.removeprefix("\ufeff")  # a byte-order mark some editors write
-    lines = text_lines(text)
+    lines = text_lines(utf8_text(read_limited(path, MAX_FILE_BYTES, "a corpus or state file"), path))
     while lines and not lines[-1].strip():
         lines.pop()
     return lines

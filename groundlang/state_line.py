@@ -55,6 +55,20 @@ def coordinate(text: str, signed: bool = True) -> int:
 _LINE_END = re.compile(r"\r\n|\r|\n")
 
 
+def utf8_text(data: bytes, path) -> str:
+    """A text file's bytes as text, a leading byte-order mark (some editors write one) dropped; CorpusError
+    naming the line and offset of the first byte that is not UTF-8 (a binary file, a Latin-1 one)."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise CorpusError(
+            f"{path}, line {line}: byte 0x{data[exc.start]:02x} at offset {exc.start} is not UTF-8; "
+            "expected a UTF-8 text file"
+        ) from None
+    return text.removeprefix("\ufeff")
+
+
 def text_lines(text: str) -> list[str]:
     """A corpus file's lines as an editor numbers them: split at the ends of line an editor writes (LF, CRLF,
     and CR alone), not at the other separators ``str.splitlines`` knows (U+2028, form feed, NEL), which a

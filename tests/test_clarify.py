@@ -70,6 +70,10 @@ def test_answers_by_number_and_by_words(novel_b, library):
     assert choose("  I mean the RED room ", rooms, novel_b, library) is rooms[0]
     with pytest.raises(AnswerError, match="expected a number from 1 to 3"):
         choose("4", rooms, novel_b, library)
+    assert choose("\u0663", rooms, novel_b, library) is rooms[2]  # an Arabic-Indic three is a number
+    for digit in ("\u00b2", "\u2460"):  # a superscript two, a circled one: digits, yet no number int() reads
+        with pytest.raises(AnswerError, match="names none of the choices"):
+            choose(digit, rooms, novel_b, library)
     with pytest.raises(AnswerError, match="names none of the choices"):
         choose("the room", rooms, novel_b, library)  # "room" is in every choice: it tells none apart
     assert choose("the mauve one", rooms, novel_b, library, read=lambda text, c: c[1]) is rooms[1]

@@ -343,6 +343,15 @@ def test_cli_parse_file_summary_and_errors(tmp_path, capsys):
     assert main(["parse", "   "]) == 2
     assert "empty" in capsys.readouterr().err
     assert main(["parse"]) == 2
+    capsys.readouterr()
+    # a file of commands is UTF-8 like every other file read (a byte-order mark dropped), not guessed at
+    path.write_bytes(b"\xef\xbb\xbfgo to green\ngo to the r\xe9d room\n")
+    assert main(["parse", "--file", str(path)]) == 2
+    assert capsys.readouterr().err.strip() == (f"groundlang parse: error: {path}, line 2: byte 0xe9 at offset 26 is "
+                                               "not UTF-8; expected a UTF-8 text file")
+    path.write_bytes(b"\xef\xbb\xbfgo to green\n")
+    assert main(["parse", "--json", "--file", str(path)]) == 0
+    assert json.loads(capsys.readouterr().out)["command"] == "go to green"
 
 
 def test_cli_parse_corpus_folder(tmp_path, capsys):
@@ -357,6 +366,7 @@ def test_cli_parse_corpus_folder(tmp_path, capsys):
 
 def test_a_command_without_a_word_is_refused_and_control_characters_are_spaces():
     for text, said in (("?!., ;", "it has no word, only punctuation ('?!., ;')"),
+                       ("__ _", "it has no word, only punctuation ('__ _')"),
                        ("\x00\x1b \t", "it is empty or only whitespace")):
         with pytest.raises(ParseError, match=re.escape(said)):
             parser.parse(text)

@@ -18,6 +18,7 @@ from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, json_text, li
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import ParseError, command_fault, parse
 from groundlang.logic.storage import read_limited
+from groundlang.state_line import text_lines, utf8_text
 
 
 def register(subparsers) -> None:
@@ -47,10 +48,10 @@ def _commands(path: Path) -> list[tuple[str, str]]:
             raise ValueError(f"{path}: no *.txt command files in this folder")
         out = []
         for f in files:
-            text = read_limited(f, MAX_CORPUS_FILE_BYTES, "a corpus file").decode("utf-8", errors="replace")
-            out.append((str(f), text.split("\n", 1)[0].strip()))
+            text = utf8_text(read_limited(f, MAX_CORPUS_FILE_BYTES, "a corpus file"), f)
+            out.append((str(f), text_lines(text)[0].strip()))
         return out
-    lines = read_limited(path, MAX_COMMANDS_BYTES, "a file of commands").decode("utf-8", errors="replace").splitlines()
+    lines = text_lines(utf8_text(read_limited(path, MAX_COMMANDS_BYTES, "a file of commands"), path))
     return [(f"{path}:{i}", line.strip()) for i, line in enumerate(lines, 1) if line.strip()]
 
 
@@ -91,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
                 print(f"  {r.probability:.3f}  {r.logical_form.paper_str()}{mark}")
     if args.file is not None:
         total = full + fallback
-        summary = (f"{total} commands: {full} full parse, {fallback} fallback only"
+        summary = (f"{total} command{'s' * (total != 1)}: {full} full parse, {fallback} fallback only"
                    + (f", {empty} without words skipped" if empty else ""))
         print(summary, file=sys.stderr if args.json else sys.stdout)
     return 0
