@@ -188,3 +188,22 @@ def test_cli_learn_needs_ask_and_leaves_the_model_alone_without_an_answer(traine
     assert _cli(model_dir, "go to the red room", "--ask", "--learn") == 0
     assert "learned" not in capsys.readouterr().out
     assert (model_dir / "model.json").read_bytes() == saved
+
+
+def test_cli_learn_refuses_a_model_folder_it_cannot_save_to_before_asking(trained, tmp_path, capsys, monkeypatch):
+    # the answer is learned and saved after the question: a folder that cannot take the model (a read-only
+    # mount; root ignores permission bits, so the probe is made to fail) is refused before the question
+    from groundlang.logic import storage
+
+    model_dir = trained.save(tmp_path / "model")
+
+    def read_only(folder, name, what):
+        raise ValueError(f"{what}: cannot create a file in {folder} (Read-only file system)")
+
+    monkeypatch.setattr(storage, "check_writable", read_only)
+    monkeypatch.setattr("sys.stdin", io.StringIO("the blue one\n"))
+    assert _cli(model_dir, "go to the purple room", "--ask", "--learn") == 2
+    out, err = capsys.readouterr()
+    assert "Which room" not in out and err.strip() == (f"groundlang follow: error: --model {model_dir}: cannot create "
+                                                       f"a file in {model_dir} (Read-only file system)")
+    assert _cli(model_dir, "go to the red room", "--ask") == 0  # without --learn nothing is saved: no probe

@@ -134,6 +134,10 @@ def run(args: argparse.Namespace) -> int:
 
         check_picture_destination(args.out)
     learner = Learner.load(args.model)
+    if args.learn:  # the model is saved after the answer: a folder that cannot take it is refused before asking
+        from groundlang.model_io import check_model_destination
+
+        check_model_destination(args.model, "--model")
     palette = args.palette
     if palette is None:
         trained = [p["name"] for p in learner.palettes or ()]
