@@ -275,6 +275,10 @@ def _command(path: Path, line: int, block: list[tuple[int, str]], palette) -> Co
             raise CorpusError(f"{path}, line {chunk[0][0]}: a pair needs a start state, an end state and the word "
                               "true; the block ends first")
         (start_no, start), (end_no, end), (true_no, true) = chunk
+        for number, text_there, which in ((start_no, start, "start"), (end_no, end, "end")):
+            if not text_there.lstrip().startswith("{"):  # a state left out: say which, not that true is late
+                raise CorpusError(f"{path}, line {number}: expected the {which} state of a pair (a state in braces), "
+                                  f"found {text_there[:40]!r}")
         if true.lower() != "true":
             raise CorpusError(f"{path}, line {true_no}: expected the word true after the end state, found {true[:40]!r}")
         first, names = parse_bdm_state(start, palette, f"{path}, line {start_no}")

@@ -103,6 +103,8 @@ def test_check_reports_the_fixture():
     # --- is never a command's text
     ("---\nSTATE\nSTATE\ntrue\n", "line 1: --- where a command was expected"),
     ("\n---\n\ngo\nSTATE\nSTATE\ntrue\n", "line 2: --- where a command was expected"),
+    # a state left out of a pair is named as missing where it is, not as the word true coming late
+    ("go\nSTATE\ntrue\n---\nSTATE\nSTATE\ntrue\n", "line 3: expected the end state of a pair (a state in braces), found 'true'"),
     # a command needs a word: punctuation or control characters alone say nothing to learn from
     ("go\nSTATE\nSTATE\ntrue\n\n?! ...\nSTATE\nSTATE\ntrue\n", "line 6: the command has no word, only punctuation ('?! ...')"),
     ("\x00\x07\nSTATE\nSTATE\ntrue\n", "line 1: the command is empty or only whitespace"),
