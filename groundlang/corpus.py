@@ -195,6 +195,10 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
         raise CorpusError(f"{path}, line 1: the command {fault}; expected the command's words")
     actions = _parse_actions(lines[1], path)
     state_lines = lines[2:]
+    blank = next((k for k, text in enumerate(state_lines) if not text.strip()), None)
+    if blank is not None:  # one state per line: a blank one shifts every count below, so it is named first
+        raise CorpusError(f"{path}, line {blank + 3}: a blank line among the state lines; expected one state per "
+                          "line from line 3 on")
     needed = len(actions) + 1
     if len(state_lines) < needed:
         raise CorpusError(

@@ -30,6 +30,7 @@ MALFORMED = {
     "only_command.txt": (2, ["missing", "expected the actions"]),
     "empty_command.txt": (1, ["the command is empty", "expected the command's words"]),
     "punctuation_command.txt": (1, ["the command has no word, only punctuation ('?? !')"]),
+    "blank_state_line.txt": (4, ["a blank line among the state lines", "expected one state per line"]),
     "truncated.txt": (5, ["3 actions need 4 state lines", "found 2", "truncated"]),
     "truncated_midline.txt": (4, ["'room,10,4' has 3 comma-separated fields", "expected 6 (room,COLOUR,LEFT,TOP,RIGHT,BOTTOM)"]),
     "extra_state.txt": (5, ["extra state line", "need exactly 2 state lines"]),
