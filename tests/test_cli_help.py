@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+import pytest
+
 from groundlang.cli import build_parser
 
 
@@ -44,3 +46,16 @@ def test_json_output_is_strict_json_everywhere():
     # no command writes JSON past json_text: a json.dumps there could write NaN again
     commands = Path(__file__).parent.parent / "groundlang" / "commands"
     assert [p.name for p in commands.glob("*.py") if p.name != "__init__.py" and "json.dumps" in p.read_text()] == []
+
+
+
+@pytest.mark.parametrize("argv", [["evaluate", "--json", ""], ["ablate", "--json", " "], ["ablate", "--plot", ""],
+                                  ["demo", "--out", ""], ["discover", "-o", ""], ["follow", "go", "--out", ""],
+                                  ["show", "x.txt", "--out", ""], ["train", "-o", ""]])
+def test_an_empty_output_path_is_refused_not_taken_for_no_output(argv, capsys):
+    from groundlang.cli import main
+
+    with pytest.raises(SystemExit) as stopped:
+        main(argv)
+    assert stopped.value.code == 2
+    assert "an empty path; expected where to write" in capsys.readouterr().err

@@ -26,6 +26,14 @@ def _whole(text: str, least: int, what: str) -> int:
     return value
 
 
+def output_path(text: str) -> str:
+    """An argparse type: the path of a file or folder to write; an empty one is refused (it was taken for
+    no output at all, and the run wrote nothing)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty path; expected where to write")
+    return text
+
+
 def positive_int(text: str) -> int:
     """An argparse type: a whole number of 1 or more (workers, steps, counts)."""
     return _whole(text, 1, "a whole number of 1 or more")

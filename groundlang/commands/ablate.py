@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from groundlang.commands import (PALETTE_HELP, add_language_model_settings, add_lexicon_option, json_bytes,
-                                 language_model_settings, positive_int, seed)
+                                 language_model_settings, output_path, positive_int, seed)
 
 
 def _names(text: str) -> list[str]:
@@ -63,8 +63,8 @@ def register(subparsers) -> None:
     p.add_argument("--limit", type=positive_int, help="score only the first N instances of each cell")
     add_language_model_settings(p)
     add_lexicon_option(p)
-    p.add_argument("--json", metavar="OUT", help="write the rows as JSON here")
-    p.add_argument("--plot", metavar="PNG", help="write a plot of accuracy by cell here (.png, .svg or .pdf)")
+    p.add_argument("--json", type=output_path, metavar="OUT", help="write the rows as JSON here")
+    p.add_argument("--plot", type=output_path, metavar="PNG", help="write a plot of accuracy by cell here (.png, .svg or .pdf)")
     p.set_defaults(func=run)
 
 

@@ -8,6 +8,8 @@ interpretation and drawing what the agent did.
 from __future__ import annotations
 
 import argparse
+
+from groundlang.commands import output_path
 import time
 
 DEMO_COMMAND = "take the star to the red room"
@@ -16,7 +18,7 @@ DEMO_LAYOUT = "novel_a.state"
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("demo", help="train on the shipped example corpus and follow a command in a new layout")
-    p.add_argument("--out", default="demo.png", metavar="PNG", help="picture to write (default demo.png)")
+    p.add_argument("--out", default="demo.png", type=output_path, metavar="PNG", help="picture to write (default demo.png)")
     p.add_argument("--command", dest="demo_command", default=DEMO_COMMAND,
                    help=f"the command to follow (default {DEMO_COMMAND!r})")
     p.add_argument("--language-model", default="parse", help="language model: bow, ibm2 or parse (default parse)")

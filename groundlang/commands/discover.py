@@ -16,14 +16,14 @@ from __future__ import annotations
 import argparse
 import time
 
-from groundlang.commands import PALETTE_HELP, fraction, json_text, positive_int
+from groundlang.commands import PALETTE_HELP, fraction, json_text, output_path, positive_int
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("discover", help="discover lifted tasks from a corpus's demonstrations")
     p.add_argument("directory", metavar="DIR", help="a corpus folder (one instance per *.txt file)")
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
-    p.add_argument("-o", "--output", required=True, metavar="LP", help="where to write the discovered library (.lp)")
+    p.add_argument("-o", "--output", required=True, type=output_path, metavar="LP", help="where to write the discovered library (.lp)")
     p.add_argument("--weight-margin", type=fraction, default=0.5, metavar="FRACTION",
                    help="top features: MLIRL weight at least this fraction of the largest (default 0.5)")
     p.add_argument("--max-conjuncts", type=positive_int, default=2, metavar="N",

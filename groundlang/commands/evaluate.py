@@ -5,11 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_em_acceleration_option,
-                                 add_language_model_settings,
-                                 add_lexicon_option, fraction, json_bytes, language_model_settings, library_given,
-                                 open_fraction,
-                                 positive_int, require_palette)
+from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
+                                 add_language_model_settings, add_lexicon_option, fraction, json_bytes,
+                                 language_model_settings, library_given, open_fraction, output_path, positive_int,
+                                 require_palette)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
@@ -55,7 +54,7 @@ def register(subparsers) -> None:
     p.add_argument("--min-confidence", type=fraction, default=DEFAULT_MIN_CONFIDENCE, metavar="P",
                    help="report coverage and accuracy of the commands read with confidence P or more, as "
                         f"follow would act on them (default {DEFAULT_MIN_CONFIDENCE}, follow's); predictions unchanged")
-    p.add_argument("--json", metavar="OUT", help="write the result as JSON here (with the calibration report: "
+    p.add_argument("--json", type=output_path, metavar="OUT", help="write the result as JSON here (with the calibration report: "
                                                  "reliability bins, risk-coverage curve, per-command confidence)")
     p.set_defaults(func=run)
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import PALETTE_HELP, add_lexicon_option, fraction, json_text, positive_int
+from groundlang.commands import PALETTE_HELP, add_lexicon_option, fraction, json_text, output_path, positive_int
 
 # Exit code of a command that asked instead of acting (documented in the README).
 ASKED = 3
@@ -39,7 +39,7 @@ def register(subparsers) -> None:
     p.add_argument("--palette", help=PALETTE_HELP + " (default: the model's, when it was trained on one; a palette file "
                    "of your own is read from the values the model records)")
     p.add_argument("--model", required=True, metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
-    p.add_argument("--out", metavar="PNG", help="draw the executed trajectory here (.png, .svg or .pdf; default: no picture)")
+    p.add_argument("--out", type=output_path, metavar="PNG", help="draw the executed trajectory here (.png, .svg or .pdf; default: no picture)")
     p.add_argument("--top", type=positive_int, default=5, help="how many goals to list with their probabilities (default 5)")
     p.add_argument("--max-steps", type=positive_int, default=200,
                    help="stop acting after this many steps if the goal does not hold by then (default 200)")

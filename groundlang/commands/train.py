@@ -7,10 +7,9 @@ import time
 
 from groundlang.bdm import bdm_files
 from groundlang.corpus import read_corpus
-from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, LANGUAGE_MODEL_NAMES, add_language_model_settings,
-                                 add_em_acceleration_option, add_lexicon_option, language_model_settings, library_given,
-                                 require_palette,
-                                 seed)
+from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
+                                 add_language_model_settings, add_lexicon_option, language_model_settings,
+                                 library_given, output_path, require_palette, seed)
 
 
 def register(subparsers) -> None:
@@ -18,7 +17,7 @@ def register(subparsers) -> None:
     p.add_argument("corpus", metavar="CORPUS", help="folder of corpus files (*.txt), or a .bdm file or folder of them "
                    "(Williams et al. 2018: (start, end) pairs, learned from as evaluate does)")
     p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
-    p.add_argument("-o", "--output", required=True, metavar="MODEL_DIR", help="folder to write the model to")
+    p.add_argument("-o", "--output", required=True, type=output_path, metavar="MODEL_DIR", help="folder to write the model to")
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES), help="language model: bow, ibm2 or parse (default parse)")
     add_language_model_settings(p)
     add_lexicon_option(p)
