@@ -141,6 +141,11 @@ def test_cli_asks_with_exit_code_3_and_guess_acts(model_dir, capsys, tmp_path):
     assert "  2) the blue room  (0.33; agentInRoom(agent0, room1))" in out and "plan" not in out
     assert err.strip() == ("groundlang follow: not acting: confidence 0.33 is below --min-confidence 0.7; "
                            "answer with --ask, or act anyway with --guess")
+    # with --json nothing is asked on the terminal: the message says where the question is
+    assert _follow(model_dir, "go to the purple room", "--ask", "--json") == 3
+    out, err = capsys.readouterr()
+    assert '"question": "I don' in out and err.strip().endswith(
+        "the question and its choices are in the JSON (--ask asks only without --json), or act anyway with --guess")
     assert _follow(model_dir, "go to the purple room", "--guess") == 0
     # three rooms equally probable: each is as likely to be right, so it ends in the nearest (expected_success);
     # the nearest states tie (the agent stands in the door between the blue and the green room), which is

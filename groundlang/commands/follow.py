@@ -114,8 +114,11 @@ def _learn(learner, asked, answered, state, model) -> None:
 
 
 def _refuse(result, args) -> None:
+    # with --json nothing is asked on the terminal: the question and its choices are in the JSON printed
+    how = ("the question and its choices are in the JSON (--ask asks only without --json)" if args.ask and args.json
+           else "answer with --ask")
     print(f"groundlang follow: not acting: confidence {result.posterior.confidence:.2f} is below "
-          f"--min-confidence {args.min_confidence:g}; answer with --ask, or act anyway with --guess", file=sys.stderr)
+          f"--min-confidence {args.min_confidence:g}; {how}, or act anyway with --guess", file=sys.stderr)
 
 
 def run(args: argparse.Namespace) -> int:
