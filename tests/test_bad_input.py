@@ -652,6 +652,13 @@ def test_a_model_json_section_of_the_wrong_kind_is_named(trained_model, tmp_path
      "argument --max-steps: expected a whole number of 1 or more, not '-1'"),
     (("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "x.lp", "--weight-margin", "2"),
      "argument --weight-margin: expected a number from 0 to 1, not '2'"),
+    # each list option's message gives an example of its own, and --folds the least it takes
+    (("ablate", "--corpus", "x", "--palette", "sokoban", "--sizes", ","),
+     "argument --sizes: expected a comma-separated list, e.g. 24,60,120,240"),
+    (("ablate", "--corpus", "x", "--palette", "sokoban", "--libraries", ","),
+     "argument --libraries: expected a comma-separated list, e.g. authored,discovered"),
+    (("ablate", "--corpus", "x", "--palette", "sokoban", "--folds", "0"),
+     "argument --folds: expected a whole number of 2 or more, not '0'"),
 ])
 def test_numeric_options_out_of_range_are_refused_by_name(argv, message, capsys):
     """Before, --time-limit inf crashed clingo (exit 134), --limit -1 scored all but one instance and --top 0

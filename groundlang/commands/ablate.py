@@ -10,24 +10,30 @@ from groundlang.commands import (PALETTE_HELP, add_language_model_settings, add_
                                  language_model_settings, output_path, positive_int, seed)
 
 
-def _names(text: str) -> list[str]:
-    names = [x.strip() for x in text.split(",") if x.strip()]
-    if not names:
-        raise argparse.ArgumentTypeError("expected a comma-separated list, e.g. bow,ibm2,parse")
+def _list_of(example: str):
+    """An argparse type: a comma-separated list of names, its message giving ``example``."""
+    def names(text: str) -> list[str]:
+        found = [x.strip() for x in text.split(",") if x.strip()]
+        if not found:
+            raise argparse.ArgumentTypeError(f"expected a comma-separated list, e.g. {example}")
+        return found
     return names
 
 
 def _sizes(text: str) -> list[int]:
     try:
-        sizes = [int(x) for x in _names(text)]
+        sizes = [int(x) for x in _list_of("24,60,120,240")(text)]
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated integers, e.g. 24,60,120,240; got {text!r}")
     return sizes
 
 
 def _at_least_two(text: str) -> int:
-    value = positive_int(text)
-    if value < 2:
+    try:
+        value = positive_int(text)
+    except argparse.ArgumentTypeError:
+        value = 0
+    if value < 2:  # folds: one fold would train on nothing it is scored against
         raise argparse.ArgumentTypeError(f"expected a whole number of 2 or more, not {text!r}")
     return value
 
@@ -39,7 +45,7 @@ def register(subparsers) -> None:
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("--labels", metavar="CSV",
                    help="gold labels (prefix,goal) the corpus is scored against (not with --held-out-likelihood)")
-    p.add_argument("--language-models", type=_names, metavar="LIST",
+    p.add_argument("--language-models", type=_list_of("bow,ibm2,parse"), metavar="LIST",
                    help="comma-separated: bow,ibm2,parse (default: all three; with --held-out-likelihood one, parse)")
     p.add_argument("--held-out-likelihood", action="store_true",
                    help="instead of the grid: per --switch, the held-out log-likelihood of the demonstrations given "
@@ -50,7 +56,7 @@ def register(subparsers) -> None:
                         "true/false setting (its other value), else NAME=VALUE (repeatable)")
     p.add_argument("--folds", type=_at_least_two, default=10,
                    help="with --held-out-likelihood: folds, instance n in fold n mod FOLDS (default 10)")
-    p.add_argument("--libraries", type=_names, default=["authored", "discovered"], metavar="LIST",
+    p.add_argument("--libraries", type=_list_of("authored,discovered"), default=["authored", "discovered"], metavar="LIST",
                    help="comma-separated: authored,discovered (default: both)")
     p.add_argument("--sizes", type=_sizes, metavar="LIST",
                    help="training sizes, e.g. 24,60,120,240 (default: the whole corpus)")
