@@ -54,6 +54,10 @@ class LexiconError(ValueError):
     """A word file or word list that does not follow the format; the message names file and line."""
 
 
+# one token as grammar.parser's tokeniser reads it: a word (a clitic such as 're too), or one sign ("&")
+_WORD = re.compile(r"'?[^\W_]+(?:'[^\W_]+)*|[^\w\s]")
+
+
 def _entry(word: str) -> str:
     """A word as the tokeniser produces it: lowercase, and the words of a multiword entry (written
     with ``_``, spaces or hyphens, which the tokeniser splits at) joined with ``_``."""
@@ -77,6 +81,11 @@ def _check(category: str, words: Iterable[str], where: str) -> tuple[str, ...]:
             out.append(f"{_entry(form)}={_entry(lemma)}")
         elif "=" in word:
             raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR pairs form=lemma)")
+        elif not all(_WORD.fullmatch(part) for part in _entry(word).split("_")):
+            # the tokeniser splits at any other character, so such an entry would never be read
+            raise LexiconError(f"{where}: {category} word {word!r} is not a word the tokeniser reads (letters, "
+                               "digits and apostrophes, or one sign such as &; '_', '-' or a space join the words of "
+                               "a multiword entry)")
         else:
             out.append(_entry(word))
     return tuple(out)

@@ -122,6 +122,9 @@ def test_a_users_word_file_adds_a_noun_and_a_multiword_preposition(tmp_path):
     ("NOUN:\n", 1, "no words after NOUN:"),
     ("IRREGULAR: went\n", 1, "IRREGULAR entry 'went' is not form=lemma"),
     ("VERB: go=went\n", 1, "only IRREGULAR pairs form=lemma"),
+    # an entry the tokeniser would split at a sign can never be read; a word, a clitic or one sign can
+    ("NOUN: mug o'clock 're &\nNOUN: !!!\n", 2, "NOUN word '!!!' is not a word the tokeniser reads"),
+    ("NOUN: a_b c-d e.f\n", 1, "NOUN word 'e.f' is not a word the tokeniser reads"),
 ])
 def test_a_malformed_word_file_is_one_line_naming_file_and_line(tmp_path, text, line, expected):
     path = tmp_path / "bad.words"
