@@ -260,7 +260,8 @@ def read_corpus(directory: str | Path, palette: str | Palette, skip_inconsistent
     paths = sorted(directory.glob("*.txt"), key=_file_order)
     for path in paths:
         if not path.is_file():  # reported, not skipped: the corpus would silently shrink
-            kind = "a folder" if path.is_dir() else "a broken link" if path.is_symlink() else "not a regular file"
+            kind = ("a folder" if path.is_dir() else "a broken link" if not path.exists()
+                    else "a device, FIFO or socket")
             raise CorpusError(f"{path}: {kind}, not a corpus file; a corpus folder's *.txt are corpus files")
     if not paths:
         raise CorpusError(f"{directory}: no corpus files; expected files like agent2red_0.txt")

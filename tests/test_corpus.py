@@ -298,6 +298,10 @@ def test_a_corpus_folder_entry_that_is_not_a_file_is_reported_not_skipped(fixtur
     (corpus / "star2green_5.txt").symlink_to(tmp_path / "gone.txt")
     with pytest.raises(CorpusError, match=r"star2green_5.txt: a broken link, not a corpus file"):
         read_corpus(corpus, "sokoban")
+    (corpus / "star2green_5.txt").unlink()
+    (corpus / "star2green_5.txt").symlink_to("/dev/zero")  # a link that resolves, to what is no file
+    with pytest.raises(CorpusError, match=r"star2green_5.txt: a device, FIFO or socket, not a corpus file"):
+        read_corpus(corpus, "sokoban")
 
 
 def test_a_byte_order_mark_is_read_as_nothing(fixtures, tmp_path):
