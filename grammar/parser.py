@@ -72,6 +72,11 @@ class ParseError(ValueError):
 
 def command_fault(command: str) -> str | None:
     """Why ``command`` cannot be read as a command, or None: text without a word says nothing to read."""
+    bad = next((i for i, c in enumerate(command) if "\ud800" <= c <= "\udfff"), None)
+    if bad is not None:  # a byte that was not UTF-8 (Python hands it over as a lone surrogate): no text to read
+        code = ord(command[bad])
+        what = f"byte 0x{code - 0xdc00:02x}" if code >= 0xdc80 else f"U+{code:04X}"
+        return f"is not UTF-8 text ({what} at character {bad + 1})"
     text = _without_control(command)
     if not text.strip():
         return "is empty or only whitespace"

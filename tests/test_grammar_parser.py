@@ -367,6 +367,8 @@ def test_cli_parse_corpus_folder(tmp_path, capsys):
 def test_a_command_without_a_word_is_refused_and_control_characters_are_spaces():
     for text, said in (("?!., ;", "it has no word, only punctuation ('?!., ;')"),
                        ("__ _", "it has no word, only punctuation ('__ _')"),
+                       # a command-line argument that is not UTF-8 reaches Python as lone surrogates
+                       ("go to the r\udce9d room", "it is not UTF-8 text (byte 0xe9 at character 12)"),
                        ("\x00\x1b \t", "it is empty or only whitespace")):
         with pytest.raises(ParseError, match=re.escape(said)):
             parser.parse(text)
