@@ -312,8 +312,8 @@ class Learner:
             return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
                                 question=question(choices, unknown, state, self.library),
                                 choices=choices, unknown_words=unknown)
-        masks = self._world.goal_masks(self._world.space(state))
-        ending = self.lm.expected_success and expected_success_states(post.goals(), masks, self.lm.step_cost)
+        masks = self._world.goal_masks(self._world.space(state)) if self.lm.expected_success else None
+        ending = masks is not None and expected_success_states(post.goals(), masks, self.lm.step_cost)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
             return self._act(command, state, post, ending[1], max_steps, ending[0], masks)
         return self._act(command, state, post, post.best_goal, max_steps)
