@@ -128,6 +128,11 @@ MODEL_DIRS: dict[str, tuple[Callable[[Path], None], list[str]]] = {
                                      ["model.json: not valid JSON", "can't decode byte 0x89"]),
     "model.json of another program": (lambda d: (d / "model.json").write_text('{"format": "keras"}'),
                                       ["model.json: not a groundlang model (format field is not 'groundlang-model')"]),
+    # edited on purpose and re-signed: each index still names each entry once
+    "vocabulary with a word twice": (lambda d: _edit_meta(d, lambda m: m["vocabulary"]["words"].__setitem__(
+        2, m["vocabulary"]["words"][1])), ["model files are incomplete or corrupt", "words name each entry once"]),
+    "vocabulary with a number for a token": (lambda d: _edit_meta(d, lambda m: m["vocabulary"]["tokens"].append(7)),
+                                             ["model files are incomplete or corrupt", "tokens are text; found 7"]),
     "vocabulary without its lifted tasks": (_drop_vocabulary_tasks,
                                             ["model files are incomplete or corrupt",
                                              "the vocabulary lacks the lifted tasks ['agentToRoom'"]),
