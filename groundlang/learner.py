@@ -313,9 +313,10 @@ class Learner:
                                 question=question(choices, unknown, state, self.library),
                                 choices=choices, unknown_words=unknown)
         masks = self._world.goal_masks(self._world.space(state)) if self.lm.expected_success else None
-        ending = masks is not None and expected_success_states(post.goals(), masks, self.lm.step_cost)
+        goals = post.goals()
+        ending = masks is not None and expected_success_states(goals, masks, self.lm.step_cost)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
-            return self._act(command, state, post, ending[1], max_steps, ending[0], masks)
+            return self._act(command, state, post, ending[1], max_steps, ending[0], (goals, masks))
         return self._act(command, state, post, post.best_goal, max_steps)
 
     def clarify(self, result: FollowResult, answer: str, max_steps: int = 200) -> FollowResult:
@@ -345,14 +346,15 @@ class Learner:
         return self.vocab is not None and self.vocab.word_id(word) != 0
 
     def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int,
-             ending=None, masks=None) -> FollowResult:
-        """Plan for ``goal``, or to end in a state of ``ending`` (:meth:`WorldPlans.act`; ``masks`` the goals'
-        over its space)."""
+             ending=None, goal_masks=None) -> FollowResult:
+        """Plan for ``goal``, or to end in a state of ``ending`` (:meth:`WorldPlans.act`; ``goal_masks``: the
+        posterior's goals and where they hold over its space)."""
         states, actions, reached, reason = self._world.act(state, goal, max_steps, ending)
         if ending is not None and reached:
             # Every state of ``ending`` is worth the same and the plan may end in any of them, not only
             # where ``goal`` holds: the goal said to be acted on is the one that holds where it ends.
-            goal = goal_holding_at(post.goals(), masks, masks.space.index_of(states[-1])) or goal
+            goals, masks = goal_masks
+            goal = goal_holding_at(goals, masks, masks.space.index_of(states[-1])) or goal
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library))
 
