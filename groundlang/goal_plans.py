@@ -11,6 +11,7 @@ import numpy as np
 
 from groundlang.confidence import NEGLIGIBLE, GoalMasks
 from groundlang.inference.acting import rollout, rollout_states, stop_before
+from groundlang.inference.end_habits import EndHabits
 from groundlang.inference.end_states import distances
 from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.logic.atoms import Atom
@@ -57,7 +58,8 @@ def plan_for_states(space: StateSpace, mask: np.ndarray, settings: TaskSettings,
     return states, actions, reached, reason
 
 
-def expected_success_states(goals, masks: GoalMasks, step_cost: float) -> tuple[np.ndarray, tuple[Atom, ...]] | None:
+def expected_success_states(goals, masks: GoalMasks, step_cost: float,
+                            habits: EndHabits | None = None) -> tuple[np.ndarray, tuple[Atom, ...]] | None:
     """Where to end so that the final state most probably satisfies what was meant: the reachable states
     ``s`` of most ``sum_g P(g | words) [s satisfies g] - step_cost * steps(s)``, over the posterior's goals
     ``goals`` (``Posterior.goals()``) as ``masks`` says where they hold over its space (shared with the
@@ -68,7 +70,8 @@ def expected_success_states(goals, masks: GoalMasks, step_cost: float) -> tuple[
     step then only breaks ties). None where ``space`` is not enumerated from the start (a relevance
     abstraction or a sample of placements): its states' distances are not the world's; and None where
     no goal holds in a reachable state, or none where the cost leaves the agent: acting on the most
-    probable goal then says what cannot be done."""
+    probable goal then says what cannot be done. With ``habits``, each goal's term is weighed, state by
+    state, by what demonstrations of such goals also left true (:mod:`groundlang.inference.end_habits`)."""
     space = masks.space
     if getattr(space, "level_sizes", None) is None:
         return None
@@ -76,8 +79,10 @@ def expected_success_states(goals, masks: GoalMasks, step_cost: float) -> tuple[
     masks.prepare(goal for goal, _ in kept)
     dist = distances(space)
     score = np.zeros(space.num_states)
-    for goal, p in kept:
-        score += p * masks.mask(goal)
+    weights = ([None] * len(kept) if habits is None else
+               habits.weights([goal for goal, _ in kept], masks, within=dist >= 0))
+    for (goal, p), weight in zip(kept, weights):
+        score += p * masks.mask(goal) * (1.0 if weight is None else weight)
     if not (score[dist >= 0] > 0).any():
         return None  # no goal holds where the agent can go: the goal acted on is said to be out of reach
     value = np.where(dist >= 0, score - step_cost * dist, -np.inf)

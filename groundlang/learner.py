@@ -19,6 +19,7 @@ from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import given_achievable, group_goals
 from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at
+from groundlang.inference.end_habits import EndHabits, demonstrated_pairs
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings
@@ -101,6 +102,7 @@ class Learner:
         self.palettes: list[dict] | None = None
         self.globals: dict[str, torch.Tensor] | None = None
         self.fit_result: FitResult | None = None
+        self.habits: EndHabits | None = None  # what demonstrations left true besides their goals
         self._interp_cache: dict[tuple[State, bool], list[Interpretation]] = {}
         self._world = WorldPlans(self.library, self.settings)  # spaces and plans: the world's, not the words'
 
@@ -238,6 +240,7 @@ class Learner:
             init=init, progress=progress, acceleration=self.em_acceleration,
         )
         self.globals = self.fit_result.globals
+        self.habits = EndHabits.learn(demonstrated_pairs(instances), self.library)
         return self
 
     # ----------------------------------------------------------------- using
@@ -314,7 +317,8 @@ class Learner:
                                 choices=choices, unknown_words=unknown)
         masks = self._world.goal_masks(self._world.space(state)) if self.lm.expected_success else None
         goals = post.goals()
-        ending = masks is not None and expected_success_states(goals, masks, self.lm.step_cost)
+        ending = masks is not None and expected_success_states(goals, masks, self.lm.step_cost,
+                                                               self.habits if self.lm.end_habits else None)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
             return self._act(command, state, post, ending[1], max_steps, ending[0], (goals, masks))
         return self._act(command, state, post, post.best_goal, max_steps)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from groundlang.inference.em import EM_ACCELERATIONS
+from groundlang.inference.end_habits import EndHabits
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.geometry import ASP_CONSTANT
@@ -54,6 +55,7 @@ def learner_state(learner) -> dict:
         "planning": learner.settings.as_dict(),
         "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed,
                      "em_acceleration": learner.em_acceleration},
+        "end_habits": None if learner.habits is None else learner.habits.to_json(),
         "globals": learner.globals,
     }
 
@@ -82,6 +84,8 @@ def learner_from_state(cls, state: dict, where: str):
     missing = {t.name for t in learner.library.tasks} - set(learner.vocab.tasks)
     if missing:
         raise ValueError(f"the vocabulary lacks the lifted tasks {sorted(missing)} of the saved task library")
+    if state.get("end_habits") is not None:
+        learner.habits = EndHabits.from_json(state["end_habits"])
     if state.get("globals") is not None:
         learner.globals = dict(state["globals"])
     return learner

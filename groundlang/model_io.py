@@ -43,7 +43,7 @@ __all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destinat
            "signed"]
 
 FORMAT = "groundlang-model"
-FORMAT_VERSION = 15  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases; 13: the words added to the lexicon (``lexicon``), multiword prepositions joined into one token; 14: content-named tensor file, palettes recorded; 15: model.json records the hash of its own fields (content_sha256)
+FORMAT_VERSION = 16  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases; 13: the words added to the lexicon (``lexicon``), multiword prepositions joined into one token; 14: content-named tensor file, palettes recorded; 15: model.json records the hash of its own fields (content_sha256); 16: end habits (end_habits)
 log = logging.getLogger(__name__)
 T = TypeVar("T")
 

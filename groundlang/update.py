@@ -84,9 +84,12 @@ def update_learner(learner, command: str, state, demonstration: Sequence | str |
             raise ValueError(f"update: no task of the library has goal {format_goal(next(iter(allowed)))} in this "
                              f"state (its goals: {'; '.join(offered)})")
     behaviour = None
+    habits = learner.habits
     if demonstration is not None:
         actions = as_actions(demonstration)
         example = Instance(Path("<update>"), command, actions, replay(state, actions))
+        if habits is not None:  # what the demonstration left true besides its goal
+            habits = habits.plus([(example.initial_state, example.final_state)], learner.library)
         goals = sorted({i.goal for i in interps})
         row = behaviour_likelihood_table([example], [goals], learner.settings, cache_dir=learner.cache_dir,
                                          library=learner.library)[0]
@@ -104,5 +107,5 @@ def update_learner(learner, command: str, state, demonstration: Sequence | str |
     vocab.add_words(new_words)
     globals_, _ = fold_in(learner.lm.encode([obs], vocab), learner.lm, vocab,
                           {**learner.globals, "phi": phi}, totals, steps=steps)
-    learner.vocab, learner.globals = vocab, globals_
+    learner.vocab, learner.globals, learner.habits = vocab, globals_, habits
     return learner

@@ -36,7 +36,8 @@ class LanguageModel:
     parser_weights = None  # overrides of the grammar's rule weights (grammar.parser.DEFAULT_WEIGHTS)
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False,
-                 achievable_goals: bool = True, expected_success: bool = True, step_cost: float = 0.005):
+                 achievable_goals: bool = True, expected_success: bool = True, step_cost: float = 0.005,
+                 end_habits: bool = True):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
         "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
         ``name_share``, and its learned words otherwise: the names a domain's author gives are words
@@ -47,7 +48,9 @@ class LanguageModel:
         (where the whole state space is enumerated; ``Learner.posterior``). ``expected_success``: following
         ends where what was meant most probably holds, over the whole posterior, not only where its most
         probable goal does (``goal_plans.expected_success_states``); ``step_cost``, at least 0, is how much
-        probability of success a step is worth there."""
+        probability of success a step is worth there. ``end_habits``: there, each goal is weighed by what
+        the training demonstrations of such goals also left true where they ended
+        (:mod:`groundlang.inference.end_habits`)."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
@@ -59,11 +62,13 @@ class LanguageModel:
                              f"success per step), not {step_cost!r}")
         self.expected_success = expected_success
         self.step_cost = step_cost
+        self.end_habits = end_habits
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
                 "schema_names": self.schema_names, "achievable_goals": self.achievable_goals,
-                "expected_success": self.expected_success, "step_cost": self.step_cost}
+                "expected_success": self.expected_success, "step_cost": self.step_cost,
+                "end_habits": self.end_habits}
 
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""

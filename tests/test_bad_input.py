@@ -607,7 +607,8 @@ _JSON = st.recursive(
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(key=st.sampled_from(["format", "version", "language_model", "language_model_settings", "vocabulary",
-                            "task_library", "planning", "training", "globals_sha256", "lexicon"]),
+                            "task_library", "planning", "training", "globals_sha256", "lexicon",
+                            "end_habits"]),
        value=_JSON, drop=st.booleans())
 def test_fuzz_model_json_fields(trained_model, tmp_path_factory, key, value, drop):
     """One field of a real model.json replaced by arbitrary JSON, or removed."""

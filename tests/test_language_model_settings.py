@@ -21,7 +21,8 @@ def test_settings_make_the_model_they_name():
     assert (lm.mention_phrases, lm.argument_bonus, lm.mention_concentration) == ("any", 0, None)
     assert get_language_model("bow", null_token=False).settings() == {"word_concentration": 1.05, "null_token": False,
                                                                         "schema_names": False, "achievable_goals": True,
-                                                                        "expected_success": True, "step_cost": 0.005}
+                                                                        "expected_success": True, "step_cost": 0.005,
+                                                                        "end_habits": True}
 
 
 @pytest.mark.parametrize("name, settings, message", [

@@ -1,0 +1,175 @@
+"""End habits: what else a demonstration's end state shows besides its goal.
+
+A demonstrator stops where the goal holds, and often where more holds too: sent to a room, a worker stops
+next to the chair in it; having pushed a chair into a room, she stands beside it. What a command is
+judged by, and what its user sees, is what holds where the agent ends, so following ends where the goal
+holds and where what demonstrators of such goals also left true most probably holds.
+
+Learned from the training demonstrations, each (start, end) pair on its own: the relations ``R`` (the
+predicates a task of the library asks for) of which some fact holds at the end and not at the start.
+Then ``q(R | L)``, how often a demonstration whose new facts include relations ``L`` (a goal's) has a
+new fact of ``R`` too, shrunk by one pseudo-demonstration towards ``R``'s rate over all of them (itself
+shrunk by half a demonstration either way, so that no rate is 0 or 1: what one more demonstration could
+show otherwise is never ruled out)::
+
+    q(R | L) = (n(L, R) + p(R)) / (n(L) + 1),    p(R) = (n(R) + 1/2) / (N + 1)
+
+Following weighs each goal ``g`` of the posterior in a state ``s`` by
+``prod_{R not in L(g)} (1 - q(R | L(g)) + q(R | L(g)) [some fact of R holds in s])``
+(:func:`groundlang.goal_plans.expected_success_states`): a goal's states where its usual company holds
+are worth more than those where it does not, and none is worth more than the goal alone.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from groundlang.logic.atoms import Atom, canonical_predicate
+from groundlang.model.features import atoms_hold_along
+from groundlang.model.pf_tables import library_pf_tables
+from groundlang.model.world import State
+
+__all__ = ["EndHabits", "new_relations", "demonstrated_pairs"]
+
+# A saved model's table is untrusted: bounds on what a crafted file can make the loader build.
+MAX_RELATION_SETS = 10_000
+MAX_DEMONSTRATIONS = 10**12
+
+
+def _relations(library) -> frozenset[str]:
+    return frozenset(canonical_predicate(p) for task in library.tasks for p, _ in task.goal)
+
+
+def new_relations(start: State, end: State, library) -> frozenset[str]:
+    """The relations a task of ``library`` asks for of which some fact holds in ``end`` and not in
+    ``start`` (the same layout)."""
+    return _new_relations([(start, end)], library)[0]
+
+
+def _new_relations(pairs: Sequence[tuple[State, State]], library) -> list[frozenset[str]]:
+    """:func:`new_relations` of pairs of one layout, their states' facts read in one pass."""
+    layout = pairs[0][0].layout
+    tables = library_pf_tables(layout, library)
+    asked = _relations(library)
+    atoms = [a for a in tables.grids if canonical_predicate(a.predicate) in asked]
+    if not atoms:
+        return [frozenset()] * len(pairs)
+    names = np.array([canonical_predicate(a.predicate) for a in atoms])
+    holds = atoms_hold_along(layout, np.stack([s.positions for pair in pairs for s in pair]), atoms, tables)
+    new = holds[1::2] & ~holds[0::2]
+    return [frozenset(names[row].tolist()) for row in new]
+
+
+def demonstrated_pairs(instances) -> list[tuple[State, State]]:
+    """The (start, end) states of training instances: each pair of a command's pairs, or a
+    demonstration's first and last states."""
+    return [pair for inst in instances
+            for pair in (tuple(getattr(inst, "pairs", ())) or ((inst.initial_state, inst.final_state),))]
+
+
+@dataclass(frozen=True)
+class EndHabits:
+    """How many demonstrations showed each set of new relations at their end (module docstring)."""
+
+    shown: tuple[tuple[frozenset[str], int], ...]
+
+    @classmethod
+    def learn(cls, pairs: Iterable[tuple[State, State]], library) -> "EndHabits":
+        """From demonstrations' (start, end) states."""
+        return cls(()).plus(pairs, library)
+
+    def plus(self, pairs: Iterable[tuple[State, State]], library) -> "EndHabits":
+        """These counts and those of more demonstrations (``Learner.update``)."""
+        counts = Counter(dict(self.shown))
+        distinct = Counter(pairs)  # a corpus repeats its pairs (Williams: 115 distinct of 4857)
+        by_layout: dict = {}
+        for pair in distinct:
+            by_layout.setdefault(pair[0].layout, []).append(pair)
+        for same in by_layout.values():
+            for pair, relations in zip(same, _new_relations(same, library)):
+                counts[relations] += distinct[pair]
+        return EndHabits(tuple(sorted(counts.items(), key=lambda kv: (sorted(kv[0]), kv[1]))))
+
+    @cached_property
+    def demonstrations(self) -> int:
+        return sum(n for _, n in self.shown)
+
+    def _count(self, relations: frozenset[str]) -> int:
+        return sum(n for shown, n in self.shown if relations <= shown)
+
+    def rate(self, relation: str, given: frozenset[str]) -> float:
+        """``q(relation | given)``: how often a demonstration whose new relations include ``given`` has a
+        new fact of ``relation`` too (module docstring); 0 where no demonstration was seen."""
+        if not self.demonstrations:
+            return 0.0
+        prior = (self._count(frozenset([relation])) + 0.5) / (self.demonstrations + 1)
+        return (self._count(given | {relation}) + prior) / (self._count(given) + 1)
+
+    @cached_property
+    def relations(self) -> frozenset[str]:
+        return frozenset().union(*(shown for shown, _ in self.shown)) if self.shown else frozenset()
+
+    def table(self) -> dict[str, dict[str, float]]:
+        """``q(R | {L})`` for every two relations demonstrations showed: ``{L: {R: rate}}``, to read what
+        was learned."""
+        return {given: {r: self.rate(r, frozenset([given])) for r in sorted(self.relations - {given})}
+                for given in sorted(self.relations)}
+
+    def weights(self, goals: Iterable[tuple[Atom, ...]], masks, within: np.ndarray) -> list[np.ndarray | None]:
+        """Per goal, ``[S]``: each state's weight for it over ``masks.space`` (a :class:`GoalMasks`), the
+        product over the relations demonstrations showed that can hold with it in a state of ``within``
+        (``[S]`` bool, those the agent can reach); None where it is 1 everywhere. A relation that cannot
+        hold where the goal does is not one its demonstrators could have left true there, so it weighs
+        nothing: habits say where to end among a goal's states, not which goal to prefer."""
+        holds: dict[str, np.ndarray] = {}
+        out = []
+        for goal in goals:
+            given = frozenset(canonical_predicate(a.predicate) for a in goal)
+            region = masks.mask(goal) & within
+            weight = None
+            for relation in sorted(self.relations - given):
+                q = self.rate(relation, given)
+                if q <= 0.0:
+                    continue
+                if relation not in holds:
+                    holds[relation] = _holds(relation, masks)
+                if not (holds[relation] & region).any():
+                    continue
+                factor = (1.0 - q) + q * holds[relation]
+                weight = factor if weight is None else weight * factor
+            out.append(weight)
+        return out
+
+    def to_json(self) -> list:
+        return [[sorted(shown), n] for shown, n in self.shown]
+
+    @classmethod
+    def from_json(cls, value) -> "EndHabits":
+        """From :meth:`to_json`'s value, checked (a saved model is untrusted): ValueError saying what is wrong."""
+        if not isinstance(value, list) or len(value) > MAX_RELATION_SETS:
+            raise ValueError(f"end_habits must be a list of at most {MAX_RELATION_SETS} [relations, count] pairs")
+        shown = []
+        for entry in value:
+            if (not isinstance(entry, list) or len(entry) != 2 or not isinstance(entry[0], list)
+                    or not all(isinstance(r, str) and r for r in entry[0]) or isinstance(entry[1], bool)
+                    or not isinstance(entry[1], int) or not 0 < entry[1] <= MAX_DEMONSTRATIONS):
+                raise ValueError(f"end_habits: {entry!r} is not [relations, count] (names, a positive count)")
+            shown.append((frozenset(entry[0]), entry[1]))
+        if len({s for s, _ in shown}) != len(shown):
+            raise ValueError("end_habits names a set of relations twice")
+        return cls(tuple(shown))
+
+
+def _holds(relation: str, masks) -> np.ndarray:
+    """``[S]`` bool over ``masks.space``: where some fact of ``relation`` holds."""
+    atoms = [(a,) for a in masks.tables.grids if canonical_predicate(a.predicate) == relation]
+    masks.prepare(atoms)
+    holds = np.zeros(masks.space.num_states, dtype=bool)
+    for atom in atoms:
+        holds |= masks.mask(atom)
+    return holds

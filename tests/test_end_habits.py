@@ -1,0 +1,139 @@
+"""End habits: what the demonstrations of a goal also left true where they ended
+(``inference.end_habits``), learned in training, saved with the model, and weighed where following ends."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from groundlang.bdm import parse_bdm_state
+from groundlang.bdm_check import default_library
+from groundlang.confidence import GoalMasks
+from groundlang.goal_plans import expected_success_states, planning_space
+from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, new_relations
+from groundlang.inference.end_states import distances
+from groundlang.learner import Learner
+from groundlang.logic.atoms import parse_goal
+from groundlang.model.language_models import get_language_model
+from groundlang.model_io import ModelFormatError, signed
+from groundlang.pair_corpus import training_instances
+
+LIBRARY = default_library()
+_ROOMS = ("door0 (door): [locked: {0} top: {4} left: {6} bottom: {4} right: {6} canbelocked: {false} ] , "
+          "door1 (door): [locked: {0} top: {4} left: {2} bottom: {4} right: {2} canbelocked: {false} ] , "
+          "room0 (room): [top: {4} left: {0} bottom: {0} right: {8} colour: {red} ] , "
+          "room1 (room): [top: {8} left: {0} bottom: {4} right: {4} colour: {green} ] , "
+          "room2 (room): [top: {8} left: {4} bottom: {4} right: {8} colour: {blue} ] , ")
+
+
+def _state(agent: tuple[int, int], chair: tuple[int, int] = (6, 7)):
+    """Three rooms; a chair in the blue room (top right), the agent where given."""
+    return parse_bdm_state("{agent0 (agent): [x: {%d} y: {%d} direction: {south} ] , " % agent + _ROOMS
+                           + "block0 (block): [x: {%d} y: {%d} shape: {chair} colour: {red} ] , }" % chair)[0]
+
+
+START = _state((2, 6))  # in the green room
+
+
+def _mask(masks: GoalMasks, goal: str) -> np.ndarray:
+    return masks.mask(parse_goal(goal))
+
+
+def test_a_demonstration_shows_the_relations_that_newly_hold_at_its_end():
+    assert new_relations(START, _state((6, 5)), LIBRARY) == {"agentInRoom"}
+    # below the chair: next to it, neither left nor right of it
+    assert new_relations(START, _state((6, 6)), LIBRARY) == {"agentInRoom", "agentNextToToy"}
+    assert new_relations(START, _state((5, 7)), LIBRARY) == {"agentInRoom", "agentNextToToy", "agentLeftOfToy"}
+    assert new_relations(START, START, LIBRARY) == frozenset()
+    # a relation that already held is not new: the agent stays in the green room
+    assert new_relations(START, _state((1, 6)), LIBRARY) == frozenset()
+
+
+def test_the_rate_is_counted_and_shrunk_towards_the_relations_own_rate():
+    habits = EndHabits(((frozenset({"agentInRoom"}), 3), (frozenset({"agentInRoom", "agentNextToToy"}), 1)))
+    assert habits.demonstrations == 4
+    # q(R | L) = (n(L, R) + p(R)) / (n(L) + 1), p(R) = (n(R) + 1/2) / (N + 1)
+    assert habits.rate("agentNextToToy", frozenset({"agentInRoom"})) == pytest.approx((1 + 1.5 / 5) / (4 + 1))
+    # every demonstration that went next to a toy changed rooms, yet one more might not: below 1
+    assert habits.rate("agentInRoom", frozenset({"agentNextToToy"})) == pytest.approx((1 + 4.5 / 5) / (1 + 1))
+    # a goal no demonstration showed gets the relation's own rate
+    assert habits.rate("agentNextToToy", frozenset({"toyInRoom"})) == pytest.approx(1.5 / 5)
+    assert EndHabits(()).rate("agentInRoom", frozenset()) == 0.0
+    more = habits.plus([(START, _state((5, 7)))], LIBRARY)
+    assert more.demonstrations == 5 and dict(more.shown)[frozenset({"agentInRoom", "agentNextToToy",
+                                                                    "agentLeftOfToy"})] == 1
+
+
+def test_following_ends_where_the_goals_usual_company_holds_too():
+    """Sent to the blue room, demonstrators mostly stopped next to a toy there: one step more takes the
+    agent next to the chair, where without habits it stops at the room's first cell."""
+    space = planning_space(START, None, LIBRARY)
+    masks = GoalMasks(space, LIBRARY)
+    room, next_to = "agentInRoom(agent0, room2)", "agentNextToToy(agent0, block0)"
+    goals = [(parse_goal(room), 1.0)]
+    habits = EndHabits(((frozenset({"agentInRoom"}), 1), (frozenset({"agentInRoom", "agentNextToToy"}), 3)))
+    plain, said = expected_success_states(goals, masks, 0.005)
+    assert said == parse_goal(room) and not (plain & _mask(masks, next_to)).any()
+    weighed, said = expected_success_states(goals, masks, 0.005, habits)
+    assert said == parse_goal(room) and weighed.any()
+    assert (weighed <= _mask(masks, room) & _mask(masks, next_to)).all()
+    dist = distances(space)
+    assert dist[weighed].min() == dist[plain].min() + 1
+    # a habit is never worth more than the goal: a goal's states all weigh at most 1, so none leaves it
+    for weight in habits.weights([parse_goal(room), parse_goal(next_to)], masks, dist >= 0):
+        assert weight is not None and 0.0 < weight.min() and weight.max() <= 1.0
+
+
+def test_a_habit_that_cannot_hold_with_the_goal_does_not_make_another_goal_preferred():
+    """0.6 the green room, without a toy, 0.4 the blue room, with the chair: demonstrators sent to the green
+    room could not have stopped next to a toy there, so the green room keeps its 0.6 against the blue
+    room's 0.4 (weighed by the habit, the green room would have had 0.6 x 0.25)."""
+    state = _state((6, 1))  # in the red room below
+    space = planning_space(state, None, LIBRARY)
+    masks = GoalMasks(space, LIBRARY)
+    green, blue = "agentInRoom(agent0, room1)", "agentInRoom(agent0, room2)"
+    goals = [(parse_goal(green), 0.6), (parse_goal(blue), 0.4)]
+    habits = EndHabits(((frozenset({"agentInRoom"}), 1), (frozenset({"agentInRoom", "agentNextToToy"}), 3)))
+    target, said = expected_success_states(goals, masks, 0.005, habits)
+    assert said == parse_goal(green) and (target <= _mask(masks, green)).all()
+    weights = habits.weights([parse_goal(green), parse_goal(blue)], masks, distances(space) >= 0)
+    assert weights[0] is None and weights[1] is not None
+
+
+@pytest.fixture(scope="module")
+def trained(williams_commands, tmp_path_factory):
+    """The project's two-command fixture: its instances, a learner trained on them, and where it is saved."""
+    instances = training_instances(williams_commands, LIBRARY, cache_dir=False).instances
+    learner = Learner(library=LIBRARY, cache_dir=False).fit(instances)
+    return instances, learner, learner.save(tmp_path_factory.mktemp("habits") / "model")
+
+
+def test_learned_in_training_saved_with_the_model_and_switched_off_by_a_setting(williams_commands, trained):
+    instances, learner, directory = trained
+    pairs = demonstrated_pairs(instances)
+    assert learner.habits.demonstrations == len(pairs) == sum(len(c.pairs) for c in williams_commands)
+    assert learner.habits == EndHabits(()).plus(pairs, LIBRARY)
+    assert Learner.load(directory).habits == learner.habits
+    assert get_language_model("parse").settings()["end_habits"] is True
+    off = Learner(get_language_model("parse", end_habits=False), library=LIBRARY, cache_dir=False).fit(instances)
+    assert off.lm.settings()["end_habits"] is False and off.habits == learner.habits  # learned, not used
+
+
+@pytest.mark.parametrize("value, expected", [
+    ("many", "end_habits must be a list"),
+    ([["agentInRoom", 3]], "is not \\[relations, count\\]"),
+    ([[["agentInRoom"], 0]], "is not \\[relations, count\\]"),
+    ([[["agentInRoom"], True]], "is not \\[relations, count\\]"),
+    ([[["agentInRoom"], 1], [["agentInRoom"], 2]], "names a set of relations twice"),
+])
+def test_a_damaged_table_in_a_saved_model_is_refused(trained, tmp_path, value, expected):
+    directory = tmp_path / "model"
+    shutil.copytree(trained[2], directory)
+    meta = json.loads((directory / "model.json").read_text())
+    meta["end_habits"] = value
+    (directory / "model.json").write_text(json.dumps(signed(meta)))
+    with pytest.raises(ModelFormatError, match=expected):
+        Learner.load(directory)
