@@ -138,6 +138,23 @@ def test_blank_lines_beside_a_separator_do_not_end_the_command(tmp_path):
     assert [p.line for p in commands[0].pairs] == [2, 9, 13]
 
 
+def test_a_state_line_shown_again_is_read_once_and_a_bad_copy_is_still_named(tmp_path):
+    """Workers were shown the same demonstrations: a repeated state line is the same State, read once."""
+    text = (FIXTURE / "small.bdm").read_text(encoding="utf-8")
+    first = text.split("\n\n")[0].strip().splitlines()  # the first command: its text and three pairs
+    path = tmp_path / "again.bdm"
+    path.write_text(text.rstrip("\n") + "\n\nthe same again\n" + "\n".join(first[1:]) + "\n", encoding="utf-8")
+    commands = read_bdm(path)
+    assert commands[-1].text == "the same again" and len(commands[-1].pairs) == len(commands[0].pairs)
+    assert all(a.start is b.start and a.end == b.end for a, b in zip(commands[0].pairs, commands[-1].pairs))
+    bad = first[1].replace("x: {2}", "x: {two}", 1)
+    assert bad != first[1]
+    path.write_text(text.rstrip("\n") + "\n\nthe same again\n" + "\n".join([bad] + first[2:]) + "\n",
+                    encoding="utf-8")
+    with pytest.raises(CorpusError, match=f"again.bdm, line {len(text.rstrip(chr(10)).splitlines()) + 3}"):
+        read_bdm(path)
+
+
 @pytest.mark.slow
 def test_the_shared_corpus_reads_and_every_command_shows_a_task(williams_library):
     if not (SHARED / "part1.bdm").is_file():
