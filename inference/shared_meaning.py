@@ -91,6 +91,9 @@ class LayoutEvidence:
         self.by_task: dict[str, list[tuple[dict[str, frozenset[str]], float]]] = {}
         for task, props, g in groundings:
             self.by_task.setdefault(task, []).append((props, values[g]))
+        # A pair shown to several workers is one object read by every command of theirs, and each asks the
+        # same few (task, description) values: kept, at most one per description its tasks admit.
+        self._values: dict[tuple, float] = {}
 
     def goal_value(self, goal: tuple) -> float:
         """log P(e | g) for a grounded goal of this layout (the noise floor for one no task has)."""
@@ -99,11 +102,12 @@ class LayoutEvidence:
     def value(self, task: str, description: dict[str, str | None]) -> float:
         """log P(e_k | L, C): the mean over the groundings satisfying ``description`` (variable -> the one
         property PF said of it, or None for its class alone), or the noise floor when none does."""
-        values = [v for props, v in self.by_task.get(task, ())
-                  if all(p is None or p in props[var] for var, p in description.items())]
-        if not values:
-            return self.floor
-        return _log_mean_exp(values)
+        key = (task, tuple(description.items()))
+        if key not in self._values:
+            values = [v for props, v in self.by_task.get(task, ())
+                      if all(p is None or p in props[var] for var, p in description.items())]
+            self._values[key] = _log_mean_exp(values) if values else self.floor
+        return self._values[key]
 
 
 def evidence_space(start: State, end: State, max_states: int | None = None) -> str:
