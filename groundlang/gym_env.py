@@ -329,12 +329,12 @@ def policy(learner, command: str, state) -> CommandPolicy:
     """Wrap a trained :class:`groundlang.Learner` into a callable ``observation -> action``.
 
     ``state`` is the initial :class:`State` or a reset :class:`CleanupEnv`
-    (its current state). It acts on the posterior's most probable grounded
-    goal (:meth:`Learner.posterior`), planned by soft value iteration with the
-    learner's settings: what :meth:`Learner.follow` does with the language
-    model's ``expected_success`` off (with it on, ``follow`` ends where the
-    goals of the whole posterior most probably hold). Raises NotFittedError
-    for an untrained learner.
+    (its current state). It ends where :meth:`Learner.follow` would
+    (:meth:`Learner.ending`: where the goals of the whole posterior most
+    probably hold, with the language model's ``expected_success``), else where
+    the posterior's most probable grounded goal holds, planned by soft value
+    iteration with the learner's settings. Raises NotFittedError for an
+    untrained learner.
     """
     from groundlang.inference.planning import solve_task
     from groundlang.model.features import goal_mask
@@ -346,10 +346,14 @@ def policy(learner, command: str, state) -> CommandPolicy:
         if state is None:
             raise ValueError("the environment has no state yet: call reset() first")
     post = learner.posterior(command, state)
-    goal = post.best_goal
-    tables = pf_tables(state.layout, learner.library.tabulation_program)
-    space = state_space_for(state, goal, tables=tables)
-    mask = goal_mask(space, goal, tables)
+    ending = learner.ending(post, state)
+    if ending:
+        space, _, _, mask, goal = ending
+    else:
+        goal = post.best_goal
+        tables = pf_tables(state.layout, learner.library.tabulation_program)
+        space = state_space_for(state, goal, tables=tables)
+        mask = goal_mask(space, goal, tables)
     solved = solve_task(space.next_state, mask, learner.settings)
     return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask)
 

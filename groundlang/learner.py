@@ -315,13 +315,23 @@ class Learner:
             return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
                                 question=question(choices, unknown, state, self.library),
                                 choices=choices, unknown_words=unknown)
-        masks = self._world.goal_masks(self._world.space(state)) if self.lm.expected_success else None
-        goals = post.goals()
-        ending = masks is not None and expected_success_states(goals, masks, self.lm.step_cost,
-                                                               self.habits if self.lm.end_habits else None)
+        ending = self.ending(post, state)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
-            return self._act(command, state, post, ending[1], max_steps, ending[0], (goals, masks))
+            space, masks, goals, target, goal = ending
+            return self._act(command, state, post, goal, max_steps, target, (goals, masks))
         return self._act(command, state, post, post.best_goal, max_steps)
+
+    def ending(self, post: Posterior, state: State):
+        """Where following ``post``'s command from ``state`` ends, with the language model's
+        ``expected_success``: ``(space, goal masks, post.goals(), target [S] bool over space, the goal
+        said to be acted on)`` (:func:`groundlang.goal_plans.expected_success_states`, weighed by the end
+        habits with ``end_habits``); None where it plans for ``post.best_goal`` alone."""
+        if not self.lm.expected_success:
+            return None
+        space = self._world.space(state)
+        masks, goals = self._world.goal_masks(space), post.goals()
+        found = expected_success_states(goals, masks, self.lm.step_cost, self.habits if self.lm.end_habits else None)
+        return None if found is None else (space, masks, goals, *found)
 
     def clarify(self, result: FollowResult, answer: str, max_steps: int = 200) -> FollowResult:
         """Act on the choice ``answer`` names among an abstained ``result``'s ``choices``: a number
