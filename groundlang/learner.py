@@ -35,7 +35,8 @@ from groundlang.model.language_models import BagOfWords, LanguageModel, get_lang
 from groundlang.model.relevance import check_abstraction_possible
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
-from groundlang.learner_state import check_count, check_training_options, learner_from_state, learner_state
+from groundlang.learner_state import (check_count, check_state, check_training_options, learner_from_state,
+                                       learner_state)
 from groundlang.model_io import read_model, write_model
 from groundlang.results import FollowResult, Posterior
 from groundlang.training_vocabulary import build_vocabulary, palette_schema, schema_words, word_files_beside
@@ -250,19 +251,7 @@ class Learner:
 
     def _check_state(self, method: str, command: str, state: State) -> None:
         """TypeError for arguments of the wrong type; ValueError for a state of a palette not trained on."""
-        if not isinstance(command, str):
-            raise TypeError(f"{method}: command must be a str, got {type(command).__name__}")
-        if not isinstance(state, State):
-            raise TypeError(f"{method}: state must be a State (read_state_file, read_initial_state), "
-                            f"got {type(state).__name__}")
-        palette = state.layout.palette
-        seen = {"name": palette.name, "colours": list(palette.colours), "shapes": list(palette.shapes)}
-        if self.palettes is not None and seen not in self.palettes:
-            trained = ", ".join(p["name"] for p in self.palettes)
-            same_name = (" of the same name but other colours or shapes"
-                         if any(p["name"] == palette.name for p in self.palettes) else "")
-            raise ValueError(f"{method}: the state is of palette {palette.name!r}; this model was trained on "
-                             f"palette {trained}{same_name} (colours and shapes must be the same to read its words)")
+        check_state(self.palettes, method, command, state)
 
     def posterior(self, command: str, state: State) -> Posterior:
         """Posterior over interpretations of ``command`` in ``state`` from the words, given (with the

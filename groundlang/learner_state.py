@@ -16,14 +16,33 @@ from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.geometry import ASP_CONSTANT
 from groundlang.model.language_models import get_language_model
 from groundlang.model.vocabulary import Vocabulary
+from groundlang.model.world import State
 
-__all__ = ["learner_state", "learner_from_state", "check_count", "check_training_options"]
+__all__ = ["learner_state", "learner_from_state", "check_count", "check_training_options", "check_state"]
 
 
 def check_count(method: str, name: str, value) -> None:
     """ValueError unless ``value`` is a positive integer (``method`` and ``name`` say where)."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise ValueError(f"{method}: {name} must be a positive integer, got {value!r}")
+
+
+def check_state(palettes: list[dict] | None, method: str, command: str, state: State) -> None:
+    """The checks of a command and a state a learner trained on ``palettes`` is asked to read: TypeError for
+    arguments of the wrong type; ValueError for a state of a palette not trained on."""
+    if not isinstance(command, str):
+        raise TypeError(f"{method}: command must be a str, got {type(command).__name__}")
+    if not isinstance(state, State):
+        raise TypeError(f"{method}: state must be a State (read_state_file, read_initial_state), "
+                        f"got {type(state).__name__}")
+    palette = state.layout.palette
+    seen = {"name": palette.name, "colours": list(palette.colours), "shapes": list(palette.shapes)}
+    if palettes is not None and seen not in palettes:
+        trained = ", ".join(p["name"] for p in palettes)
+        same_name = (" of the same name but other colours or shapes"
+                     if any(p["name"] == palette.name for p in palettes) else "")
+        raise ValueError(f"{method}: the state is of palette {palette.name!r}; this model was trained on "
+                         f"palette {trained}{same_name} (colours and shapes must be the same to read its words)")
 
 
 def check_training_options(steps, lr, seed, settings, em_acceleration) -> None:
