@@ -122,6 +122,18 @@ ax.set_yticks(range(len(preps)), preps)
 ax.set_title("P(lifted task | preposition)"); fig.tight_layout()
 
 # %% [markdown]
+# ### Where demonstrators stopped: end habits
+#
+# A demonstrator stops where the goal holds, and often where more holds too. Training counts, per (start, end) pair, the relations of which some fact holds at its end and not at its start; `Learner.habits.table()` gives `q(R | L)`, how often a pair whose new facts include relation `L` also shows `R` (`inference/end_habits.py`). Following weighs each goal's states by them, where they can hold with the goal (`end_habits`, README, Williams section).
+
+# %%
+table = learner.habits.table()
+relations = sorted(table)
+print(f"{'goal relation L':18s}", "  ".join(f"{r:>15s}" for r in relations))
+for given in relations:
+    print(f"{given:18s}", "  ".join(f"{table[given].get(r, float('nan')):15.2f}" for r in relations))
+
+# %% [markdown]
 # ## One command in two of its layouts
 #
 # The most common text with "left of" among the training commands, read in its first two layouts. `Learner.posterior` is the posterior from the words alone (the pairs are not consulted); beside it, what the command's three pairs show (`pair_tasks.pair_task`, the corpus README's rule: the lifted facts that hold in every end state and not in every start state).
