@@ -306,7 +306,7 @@ class Learner:
                                 choices=choices, unknown_words=unknown)
         ending = self.ending(post, state)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
-            space, masks, goals, target, goal = ending
+            _, masks, goals, target, goal = ending
             return self._act(command, state, post, goal, max_steps, target, (goals, masks))
         return self._act(command, state, post, post.best_goal, max_steps)
 

@@ -59,9 +59,7 @@ def _relations(library: TaskLibrary | None) -> frozenset[str] | None:
     """The relations a task is made of: the goal predicates of the library's tasks (None: every
     position PF). A position PF no task has as its goal (``agentInDoor`` where the corpus's tasks never
     ask for a door) holds in end states by chance and is not what a command asks."""
-    if library is None:
-        return None
-    return frozenset(predicate for task in library.tasks for predicate, _ in task.goal)
+    return None if library is None else library.goal_relations
 
 
 def pair_task(pairs, library: TaskLibrary | None = None, where: list[str] | None = None) -> frozenset[Atom]:

@@ -29,6 +29,7 @@ from functools import cached_property
 
 import numpy as np
 
+from groundlang.inference.shared_meaning import instance_pairs
 from groundlang.logic.atoms import Atom, canonical_predicate
 from groundlang.model.features import atoms_hold_along
 from groundlang.model.pf_tables import library_pf_tables
@@ -41,10 +42,6 @@ MAX_RELATION_SETS = 10_000
 MAX_DEMONSTRATIONS = 10**12
 
 
-def _relations(library) -> frozenset[str]:
-    return frozenset(canonical_predicate(p) for task in library.tasks for p, _ in task.goal)
-
-
 def new_relations(start: State, end: State, library) -> frozenset[str]:
     """The relations a task of ``library`` asks for of which some fact holds in ``end`` and not in
     ``start`` (the same layout)."""
@@ -55,7 +52,7 @@ def _new_relations(pairs: Sequence[tuple[State, State]], library) -> list[frozen
     """:func:`new_relations` of pairs of one layout, their states' facts read in one pass."""
     layout = pairs[0][0].layout
     tables = library_pf_tables(layout, library)
-    asked = _relations(library)
+    asked = frozenset(map(canonical_predicate, library.goal_relations))
     atoms = [a for a in tables.grids if canonical_predicate(a.predicate) in asked]
     if not atoms:
         return [frozenset()] * len(pairs)
@@ -66,10 +63,8 @@ def _new_relations(pairs: Sequence[tuple[State, State]], library) -> list[frozen
 
 
 def demonstrated_pairs(instances) -> list[tuple[State, State]]:
-    """The (start, end) states of training instances: each pair of a command's pairs, or a
-    demonstration's first and last states."""
-    return [pair for inst in instances
-            for pair in (tuple(getattr(inst, "pairs", ())) or ((inst.initial_state, inst.final_state),))]
+    """The (start, end) states of training instances, every pair of each (:func:`instance_pairs`)."""
+    return [pair for inst in instances for pair in instance_pairs(inst)]
 
 
 @dataclass(frozen=True)
@@ -169,7 +164,6 @@ def _holds(relation: str, masks) -> np.ndarray:
     """``[S]`` bool over ``masks.space``: where some fact of ``relation`` holds."""
     atoms = [(a,) for a in masks.tables.grids if canonical_predicate(a.predicate) == relation]
     masks.prepare(atoms)
-    holds = np.zeros(masks.space.num_states, dtype=bool)
-    for atom in atoms:
-        holds |= masks.mask(atom)
-    return holds
+    if not atoms:
+        return np.zeros(masks.space.num_states, dtype=bool)
+    return np.logical_or.reduce([masks.mask(atom) for atom in atoms])

@@ -156,6 +156,11 @@ def shared_meaning_terms(tasks: Sequence[GroundedTask], constraints: Sequence, o
     return out
 
 
+def instance_pairs(inst) -> tuple[tuple[State, State], ...]:
+    """A training instance's (start, end) states: a command's pairs, or a demonstration's first and last."""
+    return tuple(getattr(inst, "pairs", ())) or ((inst.initial_state, inst.final_state),)
+
+
 def end_state_behaviour(instances: Sequence, interpretations: Sequence[Sequence], library: TaskLibrary,
                         noise: EndStateNoise | None = None, max_states: int | None = None) -> list[list[float]]:
     """The behaviour term of each interpretation of each instance of (start, end) pairs: the first pair's
@@ -166,7 +171,7 @@ def end_state_behaviour(instances: Sequence, interpretations: Sequence[Sequence]
     noise = noise or EndStateNoise()
     out = []
     for inst, group in zip(instances, interpretations):
-        pairs = tuple(getattr(inst, "pairs", ())) or ((inst.initial_state, inst.final_state),)
+        pairs = instance_pairs(inst)
         evidence = getattr(inst, "evidence", None)
         if not evidence or any(e.library is not library or e.noise != noise.key() for e in evidence):
             evidence = layout_evidence(pairs, library, noise, max_states)

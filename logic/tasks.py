@@ -378,6 +378,11 @@ class TaskLibrary:
     def names(self) -> list[str]:
         return [t.name for t in self.tasks]
 
+    @property
+    def goal_relations(self) -> frozenset[str]:
+        """The PFs the tasks' goals are made of: the relations a command may ask for."""
+        return frozenset(predicate for task in self.tasks for predicate, _ in task.goal)
+
     def source_text(self) -> str:
         """The library's own ASP text, every source in order with its rules and comments
         (PFs a user defined beside the tasks included): what a saved model keeps."""

@@ -8,9 +8,9 @@ interpretation and drawing what the agent did.
 from __future__ import annotations
 
 import argparse
+import time
 
 from groundlang.commands import output_path
-import time
 
 DEMO_COMMAND = "take the star to the red room"
 DEMO_LAYOUT = "novel_a.state"
