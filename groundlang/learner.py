@@ -19,7 +19,7 @@ from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import given_achievable, group_goals
 from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at
-from groundlang.inference.end_habits import EndHabits, demonstrated_pairs
+from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.inference.planning import TaskSettings
@@ -241,7 +241,8 @@ class Learner:
             init=init, progress=progress, acceleration=self.em_acceleration,
         )
         self.globals = self.fit_result.globals
-        self.habits = EndHabits.learn(demonstrated_pairs(instances), self.library)
+        self.habits = EndHabits.learn(demonstrated_pairs(instances), self.library,
+                                      known=known_new_relations(instances, self.library))
         return self
 
     # ----------------------------------------------------------------- using

@@ -23,7 +23,7 @@ are worth more than those where it does not, and none is worth more than the goa
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -35,7 +35,7 @@ from groundlang.model.features import atoms_hold_along
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.world import State
 
-__all__ = ["EndHabits", "new_relations", "demonstrated_pairs"]
+__all__ = ["EndHabits", "new_relations", "demonstrated_pairs", "known_new_relations"]
 
 # A saved model's table is untrusted: bounds on what a crafted file can make the loader build.
 MAX_RELATION_SETS = 10_000
@@ -67,6 +67,18 @@ def demonstrated_pairs(instances) -> list[tuple[State, State]]:
     return [pair for inst in instances for pair in instance_pairs(inst)]
 
 
+def known_new_relations(instances, library) -> dict[tuple[State, State], frozenset[str]]:
+    """The new relations of the instances' pairs that their end-state evidence (computed for ``library``)
+    carries (``LayoutEvidence.new_relations``)."""
+    known = {}
+    for inst in instances:
+        evidence = getattr(inst, "evidence", ())
+        for pair, shown in zip(instance_pairs(inst), evidence):
+            if shown.library is library and shown.new_relations is not None:
+                known[pair] = shown.new_relations
+    return known
+
+
 @dataclass(frozen=True)
 class EndHabits:
     """How many demonstrations showed each set of new relations at their end (module docstring)."""
@@ -74,17 +86,23 @@ class EndHabits:
     shown: tuple[tuple[frozenset[str], int], ...]
 
     @classmethod
-    def learn(cls, pairs: Iterable[tuple[State, State]], library) -> "EndHabits":
-        """From demonstrations' (start, end) states."""
-        return cls(()).plus(pairs, library)
+    def learn(cls, pairs: Iterable[tuple[State, State]], library,
+              known: Mapping[tuple[State, State], frozenset[str]] | None = None) -> "EndHabits":
+        """From demonstrations' (start, end) states; ``known``: the new relations of some of them, computed
+        before (:func:`known_new_relations`)."""
+        return cls(()).plus(pairs, library, known)
 
-    def plus(self, pairs: Iterable[tuple[State, State]], library) -> "EndHabits":
+    def plus(self, pairs: Iterable[tuple[State, State]], library,
+             known: Mapping[tuple[State, State], frozenset[str]] | None = None) -> "EndHabits":
         """These counts and those of more demonstrations (``Learner.update``)."""
         counts = Counter(dict(self.shown))
         distinct = Counter(pairs)  # a corpus repeats its pairs (Williams: 115 distinct of 4857)
         by_layout: dict = {}
         for pair in distinct:
-            by_layout.setdefault(pair[0].layout, []).append(pair)
+            if known and pair in known:
+                counts[known[pair]] += distinct[pair]
+            else:
+                by_layout.setdefault(pair[0].layout, []).append(pair)
         for same in by_layout.values():
             for pair, relations in zip(same, _new_relations(same, library)):
                 counts[relations] += distinct[pair]

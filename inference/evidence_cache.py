@@ -33,6 +33,7 @@ import weakref
 from collections import OrderedDict
 from pathlib import Path
 
+from groundlang.inference.end_habits import new_relations
 from groundlang.inference.end_states import EndStateNoise
 from groundlang.inference.likelihoods import DamagedEntry, cache_directory, layout_description, read_entry_json
 from groundlang.inference.shared_meaning import LayoutEvidence, evidence_space
@@ -46,7 +47,7 @@ __all__ = ["EVIDENCE_VERSION", "EvidenceCache", "evidence_key", "library_digest"
 logger = logging.getLogger(__name__)
 
 # Bump when the meaning of a stored number changes (the end-state likelihood, the spaces it is computed in).
-EVIDENCE_VERSION = 1
+EVIDENCE_VERSION = 2  # 2: the relations new at the pair's end (``new``)
 # An entry holds a few numbers per grounded task (tens of bytes each); far more is not an entry.
 MAX_ENTRY_BYTES = 4 * 1024 * 1024
 # Pieces of evidence kept in memory per EvidenceCache (a few KB each), the most recently used.
@@ -89,6 +90,7 @@ def _contents(evidence: LayoutEvidence) -> dict:
         "values": evidence.values,
         "groundings": [[task, {var: sorted(p) for var, p in props.items()}, g] for task, props, g in evidence.groundings],
         "floor": evidence.floor,
+        "new": sorted(evidence.new_relations),
     }
 
 
@@ -102,7 +104,7 @@ def _checksum(key: str, contents: dict) -> str:
 def _restore(data, key: str, library: TaskLibrary, noise: EndStateNoise) -> LayoutEvidence:
     if data.get("key") != key:
         raise ValueError("records another key")
-    contents = {name: data[name] for name in ("goals", "values", "groundings", "floor")}
+    contents = {name: data[name] for name in ("goals", "values", "groundings", "floor", "new")}
     if data.get("checksum") != _checksum(key, contents):
         raise ValueError("checksum does not match the contents")
     goals = [tuple(Atom(p, tuple(args)) for p, args in goal) for goal in contents["goals"]]
@@ -113,7 +115,10 @@ def _restore(data, key: str, library: TaskLibrary, noise: EndStateNoise) -> Layo
         raise ValueError("goals, values and groundings do not match")
     if any(v != v or v > 0 for v in [*values, contents["floor"]]):
         raise ValueError("holds a number that is not a log-probability")
-    return LayoutEvidence.from_parts(library, noise, goals, values, groundings, contents["floor"])
+    if not isinstance(contents["new"], list) or not all(isinstance(r, str) and r for r in contents["new"]):
+        raise ValueError("its new relations are not a list of names")
+    return LayoutEvidence.from_parts(library, noise, goals, values, groundings, contents["floor"],
+                                     frozenset(contents["new"]))
 
 
 class EvidenceCache:
@@ -149,6 +154,8 @@ class EvidenceCache:
             self.hits += 1
         else:
             found = LayoutEvidence(start, end, self.library, self.noise, max_states)
+            # What end habits learn from the pair, kept with it: a warm cache then grounds no layout's PFs.
+            found.new_relations = new_relations(start, end, self.library)
             self.computed += 1
             if self.root is not None and self._writable:
                 self._write(path, key, found)

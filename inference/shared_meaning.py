@@ -56,7 +56,9 @@ class LayoutEvidence:
     """Pair k's end-state likelihood under every grounding of every task in its own layout, with what
     each grounding's bound objects are, and the pair's noise floor. ``goals`` (in candidate order),
     ``groundings`` (task, properties of its bound objects, index into ``goals``) and ``floor`` are what
-    :meth:`from_parts` takes back: what the evidence cache (``inference.evidence_cache``) stores."""
+    :meth:`from_parts` takes back: what the evidence cache (``inference.evidence_cache``) stores, with
+    ``new_relations``, the relations of which some fact holds at the pair's end and not at its start
+    (``inference.end_habits.new_relations``; the cache fills it in, else None)."""
 
     def __init__(self, start: State, end: State, library: TaskLibrary, noise: EndStateNoise,
                  max_states: int | None = None):
@@ -76,15 +78,18 @@ class LayoutEvidence:
 
     @classmethod
     def from_parts(cls, library: TaskLibrary, noise: EndStateNoise, goals: Sequence[tuple], values: Sequence[float],
-                   groundings: Sequence[tuple[str, dict[str, frozenset[str]], int]], floor: float) -> "LayoutEvidence":
+                   groundings: Sequence[tuple[str, dict[str, frozenset[str]], int]], floor: float,
+                   new_relations: frozenset[str] | None = None) -> "LayoutEvidence":
         """The evidence from what an instance computed once held (``goals`` and their ``values``,
-        ``groundings``, ``floor``), for the same library and noise."""
+        ``groundings``, ``floor``, ``new_relations``), for the same library and noise."""
         self = cls.__new__(cls)
         self._set(library, noise, list(goals), [float(v) for v in values], list(groundings), float(floor))
+        self.new_relations = new_relations
         return self
 
     def _set(self, library, noise, goals, values, groundings, floor) -> None:
         self.library = library
+        self.new_relations: frozenset[str] | None = None
         self.noise = noise.key()
         self.goals, self.values, self.groundings, self.floor = goals, values, groundings, floor
         self.by_goal: dict[tuple, float] = dict(zip(goals, values))

@@ -284,11 +284,10 @@ class ParseAligned(LanguageModel):
         that role's mixture.
         """
         log_emit = mixture_log_emissions(g, batch)  # [X, W]
-        modifiers = gather_mixtures(log_emit, batch.role_mix, batch.uniq)  # [I, J, V, U]
-        heads = gather_mixtures(log_emit, batch.role_head_mix, batch.uniq)  # [I, J, V, U]
-        type_ll = torch.einsum("ijvu,iku->ijvk", modifiers, batch.type_counts) + torch.einsum(
-            "ijvu,iku->ijvk", heads, batch.type_head_counts
-        )  # [I, J, V, K]
+        own = gather_mixtures(log_emit, batch.mixes, batch.uniq)  # [I, M, U]: each instance's mixtures
+        modifiers = torch.einsum("imu,iku->imk", own, batch.type_counts)  # [I, M, K]
+        heads = torch.einsum("imu,iku->imk", own, batch.type_head_counts)
+        type_ll = per_role(modifiers, batch.role_mix) + per_role(heads, batch.role_head_mix)  # [I, J, V, K]
         # Row of the alignment table per phrase type: (task, key) when aligning by task, else the key.
         if self.align_by_task:
             context = batch.align_context  # [I, J, K]
@@ -320,12 +319,12 @@ class ParseAligned(LanguageModel):
         # with learned shares, one pair for verbs and one for the other words:
         # a verb says more about the task than "to" or "the" does. A negated clause's verb
         # ("do not enter it") is one of the other words (see parse_encoding._reading_structure).
-        phi = g["phi"]
-        task_words = phi[batch.task_token[:, :, None], batch.uniq[:, None, :]].clamp_min(1e-30).log()  # [I, J, U]
-        null_words = log_emit[NULL_MIXTURE][batch.uniq][:, None, :].expand_as(task_words)  # [I, J, U]
-        both = torch.stack([task_words, null_words], dim=-1)  # [I, J, U, 2]
-        frame_words = torch.logsumexp(both + g["frame_source"].log(), dim=-1)
-        verb_words = torch.logsumexp(both + g["verb_source"].log(), dim=-1)
+        # Mixed per (token, word) of the vocabulary, then gathered: fewer entries than [I, J, U].
+        task_words = g["phi"].clamp_min(1e-30).log()  # [S, W]
+        both = torch.stack([task_words, log_emit[NULL_MIXTURE].expand_as(task_words)], dim=-1)  # [S, W, 2]
+        said = (batch.task_token[:, :, None], batch.uniq[:, None, :])
+        frame_words = torch.logsumexp(both + g["frame_source"].log(), dim=-1)[said]  # [I, J, U]
+        verb_words = torch.logsumexp(both + g["verb_source"].log(), dim=-1)[said]
         frame = torch.einsum("iju,iru->ijr", frame_words, batch.frame_counts)
         verbs = torch.einsum("iju,iru->ijr", verb_words, batch.verb_counts)
         per_reading = entities + frame + verbs
@@ -357,7 +356,25 @@ class ParseAligned(LanguageModel):
         # A padded structure's words carry PAD_LOGIT, not 0: Pyro sums an enumerated site in log space
         # shifted by its largest term, and a padded 0 would shift a real -150 to nothing.
         padded = batch.reading_logp <= PAD_LOGIT
-        return self._words_given_reading(g, batch)[0].masked_fill(padded[:, None, :], PAD_LOGIT), batch.reading_logp
+        parts, order = batch.by_width()  # the same terms, without computing the padding
+        J = batch.mask.shape[1]
+        rows = [_pad_interpretations(self._words_given_reading(g, part)[0], J) for part in parts]
+        return torch.cat(rows)[order].masked_fill(padded[:, None, :], PAD_LOGIT), batch.reading_logp
+
+
+def _pad_interpretations(per_reading: torch.Tensor, J: int) -> torch.Tensor:
+    """``[I, j, S]`` -> ``[I, J, S]``, the interpretations a part lacks at PAD_LOGIT (their prior's too)."""
+    missing = J - per_reading.shape[1]
+    return torch.nn.functional.pad(per_reading, (0, 0, 0, missing), value=PAD_LOGIT) if missing else per_reading
+
+
+def per_role(per_mixture: torch.Tensor, at: torch.Tensor) -> torch.Tensor:
+    """``per_mixture [I, M, K]`` at each role binding's mixture ``at [I, J, V]`` (an index into M) ->
+    ``[I, J, V, K]``."""
+    I, J, V = at.shape
+    K = per_mixture.shape[-1]
+    out = per_mixture.gather(1, at.reshape(I, J * V, 1).expand(I, J * V, K))
+    return out.reshape(I, J, V, K)
 
 
 def preposition_table(g: dict, vocab) -> tuple[list[str], list[str], torch.Tensor]:

@@ -29,7 +29,10 @@ __all__ = [
 Candidate = tuple[GroundedTask, list[BindingConstraint]]
 
 
-@lru_cache(maxsize=64)
+# Training walks a corpus's start states twice (interpretations, then the pairs' evidence), in the same
+# order: with fewer slots than distinct states (the Williams corpus has 70), least-recently-used eviction
+# dropped each state just before it was needed again. An entry is a layout's candidates, tens of kB.
+@lru_cache(maxsize=256)
 def _environment(state: State, library: TaskLibrary) -> tuple:
     palette = state.layout.palette.name
     found, described, terms, related = ground_environment(library, state_facts(state),

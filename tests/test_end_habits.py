@@ -13,7 +13,7 @@ from groundlang.bdm import parse_bdm_state
 from groundlang.bdm_check import default_library
 from groundlang.confidence import GoalMasks
 from groundlang.goal_plans import expected_success_states, planning_space
-from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, new_relations
+from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations, new_relations
 from groundlang.inference.end_states import distances
 from groundlang.learner import Learner
 from groundlang.logic.atoms import parse_goal
@@ -116,6 +116,8 @@ def test_learned_in_training_saved_with_the_model_and_switched_off_by_a_setting(
     pairs = demonstrated_pairs(instances)
     assert learner.habits.demonstrations == len(pairs) == sum(len(c.pairs) for c in williams_commands)
     assert learner.habits == EndHabits(()).plus(pairs, LIBRARY)
+    # read from each pair's end-state evidence, which keeps them (in the cache too): no layout grounded again
+    assert set(known_new_relations(instances, LIBRARY)) == set(pairs)
     assert Learner.load(directory).habits == learner.habits
     assert get_language_model("parse").settings()["end_habits"] is True
     off = Learner(get_language_model("parse", end_habits=False), library=LIBRARY, cache_dir=False).fit(instances)

@@ -26,6 +26,7 @@ def _pairs(commands):
 def _same(a: LayoutEvidence, b: LayoutEvidence) -> None:
     assert a.goals == b.goals and a.values == b.values and a.floor == b.floor  # exactly: floats round-trip
     assert a.by_task == b.by_task and a.by_goal == b.by_goal
+    assert a.new_relations == b.new_relations and a.new_relations is not None
 
 
 def test_a_warm_cache_gives_what_was_computed_and_computes_nothing(williams_commands, williams_library, tmp_path,
@@ -86,10 +87,15 @@ def test_damaged_entries_are_recomputed_with_one_warning(williams_commands, will
     entries[1].write_text(json.dumps(data))
     entries[2].write_text(entries[3].read_text())  # another pair's entry under this name
     entries[4].write_bytes(b"\xff\xfe\x00garbage")  # not UTF-8
+    data = json.loads(entries[5].read_text())
+    data["new"] = [7]  # not names, its checksum made to match
+    data["checksum"] = evidence_cache._checksum(data["key"], {k: data[k] for k in ("goals", "values", "groundings",
+                                                                                  "floor", "new")})
+    entries[5].write_text(json.dumps(data))
     with caplog.at_level(logging.WARNING, logger="groundlang.inference.evidence_cache"):
         warm = training_instances(williams_commands, williams_library, cache_dir=tmp_path)
     corrupt = [r for r in caplog.records if "corrupt" in r.getMessage()]
-    assert len(corrupt) == 1 and "4 corrupt entries recomputed" in corrupt[0].getMessage()
+    assert len(corrupt) == 1 and "5 corrupt entries recomputed" in corrupt[0].getMessage()
     for a, b in zip(cold.instances, warm.instances):
         for x, y in zip(a.evidence, b.evidence):
             _same(x, y)

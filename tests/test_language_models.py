@@ -466,3 +466,31 @@ def test_alignment_posterior_equals_summing_over_every_alignment(setting):
                         assert float(got[k, v]) == pytest.approx(fixed.get((k, v), 0.0) / total, abs=1e-4)
                     checked += 1
     assert checked > 20
+
+
+def test_parts_by_width_give_the_words_terms_and_gradients_of_the_whole_batch(setting):
+    """``words_by_reading`` computes each part of instances with as many interpretations, roles and
+    noun-phrase types as its own widest needs (``ParseBatch.by_width``): the same terms, and the same
+    gradient (EM's expected counts), as the padded whole."""
+    from groundlang.model.encoding import PAD_LOGIT
+
+    learner, _, batch, g = setting
+    parts, order = batch.by_width()
+    widths = sorted(int(p.type_mask.shape[1]) for p in parts)
+    assert len(parts) >= 2 and widths[0] < batch.type_mask.shape[1]  # the test has something to cut
+    assert sorted(order.tolist()) == list(range(batch.num_instances))
+    real = batch.mask[:, :, None] & (batch.reading_logp > PAD_LOGIT)[:, None, :]  # [I, J, S]
+
+    def terms(compute):
+        leaves = {k: v.detach().clone().requires_grad_(True) for k, v in g.items()}
+        values = compute(leaves)
+        values[real].sum().backward()
+        return values.detach(), {k: v.grad for k, v in leaves.items() if v.grad is not None}
+
+    by_width, grads = terms(lambda leaves: learner.lm.words_by_reading(leaves, batch)[0])
+    whole, whole_grads = terms(lambda leaves: learner.lm._words_given_reading(leaves, batch)[0])
+    assert torch.allclose(by_width[real], whole[real], atol=1e-4)
+    assert (by_width[~real] <= PAD_LOGIT / 2).all()  # padding stays padding
+    assert grads.keys() == whole_grads.keys() and "phi" in grads
+    for name, grad in grads.items():
+        assert torch.allclose(grad, whole_grads[name], atol=1e-4, rtol=1e-4), name
