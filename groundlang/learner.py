@@ -22,6 +22,7 @@ from groundlang.goal_plans import WorldPlans, expected_success_states, goal_hold
 from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.likelihoods import behaviour_likelihood_table
+from groundlang.inference.parse_cache import ParseCache
 from groundlang.inference.planning import TaskSettings
 from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.logic.atoms import Atom
@@ -170,10 +171,10 @@ class Learner:
             interps, behaviour = without_unbroken_held_parts(interps, behaviour, [i.states for i in instances], tables)
         observations = []
         parsed: dict[str, tuple] = {}  # a text said again is parsed once
+        parses = ParseCache(self.cache_dir)
         for inst, group, values in zip(instances, interps, behaviour):
             if inst.command not in parsed:
-                parsed[inst.command] = tuple(parse(inst.command, weights=self.lm.parser_weights,
-                                                   word_lexicon=self.word_lexicon))
+                parsed[inst.command] = parses.readings(inst.command, self.lm.parser_weights, self.word_lexicon)
             readings = parsed[inst.command]
             observations.append(
                 Observation(
@@ -183,6 +184,7 @@ class Learner:
                     tuple(values),
                 )
             )
+        parses.report()
         return observations
 
     def _command_observation(self, command: str, state: State) -> Observation:

@@ -218,14 +218,38 @@ def encode_parse_fields(enc: Encoder, keys: PhraseKeys, *, negated_verbs_frame: 
                 type_preposition=type_preposition)
 
 
+def _bindings(enc: Encoder, interp, mention_task_objects: bool) -> tuple[list[int], list[tuple]]:
+    """An interpretation's mentionable role bindings (their indices v), and per binding a phrase may align
+    with, ``(v, role id, -log(bindings sharing its role), modifier mixture, head mixture)``."""
+    vocab = enc.vocab
+    sharing = Counter(rb.role for rb in interp.roles)
+    slots, aligned = [], []
+    for v, rb in enumerate(interp.roles, start=1):
+        if is_mentionable(rb, mention_task_objects):  # the mention model asks whether it is named
+            slots.append(v)
+        if rb.cls in UNALIGNED_CLASSES:
+            # The addressee is "you", which the parser leaves without
+            # words. Alignable, its class token had no words of its own
+            # to learn and took the toy's noun: trained on three "take
+            # the star ..." commands, "star" named the agent.
+            continue
+        tokens = [vocab.token_id(t) for t in rb.constraint_tokens]
+        # Adjectives say properties, nouns say kinds: a class token
+        # that could emit modifiers would learn every colour word.
+        modifier = enc.mixture(tokens + [enc.null])
+        # A head noun names the class ("block") or, for a toy, its shape ("chair").
+        head = enc.mixture([vocab.token_id(class_token(rb.cls))] + [vocab.token_id(t) for t in rb.kind_tokens])
+        aligned.append((v, vocab.role_id(rb.role), -math.log(sharing[rb.role]), modifier, head))
+    return slots, aligned
+
+
 def _role_fields(enc: Encoder, mention_task_objects: bool) -> dict:
     """Per interpretation, its role bindings (``role*``) and the slots of its mentionable objects (``cover_*``).
 
     Entries are gathered in lists and written with one indexed assignment per field: element by element,
     writing the tensors took most of the time of encoding a corpus of 1619 commands."""
-    vocab = enc.vocab
     I, J = enc.num_instances, enc.num_interpretations
-    interps = [interp for _, _, interp in enc.interpretations()]
+    interps = {id(interp): interp for _, _, interp in enc.interpretations()}.values()
     V = max(len(interp.roles) for interp in interps) + 1
     G = max(1, max(sum(1 for rb in interp.roles if is_mentionable(rb, mention_task_objects)) for interp in interps))
     at, role_ids, logw, mix, head_mix = [], [], [], [], []  # one entry per aligned role binding (i, j, v)
@@ -234,30 +258,19 @@ def _role_fields(enc: Encoder, mention_task_objects: bool) -> dict:
     mixes = [{enc.null_mixture: 0} for _ in range(I)]
     cover_at = []  # (i, j, slot, v) per mentionable object
     interp_at = []  # (i, j) per interpretation: a phrase may align with nothing
+    bindings: dict[int, tuple] = {}  # id(interpretation) -> its bindings' entries: instances of a state share them
     for i, j, interp in enc.interpretations():
         interp_at.append((i, j))
-        sharing = Counter(rb.role for rb in interp.roles)
-        slots = 0
-        for v, rb in enumerate(interp.roles, start=1):
-            if is_mentionable(rb, mention_task_objects):  # the mention model asks whether it is named
-                cover_at.append((i, j, slots, v))
-                slots += 1
-            if rb.cls in UNALIGNED_CLASSES:
-                # The addressee is "you", which the parser leaves without
-                # words. Alignable, its class token had no words of its own
-                # to learn and took the toy's noun: trained on three "take
-                # the star ..." commands, "star" named the agent.
-                continue
+        if id(interp) not in bindings:
+            bindings[id(interp)] = _bindings(enc, interp, mention_task_objects)
+        slots, aligned = bindings[id(interp)]
+        cover_at.extend((i, j, slot, v) for slot, v in enumerate(slots))
+        own = mixes[i]
+        for v, role_id, weight, modifier, head in aligned:
             at.append((i, j, v))
-            logw.append(-math.log(sharing[rb.role]))
-            role_ids.append(vocab.role_id(rb.role))
-            tokens = [vocab.token_id(t) for t in rb.constraint_tokens]
-            # Adjectives say properties, nouns say kinds: a class token
-            # that could emit modifiers would learn every colour word.
-            own = mixes[i]
-            mix.append(own.setdefault(enc.mixture(tokens + [enc.null]), len(own)))
-            # A head noun names the class ("block") or, for a toy, its shape ("chair").
-            head = enc.mixture([vocab.token_id(class_token(rb.cls))] + [vocab.token_id(t) for t in rb.kind_tokens])
+            logw.append(weight)
+            role_ids.append(role_id)
+            mix.append(own.setdefault(modifier, len(own)))
             head_mix.append(own.setdefault(head, len(own)))
     role = torch.zeros(I, J, V, dtype=torch.long)
     role_mask = torch.zeros(I, J, V, dtype=torch.bool)

@@ -1,0 +1,187 @@
+"""A disk cache of the parser's readings of training commands.
+
+Parsing a corpus's distinct texts (Earley over the grammar, k-best readings from the forest) is most of
+what training does before EM on a warm cache of behaviour terms: 748 texts of the Williams corpus take
+about 5 s. The readings are kept in the cache folder of the behaviour likelihoods
+(``inference.likelihoods``: ``cache_dir``, else ``$GROUNDLANG_CACHE``, else ``.groundlang-cache``), one
+JSON file per text in ``parses/ab/abcdef....json``, with the evidence cache's guarantees
+(``inference.evidence_cache``):
+
+- the name is the sha256 of everything the readings depend on: the text, the number of readings kept,
+  the rule weights, the words of the lexicon by category, the text of every file of the grammar package
+  (its code, grammar and word lists: any change to the parser gives new names) and
+  :data:`PARSE_CACHE_VERSION`;
+- an entry records its key and a checksum over the key and the canonical text of its readings, and every
+  field is read back with its type checked, so a changed character, a truncated file or an entry copied
+  under another name is detected, reparsed and rewritten, with one warning per run giving how many;
+- entries are written atomically, not fsynced (a lost entry is reparsed), read with a size limit; a folder
+  that cannot be written gives one warning, and training goes on without writing.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+from collections.abc import Mapping
+from functools import cache
+from importlib.resources import files
+from pathlib import Path
+
+from groundlang.grammar.lexicon import Lexicon
+from groundlang.grammar.logical_form import Clause, Entity, LogicalForm, Reading, Relation
+from groundlang.grammar.parser import parse
+from groundlang.inference.likelihoods import DamagedEntry, cache_directory, read_entry_json
+from groundlang.logic.storage import write_atomically
+
+__all__ = ["PARSE_CACHE_VERSION", "ParseCache", "parse_key", "parser_digest"]
+
+logger = logging.getLogger(__name__)
+
+PARSE_CACHE_VERSION = 1  # bump when what an entry holds changes meaning
+MAX_ENTRY_BYTES = 1024 * 1024  # at most 8 readings of one command; far more is not an entry
+MAX_READINGS = 8  # the parser's default, which training uses
+
+# Each dataclass's fields as the cache writes them: (name, type); a list type is a tuple of that type,
+# None in a type allows None.
+_STR, _OPT = (str,), (str, type(None))
+_FIELDS = {
+    Entity: (("var", _STR), ("head", _OPT), ("modifiers", [_STR]), ("determiner", _OPT), ("clause", (int,)),
+             ("role", _STR), ("prep", _OPT), ("parent", _OPT), ("pronoun", _OPT)),
+    Relation: (("name", _STR), ("args", [_STR]), ("word", _OPT), ("kind", _STR), ("negated", (bool,)),
+               ("probability", (float,))),
+    Clause: (("verb", _OPT), ("args", [_STR]), ("preps", [[_STR]]), ("negated", (bool,)), ("subject", _OPT),
+             ("connective", _OPT), ("adverbs", [_STR])),
+    LogicalForm: (("clauses", [Clause]), ("entities", [Entity]), ("relations", [Relation]),
+                  ("attachments", [[_STR]]), ("words", [_STR]), ("tags", [_STR]), ("fallback", (bool,))),
+    Reading: (("logical_form", LogicalForm), ("probability", (float,))),
+}
+
+
+@cache
+def parser_digest() -> str:
+    """sha256 of the names and texts of every file of the grammar package, read once per process."""
+    root = files("groundlang.grammar")
+    digest = hashlib.sha256()
+    for entry in sorted(Path(str(root)).rglob("*")):
+        if entry.is_file() and "__pycache__" not in entry.parts:
+            digest.update(entry.relative_to(Path(str(root))).as_posix().encode() + b"\0" + entry.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def parse_key(command: str, weights: Mapping[str, float] | None, lexicon: Lexicon) -> str:
+    """sha256 (hex) of what a command's readings depend on."""
+    description = {
+        "version": PARSE_CACHE_VERSION,
+        "command": command,
+        "readings": MAX_READINGS,
+        "weights": sorted((weights or {}).items()),
+        "lexicon": sorted(lexicon.entries.items()),
+        "parser": parser_digest(),
+    }
+    return hashlib.sha256(json.dumps(description, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
+def _plain(value):
+    """A reading (or a part of one) as JSON values, field by field in :data:`_FIELDS` order."""
+    if type(value) in _FIELDS:
+        return [_plain(getattr(value, name)) for name, _ in _FIELDS[type(value)]]
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _restore(value, kind):
+    """The inverse of :func:`_plain` for ``kind`` (a dataclass, a list type or a tuple of types), checked:
+    ValueError for anything of another shape or type."""
+    if isinstance(kind, list):
+        if not isinstance(value, list):
+            raise ValueError(f"{value!r:.40} is not a list")
+        return tuple(_restore(v, kind[0]) for v in value)
+    if kind in _FIELDS:
+        spec = _FIELDS[kind]
+        if not isinstance(value, list) or len(value) != len(spec):
+            raise ValueError(f"a {kind.__name__} needs {len(spec)} fields")
+        return kind(**{name: _restore(v, t) for (name, t), v in zip(spec, value)})
+    if float in kind and type(value) is int:  # JSON writes no ".0" for some numbers' reprs elsewhere
+        return float(value)
+    if type(value) not in kind:  # type, not isinstance: a bool is not an int here
+        raise ValueError(f"{value!r:.40} is not a {' or '.join(t.__name__ for t in kind)}")
+    return value
+
+
+def _checksum(key: str, readings: list) -> str:
+    text = json.dumps(readings, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(f"{key} {text}".encode()).hexdigest()
+
+
+class ParseCache:
+    """Readings of commands, read from the cache folder or parsed and written there. ``cache_dir``: the
+    folder (see the module docstring), None for the default, False for no cache. Counts ``hits``,
+    ``parsed`` and ``damaged`` entries; :meth:`report` logs them once."""
+
+    def __init__(self, cache_dir: str | os.PathLike | None | bool = None):
+        self.root = None if cache_dir is False else cache_directory(cache_dir)
+        self.hits = self.parsed = self.damaged = 0
+        self._writable = True
+        self._first_damaged: tuple[Path, str] | None = None
+
+    def readings(self, command: str, weights: Mapping[str, float] | None, lexicon: Lexicon) -> tuple[Reading, ...]:
+        """``parse(command, weights=weights, word_lexicon=lexicon)``'s readings; the parser's errors as it
+        raises them."""
+        if self.root is None:
+            self.parsed += 1
+            return tuple(parse(command, weights=weights, word_lexicon=lexicon))
+        key = parse_key(command, weights, lexicon)
+        path = self.root / "parses" / key[:2] / f"{key}.json"
+        try:
+            found = self._read(path, key)
+        except DamagedEntry as exc:
+            self.damaged += 1
+            self._first_damaged = self._first_damaged or (path, str(exc))
+            found = None
+        if found is not None:
+            self.hits += 1
+            return found
+        readings = tuple(parse(command, weights=weights, word_lexicon=lexicon))
+        self.parsed += 1
+        if self._writable:
+            self._write(path, key, readings)
+        return readings
+
+    def _read(self, path: Path, key: str) -> tuple[Reading, ...] | None:
+        data = read_entry_json(path, MAX_ENTRY_BYTES, "a parse cache entry")
+        if data is None:
+            return None
+        try:
+            if data.get("key") != key:
+                raise ValueError("records another key")
+            if data.get("checksum") != _checksum(key, data["readings"]):
+                raise ValueError("checksum does not match the readings")
+            readings = _restore(data["readings"], [Reading])
+            if not readings:
+                raise ValueError("holds no reading")
+            return readings
+        except KeyError as exc:
+            raise DamagedEntry(f"lacks its field {exc}") from None
+        except (ValueError, TypeError, RecursionError) as exc:
+            raise DamagedEntry(str(exc) or type(exc).__name__) from None
+
+    def _write(self, path: Path, key: str, readings: tuple[Reading, ...]) -> None:
+        plain = _plain(readings)
+        entry = {"key": key, "readings": plain, "checksum": _checksum(key, plain)}
+        try:
+            write_atomically(path, json.dumps(entry, separators=(",", ":")), durable=False, follow=False)
+        except OSError as exc:
+            logger.warning("parse cache %s cannot be written (%s: %s); going on without writing to it",
+                           self.root, exc.filename or self.root, exc.strerror or exc)
+            self._writable = False
+
+    def report(self) -> None:
+        """One warning for damaged entries (how many, the first and why), one info line of counts."""
+        if self.damaged:
+            first, why = self._first_damaged
+            logger.warning("parse cache: %d corrupt entr%s reparsed (first: %s: %s)", self.damaged,
+                           "y" if self.damaged == 1 else "ies", first, why)
+        logger.info("commands: %d readings from the parse cache, %d parsed", self.hits, self.parsed)

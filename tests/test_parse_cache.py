@@ -1,0 +1,107 @@
+"""The parse cache: a warm read gives the readings the parser gave and parses nothing, keys follow what
+the readings depend on, damaged entries are reparsed with one warning, and no cache writes nothing."""
+
+from __future__ import annotations
+
+import json
+import logging
+
+import pytest
+
+from groundlang.grammar.lexicon import Lexicon
+from groundlang.grammar.parser import ParseError, parse
+from groundlang.inference import parse_cache
+from groundlang.inference.parse_cache import ParseCache, parse_key
+
+COMMANDS = [
+    "take the red chair to the green room",
+    "go to the room with the chair, then stand to the left of it",
+    "walk to the largest room",
+    "move the small box next to the door and do not enter the blue room",
+]
+WORDS = Lexicon.english().extend({"NOUN": ["chair", "box"], "COLOR": ["red", "green", "blue"]})
+
+
+def _entries(root):
+    return sorted((root / "parses").rglob("*.json"))
+
+
+def test_a_warm_cache_gives_the_parsers_readings_and_parses_nothing(tmp_path, monkeypatch):
+    cold = ParseCache(tmp_path)
+    readings = [cold.readings(c, None, WORDS) for c in COMMANDS]
+    assert cold.parsed == len(COMMANDS) and len(_entries(tmp_path)) == len(COMMANDS)
+    assert readings == [tuple(parse(c, word_lexicon=WORDS)) for c in COMMANDS]
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("parsed, not read from the cache")
+
+    monkeypatch.setattr(parse_cache, "parse", refuse)
+    warm = ParseCache(tmp_path)
+    assert [warm.readings(c, None, WORDS) for c in COMMANDS] == readings  # every field, floats exactly
+    assert warm.hits == len(COMMANDS) and warm.parsed == 0
+
+
+def test_the_key_follows_what_the_readings_depend_on():
+    key = parse_key(COMMANDS[0], None, WORDS)
+    assert key == parse_key(COMMANDS[0], {}, Lexicon.english().extend({"NOUN": ["box", "chair"],
+                                                                       "COLOR": ["blue", "green", "red"]}))
+    changed = [
+        parse_key(COMMANDS[1], None, WORDS),
+        parse_key(COMMANDS[0], {"nmods_coord": 1.0}, WORDS),
+        parse_key(COMMANDS[0], None, WORDS.extend({"NOUN": ["mug"]})),
+        parse_key(COMMANDS[0], None, Lexicon.english()),
+    ]
+    assert len({key, *changed}) == 1 + len(changed)
+
+
+def test_a_change_to_the_parser_gives_new_keys(monkeypatch):
+    key = parse_key(COMMANDS[0], None, WORDS)
+    monkeypatch.setattr(parse_cache, "parser_digest", lambda: "another grammar")
+    assert parse_key(COMMANDS[0], None, WORDS) != key
+
+
+def test_damaged_entries_are_reparsed_with_one_warning(tmp_path, caplog):
+    cold = ParseCache(tmp_path)
+    readings = {c: cold.readings(c, None, WORDS) for c in COMMANDS}
+    entries = {c: tmp_path / "parses" / k[:2] / f"{k}.json" for c in COMMANDS for k in [parse_key(c, None, WORDS)]}
+    first, second, third, fourth = (entries[c] for c in COMMANDS)
+    text = first.read_text()
+    first.write_text(text[: len(text) // 2])  # truncated
+    data = json.loads(second.read_text())
+    data["readings"][0][1] = 0.5  # a probability changed, its checksum not
+    second.write_text(json.dumps(data))
+    third.write_text(fourth.read_text())  # another command's entry under this name
+    data = json.loads(fourth.read_text())
+    data["readings"][0][0][4] = [1, 2]  # words that are not strings, the checksum made to match
+    data["checksum"] = parse_cache._checksum(data["key"], data["readings"])
+    fourth.write_text(json.dumps(data))
+    warm = ParseCache(tmp_path)
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.parse_cache"):
+        assert {c: warm.readings(c, None, WORDS) for c in COMMANDS} == readings
+        warm.report()
+    corrupt = [r.getMessage() for r in caplog.records if "corrupt" in r.getMessage()]
+    assert len(corrupt) == 1 and "4 corrupt entries reparsed" in corrupt[0]
+    again = ParseCache(tmp_path)
+    assert {c: again.readings(c, None, WORDS) for c in COMMANDS} == readings
+    assert again.hits == len(COMMANDS)  # rewritten whole
+
+
+def test_no_cache_writes_nothing_and_the_parsers_errors_pass_through(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("GROUNDLANG_CACHE", raising=False)
+    assert ParseCache(False).readings(COMMANDS[0], None, WORDS) == tuple(parse(COMMANDS[0], word_lexicon=WORDS))
+    assert not any(tmp_path.iterdir())
+    with pytest.raises(ParseError):
+        ParseCache(tmp_path / "cache").readings("   ", None, WORDS)
+
+
+def test_training_reads_its_commands_from_the_cache(williams_commands, williams_library, tmp_path, monkeypatch):
+    from groundlang.learner import Learner
+    from groundlang.pair_corpus import training_instances
+
+    instances = training_instances(williams_commands, williams_library, cache_dir=tmp_path).instances
+    cold = Learner(library=williams_library, cache_dir=tmp_path).observe(instances)
+    assert len(_entries(tmp_path)) == len({i.command for i in instances})
+    monkeypatch.setattr(parse_cache, "parse", lambda *a, **k: pytest.fail("parsed, not read from the cache"))
+    warm = Learner(library=williams_library, cache_dir=tmp_path).observe(instances)
+    assert warm == cold
