@@ -31,15 +31,14 @@ import logging
 import os
 import weakref
 from collections import OrderedDict
-from pathlib import Path
 
 from groundlang.inference.end_habits import new_relations
 from groundlang.inference.end_states import EndStateNoise
-from groundlang.inference.likelihoods import DamagedEntry, cache_directory, layout_description, read_entry_json
+from groundlang.inference.cache_entries import EntryFolder
+from groundlang.inference.likelihoods import layout_description
 from groundlang.inference.shared_meaning import LayoutEvidence, evidence_space
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.logic.storage import write_atomically
 from groundlang.model.world import State
 
 __all__ = ["EVIDENCE_VERSION", "EvidenceCache", "evidence_key", "library_digest"]
@@ -101,9 +100,7 @@ def _checksum(key: str, contents: dict) -> str:
     return hashlib.sha256(f"{key} {text}".encode()).hexdigest()
 
 
-def _restore(data, key: str, library: TaskLibrary, noise: EndStateNoise) -> LayoutEvidence:
-    if data.get("key") != key:
-        raise ValueError("records another key")
+def _restore(data: dict, key: str, library: TaskLibrary, noise: EndStateNoise) -> LayoutEvidence:
     contents = {name: data[name] for name in ("goals", "values", "groundings", "floor", "new")}
     if data.get("checksum") != _checksum(key, contents):
         raise ValueError("checksum does not match the contents")
@@ -128,67 +125,35 @@ class EvidenceCache:
 
     def __init__(self, library: TaskLibrary, noise: EndStateNoise, cache_dir: str | os.PathLike | None | bool = None):
         self.library, self.noise = library, noise
-        self.root = None if cache_dir is False else cache_directory(cache_dir)
+        self.entries = EntryFolder(cache_dir, "evidence", "recomputed", logger)
         self.digest = library_digest(library)
-        self.hits = self.computed = self.damaged = 0
-        self._writable = True  # until a write fails: a cache that cannot be written is still read
-        self._first_damaged: tuple[Path, str] | None = None
         self._memory: OrderedDict[str, LayoutEvidence] = OrderedDict()
+
+    hits = property(lambda self: self.entries.hits)
+    computed = property(lambda self: self.entries.computed)
+    damaged = property(lambda self: self.entries.damaged)
 
     def evidence(self, start: State, end: State, max_states: int | None = None) -> LayoutEvidence:
         """The pair's LayoutEvidence; StateSpaceError (not cached) when its end cannot be reached."""
         key = evidence_key(start, end, self.digest, self.noise, evidence_space(start, end, max_states))
         if key in self._memory:
             self._memory.move_to_end(key)
-            self.hits += 1
+            self.entries.hits += 1
             return self._memory[key]
-        found = None
-        if self.root is not None:
-            path = self.root / "evidence" / key[:2] / f"{key}.json"
-            try:
-                found = self._read(path, key)
-            except DamagedEntry as exc:
-                self.damaged += 1
-                self._first_damaged = self._first_damaged or (path, str(exc))
-        if found is not None:
-            self.hits += 1
-        else:
+        found = self.entries.read(key, MAX_ENTRY_BYTES, "an evidence cache entry",
+                                  lambda data: _restore(data, key, self.library, self.noise))
+        if found is None:
             found = LayoutEvidence(start, end, self.library, self.noise, max_states)
             # What end habits learn from the pair, kept with it: a warm cache then grounds no layout's PFs.
             found.new_relations = new_relations(start, end, self.library)
-            self.computed += 1
-            if self.root is not None and self._writable:
-                self._write(path, key, found)
+            self.entries.computed += 1
+            contents = _contents(found)
+            self.entries.write(key, {**contents, "checksum": _checksum(key, contents)})
         self._memory[key] = found
         if len(self._memory) > REMEMBERED:
             self._memory.popitem(last=False)
         return found
 
-    def _read(self, path: Path, key: str) -> LayoutEvidence | None:
-        data = read_entry_json(path, MAX_ENTRY_BYTES, "an evidence cache entry")
-        if data is None:
-            return None
-        try:
-            return _restore(data, key, self.library, self.noise)
-        except KeyError as exc:
-            raise DamagedEntry(f"lacks its field {exc}") from None
-        except (ValueError, TypeError, AttributeError, RecursionError) as exc:
-            raise DamagedEntry(str(exc) or type(exc).__name__) from None
-
-    def _write(self, path: Path, key: str, evidence: LayoutEvidence) -> None:
-        contents = _contents(evidence)
-        entry = {"key": key, **contents, "checksum": _checksum(key, contents)}
-        try:
-            write_atomically(path, json.dumps(entry, separators=(",", ":")), durable=False, follow=False)
-        except OSError as exc:
-            logger.warning("evidence cache %s cannot be written (%s: %s); going on without writing to it",
-                           self.root, exc.filename or self.root, exc.strerror or exc)
-            self._writable = False
-
     def report(self) -> None:
         """One warning for damaged entries (how many, the first and why), one info line of counts."""
-        if self.damaged:
-            first, why = self._first_damaged
-            logger.warning("evidence cache: %d corrupt entr%s recomputed (first: %s: %s)", self.damaged,
-                           "y" if self.damaged == 1 else "ies", first, why)
-        logger.info("end-state evidence: %d pairs from the cache or repeated, %d computed", self.hits, self.computed)
+        self.entries.report("end-state evidence, pairs (from memory when repeated)")

@@ -32,8 +32,7 @@ from pathlib import Path
 from groundlang.grammar.lexicon import Lexicon
 from groundlang.grammar.logical_form import Clause, Entity, LogicalForm, Reading, Relation
 from groundlang.grammar.parser import parse
-from groundlang.inference.likelihoods import DamagedEntry, cache_directory, read_entry_json
-from groundlang.logic.storage import write_atomically
+from groundlang.inference.cache_entries import EntryFolder
 
 __all__ = ["PARSE_CACHE_VERSION", "ParseCache", "parse_key", "parser_digest"]
 
@@ -119,69 +118,38 @@ def _checksum(key: str, readings: list) -> str:
 class ParseCache:
     """Readings of commands, read from the cache folder or parsed and written there. ``cache_dir``: the
     folder (see the module docstring), None for the default, False for no cache. Counts ``hits``,
-    ``parsed`` and ``damaged`` entries; :meth:`report` logs them once."""
+    ``computed`` (parsed) and ``damaged`` entries; :meth:`report` logs them once."""
 
     def __init__(self, cache_dir: str | os.PathLike | None | bool = None):
-        self.root = None if cache_dir is False else cache_directory(cache_dir)
-        self.hits = self.parsed = self.damaged = 0
-        self._writable = True
-        self._first_damaged: tuple[Path, str] | None = None
+        self.entries = EntryFolder(cache_dir, "parses", "reparsed", logger)
+
+    hits = property(lambda self: self.entries.hits)
+    computed = property(lambda self: self.entries.computed)
+    damaged = property(lambda self: self.entries.damaged)
 
     def readings(self, command: str, weights: Mapping[str, float] | None, lexicon: Lexicon) -> tuple[Reading, ...]:
         """``parse(command, weights=weights, word_lexicon=lexicon)``'s readings; the parser's errors as it
         raises them."""
-        if self.root is None:
-            self.parsed += 1
-            return tuple(parse(command, weights=weights, word_lexicon=lexicon))
-        key = parse_key(command, weights, lexicon)
-        path = self.root / "parses" / key[:2] / f"{key}.json"
-        try:
-            found = self._read(path, key)
-        except DamagedEntry as exc:
-            self.damaged += 1
-            self._first_damaged = self._first_damaged or (path, str(exc))
-            found = None
-        if found is not None:
-            self.hits += 1
+        key = parse_key(command, weights, lexicon) if self.entries.root is not None else None
+        found = key and self.entries.read(key, MAX_ENTRY_BYTES, "a parse cache entry", lambda data: _restore_entry(data, key))
+        if found:
             return found
         readings = tuple(parse(command, weights=weights, word_lexicon=lexicon))
-        self.parsed += 1
-        if self._writable:
-            self._write(path, key, readings)
+        self.entries.computed += 1
+        if key:
+            plain = _plain(readings)
+            self.entries.write(key, {"readings": plain, "checksum": _checksum(key, plain)})
         return readings
-
-    def _read(self, path: Path, key: str) -> tuple[Reading, ...] | None:
-        data = read_entry_json(path, MAX_ENTRY_BYTES, "a parse cache entry")
-        if data is None:
-            return None
-        try:
-            if data.get("key") != key:
-                raise ValueError("records another key")
-            if data.get("checksum") != _checksum(key, data["readings"]):
-                raise ValueError("checksum does not match the readings")
-            readings = _restore(data["readings"], [Reading])
-            if not readings:
-                raise ValueError("holds no reading")
-            return readings
-        except KeyError as exc:
-            raise DamagedEntry(f"lacks its field {exc}") from None
-        except (ValueError, TypeError, RecursionError) as exc:
-            raise DamagedEntry(str(exc) or type(exc).__name__) from None
-
-    def _write(self, path: Path, key: str, readings: tuple[Reading, ...]) -> None:
-        plain = _plain(readings)
-        entry = {"key": key, "readings": plain, "checksum": _checksum(key, plain)}
-        try:
-            write_atomically(path, json.dumps(entry, separators=(",", ":")), durable=False, follow=False)
-        except OSError as exc:
-            logger.warning("parse cache %s cannot be written (%s: %s); going on without writing to it",
-                           self.root, exc.filename or self.root, exc.strerror or exc)
-            self._writable = False
 
     def report(self) -> None:
         """One warning for damaged entries (how many, the first and why), one info line of counts."""
-        if self.damaged:
-            first, why = self._first_damaged
-            logger.warning("parse cache: %d corrupt entr%s reparsed (first: %s: %s)", self.damaged,
-                           "y" if self.damaged == 1 else "ies", first, why)
-        logger.info("commands: %d readings from the parse cache, %d parsed", self.hits, self.parsed)
+        self.entries.report("commands' readings")
+
+
+def _restore_entry(data: dict, key: str) -> tuple[Reading, ...]:
+    if data.get("checksum") != _checksum(key, data["readings"]):
+        raise ValueError("checksum does not match the readings")
+    readings = _restore(data["readings"], [Reading])
+    if not readings:
+        raise ValueError("holds no reading")
+    return readings

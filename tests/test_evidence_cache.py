@@ -9,7 +9,7 @@ import logging
 
 import pytest
 
-from groundlang.inference import evidence_cache
+from groundlang.inference import cache_entries, evidence_cache
 from groundlang.inference.end_states import EndStateNoise
 from groundlang.inference.evidence_cache import EvidenceCache, evidence_key, library_digest
 from groundlang.inference.shared_meaning import LayoutEvidence, end_state_behaviour, evidence_space
@@ -113,7 +113,7 @@ def test_a_folder_that_cannot_be_written_is_a_warning(williams_commands, william
         writes.append(path)
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr(evidence_cache, "write_atomically", full)
+    monkeypatch.setattr(cache_entries, "write_atomically", full)
     cache = EvidenceCache(williams_library, EndStateNoise(), tmp_path)
     with caplog.at_level(logging.WARNING, logger="groundlang.inference.evidence_cache"):
         for start, end in _pairs(williams_commands):
@@ -130,7 +130,7 @@ def test_a_cache_that_cannot_be_written_is_still_read(williams_commands, william
     def full(path, data, **options):
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr(evidence_cache, "write_atomically", full)
+    monkeypatch.setattr(cache_entries, "write_atomically", full)
     cache = EvidenceCache(williams_library, EndStateNoise(), tmp_path)
     cache.evidence(*pairs[1])  # not cached: computed, its write fails
     cache.evidence(*pairs[0])

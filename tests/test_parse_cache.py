@@ -29,7 +29,7 @@ def _entries(root):
 def test_a_warm_cache_gives_the_parsers_readings_and_parses_nothing(tmp_path, monkeypatch):
     cold = ParseCache(tmp_path)
     readings = [cold.readings(c, None, WORDS) for c in COMMANDS]
-    assert cold.parsed == len(COMMANDS) and len(_entries(tmp_path)) == len(COMMANDS)
+    assert cold.computed == len(COMMANDS) and len(_entries(tmp_path)) == len(COMMANDS)
     assert readings == [tuple(parse(c, word_lexicon=WORDS)) for c in COMMANDS]
 
     def refuse(*args, **kwargs):
@@ -38,7 +38,7 @@ def test_a_warm_cache_gives_the_parsers_readings_and_parses_nothing(tmp_path, mo
     monkeypatch.setattr(parse_cache, "parse", refuse)
     warm = ParseCache(tmp_path)
     assert [warm.readings(c, None, WORDS) for c in COMMANDS] == readings  # every field, floats exactly
-    assert warm.hits == len(COMMANDS) and warm.parsed == 0
+    assert warm.hits == len(COMMANDS) and warm.computed == 0
 
 
 def test_the_key_follows_what_the_readings_depend_on():
@@ -105,3 +105,22 @@ def test_training_reads_its_commands_from_the_cache(williams_commands, williams_
     monkeypatch.setattr(parse_cache, "parse", lambda *a, **k: pytest.fail("parsed, not read from the cache"))
     warm = Learner(library=williams_library, cache_dir=tmp_path).observe(instances)
     assert warm == cold
+
+
+def test_a_folder_that_cannot_be_written_is_a_warning_and_still_read(tmp_path, monkeypatch, caplog):
+    from groundlang.inference import cache_entries
+
+    ParseCache(tmp_path).readings(COMMANDS[0], None, WORDS)
+    writes = []
+
+    def full(path, data, **options):
+        writes.append(path)
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(cache_entries, "write_atomically", full)
+    cache = ParseCache(tmp_path)
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.parse_cache"):
+        readings = [cache.readings(c, None, WORDS) for c in COMMANDS]
+    assert readings == [tuple(parse(c, word_lexicon=WORDS)) for c in COMMANDS]
+    assert len(writes) == 1 and (cache.hits, cache.computed) == (1, 3)  # tried once, then read only
+    assert len(caplog.records) == 1 and "cannot be written" in caplog.records[0].getMessage()
