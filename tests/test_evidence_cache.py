@@ -152,3 +152,18 @@ def test_repeated_pairs_are_computed_once_and_memory_is_bounded(williams_command
     for pair in pairs:
         cache.evidence(*pair)
     assert len(cache._memory) == 2 and cache.computed == 6  # the oldest forgotten: pairs[0] computed again
+
+
+def test_commands_that_share_their_pairs_are_scored_once(williams_commands, williams_library, monkeypatch):
+    """Workers shown the same pairs give commands with the same evidence objects: their behaviour terms are
+    computed once and are what each command's own computation gives."""
+    from groundlang.inference import shared_meaning
+
+    instances = training_instances(williams_commands, williams_library, cache_dir=False).instances
+    interps = [interpretations(i.initial_state, williams_library) for i in instances]
+    alone = [end_state_behaviour([i], [g], williams_library)[0] for i, g in zip(instances, interps)]
+    computed = []
+    real = shared_meaning._behaviour
+    monkeypatch.setattr(shared_meaning, "_behaviour", lambda *args: computed.append(1) or real(*args))
+    repeated = end_state_behaviour(instances * 3, interps * 3, williams_library)
+    assert repeated == alone * 3 and len(computed) == len(instances)
