@@ -468,13 +468,24 @@ def test_alignment_posterior_equals_summing_over_every_alignment(setting):
     assert checked > 20
 
 
-def test_parts_by_width_give_the_words_terms_and_gradients_of_the_whole_batch(setting):
+def _copy(batch):
+    """The batch without what it computed of itself (its parts)."""
+    from dataclasses import fields
+
+    return type(batch)(**{f.name: getattr(batch, f.name) for f in fields(batch)})
+
+
+def test_parts_by_width_give_the_words_terms_and_gradients_of_the_whole_batch(setting, monkeypatch):
     """``words_by_reading`` computes each part of instances with as many interpretations, roles and
     noun-phrase types as its own widest needs (``ParseBatch.by_width``): the same terms, and the same
     gradient (EM's expected counts), as the padded whole."""
+    from groundlang.model import parse_encoding
     from groundlang.model.encoding import PAD_LOGIT
 
     learner, _, batch, g = setting
+    assert len(_copy(batch).by_width()[0]) == 1  # four commands: a part's fixed cost outweighs the padding
+    monkeypatch.setattr(parse_encoding, "PART_OVERHEAD", 0)  # every width its own part
+    batch = _copy(batch)
     parts, order = batch.by_width()
     widths = sorted(int(p.type_mask.shape[1]) for p in parts)
     assert len(parts) >= 2 and widths[0] < batch.type_mask.shape[1]  # the test has something to cut
