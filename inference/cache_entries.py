@@ -31,6 +31,7 @@ class EntryFolder:
     def __init__(self, cache_dir: str | os.PathLike | None | bool, kind: str, made: str, logger: logging.Logger):
         self.root = None if cache_dir is False else cache_directory(cache_dir)
         self.kind, self.made, self.logger = kind, made, logger
+        self.new = made.removeprefix("re")  # what the count of entries made for the first time says
         self.hits = self.computed = self.damaged = 0
         self._writable = True  # until a write fails: a cache that cannot be written is still read
         self._first_damaged: tuple[Path, str] | None = None
@@ -80,10 +81,11 @@ class EntryFolder:
                                 self.root, exc.filename or self.root, exc.strerror or exc)
             self._writable = False
 
-    def report(self, counted: str) -> None:
-        """One warning for damaged entries (how many, the first and why), one info line of counts."""
+    def report(self, counted: str, hits: str = "from the cache") -> None:
+        """One warning for damaged entries (how many, the first and why), one info line of counts:
+        ``"<counted>: <n> <hits>, <n> computed"``."""
         if self.damaged:
             first, why = self._first_damaged
             self.logger.warning("%s cache: %d corrupt entr%s %s (first: %s: %s)", self.kind, self.damaged,
                                 "y" if self.damaged == 1 else "ies", self.made, first, why)
-        self.logger.info("%s: %d from the cache, %d %s", counted, self.hits, self.computed, self.made)
+        self.logger.info("%s: %d %s, %d %s", counted, self.hits, hits, self.computed, self.new)

@@ -156,4 +156,4 @@ class EvidenceCache:
 
     def report(self) -> None:
         """One warning for damaged entries (how many, the first and why), one info line of counts."""
-        self.entries.report("end-state evidence, pairs (from memory when repeated)")
+        self.entries.report("end-state evidence", "pairs from the cache or repeated")

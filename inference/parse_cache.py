@@ -143,7 +143,7 @@ class ParseCache:
 
     def report(self) -> None:
         """One warning for damaged entries (how many, the first and why), one info line of counts."""
-        self.entries.report("commands' readings")
+        self.entries.report("readings", "commands' from the parse cache")
 
 
 def _restore_entry(data: dict, key: str) -> tuple[Reading, ...]:
