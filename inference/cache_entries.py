@@ -41,8 +41,8 @@ class EntryFolder:
 
     def read(self, key: str, max_bytes: int, what: str, restore):
         """``restore(data)`` of the entry named ``key``, or None when there is none, the folder is off, or
-        the entry is damaged (counted). ``restore`` raises ValueError, TypeError, KeyError (or
-        DamagedEntry) for an entry it cannot trust."""
+        the entry is damaged (counted). ``restore`` raises ValueError, TypeError, KeyError, ArithmeticError
+        (a number too large for a float) or DamagedEntry for an entry it cannot trust."""
         if self.root is None:
             return None
         path = self.path(key)
@@ -59,7 +59,7 @@ class EntryFolder:
         except KeyError as exc:
             self._damaged(path, f"lacks its field {exc}")
             return None
-        except (ValueError, TypeError, AttributeError, RecursionError) as exc:
+        except (ValueError, TypeError, AttributeError, RecursionError, ArithmeticError) as exc:
             self._damaged(path, str(exc) or type(exc).__name__)
             return None
         self.hits += 1

@@ -23,11 +23,15 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+import math
 import os
+import unicodedata
 from collections.abc import Mapping
 from functools import cache
 from importlib.resources import files
 from pathlib import Path
+
+import lark
 
 from groundlang.grammar.lexicon import Lexicon
 from groundlang.grammar.logical_form import Clause, Entity, LogicalForm, Reading, Relation
@@ -70,7 +74,9 @@ def parser_digest() -> str:
 
 
 def parse_key(command: str, weights: Mapping[str, float] | None, lexicon: Lexicon) -> str:
-    """sha256 (hex) of what a command's readings depend on."""
+    """sha256 (hex) of what a command's readings depend on: besides the parser's own files, lark (whose
+    Earley parser the grammar package patches and whose forests it reads) and the Unicode tables the
+    tokeniser lowercases and splits words by."""
     description = {
         "version": PARSE_CACHE_VERSION,
         "command": command,
@@ -78,6 +84,8 @@ def parse_key(command: str, weights: Mapping[str, float] | None, lexicon: Lexico
         "weights": sorted((weights or {}).items()),
         "lexicon": sorted(lexicon.entries.items()),
         "parser": parser_digest(),
+        "lark": lark.__version__,
+        "unicode": unicodedata.unidata_version,
     }
     return hashlib.sha256(json.dumps(description, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
 
@@ -134,7 +142,7 @@ class ParseCache:
         found = key and self.entries.read(key, MAX_ENTRY_BYTES, "a parse cache entry", lambda data: _restore_entry(data, key))
         if found:
             return found
-        readings = tuple(parse(command, weights=weights, word_lexicon=lexicon))
+        readings = tuple(parse(command, max_readings=MAX_READINGS, weights=weights, word_lexicon=lexicon))
         self.entries.computed += 1
         if key:
             plain = _plain(readings)
@@ -147,9 +155,26 @@ class ParseCache:
 
 
 def _restore_entry(data: dict, key: str) -> tuple[Reading, ...]:
+    """The readings of an entry, checked for what the parser guarantees and the encoding relies on: at
+    most MAX_READINGS readings with probabilities in (0, 1] summing to one, relations' probabilities in
+    [0, 1], one command's words in every reading, and each noun phrase's words among them."""
     if data.get("checksum") != _checksum(key, data["readings"]):
         raise ValueError("checksum does not match the readings")
     readings = _restore(data["readings"], [Reading])
-    if not readings:
-        raise ValueError("holds no reading")
+    if not 0 < len(readings) <= MAX_READINGS:
+        raise ValueError(f"holds {len(readings)} readings, not 1 to {MAX_READINGS}")
+    if (not all(0 < r.probability <= 1 for r in readings)
+            or not math.isclose(sum(r.probability for r in readings), 1.0, abs_tol=1e-6)):
+        raise ValueError("its readings' probabilities are not a distribution")
+    words = readings[0].logical_form.words
+    for reading in readings:
+        form = reading.logical_form
+        if form.words != words:
+            raise ValueError("its readings are of different words")
+        if not all(0 <= r.probability <= 1 for r in form.relations):
+            raise ValueError("a relation's probability is not one")
+        if not all((set(e.modifiers) | {e.head}) - {None} <= set(words) for e in form.entities):
+            raise ValueError("a noun phrase has words the command does not")
+        if any(len(p) != 2 for c in form.clauses for p in c.preps) or any(len(a) != 3 for a in form.attachments):
+            raise ValueError("a preposition or attachment of the wrong shape")
     return readings

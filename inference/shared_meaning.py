@@ -185,6 +185,9 @@ def end_state_behaviour(instances: Sequence, interpretations: Sequence[Sequence]
         evidence = getattr(inst, "evidence", None)
         if not evidence or any(e.library is not library or e.noise != noise.key() for e in evidence):
             evidence = layout_evidence(pairs, library, noise, max_states)
+        if evidence is not getattr(inst, "evidence", None):  # made here for this instance alone: shared by none
+            out.append(_behaviour(inst.initial_state, group, evidence, library))
+            continue
         key = (*map(id, evidence), id(group))
         if key not in done:
             done[key] = (evidence, group, _behaviour(inst.initial_state, group, evidence, library))

@@ -167,3 +167,19 @@ def test_commands_that_share_their_pairs_are_scored_once(williams_commands, will
     monkeypatch.setattr(shared_meaning, "_behaviour", lambda *args: computed.append(1) or real(*args))
     repeated = end_state_behaviour(instances * 3, interps * 3, williams_library)
     assert repeated == alone * 3 and len(computed) == len(instances)
+
+
+def test_a_number_too_large_for_a_float_is_a_damaged_entry(williams_commands, williams_library, tmp_path, caplog):
+    start, end = _pairs(williams_commands)[0]
+    EvidenceCache(williams_library, EndStateNoise(), tmp_path).evidence(start, end)
+    (path,) = (tmp_path / "evidence").rglob("*.json")
+    data = json.loads(path.read_text())
+    data["floor"] = -(10 ** 400)  # passes "at most 0", then overflows a float; its checksum made to match
+    data["checksum"] = evidence_cache._checksum(data["key"], {k: data[k] for k in ("goals", "values", "groundings",
+                                                                                  "floor", "new")})
+    path.write_text(json.dumps(data))
+    cache = EvidenceCache(williams_library, EndStateNoise(), tmp_path)
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.evidence_cache"):
+        cache.evidence(start, end)
+        cache.report()
+    assert (cache.damaged, cache.computed) == (1, 1) and "1 corrupt entry recomputed" in caplog.records[0].getMessage()

@@ -124,3 +124,46 @@ def test_a_folder_that_cannot_be_written_is_a_warning_and_still_read(tmp_path, m
     assert readings == [tuple(parse(c, word_lexicon=WORDS)) for c in COMMANDS]
     assert len(writes) == 1 and (cache.hits, cache.computed) == (1, 3)  # tried once, then read only
     assert len(caplog.records) == 1 and "cannot be written" in caplog.records[0].getMessage()
+
+
+def test_the_cache_writes_every_field_of_a_reading():
+    from dataclasses import fields
+
+    for kind, spec in parse_cache._FIELDS.items():
+        assert [name for name, _ in spec] == [f.name for f in fields(kind)], kind.__name__
+
+
+def _probabilities(readings):
+    for r in readings:
+        r[1] = float("nan")
+
+
+def _huge(readings):
+    readings[0][1] = -(10 ** 400)
+
+
+def _foreign_word(readings):
+    readings[0][0][1][0][2] = ["unicorn"]  # the first noun phrase's modifiers: a word the command lacks
+
+
+def _nine(readings):
+    readings.extend([readings[0]] * (9 - len(readings)))
+
+
+@pytest.mark.parametrize("spoil", [_probabilities, _huge, _foreign_word, _nine])
+def test_an_entry_made_to_match_its_checksum_is_still_checked(tmp_path, spoil, caplog):
+    """The checksum catches damage, not an entry written on purpose: what the encoding relies on is checked
+    too, and such an entry is reparsed, not read (nor a traceback)."""
+    command = COMMANDS[0]
+    ParseCache(tmp_path).readings(command, None, WORDS)
+    key = parse_key(command, None, WORDS)
+    path = tmp_path / "parses" / key[:2] / f"{key}.json"
+    data = json.loads(path.read_text())
+    spoil(data["readings"])
+    data["checksum"] = parse_cache._checksum(key, data["readings"])
+    path.write_text(json.dumps(data))
+    cache = ParseCache(tmp_path)
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.parse_cache"):
+        assert cache.readings(command, None, WORDS) == tuple(parse(command, word_lexicon=WORDS))
+        cache.report()
+    assert cache.damaged == 1 and "1 corrupt entry reparsed" in caplog.records[0].getMessage()
