@@ -130,6 +130,15 @@ class Vocabulary:
             if len(index) != len(items):
                 twice = next(x for k, x in enumerate(items) if index[x] != k)
                 raise ValueError(f"a vocabulary's {what} name each entry once; {twice!r} is there twice")
+        # A task's roles index the rows of its alignment table: a task or a role the lists do not hold
+        # would size the tables otherwise than the globals trained with them.
+        for task, own in self.task_roles.items():
+            if task not in self._task_index:
+                raise ValueError(f"a vocabulary's task_roles name {task!r}, which is not one of its tasks")
+            stray = next((r for r in own if r not in self._role_index), None)
+            if stray is not None:
+                raise ValueError(f"a vocabulary's task_roles give {task!r} the role {stray!r}, which is not one "
+                                 "of its roles")
 
     @staticmethod
     def _intern(items: list[str], index: dict[str, int], new: Iterable[str]) -> None:

@@ -89,7 +89,7 @@ def _set_version(d: Path) -> None:
 
 
 def _drop_vocabulary_tasks(d: Path) -> None:
-    _edit_meta(d, lambda meta: meta["vocabulary"].pop("tasks"))
+    _edit_meta(d, lambda meta: (meta["vocabulary"].pop("tasks"), meta["vocabulary"].pop("task_roles")))
 
 
 def _globals(d: Path) -> dict:
@@ -133,6 +133,12 @@ MODEL_DIRS: dict[str, tuple[Callable[[Path], None], list[str]]] = {
         2, m["vocabulary"]["words"][1])), ["model files are incomplete or corrupt", "words name each entry once"]),
     "vocabulary with a number for a token": (lambda d: _edit_meta(d, lambda m: m["vocabulary"]["tokens"].append(7)),
                                              ["model files are incomplete or corrupt", "tokens are text; found 7"]),
+    "vocabulary whose task roles name another task": (
+        lambda d: _edit_meta(d, lambda m: m["vocabulary"]["task_roles"].__setitem__("flyToMoon", ["none"])),
+        ["model files are incomplete or corrupt", "task_roles name 'flyToMoon', which is not one of its tasks"]),
+    "vocabulary whose task roles name another role": (
+        lambda d: _edit_meta(d, lambda m: next(iter(m["vocabulary"]["task_roles"].values())).append("other:moon")),
+        ["model files are incomplete or corrupt", "the role 'other:moon', which is not one of its roles"]),
     "vocabulary without its lifted tasks": (_drop_vocabulary_tasks,
                                             ["model files are incomplete or corrupt",
                                              "the vocabulary lacks the lifted tasks ['agentToRoom'"]),
