@@ -139,12 +139,13 @@ class ParseCache:
         """``parse(command, weights=weights, word_lexicon=lexicon)``'s readings; the parser's errors as it
         raises them."""
         key = parse_key(command, weights, lexicon) if self.entries.root is not None else None
-        found = key and self.entries.read(key, MAX_ENTRY_BYTES, "a parse cache entry", lambda data: _restore_entry(data, key))
-        if found:
-            return found
+        if key is not None:
+            found = self.entries.read(key, MAX_ENTRY_BYTES, "a parse cache entry", lambda data: _restore_entry(data, key))
+            if found is not None:
+                return found
         readings = tuple(parse(command, max_readings=MAX_READINGS, weights=weights, word_lexicon=lexicon))
         self.entries.computed += 1
-        if key:
+        if key is not None:
             plain = _plain(readings)
             self.entries.write(key, {"readings": plain, "checksum": _checksum(key, plain)})
         return readings

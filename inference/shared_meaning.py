@@ -181,12 +181,11 @@ def end_state_behaviour(instances: Sequence, interpretations: Sequence[Sequence]
     # what its key names, so that no id is reused while the key stands.
     done: dict[tuple, tuple] = {}
     for inst, group in zip(instances, interpretations):
-        pairs = instance_pairs(inst)
         evidence = getattr(inst, "evidence", None)
         if not evidence or any(e.library is not library or e.noise != noise.key() for e in evidence):
-            evidence = layout_evidence(pairs, library, noise, max_states)
-        if evidence is not getattr(inst, "evidence", None):  # made here for this instance alone: shared by none
-            out.append(_behaviour(inst.initial_state, group, evidence, library))
+            # made here for this instance alone: shared by none
+            out.append(_behaviour(inst.initial_state, group, layout_evidence(instance_pairs(inst), library, noise,
+                                                                             max_states), library))
             continue
         key = (*map(id, evidence), id(group))
         if key not in done:

@@ -9,12 +9,12 @@ from __future__ import annotations
 import itertools
 import math
 from collections import Counter
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, replace
 
 import torch
 
 from groundlang.logic.classes import domain_classes
-from groundlang.model.encoding import _SHARED, PAD_LOGIT, Batch, Encoder, Observation, pad_rows
+from groundlang.model.encoding import PAD_LOGIT, Batch, Encoder, Observation, pad_rows
 from groundlang.model.interpretations import UNALIGNED_CLASSES, RoleBinding
 from groundlang.model.phrase_keys import PhraseKeys, backoff_prep_ids, bare_preposition, entity_words, is_referring
 from groundlang.model.vocabulary import Vocabulary, class_token, is_task_role
@@ -86,41 +86,40 @@ class ParseBatch(Batch):
             def widths(index):
                 return {"J": int(interps[index].max()), "V": int(roles[index].max()), "K": int(types[index].max())}
 
-            def cost(index):
-                w = widths(index)
-                return PART_OVERHEAD + len(index) * w["J"] * w["V"] * w["K"]
-
-            # Neighbouring widths are merged where a part's fixed cost outweighs the padding it saves (a
-            # small batch stays whole): the cheapest split of the sorted widths into runs, of 2^(b-1).
-            best = None
-            for cuts in itertools.product((False, True), repeat=len(groups) - 1):
-                runs, start = [], 0
-                for n, cut in enumerate(cuts, start=1):
-                    if cut:
-                        runs.append(torch.cat(groups[start:n]))
-                        start = n
-                runs.append(torch.cat(groups[start:]))
-                total = sum(cost(index) for index in runs)
-                if best is None or total < best[0]:
-                    best = (total, runs)
-            runs = best[1]
+            runs = _cheapest_runs(groups, lambda index: PART_OVERHEAD + len(index) * math.prod(widths(index).values()))
             parts = [self._narrowed(index, widths(index)) for index in runs]
             self.__dict__["_parts"] = (parts, torch.argsort(torch.cat(runs)))
         return self.__dict__["_parts"]
 
     def _narrowed(self, index: torch.Tensor, widths: dict[str, int]) -> "ParseBatch":
-        values = {}
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.name in _SHARED:
-                values[f.name] = value
-                continue
-            value = value[index]
-            for axis, letter in enumerate(self._AXES.get(f.name, ""), start=1):
+        """:meth:`subset` of ``index``, each padded axis cut to ``widths``."""
+        part = self.subset(index)
+        narrowed = {}
+        for name, axes in self._AXES.items():
+            value = getattr(part, name)
+            for axis, letter in enumerate(axes, start=1):
                 if letter in widths:
                     value = value.narrow(axis, 0, widths[letter])
-            values[f.name] = value
-        return type(self)(**values)
+            narrowed[name] = value
+        return replace(part, **narrowed)
+
+
+def _cheapest_runs(groups: list[torch.Tensor], cost) -> list[torch.Tensor]:
+    """The split of ``groups`` (instance indices, narrowest first) into runs of neighbours, each run one part,
+    with the least total ``cost(run)``: a part's fixed cost outweighs the padding that a small group saves
+    (a small batch stays whole). Every split is tried: 2^(groups - 1), and widths 1, 2, 4, 8, 16 make 16."""
+    best, best_cost = None, math.inf
+    for cuts in itertools.product((False, True), repeat=len(groups) - 1):
+        runs, start = [], 0
+        for n, cut in enumerate(cuts, start=1):
+            if cut:
+                runs.append(torch.cat(groups[start:n]))
+                start = n
+        runs.append(torch.cat(groups[start:]))
+        total = sum(cost(run) for run in runs)
+        if total < best_cost:
+            best, best_cost = runs, total
+    return best
 
 
 def is_mentionable(rb: RoleBinding, task_objects: bool = True) -> bool:
