@@ -39,10 +39,8 @@ def check_bdm(args: argparse.Namespace) -> int:
     pairs = [(c, p) for c in commands for p in c.pairs]
     layouts = {p.start.layout for _, p in pairs}
     sizes = Counter((p.start.layout.width - 1, p.start.layout.height - 1, len(p.start.toys)) for _, p in pairs)
-    print(f"corpus: {', '.join(map(str, paths))} (palette {palette})")
-    print(f"commands: {len(commands)} ({len({c.text for c in commands})} distinct texts)")
-    print(f"pairs: {len(pairs)}; distinct layouts: {len(layouts)}")
-    print("pairs by grid and blocks: " + ", ".join(f"{w}x{h} with {k}: {n}" for (w, h, k), n in sorted(sizes.items())))
+    # Everything is computed before anything is printed: a pair that cannot be read as a task (a layout
+    # too large to tabulate) is then one error line, not a summary cut off by it.
     unreachable, unchecked = [], 0
     for command, pair in pairs:
         found = reachable(pair.start, pair.end)
@@ -50,11 +48,15 @@ def check_bdm(args: argparse.Namespace) -> int:
             unchecked += 1
         elif not found:
             unreachable.append((command, pair))
+    empty = [c for c in commands if not command_task(c, library)]
+    print(f"corpus: {', '.join(map(str, paths))} (palette {palette})")
+    print(f"commands: {len(commands)} ({len({c.text for c in commands})} distinct texts)")
+    print(f"pairs: {len(pairs)}; distinct layouts: {len(layouts)}")
+    print("pairs by grid and blocks: " + ", ".join(f"{w}x{h} with {k}: {n}" for (w, h, k), n in sorted(sizes.items())))
     print(f"pairs whose end state cannot be reached from the start: {len(unreachable)}")
     for command, pair in unreachable:
         print(f"  {command.path}, line {pair.line}: {command.text!r}")
     print(f"pairs not checked (too large even for the relevance abstraction, or not reached in it): {unchecked}")
-    empty = [c for c in commands if not command_task(c, library)]
     print(f"commands whose pairs show no task: {len(empty)}")
     for c in empty[:20]:
         print(f"  {c.path}, line {c.line}: {c.text!r}")

@@ -401,6 +401,11 @@ ROWS += [
         ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model", "--cache-dir", ""),
         pieces=("--cache-dir: empty; name a folder",), absent=("{tmp}/model",)),
 ]
+ROWS.append(Row("input/check a .bdm whose layout is too large to tabulate: the error alone, no summary cut off by it",
+                ("check", str(BAD / "too_large_to_tabulate.bdm")),
+                pieces=("too_large_to_tabulate.bdm, line 2: this layout has 9,801 walkable cells; PFs are tabulated "
+                        "for at most 4,096",),
+                check=lambda out: _has("", out)))
 ROWS.append(Row("input/a task library that does not exist", (*_TASKS, "{tmp}/nope.lp"),
                 pieces=("groundlang tasks: error: {tmp}/nope.lp: No such file or directory",)))
 ROWS.append(Row("input/a folder where a state file is expected", ("tasks", str(FIXTURES), "--palette", "sokoban"),
