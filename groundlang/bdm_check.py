@@ -2,9 +2,10 @@
 
 Reports commands, (start, end) pairs and distinct layouts; every pair whose end state cannot be reached
 from its start state under the project's dynamics (file and line); pairs that cannot be checked (too
-large even for the relevance abstraction, or not reached in it); and commands whose pairs show no task (nothing that
-changed holds in every end state: groundlang.pair_tasks). Exit 1 when a pair is unreachable, unless
-``--skip-inconsistent``.
+large even for the relevance abstraction, or not reached in it); commands whose pairs show no task
+(nothing that changed holds in every end state: groundlang.pair_tasks); and, over the commands whose text
+is given more than once, how many one task per text could get right (``pair_tasks.text_agreement``: the
+labels' noise). Exit 1 when a pair is unreachable, unless ``--skip-inconsistent``.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from importlib.resources import files
 
 from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.pair_tasks import command_task, reachable
+from groundlang.pair_tasks import command_task, reachable, text_agreement
 
 __all__ = ["check_bdm", "default_library"]
 
@@ -48,7 +49,8 @@ def check_bdm(args: argparse.Namespace) -> int:
             unchecked += 1
         elif not found:
             unreachable.append((command, pair))
-    empty = [c for c in commands if not command_task(c, library)]
+    tasks = [command_task(c, library) for c in commands]
+    empty = [c for c, task in zip(commands, tasks) if not task]
     print(f"corpus: {', '.join(map(str, paths))} (palette {palette})")
     print(f"commands: {len(commands)} ({len({c.text for c in commands})} distinct texts)")
     print(f"pairs: {len(pairs)}; distinct layouts: {len(layouts)}")
@@ -62,6 +64,11 @@ def check_bdm(args: argparse.Namespace) -> int:
         print(f"  {c.path}, line {c.line}: {c.text!r}")
     if len(empty) > 20:
         print(f"  ... and {len(empty) - 20} more")
+    texts, shared, covered = text_agreement(commands, tasks)
+    if shared:
+        print(f"commands whose text another command shares: {shared} ({texts} text{'' if texts == 1 else 's'}); one task per text does what "
+              f"the pairs of at most {covered} of them show ({100 * covered / shared:.1f}%), a bound for any reader "
+              f"of the words alone")
     if unreachable and not args.skip_inconsistent:
         print(f"groundlang check: {len(unreachable)} unreachable pairs (use --skip-inconsistent to skip them)",
               file=sys.stderr)

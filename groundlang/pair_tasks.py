@@ -22,7 +22,8 @@ from groundlang.model.relevance import AbstractStateSpace, state_space_for
 from groundlang.model.statespace import StateSpaceError
 from groundlang.model.world import State
 
-__all__ = ["lifted_facts", "pair_task", "command_task", "satisfies", "reachable", "REACHABILITY_MAX_STATES"]
+__all__ = ["lifted_facts", "pair_task", "command_task", "satisfies", "reachable", "covers", "text_agreement",
+           "REACHABILITY_MAX_STATES"]
 
 # Upper bound (the enumerator's estimate) on the states a reachability check may enumerate: the 8x8
 # layouts with three blocks estimate 2.4 million and reach about 10^4; the 16x16 ones estimate 10^9 and
@@ -83,6 +84,36 @@ def command_task(command, library: TaskLibrary | None = None) -> frozenset[Atom]
     """:func:`pair_task` of a ``.bdm`` command's pairs, a layout it cannot read named by file and line."""
     return pair_task([(p.start, p.end) for p in command.pairs], library,
                      [f"{command.path}, line {p.line}" for p in command.pairs])
+
+
+def _by_relation(task: frozenset[Atom]) -> dict[str, set[tuple]]:
+    out: dict[str, set[tuple]] = {}
+    for atom in task:
+        out.setdefault(atom.predicate, set()).add(atom.args)
+    return out
+
+
+def covers(task: frozenset[Atom], other: frozenset[Atom]) -> bool:
+    """Whether doing what ``task`` shows (one command's pairs) would do what ``other`` shows: each relation of
+    ``other`` is one of ``task``'s, with a way of saying its objects in common (``agentInRoom(agent,
+    roomIsRed)`` in both). Lifted facts name objects by description, so this is generous: the red room
+    of one layout need not be the largest room of another."""
+    mine, theirs = _by_relation(task), _by_relation(other)
+    return all(relation in mine and mine[relation] & said for relation, said in theirs.items())
+
+
+def text_agreement(commands, tasks) -> tuple[int, int, int]:
+    """How far commands that share a text (lower-cased, stripped) agree on what their pairs show:
+    ``(texts, commands, covered)`` over the texts given more than once, ``covered`` the commands that the
+    best single task per text :func:`covers`. A reader of the words alone answers a text one way, so it can
+    be right about at most ``covered`` of them: the rest is noise in the labels (a worker who described
+    one pair, named a wrong colour, or wrote "move to chair" for a chair pushed into a room)."""
+    by_text: dict[str, list[frozenset[Atom]]] = {}
+    for command, task in zip(commands, tasks):
+        by_text.setdefault(command.text.strip().lower(), []).append(task)
+    shared = [group for group in by_text.values() if len(group) > 1]
+    covered = sum(max(sum(covers(best, t) for t in group) for best in set(group)) for group in shared)
+    return len(shared), sum(map(len, shared)), covered
 
 
 def satisfies(state: State, task: frozenset[Atom], library: TaskLibrary | None = None) -> bool:

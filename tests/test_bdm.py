@@ -11,7 +11,7 @@ import pytest
 from groundlang.bdm import format_bdm_state, parse_bdm_state, read_bdm
 from groundlang.corpus import CorpusError, read_initial_state
 from groundlang.logic.atoms import Atom
-from groundlang.pair_tasks import pair_task, reachable, satisfies
+from groundlang.pair_tasks import covers, pair_task, reachable, satisfies
 
 FIXTURE = Path(__file__).parent / "fixtures" / "williams2018"
 SHARED = Path(__file__).parent.parent.parent / "shared" / "data" / "williams2018" / "train"
@@ -283,3 +283,30 @@ def test_a_layout_too_large_to_tabulate_is_named_by_file_and_line_before_trainin
         assert len(err.strip().splitlines()) == 1
         if command[0] == "evaluate":
             assert out == ""  # refused with nothing on stdout: no training summary, no figures
+
+
+def test_check_bounds_what_a_reader_of_words_could_get_right(tmp_path):
+    """Commands that share a text but whose pairs show different tasks: one answer per text can do what at most
+    one group of them shows. Copies that agree count in full; a text given once is not counted."""
+    largest, chair = (FIXTURE / "small.bdm").read_text(encoding="utf-8").split("\n\n")
+    chair_body = chair.split("\n", 1)[1]
+    noisy = "\n\n".join([largest, largest, "go to the largest room\n" + chair_body, "go next to the chair\n" + chair_body])
+    (tmp_path / "noisy.bdm").write_text(noisy, encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(tmp_path / "noisy.bdm")],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert ("commands whose text another command shares: 3 (1 text); one task per text does what the pairs of "
+            "at most 2 of them show (66.7%)") in done.stdout
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(FIXTURE / "small.bdm")],
+                          capture_output=True, text=True)
+    assert "another command shares" not in done.stdout  # no text is given twice
+
+
+def test_covers_asks_each_relation_with_a_description_in_common():
+    red = Atom("agentInRoom", ("agent", "roomIsRed"))
+    large = Atom("agentInRoom", ("agent", "roomIsLargest"))
+    beside = Atom("agentNextToToy", ("agent", "toyIsChair"))
+    assert covers(frozenset({red, large}), frozenset({large}))  # one way of saying the room in common
+    assert covers(frozenset({red, beside}), frozenset({red}))  # doing more still does it
+    assert not covers(frozenset({red}), frozenset({red, beside}))  # a relation it does not do
+    assert not covers(frozenset({red}), frozenset({large}))  # the same relation, nothing said alike
