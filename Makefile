@@ -12,7 +12,7 @@ $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet "torch==2.13.0"
-	$(BIN)/python -m pip install --quiet -e ".[test,progress,gym,notebooks,ray]"
+	$(BIN)/python -m pip install --quiet -e ".[test,progress,plot,gym,notebooks,ray]"
 	touch $(STAMP)
 
 demo: $(STAMP)

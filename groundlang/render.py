@@ -197,11 +197,17 @@ def picture_title(command: str, goal_words: str, goal_ids: str, outcome: str | N
 
 def picture_format(path: str | Path) -> str:
     """The image format of a picture's path, from its suffix ("png" without one); ValueError unless png,
-    svg or pdf. Commands ask before their work, :func:`save_picture` again when it writes."""
+    svg or pdf, and unless matplotlib (the ``plot`` extra) is installed. Commands ask before their work,
+    :func:`save_picture` again when it writes."""
     path = Path(path)
     fmt = path.suffix.lstrip(".").lower() or "png"
     if fmt not in ("png", "svg", "pdf"):
         raise ValueError(f"{path}: picture format {fmt!r} is not supported; expected .png, .svg or .pdf")
+    try:
+        import matplotlib  # noqa: F401  (an optional extra: asked here, before any work)
+    except ImportError:
+        raise ValueError(f"{path}: drawing a picture needs matplotlib, an optional extra: "
+                         "pip install 'groundlang[plot]'") from None
     return fmt
 
 

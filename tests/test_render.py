@@ -190,3 +190,23 @@ def test_picture_titles_quote_the_command_and_give_the_goal_in_words_with_its_id
         "\u2192 the yellow star in the red room \u2014 toyInRoom(block0, room2)")
     assert picture_title("go", "", "agentInRoom(agent0, room1)", "reached").endswith(
         "\u2192 agentInRoom(agent0, room1): reached")
+
+
+def test_without_matplotlib_pictures_are_refused_in_one_line_and_the_rest_runs(tmp_path):
+    """matplotlib is the optional ``plot`` extra: without it ``--out`` says what to install before any work,
+    and the commands that draw nothing run (the subprocess hides matplotlib as an uninstalled package)."""
+    from pathlib import Path
+    example = Path(__file__).parent.parent / "groundlang" / "examples" / "star2red_0.txt"
+    hide = "import sys; sys.modules['matplotlib'] = None; from groundlang.cli import main; sys.exit(main(sys.argv[1:]))"
+    picture = tmp_path / "star.png"
+    done = subprocess.run([sys.executable, "-c", hide, "--quiet", "show", str(example), "--palette", "sokoban",
+                           "--out", str(picture)], capture_output=True, text=True)
+    assert done.returncode == 2 and done.stdout == "" and not picture.exists()
+    assert done.stderr == (f"groundlang show: error: {picture}: drawing a picture needs matplotlib, an optional "
+                           "extra: pip install 'groundlang[plot]'\n")
+    done = subprocess.run([sys.executable, "-c", hide, "--quiet", "show", str(example), "--palette", "sokoban"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and "command: push the star into the red room" in done.stdout, done.stderr
+    done = subprocess.run([sys.executable, "-c", hide, "--quiet", "tasks", str(example), "--palette", "sokoban"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and "toyToRoom" in done.stdout, done.stderr
