@@ -115,7 +115,9 @@ def read_word_file(path: str | Path) -> dict[str, tuple[str, ...]]:
         raise LexiconError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); a word file is "
                            "text with `CATEGORY: word word ...` lines") from None
     entries: dict[str, list[str]] = {}
-    for number, line in enumerate(text.splitlines(), 1):
+    # Split where an editor ends a line (LF, CRLF, CR), not at the other separators str.splitlines knows
+    # (U+2028, form feed, NEL): a comment may hold one, and every line number after it would shift.
+    for number, line in enumerate(re.split(r"\r\n|\r|\n", text), 1):
         content = line.split("#", 1)[0].strip()
         if not content:
             continue

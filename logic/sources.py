@@ -172,6 +172,12 @@ def _parsed(name: str, text: str, allow_scripts: bool) -> tuple:
         raise AspScriptRefused(
             f"{source.name}:{line}: #include is not allowed; pass the included file as another source"
         )
+    # clingo reads the text as a C string: a NUL would end it there, and what follows would silently not be
+    # part of the program.
+    nul = source.text.find("\x00")
+    if nul >= 0:
+        raise AspSyntaxError(f"{source.name}:{source.text.count(chr(10), 0, nul) + 1}: a NUL byte; ASP text has "
+                             "none (clingo would stop reading the file there)")
     # clingo's lexer reports a non-ASCII character one byte at a time, and the
     # half character in its message aborts the process (a decode error inside
     # a C callback): refuse such text here, with the position.
@@ -199,5 +205,9 @@ def _parsed(name: str, text: str, allow_scripts: bool) -> tuple:
                 "allow them only for programs you trust "
                 "(allow_scripts=True in Python; --allow-scripts of tasks and domain)"
             )
-        _relocate(stm, source.name)
+        try:
+            _relocate(stm, source.name)
+        except RecursionError:  # walked in Python: a term nested deeper than its stack (f(f(...)), 1+1+...)
+            raise AspSyntaxError(f"{source.name}:{stm.location.begin.line}: a term nested too deeply (more than "
+                                 "about a few hundred levels of parentheses or operators)") from None
     return tuple(statements)

@@ -125,6 +125,8 @@ def test_a_users_word_file_adds_a_noun_and_a_multiword_preposition(tmp_path):
     # an entry the tokeniser would split at a sign can never be read; a word, a clitic or one sign can
     ("NOUN: mug o'clock 're &\nNOUN: !!!\n", 2, "NOUN word '!!!' is not a word the tokeniser reads"),
     ("NOUN: a_b c-d e.f\n", 1, "NOUN word 'e.f' is not a word the tokeniser reads"),
+    # a comment may hold a separator str.splitlines would end a line at: the lines are an editor's
+    ("# a\u2028comment and\x0cthis\x85too\nNOUN: mug\nmug sink\n", 3, "got 'mug sink'"),
 ])
 def test_a_malformed_word_file_is_one_line_naming_file_and_line(tmp_path, text, line, expected):
     path = tmp_path / "bad.words"
