@@ -15,9 +15,16 @@ import torch
 
 from groundlang.model.parse_encoding import ParseBatch
 
-__all__ = ["MENTION_SUBSETS_PER_BLOCK", "mention_factor"]
+__all__ = ["MENTION_SUBSETS_PER_BLOCK", "MAX_MENTIONABLE", "MentionLimitError", "mention_factor"]
 
 MENTION_SUBSETS_PER_BLOCK = 64  # subsets of mentionable objects summed at once by the mention factor
+# The factor sums over the subsets of the objects a command could name (every block, and the task's other
+# objects): 2^16 subsets take seconds; each object more doubles time and memory (26 blocks: gigabytes).
+MAX_MENTIONABLE = 16
+
+
+class MentionLimitError(ValueError):
+    """A layout with more objects a command could name than the mention factor sums over."""
 
 
 def mention_factor(g: dict, batch: ParseBatch, joint: torch.Tensor, entities: torch.Tensor,
@@ -44,6 +51,11 @@ def mention_factor(g: dict, batch: ParseBatch, joint: torch.Tensor, entities: to
     cover_mask = torch.gather(cover_mask, 1, order)
     cover_slot = torch.gather(batch.cover_slot[real_i, real_j], 1, order)  # [N, G]
     covered = cover_mask.sum(1)  # [N]
+    most = int(covered.max()) if len(covered) else 0
+    if most > MAX_MENTIONABLE:
+        raise MentionLimitError(f"{most} objects a command could name in one layout (its blocks and the task's "
+                                f"room); the mention model sums over their subsets and reads at most "
+                                f"{MAX_MENTIONABLE} (2^{MAX_MENTIONABLE} subsets)")
     total = torch.ones((len(real_i), entities.shape[-1]), dtype=torch.float64)
     for c in covered.unique().tolist():
         if c == 0:
