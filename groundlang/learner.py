@@ -38,7 +38,7 @@ from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
 from groundlang.learner_state import (check_count, check_state, check_training_options, learner_from_state,
                                        learner_state)
-from groundlang.model_io import read_model, write_model
+from groundlang.model_io import check_parameter_bound, read_model, write_model
 from groundlang.results import FollowResult, Posterior
 from groundlang.training_vocabulary import build_vocabulary, palette_schema, schema_words, word_files_beside
 from groundlang.wording import goal_phrase
@@ -226,7 +226,13 @@ class Learner:
                 observations = self.observe(instances, progress=progress)
             if init is None or self.vocab is None:
                 palettes = sorted({inst.initial_state.layout.palette for inst in instances}, key=lambda p: p.name)
-                self.vocab = self._build_vocabulary(observations, palettes)
+                vocab = self._build_vocabulary(observations, palettes)
+                try:
+                    check_parameter_bound(vocab)
+                except ValueError as exc:
+                    raise ValueError(f"the corpus cannot be learned from: {exc} (a model could not be loaded "
+                                     "back): fewer distinct words, or a smaller corpus") from None
+                self.vocab = vocab
                 self.palettes = [{"name": p.name, "colours": list(p.colours), "shapes": list(p.shapes)}
                                  for p in palettes]
                 init = None

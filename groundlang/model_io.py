@@ -39,8 +39,8 @@ import torch
 from groundlang.interrupt import deferred_interrupts
 from groundlang.logic import storage
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "write_model", "read_model",
-           "signed"]
+__all__ = ["FORMAT", "FORMAT_VERSION", "ModelFormatError", "check_model_destination", "check_parameter_bound",
+           "write_model", "read_model", "signed"]
 
 FORMAT = "groundlang-model"
 FORMAT_VERSION = 16  # 2: mention and arity globals; 3: transitive prepositions, spatial PF tokens; 4: rooms in the mention model; 5: alignment per lifted task; 6: last-phrase keys; 7: alignment and arity tables per lifted task, not per token; 8: arity per clause; 9: alignment tables span the roles a task offers (vocabulary task_roles), only referring phrases name objects; 10: verbs of negated clauses are frame words; 11: the start room role (other:start); 12: "|last" passes over verb-attached "from" and "with" phrases; 13: the words added to the lexicon (``lexicon``), multiword prepositions joined into one token; 14: content-named tensor file, palettes recorded; 15: model.json records the hash of its own fields (content_sha256); 16: end habits (end_habits)
@@ -254,14 +254,14 @@ def _reason(exc: BaseException) -> str:
     return " ".join(f"{type(exc).__name__}: {exc}".split())[:300]
 
 
-def _expected_globals(learner) -> dict:
-    """The globals a model of this vocabulary and language model has (shapes and dtypes), sized before
-    anything is built: a crafted vocabulary of 10^5 words made the prior tables alone take 10 GB."""
-    import pyro.poutine
-
+def check_parameter_bound(vocab) -> dict:
+    """The sizes of the globals of a model of ``vocab`` (``generative.global_sizes``); ValueError when they
+    could hold more than ``MAX_GLOBAL_ELEMENTS`` parameters. Loading asks it of a saved vocabulary before
+    anything is built (a crafted one of 10^5 words made the prior tables alone take 10 GB); training asks it
+    of the corpus's before the fit, so that no model is fitted, or written, that could not be loaded."""
     from groundlang.model.generative import global_sizes
 
-    sizes = global_sizes(learner.vocab)
+    sizes = global_sizes(vocab)
     tokens, words, roles = sizes["num_tokens"], sizes["num_words"], sizes["num_roles"]
     tasks, preps = sizes["num_tasks"], sizes["num_preps"]
     # phi [tokens, words] is the largest table; alignment tables are at most [tasks * preps, roles].
@@ -270,6 +270,15 @@ def _expected_globals(learner) -> dict:
         raise ValueError(f"the vocabulary ({tokens} tokens, {words} words, {roles} roles, {preps} prepositions, "
                          f"{tasks} tasks) implies up to {bound:,} parameters; at most {MAX_GLOBAL_ELEMENTS:,} "
                          "are loaded")
+    return sizes
+
+
+def _expected_globals(learner) -> dict:
+    """The globals a model of this vocabulary and language model has (shapes and dtypes), sized before
+    anything is built (:func:`check_parameter_bound`)."""
+    import pyro.poutine
+
+    sizes = check_parameter_bound(learner.vocab)
     with pyro.poutine.block():
         return learner.lm.sample_globals(**sizes)
 

@@ -419,3 +419,20 @@ def test_damage_to_model_json_is_refused(learners, tmp_path, damage):
         Learner.load(model)
     (model / "model.json").write_text(json.dumps(signed({k: v for k, v in json.loads(text).items()})))
     Learner.load(model)  # written on purpose, and still valid: it loads
+
+
+def test_train_refuses_a_corpus_whose_model_could_not_be_loaded_back(tmp_path, capsys, monkeypatch):
+    """A corpus of enough distinct words implies more parameters than a model may hold when loaded: training
+    says so in one line before the fit and writes nothing (it had fitted, written a model its own loader then
+    refused, and with more words run out of memory). The bound is lowered here so the shipped corpus meets it."""
+    import groundlang.model_io as model_io
+
+    monkeypatch.setattr(model_io, "MAX_GLOBAL_ELEMENTS", 2_000)
+    out = tmp_path / "model"
+    code = main(["--quiet", "train", str(example_corpus_path()), "--palette", "sokoban", "-o", str(out),
+                 "--cache-dir", str(tmp_path / "cache")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith("groundlang train: error: the corpus cannot be learned from: the vocabulary (")
+    assert "parameters; at most 2,000 are loaded (a model could not be loaded back)" in err
+    assert not out.exists()
