@@ -130,6 +130,16 @@ class Vocabulary:
             if len(index) != len(items):
                 twice = next(x for k, x in enumerate(items) if index[x] != k)
                 raise ValueError(f"a vocabulary's {what} name each entry once; {twice!r} is there twice")
+        # The maps are read where a word is looked up, long after loading: one that is not text to text is
+        # refused here ("aliases": {"red": 5} broke spelling correction with a TypeError at follow).
+        for what, mapping in (("aliases", self.aliases), ("names", self.names),
+                              ("name_families", self.name_families), ("kinds", self.kinds)):
+            if not isinstance(mapping, dict) or not all(isinstance(k, str) and isinstance(v, str)
+                                                        for k, v in mapping.items()):
+                raise ValueError(f"a vocabulary's {what} map text to text")
+        for task, own in self.task_roles.items():
+            if not all(isinstance(r, str) for r in own):
+                raise ValueError(f"a vocabulary's task_roles give {task!r} roles that are not text")
         # A task's roles index the rows of its alignment table: a task or a role the lists do not hold
         # would size the tables otherwise than the globals trained with them.
         for task, own in self.task_roles.items():

@@ -139,6 +139,12 @@ MODEL_DIRS: dict[str, tuple[Callable[[Path], None], list[str]]] = {
     "vocabulary whose task roles name another role": (
         lambda d: _edit_meta(d, lambda m: next(iter(m["vocabulary"]["task_roles"].values())).append("other:moon")),
         ["model files are incomplete or corrupt", "the role 'other:moon', which is not one of its roles"]),
+    "vocabulary aliasing a word to a number": (
+        lambda d: _edit_meta(d, lambda m: m["vocabulary"]["aliases"].__setitem__("red", 5)),
+        ["model files are incomplete or corrupt", "a vocabulary's aliases map text to text"]),
+    "vocabulary naming a token by a list": (
+        lambda d: _edit_meta(d, lambda m: m["vocabulary"]["names"].__setitem__("CLASS:door", [1])),
+        ["model files are incomplete or corrupt", "a vocabulary's names map text to text"]),
     "vocabulary without its lifted tasks": (_drop_vocabulary_tasks,
                                             ["model files are incomplete or corrupt",
                                              "the vocabulary lacks the lifted tasks ['agentToRoom'"]),
