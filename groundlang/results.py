@@ -39,6 +39,14 @@ class Posterior:
     reading_probabilities: np.ndarray | None = None  # [R] posterior over readings
     groups: list[GoalGroup] | None = None
 
+    def __post_init__(self) -> None:
+        # A model whose tables pass the loader's checks (finite numbers of the right shapes) may still not
+        # be probabilities (zeros, negatives): a NaN here would make every confidence NaN, and NaN < 0.7 is
+        # false, so it would act. Refused where it shows.
+        if not np.isfinite(np.asarray(self.probabilities, dtype=float)).all():
+            raise ValueError(f"the model gives no posterior for {self.command!r}: its probabilities are not "
+                             "finite numbers (tables that are not distributions: a damaged or edited model)")
+
     def ranked(self) -> list[tuple[float, Interpretation]]:
         order = np.argsort(-self.probabilities, kind="stable")
         return [(float(self.probabilities[j]), self.interpretations[j]) for j in order]

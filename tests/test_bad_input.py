@@ -438,6 +438,12 @@ ROWS.append(Row("input/a bare --library name the package does not ship", (*_TASK
                 pieces=("groundlang tasks: error: taskz: no such file, nor a library the package ships (tasks, "
                         "williams2018)",)))
 
+ROWS.append(Row("model/every table zeros (finite, so loaded, but no distribution): follow refuses, never acts",
+                _follow("go to the red room", NOVEL, "--out", "{tmp}/picture.png"),
+                pieces=("the model gives no posterior for 'go to the red room'", "not finite numbers"),
+                broken=lambda d: _with(d, **{k: np.zeros_like(v) for k, v in _globals(d).items()}),
+                absent=("{tmp}/picture.png",)))
+
 # Model directories, through follow and lexicon.
 for _case, (_make, _pieces) in MODEL_DIRS.items():
     ROWS += [
