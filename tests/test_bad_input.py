@@ -423,7 +423,11 @@ ROWS.append(Row("input/check a .bdm whose layout is too large to tabulate: the e
 ROWS.append(Row("input/a task library that does not exist", (*_TASKS, "{tmp}/nope.lp"),
                 pieces=("groundlang tasks: error: {tmp}/nope.lp: No such file or directory",)))
 ROWS.append(Row("input/a folder where a state file is expected", ("tasks", str(FIXTURES), "--palette", "sokoban"),
-                pieces=(f"groundlang tasks: error: {FIXTURES}: Is a directory",)))
+                pieces=(f"groundlang tasks: error: {FIXTURES}: not a regular file (a folder, a FIFO or a device)",)))
+# Without --palette too: what is wrong with the path comes before asking for a palette it would not need.
+ROWS.append(Row("input/a folder named like a state file, no palette", ("show", "{tmp}"),
+                pieces=("groundlang show: error: {tmp}: not a regular file",)))
+
 ROWS.append(Row("input/evaluate --novel-envs folder missing",
                 ("evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban",
                  "--labels", str(FIXTURES / "sokoban" / "labels.csv"), "--novel-envs", "{tmp}/absent"),
@@ -780,3 +784,11 @@ def test_operating_system_errors_read_path_and_reason():
         "out/r.json: Is a directory")
     assert _said(FileExistsError("out: no free temporary name for r.json in 100 tries")) == (
         "out: no free temporary name for r.json in 100 tries")  # our own message, kept
+
+
+@pytest.mark.parametrize("command", ["show", "tasks"])
+def test_a_state_file_that_is_a_symbolic_link_loop_is_said_to_loop(command, tmp_path, capsys):
+    loop = tmp_path / "loop.bdm"
+    loop.symlink_to(loop)
+    assert main(["--quiet", command, str(loop)]) == 2
+    assert capsys.readouterr().err == f"groundlang {command}: error: {loop}: Too many levels of symbolic links\n"

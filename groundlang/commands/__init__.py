@@ -8,6 +8,8 @@ match the library's.
 import argparse
 import json
 import math
+import os
+import stat
 from pathlib import Path
 
 from groundlang.logic.palette_files import palette_names
@@ -189,9 +191,14 @@ def require_palette(args, corpus: str) -> None:
 def check_state_file(path: str, what: str) -> None:
     """One line for a state file that is absent or has nothing in it, or a ``.bdm`` file of commands where
     ``what`` (the command) wants one state: before asking for a palette none of them would need."""
-    if not Path(path).exists():
-        raise ValueError(f"{path}: No such file or directory")
-    if Path(path).suffix in (".state", ".bdm") and Path(path).is_file():
+    try:
+        mode = os.stat(path).st_mode  # a symlink loop says so, where Path.exists would say "no such file"
+    except OSError as exc:
+        raise ValueError(f"{path}: {exc.strerror}") from None
+    if not stat.S_ISREG(mode):
+        raise ValueError(f"{path}: not a regular file (a folder, a FIFO or a device); expected a state file or "
+                         "a corpus file")
+    if Path(path).suffix in (".state", ".bdm"):
         with open(path, "rb") as handle:
             if not handle.read(1 << 16).removeprefix(_BOM).strip():
                 raise ValueError(f"{path}: the file is empty; expected one state line")
