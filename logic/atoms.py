@@ -65,6 +65,12 @@ def parse_atom(text: str) -> Atom:
     return Atom(pred, args)
 
 
+def _quoted(text: str, limit: int = 60) -> str:
+    """``text`` as an error quotes it: whole when short, else its start and its length (a goal of 30,000
+    characters made a 30 KB error line)."""
+    return repr(text) if len(text) <= limit else f"{text[:limit]!r}... ({len(text)} characters)"
+
+
 def parse_goal(text: str) -> tuple[Atom, ...]:
     """Parse a conjunction of atoms separated by spaces (commas inside atoms only)."""
     text = text.strip()
@@ -75,7 +81,7 @@ def parse_goal(text: str) -> tuple[Atom, ...]:
     while pos < len(text):
         m = _ATOM.match(text, pos)
         if not m:
-            raise AtomError(f"cannot read an atom at {text[pos:]!r} in goal {text!r}")
+            raise AtomError(f"cannot read an atom at {_quoted(text[pos:])} in goal {_quoted(text)}")
         atoms.append(parse_atom(m.group(0)))
         pos = m.end()
     return tuple(atoms)

@@ -216,3 +216,14 @@ def test_labels_may_name_a_user_librarys_pf(tmp_path, fixtures):
     assert (cov.labelled, cov.holding) == (4, 4)  # each push ends with the agent beside the star
     assert main(["check", str(fixtures / "sokoban"), "--palette", "sokoban", "--labels", str(csv),
                  "--library", str(example_corpus_path() / "next_to.lp")]) == 0
+
+
+def test_an_unreadable_goal_of_any_length_is_quoted_by_its_start(tmp_path):
+    """A label's goal nested 5,000 deep is refused in a line of bounded length (it was quoted whole: 30 KB)."""
+    path = tmp_path / "deep.csv"
+    path.write_text("prefix,goal\nstar2red_," + "f(" * 5000 + "x" + ")" * 5000 + "\n", encoding="utf-8")
+    with pytest.raises(LabelError) as caught:
+        read_labels(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}, line 2: cannot read an atom at 'f(f(f(") and len(message) < 400
+    assert "(15001 characters)" in message
