@@ -27,7 +27,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-__all__ = ["FileRefused", "atomic_path", "check_destination", "check_folder", "check_writable", "read_limited",
+__all__ = ["FileRefused", "atomic_path", "check_destination", "check_folder", "check_writable", "file_kind", "read_limited",
            "write_atomically"]
 
 
@@ -35,7 +35,10 @@ class FileRefused(ValueError):
     """A file that is not a regular file, or larger than its kind may be; the message names the path."""
 
 
-def _kind(mode: int) -> str:
+def file_kind(mode: int) -> str:
+    """What a file that is not a regular one is, as an error names it ("a FIFO (named pipe)", "a folder")."""
+    if stat.S_ISDIR(mode):
+        return "a folder"
     if stat.S_ISFIFO(mode):
         return "a FIFO (named pipe)"
     if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
@@ -61,7 +64,7 @@ def read_limited(path: str | os.PathLike, limit: int, what: str) -> bytes:
         os.close(fd)
         if stat.S_ISDIR(info.st_mode):  # what reading a folder has always said
             raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
-        raise FileRefused(f"{path}: {_kind(info.st_mode)}, not a regular file; expected {what}")
+        raise FileRefused(f"{path}: {file_kind(info.st_mode)}, not a regular file; expected {what}")
     with os.fdopen(fd, "rb") as handle:
         if info.st_size > limit:
             raise FileRefused(f"{path}: {info.st_size:,} bytes, more than the {limit:,} allowed for {what}")
@@ -98,7 +101,7 @@ def _target(path: Path) -> tuple[Path, os.stat_result | None]:
     if stat.S_ISDIR(info.st_mode):
         raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
     if stat.S_ISSOCK(info.st_mode) or stat.S_ISBLK(info.st_mode):  # overwriting a disk is never what was meant
-        raise FileRefused(f"{path}: {_kind(info.st_mode)}; expected the path of a file to write")
+        raise FileRefused(f"{path}: {file_kind(info.st_mode)}; expected the path of a file to write")
     return path, info  # written into by the name given: /dev/stdout's link ends in a pipe no path names
 
 

@@ -222,44 +222,40 @@ class Layout:
                 )
             if min(r.left, r.bottom) < 0:
                 raise WorldError(f"room{i} has a negative coordinate")
-        for i, a in enumerate(self.rooms):
-            for j in range(i + 1, len(self.rooms)):
-                b = self.rooms[j]
-                if (
-                    max(a.left + 1, b.left + 1) < min(a.right, b.right)
-                    and max(a.bottom + 1, b.bottom + 1) < min(a.top, b.top)
-                ):
-                    raise WorldError(f"room{i} and room{j} overlap")
+        bounds = np.array([(r.left, r.right, r.bottom, r.top) for r in self.rooms], dtype=np.int64).reshape(-1, 4)
+        left, right, bottom, top = bounds.T
+        for i in range(len(self.rooms) - 1):  # interiors overlap: against every later room at once
+            overlap = ((np.maximum(left[i], left[i + 1:]) + 1 < np.minimum(right[i], right[i + 1:]))
+                       & (np.maximum(bottom[i], bottom[i + 1:]) + 1 < np.minimum(top[i], top[i + 1:])))
+            if overlap.any():
+                raise WorldError(f"room{i} and room{i + 1 + int(np.argmax(overlap))} overlap")
         for i, d in enumerate(self.doors):
             if d.right < d.left or d.top < d.bottom:
                 raise WorldError(f"door{i} has RIGHT < LEFT or TOP < BOTTOM")
             where = f"door{i} ({d.left},{d.top},{d.right},{d.bottom})"
             if min(d.left, d.bottom) < 0 or d.right >= self.width or d.top >= self.height:
                 raise WorldError(f"{where} reaches outside the rooms (the grid is {self.width} x {self.height})")
-            problem = _door_problem(self.rooms, d)
+            problem = _door_problem(bounds, d)
             if problem:
                 raise WorldError(f"{where} {problem}")
 
 
-def _door_problem(rooms: tuple[Room, ...], d: Door) -> str | None:
-    """Why a door joins no two rooms, or None. Every door cell must lie in some room's rectangle (a cell
-    between two rooms' walls stays solid), and the door must open the walls of two rooms: a cell on a
-    room's wall next to that room's interior. Vectorised over the door's cells, one room at a time (no
-    grid per room: a layout of hundreds of rooms stays small)."""
+def _door_problem(bounds: np.ndarray, d: Door) -> str | None:
+    """Why a door joins no two rooms, or None; ``bounds`` ``[R, 4]``: each room's left, right, bottom, top.
+    Every door cell must lie in some room's rectangle (a cell between two rooms' walls stays solid), and the
+    door must open the walls of two rooms: a cell on a room's wall next to that room's interior. Vectorised
+    over the door's cells and the rooms at once (one room at a time, 2,000 doors among 2,000 rooms took
+    minutes)."""
     xs, ys = np.meshgrid(np.arange(d.left, d.right + 1), np.arange(d.bottom, d.top + 1), indexing="ij")
-    xs, ys = xs.ravel(), ys.ravel()
-    covered = np.zeros(xs.shape, dtype=bool)
-    opened = 0
-    for r in rooms:
-        inside = (r.left <= xs) & (xs <= r.right) & (r.bottom <= ys) & (ys <= r.top)
-        covered |= inside
-        # on the room's wall next to its interior (corners excluded): the cell across the wall is inside
-        beside = ((r.left < xs) & (xs < r.right) & ((ys == r.bottom) | (ys == r.top))) | (
-            (r.bottom < ys) & (ys < r.top) & ((xs == r.left) | (xs == r.right)))
-        opened += bool(beside.any())
-    if not covered.all():
+    xs, ys = xs.ravel()[None, :], ys.ravel()[None, :]  # [1, C]
+    left, right, bottom, top = (bounds[:, k, None] for k in range(4))  # [R, 1] each
+    inside = (left <= xs) & (xs <= right) & (bottom <= ys) & (ys <= top)  # [R, C]
+    # on the room's wall next to its interior (corners excluded): the cell across the wall is inside
+    beside = ((left < xs) & (xs < right) & ((ys == bottom) | (ys == top))) | (
+        (bottom < ys) & (ys < top) & ((xs == left) | (xs == right)))
+    if not inside.any(axis=0).all():
         return "has cells outside every room; a door opens the walls of two rooms"
-    if opened < 2:
+    if int(beside.any(axis=1).sum()) < 2:
         return "is not in a wall between two rooms; a door opens the walls of two rooms"
     return None
 

@@ -423,10 +423,10 @@ ROWS.append(Row("input/check a .bdm whose layout is too large to tabulate: the e
 ROWS.append(Row("input/a task library that does not exist", (*_TASKS, "{tmp}/nope.lp"),
                 pieces=("groundlang tasks: error: {tmp}/nope.lp: No such file or directory",)))
 ROWS.append(Row("input/a folder where a state file is expected", ("tasks", str(FIXTURES), "--palette", "sokoban"),
-                pieces=(f"groundlang tasks: error: {FIXTURES}: not a regular file (a folder, a FIFO or a device)",)))
+                pieces=(f"groundlang tasks: error: {FIXTURES}: a folder, not a regular file; expected a state file",)))
 # Without --palette too: what is wrong with the path comes before asking for a palette it would not need.
 ROWS.append(Row("input/a folder named like a state file, no palette", ("show", "{tmp}"),
-                pieces=("groundlang show: error: {tmp}: not a regular file",)))
+                pieces=("groundlang show: error: {tmp}: a folder, not a regular file",)))
 
 ROWS.append(Row("input/evaluate --novel-envs folder missing",
                 ("evaluate", "--corpus", str(FIXTURES / "sokoban"), "--palette", "sokoban",

@@ -13,6 +13,7 @@ import stat
 from pathlib import Path
 
 from groundlang.logic.palette_files import palette_names
+from groundlang.logic.storage import file_kind
 from groundlang.logic.sources import library_names
 
 LANGUAGE_MODEL_NAMES = ("bow", "ibm2", "parse")  # == tuple(groundlang.model.language_models.LANGUAGE_MODELS)
@@ -196,8 +197,7 @@ def check_state_file(path: str, what: str) -> None:
     except OSError as exc:
         raise ValueError(f"{path}: {exc.strerror}") from None
     if not stat.S_ISREG(mode):
-        raise ValueError(f"{path}: not a regular file (a folder, a FIFO or a device); expected a state file or "
-                         "a corpus file")
+        raise ValueError(f"{path}: {file_kind(mode)}, not a regular file; expected a state file or a corpus file")
     if Path(path).suffix in (".state", ".bdm"):
         with open(path, "rb") as handle:
             if not handle.read(1 << 16).removeprefix(_BOM).strip():
