@@ -112,8 +112,15 @@ def write_model(state: dict, directory: str | Path) -> Path:
     """Write a learner's ``state_dict()`` to ``directory`` (created if needed; see
     :func:`check_model_destination`); returns the directory."""
     directory = check_model_destination(directory)
+    arrays = {k: v.detach().cpu().numpy() for k, v in state["globals"].items()}
+    # The loader refuses a tensor that is not finite: such a model is never written, so that a fit or an
+    # update (`follow --learn`) that went wrong leaves the model there as it was.
+    bad = next((k for k, a in arrays.items() if a.dtype.kind == "f" and not np.isfinite(a).all()), None)
+    if bad is not None:
+        raise ValueError(f"{directory}: not written: the learned {bad} holds values that are not finite "
+                         "(the model there, if any, is unchanged)")
     buffer = io.BytesIO()
-    np.savez(buffer, **{k: v.detach().cpu().numpy() for k, v in state["globals"].items()})
+    np.savez(buffer, **arrays)
     tensors = buffer.getvalue()
     digest = hashlib.sha256(tensors).hexdigest()
     tensor_name = f"globals-{digest[:16]}.npz"

@@ -436,3 +436,15 @@ def test_train_refuses_a_corpus_whose_model_could_not_be_loaded_back(tmp_path, c
     assert err.startswith("groundlang train: error: the corpus cannot be learned from: the vocabulary (")
     assert "parameters; at most 2,000 are loaded (a model could not be loaded back)" in err
     assert not out.exists()
+
+
+def test_a_model_with_tensors_that_are_not_finite_is_never_written(tmp_path):
+    """A fit or an update gone wrong (NaN in phi) leaves the model folder as it was: the loader would refuse
+    what it wrote, so nothing is written."""
+    learner = Learner(language_model="bow").fit(read_corpus(example_corpus_path(), "sokoban").instances[:4])
+    target = learner.save(tmp_path / "model")
+    before = {p.name: p.read_bytes() for p in target.iterdir()}
+    learner.globals = {**learner.globals, "phi": learner.globals["phi"] * float("nan")}
+    with pytest.raises(ValueError, match="not written: the learned phi holds values that are not finite"):
+        learner.save(target)
+    assert {p.name: p.read_bytes() for p in target.iterdir()} == before
