@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 from collections import Counter
 from collections.abc import Iterable
 from importlib.resources import files
@@ -91,7 +93,9 @@ def word_files_beside(library: TaskLibrary) -> list[Path]:
         else:
             path = Path(source.name)
         words = path.with_suffix(".words")
-        if path.suffix == ".lp" and words.is_file():
+        # Anything there by that name is the word file: a folder, a FIFO or a looping link is then refused
+        # by the reader, as --lexicon refuses it, not silently passed over.
+        if path.suffix == ".lp" and os.path.lexists(words):
             out.append(words)
     return out
 

@@ -207,3 +207,15 @@ def test_parse_reads_the_words_beside_the_library(domain):
     # Without the file "mugs" is an unknown word, read as a noun or as a modifier of an elided one.
     assert readings() == ["0.667  go(mugs1), P1(mugs1, biggest)", "0.333  go(mugs1), P1(mugs1, biggest), P2(mugs1, mugs)"]
     assert readings("--library", str(domain / "pfs.lp")) == ["1.000  go(mugs1), P1(mugs1, biggest)"]
+
+
+def test_a_word_file_beside_a_library_that_is_not_a_file_is_refused_not_passed_over(tmp_path, capsys):
+    """``mine.words`` beside ``mine.lp`` is read with the library; a folder of that name is refused in one line,
+    as ``--lexicon`` refuses it (it was silently ignored, and the words it was meant to add were missing)."""
+    from groundlang.cli import main
+
+    library = tmp_path / "mine.lp"
+    library.write_text('task(t). var(t, "A", agent). var(t, "R", room). goal(t, agentInRoom, ("A", "R")).\n')
+    (tmp_path / "mine.words").mkdir()
+    assert main(["--quiet", "parse", "--library", str(library), "go"]) == 2
+    assert capsys.readouterr().err == f"groundlang parse: error: {tmp_path / 'mine.words'}: Is a directory\n"
