@@ -66,9 +66,9 @@ def check_bdm(args: argparse.Namespace) -> int:
         print(f"  ... and {len(empty) - 20} more")
     texts, shared, covered = text_agreement(commands, tasks)
     if shared:
-        print(f"commands whose text another command shares: {shared} ({texts} text{'' if texts == 1 else 's'}); one task per text does what "
-              f"the pairs of at most {covered} of them show ({100 * covered / shared:.1f}%), a bound for any reader "
-              f"of the words alone")
+        print(f"commands whose text another command shares: {shared} ({texts} text{'' if texts == 1 else 's'}); "
+              f"one task per text does what the pairs of at most {covered} of them show "
+              f"({100 * covered / shared:.1f}%), a bound for any reader of the words alone")
     if unreachable and not args.skip_inconsistent:
         print(f"groundlang check: {len(unreachable)} unreachable pairs (use --skip-inconsistent to skip them)",
               file=sys.stderr)

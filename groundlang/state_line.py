@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 
+from groundlang.logic.atoms import shown
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
 __all__ = ["CorpusError", "MAX_COORDINATE", "MAX_FILE_BYTES", "coordinate", "parse_state", "format_state", "shared_cell",
@@ -74,11 +75,6 @@ def text_lines(text: str) -> list[str]:
     and CR alone), not at the other separators ``str.splitlines`` knows (U+2028, form feed, NEL), which a
     command may hold and which would shift every line number an error gives after them."""
     return _LINE_END.split(text)
-
-
-def shown(text: str, unit: str = "characters", limit: int = 20) -> str:
-    """``text`` as an error message quotes it: whole when short, else its start and its length."""
-    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} {unit})"
 
 
 def _integer(text: str, where: str, name: str, obj: str) -> int:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-
 from collections import Counter
 from collections.abc import Iterable
 from importlib.resources import files

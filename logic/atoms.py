@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["canonical_predicate", "Atom", "AtomError", "attribute_pf", "parse_atom", "parse_goal", "format_goal"]
+__all__ = ["canonical_predicate", "Atom", "AtomError", "attribute_pf", "parse_atom", "parse_goal", "format_goal", "shown"]
 
 # The commands-to-tasks corpus calls toys blocks, in object and predicate names (blockInRoom,
 # agentTouchingBlock): its spelling of the class toy, wherever it is a word of a camelCase name.
@@ -65,10 +65,10 @@ def parse_atom(text: str) -> Atom:
     return Atom(pred, args)
 
 
-def _quoted(text: str, limit: int = 60) -> str:
-    """``text`` as an error quotes it: whole when short, else its start and its length (a goal of 30,000
-    characters made a 30 KB error line)."""
-    return repr(text) if len(text) <= limit else f"{text[:limit]!r}... ({len(text)} characters)"
+def shown(text: str, unit: str = "characters", limit: int = 20) -> str:
+    """``text`` as an error message quotes it: whole when short, else its start and its length (a goal of
+    30,000 characters had made a 30 KB error line)."""
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} {unit})"
 
 
 def parse_goal(text: str) -> tuple[Atom, ...]:
@@ -81,7 +81,7 @@ def parse_goal(text: str) -> tuple[Atom, ...]:
     while pos < len(text):
         m = _ATOM.match(text, pos)
         if not m:
-            raise AtomError(f"cannot read an atom at {_quoted(text[pos:])} in goal {_quoted(text)}")
+            raise AtomError(f"cannot read an atom at {shown(text[pos:], limit=60)!r} in goal {shown(text, limit=60)!r}")
         atoms.append(parse_atom(m.group(0)))
         pos = m.end()
     return tuple(atoms)

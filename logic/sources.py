@@ -176,8 +176,9 @@ def _parsed(name: str, text: str, allow_scripts: bool) -> tuple:
     # part of the program.
     nul = source.text.find("\x00")
     if nul >= 0:
-        raise AspSyntaxError(f"{source.name}:{source.text.count(chr(10), 0, nul) + 1}: a NUL byte; ASP text has "
-                             "none (clingo would stop reading the file there)")
+        line = source.text.count("\n", 0, nul) + 1
+        raise AspSyntaxError(f"{source.name}:{line}: a NUL byte; ASP text has none (clingo would stop reading "
+                             "the file there)")
     # clingo's lexer reports a non-ASCII character one byte at a time, and the
     # half character in its message aborts the process (a decode error inside
     # a C callback): refuse such text here, with the position.

@@ -27,8 +27,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-__all__ = ["FileRefused", "atomic_path", "check_destination", "check_folder", "check_writable", "file_kind", "read_limited",
-           "write_atomically"]
+__all__ = ["FileRefused", "atomic_path", "check_destination", "check_folder", "check_writable", "file_kind",
+           "read_limited", "write_atomically"]
 
 
 class FileRefused(ValueError):

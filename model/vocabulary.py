@@ -137,12 +137,11 @@ class Vocabulary:
             if not isinstance(mapping, dict) or not all(isinstance(k, str) and isinstance(v, str)
                                                         for k, v in mapping.items()):
                 raise ValueError(f"a vocabulary's {what} map text to text")
-        for task, own in self.task_roles.items():
-            if not all(isinstance(r, str) for r in own):
-                raise ValueError(f"a vocabulary's task_roles give {task!r} roles that are not text")
         # A task's roles index the rows of its alignment table: a task or a role the lists do not hold
         # would size the tables otherwise than the globals trained with them.
         for task, own in self.task_roles.items():
+            if not all(isinstance(r, str) for r in own):
+                raise ValueError(f"a vocabulary's task_roles give {task!r} roles that are not text")
             if task not in self._task_index:
                 raise ValueError(f"a vocabulary's task_roles name {task!r}, which is not one of its tasks")
             stray = next((r for r in own if r not in self._role_index), None)
