@@ -65,8 +65,24 @@ def long_commands() -> None:
           f"{times[1600] / times[200]:.1f}x for 8x the words (linear: 8x, quadratic: 64x)")
 
 
+def many_multiword_entries() -> None:
+    """Joining multiword entries against the size of a word file, side by side: ten times the entries that
+    share a first word should cost about the same (each position walks one entry's words, not every entry
+    with its first word; 60,000 entries and a 10,000-word command took minutes when it did)."""
+    tokens = ["the", "side", "of", "it"] * 2500  # no entry fits: the costly case for a list of entries
+    times = {}
+    for n in (6000, 60000):
+        words = WORDS.extend({"PREP": [f"the side{i} of" for i in range(n)]})
+        t0 = time.process_time()
+        words.join_multiword(tokens)
+        times[n] = time.process_time() - t0
+    print(f"multiword entries: 6,000 {times[6000] * 1e3:.1f} ms cpu, 60,000 {times[60000] * 1e3:.1f} ms cpu for "
+          f"{len(tokens)} words: {times[60000] / times[6000]:.1f}x for 10x the entries (a trie: 1x, a list: 10x)")
+
+
 def main() -> int:
     long_commands()  # needs no corpus
+    many_multiword_entries()
     given = len(sys.argv) > 1
     corpus = Path(sys.argv[1]) if given else DEFAULT_CORPUS
     folders = [corpus / "allTurkTrain", corpus / "allTurkTrainLimitedCommand"]

@@ -46,6 +46,8 @@ FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB")) + (
 # rather than open the preposition, after a word of these categories: "the left of the room",
 # "to left of star", "bottom left of orange room".
 _NOUN_PHRASE_OPENERS = frozenset({"DET", "PREP", "TO", "ADJ", "NUM"})
+# Marks, in the trie of multiword entries, a node where an entry ends: not a string, so no word collides.
+_END = None
 _CATEGORY_LINE = re.compile(r"^([A-Za-z_]+)\s*:(.*)$")
 _HYPHEN = re.compile(r"(?<=\w)-(?=\w)")
 
@@ -191,12 +193,16 @@ class Lexicon:
         self.having_verbs = words["VERB_HAVING"]
         # The preposition a clause of having reads as ("with"); None when no word file names one.
         self.having_preposition = min(words["PREP_HAVING"], default=None)
-        # Multiword entries by first word, longest first (the tokeniser joins the longest that fits).
-        multiword: dict[str, list[tuple[str, ...]]] = {}
-        for word in sorted(table, key=lambda w: (-w.count("_"), w)):
+        # Multiword entries as a trie of their words: the tokeniser joins the longest that fits, and a walk
+        # down the trie finds it in as many steps as the entry has words, however many entries share a first
+        # word (a list per first word took minutes for a large word file and a long command).
+        multiword: dict[str, dict] = {}
+        for word in table:
             if "_" in word.strip("_"):
-                parts = tuple(word.split("_"))
-                multiword.setdefault(parts[0], []).append(parts)
+                node = multiword
+                for part in word.split("_"):
+                    node = node.setdefault(part, {})
+                node[_END] = True
         self._multiword = multiword
 
     # ------------------------------------------------------------------ building
@@ -296,16 +302,18 @@ class Lexicon:
         out: list[str] = []
         i = 0
         while i < len(tokens):
-            for parts in self._multiword.get(tokens[i], ()):
-                if tuple(tokens[i:i + len(parts)]) == parts and not (
-                    out and self.listed(parts[0]) & {"ADJ", "NOUN"} and self.listed(out[-1]) & _NOUN_PHRASE_OPENERS
-                ):
-                    out.append("_".join(parts))
-                    i += len(parts)
-                    break
-            else:
-                out.append(tokens[i])
-                i += 1
+            end = i + 1
+            # The exception depends on the first word alone, so it holds for every entry that starts here.
+            if not (out and self.listed(tokens[i]) & {"ADJ", "NOUN"} and self.listed(out[-1]) & _NOUN_PHRASE_OPENERS):
+                node = self._multiword
+                for j in range(i, len(tokens)):
+                    node = node.get(tokens[j])
+                    if node is None:
+                        break
+                    if _END in node:
+                        end = j + 1
+            out.append("_".join(tokens[i:end]))
+            i = end
         return out
 
 

@@ -160,3 +160,17 @@ def test_cli_parse_reads_extra_word_files(tmp_path, capsys):
     assert main(["parse", "--json", "put the star on the coffee table"]) == 0
     top = json.loads(capsys.readouterr().out)["readings"][0]["logical_form"]
     assert top == "put(star1, table1), P1(table1, coffee)"
+
+
+def test_the_longest_multiword_entry_that_fits_is_joined_and_a_prefix_alone_is_not(tmp_path):
+    words = tmp_path / "long.words"
+    # "up to the" is no entry, though "up to" and "up to the top of" are
+    words.write_text("PREP: up_to up_to_the_top_of\n", encoding="utf-8")
+    lexicon = CLEANUP.with_files(words)
+    assert lexicon.join_multiword("go up to the top of it".split()) == ["go", "up_to_the_top_of", "it"]
+    assert lexicon.join_multiword("go up to the box".split()) == ["go", "up_to", "the", "box"]
+    assert lexicon.join_multiword("go up to the top".split()) == ["go", "up_to", "the", "top"]
+    # many entries sharing a first word (benchmarks/bench_parse.py times this against the word file's size)
+    many = CLEANUP.extend({"PREP": [f"the side{i} of" for i in range(200)]})
+    tokens = ["the", "side199", "of"] * 30 + ["the", "side", "of", "the", "box"]
+    assert many.join_multiword(tokens) == ["the_side199_of"] * 30 + ["the", "side", "of", "the", "box"]
