@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import torch
 
 from groundlang.learner import Learner
-from groundlang.model.language_models import get_language_model, setting_names
+from groundlang.model.language_models import get_language_model, setting_names, setting_value
 
 __all__ = ["HeldOutLikelihood", "SwitchRow", "held_out_likelihood", "switch_settings", "compare_switches",
            "format_switches"]
@@ -98,8 +98,6 @@ def switch_settings(language_model: str, switch: str, base: Mapping | None = Non
     value) or ``NAME=VALUE`` (VALUE read as JSON, else as text); the default is the model's, or ``base``'s
     where it sets the setting. ValueError, in one line, for a setting the model lacks, a wrong value, or
     a ``NAME`` that is not true/false."""
-    import json
-
     name, sep, text = switch.partition("=")
     name = name.strip()
     if name not in setting_names(language_model):
@@ -108,9 +106,9 @@ def switch_settings(language_model: str, switch: str, base: Mapping | None = Non
     default = get_language_model(language_model, **dict(base or {})).settings()[name]
     if sep:
         try:
-            value = json.loads(text.strip())
-        except ValueError:
-            value = text.strip()
+            value = setting_value(text.strip())
+        except ValueError as exc:
+            raise ValueError(f"--switch {name}={exc}") from None
     elif isinstance(default, bool):
         value = not default
     else:

@@ -242,7 +242,7 @@ def _read_model(directory: Path, from_state_dict: Callable[[dict], T]) -> T:
     if not tensor_path.exists():
         raise ModelFormatError(f"{tensor_path}: the model's tensor file is missing ({MODEL_JSON} names it)")
     # What np.savez writes for these arrays: each one's data and header, plus the archive's directories.
-    limit = sum(8 * math.prod(t.shape) + 1024 for t in expected.values()) + 4096
+    limit = sum(8 * math.prod(t.shape) + 1024 for t, _ in expected.values()) + 4096
     try:
         data = storage.read_limited(tensor_path, limit, "the tensors of a model of this vocabulary")
     except storage.FileRefused as exc:
@@ -281,13 +281,35 @@ def check_parameter_bound(vocab) -> dict:
 
 
 def _expected_globals(learner) -> dict:
-    """The globals a model of this vocabulary and language model has (shapes and dtypes), sized before
-    anything is built (:func:`check_parameter_bound`)."""
+    """The globals a model of this vocabulary and language model has, each as ``(template, simplex)``: the
+    template gives its shape and dtype, sized before anything is built (:func:`check_parameter_bound`), and
+    ``simplex`` says whether its prior draws rows that are distributions (a Dirichlet's), which a saved
+    table must then be too."""
     import pyro.poutine
+    from torch.distributions import constraints
 
     sizes = check_parameter_bound(learner.vocab)
     with pyro.poutine.block():
-        return learner.lm.sample_globals(**sizes)
+        trace = pyro.poutine.trace(learner.lm.sample_globals).get_trace(**sizes)
+    templates = trace.nodes["_RETURN"]["value"]
+    supports = {name: site["fn"].support for name, site in trace.nodes.items()
+                if site["type"] == "sample" and not site["is_observed"] and name in templates}
+    return {name: (t, supports.get(name) is constraints.simplex) for name, t in templates.items()}
+
+
+# How far a saved row of a distribution may sum from one: float32 sums of a few thousand entries stray by
+# about 1e-5; a table edited by hand or damaged strays by far more.
+_SIMPLEX_TOLERANCE = 1e-3
+
+
+def _check_distributions(name: str, tensor: torch.Tensor) -> None:
+    if bool((tensor < 0).any()):
+        raise ValueError(f"{name} holds negative probabilities; each row must be a distribution")
+    sums = tensor.double().reshape(-1, tensor.shape[-1]).sum(-1)
+    astray = ((sums - 1.0).abs() > _SIMPLEX_TOLERANCE).nonzero()
+    if len(astray):
+        row = int(astray[0])
+        raise ValueError(f"{name}: row {row} sums to {float(sums[row]):.6g}; each row must be a distribution (sum 1)")
 
 
 def _read_globals(data: bytes, expected: dict, tensor_path: Path, lm_name: str) -> dict:
@@ -301,7 +323,7 @@ def _read_globals(data: bytes, expected: dict, tensor_path: Path, lm_name: str) 
             if names != sorted(expected) or len(set(archive.namelist())) != len(expected):
                 raise ValueError(f"holds {names}; language model {lm_name} needs {sorted(expected)}")
             out = {}
-            for name, template in expected.items():
+            for name, (template, simplex) in expected.items():
                 with archive.open(f"{name}.npy") as member:
                     version = np.lib.format.read_magic(member)
                     header = (np.lib.format.read_array_header_1_0 if version == (1, 0)
@@ -316,6 +338,8 @@ def _read_globals(data: bytes, expected: dict, tensor_path: Path, lm_name: str) 
                 if not bool(torch.isfinite(tensor).all()):
                     raise ValueError(f"{name} is {array.dtype} {tuple(array.shape)} with values that are not "
                                      "finite; expected finite floats")
+                if simplex:
+                    _check_distributions(name, tensor)
                 out[name] = tensor.to(template.dtype)
             return out
     except (ValueError, EOFError, zipfile.BadZipFile, OSError, NotImplementedError, RuntimeError) as exc:

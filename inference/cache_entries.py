@@ -12,6 +12,7 @@ bounded: counts and the first damaged entry, not a list of them.
 
 from __future__ import annotations
 
+import errno
 import json
 import logging
 import os
@@ -77,6 +78,8 @@ class EntryFolder:
             write_atomically(self.path(key), json.dumps({"key": key, **entry}, separators=(",", ":")),
                              durable=False, follow=False)
         except OSError as exc:
+            if exc.errno in (errno.EISDIR, errno.ENOTDIR) and self.root.is_dir():
+                return  # this entry's own path is taken by a folder (counted as damaged when read): only it is lost
             self.logger.warning("%s cache %s cannot be written (%s: %s); going on without writing to it", self.kind,
                                 self.root, exc.filename or self.root, exc.strerror or exc)
             self._writable = False

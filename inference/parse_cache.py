@@ -35,7 +35,7 @@ import lark
 
 from groundlang.grammar.lexicon import Lexicon
 from groundlang.grammar.logical_form import Clause, Entity, LogicalForm, Reading, Relation
-from groundlang.grammar.parser import parse
+from groundlang.grammar.parser import parse, tokenise
 from groundlang.inference.cache_entries import EntryFolder
 
 __all__ = ["PARSE_CACHE_VERSION", "ParseCache", "parse_key", "parser_digest"]
@@ -140,7 +140,8 @@ class ParseCache:
         raises them."""
         key = parse_key(command, weights, lexicon) if self.entries.root is not None else None
         if key is not None:
-            found = self.entries.read(key, MAX_ENTRY_BYTES, "a parse cache entry", lambda data: _restore_entry(data, key))
+            found = self.entries.read(key, MAX_ENTRY_BYTES, "a parse cache entry",
+                                      lambda data: _restore_entry(data, key, tokenise(command, lexicon)))
             if found is not None:
                 return found
         readings = tuple(parse(command, max_readings=MAX_READINGS, weights=weights, word_lexicon=lexicon))
@@ -155,10 +156,14 @@ class ParseCache:
         self.entries.report("readings", "commands' from the parse cache")
 
 
-def _restore_entry(data: dict, key: str) -> tuple[Reading, ...]:
+def _restore_entry(data: dict, key: str, tokens: list[str]) -> tuple[Reading, ...]:
     """The readings of an entry, checked for what the parser guarantees and the encoding relies on: at
     most MAX_READINGS readings with probabilities in (0, 1] summing to one, relations' probabilities in
-    [0, 1], one command's words in every reading, and each noun phrase's words among them."""
+    [0, 1], and in every reading the command's own words (``tokens``), at most one noun phrase per word,
+    each noun phrase's words and preposition among them, and every variable a clause, relation or
+    attachment names a noun phrase's. An entry the checksum passes is still one the parser could have
+    written, or it is reparsed: a forged or buggy one must not train a model on words it does not hold,
+    nor size the batch's tables by thousands of noun phrases."""
     if data.get("checksum") != _checksum(key, data["readings"]):
         raise ValueError("checksum does not match the readings")
     readings = _restore(data["readings"], [Reading])
@@ -167,15 +172,34 @@ def _restore_entry(data: dict, key: str) -> tuple[Reading, ...]:
     if (not all(0 < r.probability <= 1 for r in readings)
             or not math.isclose(sum(r.probability for r in readings), 1.0, abs_tol=1e-6)):
         raise ValueError("its readings' probabilities are not a distribution")
-    words = readings[0].logical_form.words
     for reading in readings:
-        form = reading.logical_form
-        if form.words != words:
-            raise ValueError("its readings are of different words")
-        if not all(0 <= r.probability <= 1 for r in form.relations):
-            raise ValueError("a relation's probability is not one")
-        if not all((set(e.modifiers) | {e.head}) - {None} <= set(words) for e in form.entities):
-            raise ValueError("a noun phrase has words the command does not")
-        if any(len(p) != 2 for c in form.clauses for p in c.preps) or any(len(a) != 3 for a in form.attachments):
-            raise ValueError("a preposition or attachment of the wrong shape")
+        _check_form(reading.logical_form, tuple(tokens))
     return readings
+
+
+# The preposition the chunker gives a second bare noun phrase of a verb (grammar.chunker): no word of its own.
+_UNSAID_PREPOSITION = "_"
+
+
+def _check_form(form: LogicalForm, tokens: tuple[str, ...]) -> None:
+    if form.words != tokens:
+        raise ValueError("its words are not the command's")
+    if len(form.entities) > len(tokens):
+        raise ValueError(f"{len(form.entities)} noun phrases in {len(tokens)} words")
+    names = {e.var for e in form.entities}
+    words = set(tokens) | {_UNSAID_PREPOSITION}
+    if len(names) != len(form.entities):
+        raise ValueError("two noun phrases share a variable")
+    if not all(0 <= r.probability <= 1 for r in form.relations):
+        raise ValueError("a relation's probability is not one")
+    if not all((set(e.modifiers) | {e.head, e.prep}) - {None} <= words for e in form.entities):
+        raise ValueError("a noun phrase has words the command does not")
+    if any(len(p) != 2 for c in form.clauses for p in c.preps) or any(len(a) != 3 for a in form.attachments):
+        raise ValueError("a preposition or attachment of the wrong shape")
+    if not all(0 <= e.clause < len(form.clauses) for e in form.entities):
+        raise ValueError("a noun phrase belongs to a clause the reading does not have")
+    named = ([e.parent for e in form.entities] + [c.subject for c in form.clauses]
+             + [v for c in form.clauses for v in (*c.args, *(p[1] for p in c.preps))]
+             + [a for a in form.attachments for a in a[1:]] + [r.args[0] for r in form.relations if r.args])
+    if not set(named) - {None} <= names:
+        raise ValueError("a variable names no noun phrase")

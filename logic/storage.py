@@ -23,7 +23,7 @@ import errno
 import os
 import secrets
 import stat
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
@@ -213,10 +213,13 @@ def check_folder(path: str | os.PathLike, what: str, named: str | os.PathLike | 
     path = Path(path)
     named = path if named is None else Path(named)
     for step in (path, *path.parents):
+        it = "it" if step == named else step
         if step.exists():
             if not step.is_dir():
-                raise ValueError(f"{what}: {'it' if step == named else step} is a file, not a folder")
+                raise ValueError(f"{what}: {it} is a file, not a folder")
             break
+        if step.is_symlink():  # a dangling link: creating the folder would fail with "File exists"
+            raise ValueError(f"{what}: {it} is a link to {os.readlink(step)}, which does not exist")
     return path
 
 
@@ -240,13 +243,29 @@ def check_writable(folder: str | os.PathLike, name: str, what: str) -> Path:
     return folder
 
 
-def check_destination(path: str | os.PathLike, option: str) -> Path:
+def _check_not_read(path: Path, option: str, reads: Iterable[tuple[str, str | os.PathLike]]) -> None:
+    if not path.exists():
+        return  # a new file replaces nothing (a FIFO or device is written into, and is no input either)
+    for what, given in reads:
+        source = Path(given)
+        with suppress(OSError):
+            if os.path.samefile(path, source) or (source.is_dir() and path.resolve().is_relative_to(source.resolve())):
+                raise ValueError(f"{option} {path}: the command reads it ({what} {given}); writing the result "
+                                 "there would replace its input: name another file")
+
+
+def check_destination(path: str | os.PathLike, option: str,
+                      reads: Iterable[tuple[str, str | os.PathLike]] = ()) -> Path:
     """``path`` as a file to write later, refused now (naming ``option``) if it cannot be: an existing
     folder, socket or block device, a path through a file, or a folder no file can be created in
     (missing folders are created when writing, as ``train -o`` creates its model's). Commands check their
     outputs before the work, so a long run is not lost to a typo at the end. A device or FIFO is written
-    into and needs no probe (opening a FIFO here would wait for a reader)."""
+    into and needs no probe (opening a FIFO here would wait for a reader).
+
+    ``reads``: ``(option, path)`` of what the command reads; writing over one of those files, or over a
+    file inside one of those folders (a corpus's), is refused: the result would replace its own input."""
     path = Path(path)
+    _check_not_read(path, option, reads)
     if path.is_dir():
         raise ValueError(f"{option} {path}: is a folder; expected the path of a file to write")
     try:

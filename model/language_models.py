@@ -23,7 +23,7 @@ from groundlang.model.language_model_base import NULL_MIXTURE, LanguageModel, mi
 from groundlang.model.parse_aligned import ParseAligned
 
 __all__ = ["LanguageModel", "BagOfWords", "IBMModel2", "ParseAligned", "LANGUAGE_MODELS", "get_language_model",
-           "register_language_model", "setting_names", "NULL_MIXTURE", "mixture_log_emissions"]
+           "register_language_model", "setting_names", "setting_value", "NULL_MIXTURE", "mixture_log_emissions"]
 
 
 LANGUAGE_MODELS = {"bow": BagOfWords, "ibm2": IBMModel2, "parse": ParseAligned}
@@ -55,6 +55,20 @@ def get_language_model(name: str, **settings) -> LanguageModel:
         if problem:
             raise ValueError(f"language model {name}, setting {key}: {problem}")
     return LANGUAGE_MODELS[name](**settings)
+
+
+def setting_value(text: str) -> object:
+    """A setting's value as a user writes it (``--lm-setting``, ``--switch``): JSON where it reads as JSON
+    (``0.5``, ``true``, ``[1, 2]``), else the text itself (``any``). ValueError for JSON nested too deeply
+    to read (the decoder recurses once per level)."""
+    import json
+
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise ValueError(f"{text[:20]}...: nested too deeply to be a setting") from None
+    except ValueError:
+        return text
 
 
 def setting_names(name: str) -> tuple[str, ...]:

@@ -408,6 +408,10 @@ ROWS += [
         ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model", "--cache-dir", "{tmp}/cache", "--lm-setting",
          "held_parts=maybe"),
         pieces=("held_parts",), absent=("{tmp}/model", "{tmp}/cache")),
+    Row("input/train with a setting nested 3000 deep (the JSON decoder recursed out)",
+        ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model", "--lm-setting", "x=" + "[" * 3000),
+        pieces=("--lm-setting x=[[[[[[[[[[[[[[[[[[[[...: nested too deeply to be a setting",),
+        absent=("{tmp}/model",)),
     Row("input/train --no-cache with --cache-dir",
         ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model", "--no-cache", "--cache-dir", "{tmp}/cache"),
         pieces=("--no-cache and --cache-dir {tmp}/cache: choose one",), absent=("{tmp}/model", "{tmp}/cache")),
@@ -442,9 +446,9 @@ ROWS.append(Row("input/a bare --library name the package does not ship", (*_TASK
                 pieces=("groundlang tasks: error: taskz: no such file, nor a library the package ships (tasks, "
                         "williams2018)",)))
 
-ROWS.append(Row("model/every table zeros (finite, so loaded, but no distribution): follow refuses, never acts",
+ROWS.append(Row("model/every table zeros (finite, but no distribution): refused at load, never acts",
                 _follow("go to the red room", NOVEL, "--out", "{tmp}/picture.png"),
-                pieces=("the model gives no posterior for 'go to the red room'", "not finite numbers"),
+                pieces=("groundlang follow: error: {model}/globals-", ": row 0 sums to 0; each row must be a distribution"),
                 broken=lambda d: _with(d, **{k: np.zeros_like(v) for k, v in _globals(d).items()}),
                 absent=("{tmp}/picture.png",)))
 
@@ -499,6 +503,33 @@ def test_bad_input(row: Row, capsys, tmp_path, trained_model, monkeypatch):
 def test_every_bad_input_fixture_is_used():
     used = " ".join(" ".join(r.argv) for r in ROWS)
     assert sorted(p.name for p in BAD.iterdir() if p.name not in used) == []
+
+
+@pytest.mark.parametrize("argv, option, read", [
+    (("evaluate", "--corpus", "{tmp}/small.bdm", "--holdout", "0.5", "--json", "{tmp}/small.bdm"),
+     "--json {tmp}/small.bdm", "--corpus {tmp}/small.bdm"),
+    (("evaluate", "--corpus", "{tmp}/small.bdm", "--test", "{tmp}/test.bdm", "--json", "{tmp}/test.bdm"),
+     "--json {tmp}/test.bdm", "--test {tmp}/test.bdm"),
+    (("evaluate", "--corpus", "{tmp}/ex", "--palette", "sokoban", "--labels", "{tmp}/ex/labels.csv", "--json",
+      "{tmp}/ex/labels.csv"), "--json {tmp}/ex/labels.csv", "--corpus {tmp}/ex"),
+    (("discover", "{tmp}/ex", "--palette", "sokoban", "-o", "{tmp}/ex/agent2blue_0.txt"),
+     "-o {tmp}/ex/agent2blue_0.txt", "directory {tmp}/ex"),
+    (("evaluate", "--corpus", "{tmp}/small.bdm", "--holdout", "0.5", "--json", "{tmp}/link.json"),
+     "--json {tmp}/link.json", "--corpus {tmp}/small.bdm"),  # a link to the corpus is the corpus
+])
+def test_an_output_that_is_one_of_the_inputs_is_refused_before_any_work(tmp_path, capsys, argv, option, read):
+    """``evaluate --corpus c.bdm --json c.bdm`` replaced the corpus with its own result, and ``discover ex -o
+    ex/agent2blue_0.txt`` a corpus file with a library."""
+    shutil.copy(FIXTURES / "williams2018" / "small.bdm", tmp_path / "small.bdm")
+    shutil.copy(FIXTURES / "williams2018" / "small.bdm", tmp_path / "test.bdm")
+    shutil.copytree(EXAMPLES, tmp_path / "ex")
+    (tmp_path / "link.json").symlink_to(tmp_path / "small.bdm")
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    assert main([a.format(tmp=tmp_path) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert f"{option.format(tmp=tmp_path)}: the command reads it ({read.format(tmp=tmp_path)})" in err, err
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
 
 
 def test_script_did_not_run(tmp_path):

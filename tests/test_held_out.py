@@ -54,6 +54,7 @@ def test_a_switch_is_compared_with_the_defaults(examples):
     ("start_rol", "--switch 'start_rol': language model parse has no setting 'start_rol'"),
     ("argument_bonus", "--switch 'argument_bonus': argument_bonus is not true or false (default 3.0)"),
     ("start_role=3", "language model parse, setting start_role: expected true or false, not 3"),
+    ("word_concentration=" + "[" * 3000, "--switch word_concentration=[[[[[[[[[[[[[[[[[[[[...: nested too deeply"),
 ])
 def test_a_wrong_switch_is_refused(switch, message):
     with pytest.raises(ValueError) as caught:

@@ -210,7 +210,23 @@ def _huge_npz(d: Path) -> None:
     _edit(d, lambda m: m.update(globals_sha256=hashlib.sha256(path.read_bytes()).hexdigest()))
 
 
+def _retabled(name: str, change):
+    """The model's tensor ``name`` changed by ``change`` (an array in, an array out), the hash rewritten."""
+    def edit(d: Path) -> None:
+        path = d / json.loads((d / "model.json").read_text())["globals_file"]
+        with np.load(path) as z:
+            arrays = {k: z[k] for k in z.files}
+        arrays[name] = change(arrays[name])
+        np.savez(path.with_suffix(""), **arrays)  # np.savez adds the suffix again
+        _edit(d, lambda m: m.update(globals_sha256=hashlib.sha256(path.read_bytes()).hexdigest()))
+    return edit
+
+
 HOSTILE = {
+    # a table of word probabilities that is not one: followed, it would act on scores that mean nothing
+    "phi negative": (_retabled("phi", lambda a: -a), ["phi holds negative probabilities"]),
+    "phi rows summing to 2": (_retabled("phi", lambda a: 2 * a), ["phi: row 0 sums to 2", "must be a distribution"]),
+    "align all zero": (_retabled("align", lambda a: 0 * a), ["align: row 0 sums to 0"]),
     "30,000 extra words": (lambda d: _edit(d, lambda m: m["vocabulary"]["words"].extend(f"w{i}" for i in range(30000))),
                            ["phi is float32", "expected finite floats of shape"]),
     "10^6 extra words": (lambda d: _edit(d, lambda m: m["vocabulary"]["words"].extend(f"w{i}" for i in range(10**6))),

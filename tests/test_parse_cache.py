@@ -126,6 +126,19 @@ def test_a_folder_that_cannot_be_written_is_a_warning_and_still_read(tmp_path, m
     assert len(caplog.records) == 1 and "cannot be written" in caplog.records[0].getMessage()
 
 
+def test_an_entry_whose_path_is_a_folder_loses_only_that_entry(tmp_path, caplog):
+    """One entry's path taken by a folder stopped the cache being written for the rest of the run."""
+    key = parse_key(COMMANDS[0], None, WORDS)
+    (tmp_path / "parses" / key[:2] / f"{key}.json").mkdir(parents=True)
+    cache = ParseCache(tmp_path)
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.parse_cache"):
+        readings = [cache.readings(c, None, WORDS) for c in COMMANDS]
+        cache.report()
+    assert readings == [tuple(parse(c, word_lexicon=WORDS)) for c in COMMANDS]
+    assert cache.damaged == 1 and sum(p.is_file() for p in _entries(tmp_path)) == len(COMMANDS) - 1  # the others
+    assert not any("cannot be written" in r.getMessage() for r in caplog.records)
+
+
 def test_the_cache_writes_every_field_of_a_reading():
     from dataclasses import fields
 
@@ -150,7 +163,32 @@ def _nine(readings):
     readings.extend([readings[0]] * (9 - len(readings)))
 
 
-@pytest.mark.parametrize("spoil", [_probabilities, _huge, _foreign_word, _nine])
+# A reading is [logical form, probability]; a logical form [clauses, entities, relations, attachments, words,
+# tags, fallback]; an entity [var, head, modifiers, determiner, clause, role, prep, parent, pronoun].
+def _no_words(readings):
+    for r in readings:
+        r[0][4] = []  # trained as a command without words
+
+
+def _clause_out_of_range(readings):
+    readings[0][0][1][0][4] = 99
+
+
+def _unknown_variable(readings):
+    readings[0][0][0][0][1] = ["ghost1"]  # the first clause's arguments
+
+
+def _thousands_of_noun_phrases(readings):
+    entity = readings[0][0][1][0]
+    readings[0][0][1] = [[f"x{i}", *entity[1:6], "to", None, None] for i in range(3000)]
+
+
+def _a_vocabulary_token_as_preposition(readings):
+    readings[0][0][1][0][6] = "<dobj>"
+
+
+@pytest.mark.parametrize("spoil", [_probabilities, _huge, _foreign_word, _nine, _no_words, _clause_out_of_range,
+                                   _unknown_variable, _thousands_of_noun_phrases, _a_vocabulary_token_as_preposition])
 def test_an_entry_made_to_match_its_checksum_is_still_checked(tmp_path, spoil, caplog):
     """The checksum catches damage, not an entry written on purpose: what the encoding relies on is checked
     too, and such an entry is reparsed, not read (nor a traceback)."""

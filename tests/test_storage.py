@@ -263,3 +263,14 @@ def test_dev_stdout_is_written_into_when_it_is_a_pipe():
     done = subprocess.run([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stdout == "hello\n"
+
+
+def test_a_dangling_link_where_a_folder_goes_is_named_as_one(tmp_path):
+    """GROUNDLANG_CACHE set to a link whose target is gone said "cannot be written (File exists)"."""
+    (tmp_path / "cache").symlink_to(tmp_path / "gone")
+    with pytest.raises(ValueError, match=f"^the cache folder: it is a link to {tmp_path / 'gone'}, which does not exist$"):
+        storage.check_folder(tmp_path / "cache", "the cache folder")
+    with pytest.raises(ValueError, match=f"^-o: {tmp_path / 'cache'} is a link to"):
+        storage.check_folder(tmp_path / "cache" / "model", "-o")
+    (tmp_path / "gone").mkdir()
+    assert storage.check_folder(tmp_path / "cache" / "model", "-o") == tmp_path / "cache" / "model"

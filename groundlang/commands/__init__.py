@@ -90,8 +90,8 @@ def add_language_model_settings(parser) -> None:
 
 def language_model_settings(pairs: list[str]) -> dict:
     """``["argument_bonus=0", "mention_phrases=any"]`` -> ``{"argument_bonus": 0, "mention_phrases": "any"}``.
-    Raises ValueError for an item without ``=``."""
-    import json
+    Raises ValueError for an item without ``=`` or a value nested too deeply to read."""
+    from groundlang.model.language_models import setting_value
 
     settings = {}
     for pair in pairs:
@@ -100,10 +100,9 @@ def language_model_settings(pairs: list[str]) -> dict:
         if not sep or not key.strip():
             raise ValueError(f"--lm-setting {pair!r}: expected KEY=VALUE, e.g. mention_phrases=any")
         try:
-            value = json.loads(text)
-        except ValueError:
-            value = text
-        settings[key.strip()] = value
+            settings[key.strip()] = setting_value(text)
+        except ValueError as exc:
+            raise ValueError(f"--lm-setting {key.strip()}={exc}") from None
     return settings
 
 
@@ -159,6 +158,23 @@ def add_lexicon_option(parser) -> None:
         help="a word file (`CATEGORY: word word ...` lines, see grammar/english.words) whose nouns, "
              "adjectives, verbs and prepositions the parser should know too (repeatable)",
     )
+
+
+def inputs_read(args, *names: str) -> list[tuple[str, str]]:
+    """``(option, path)`` for each of ``args``' path options ``names`` that is given (a repeatable option
+    gives one pair per path), for :func:`groundlang.logic.storage.check_destination` to keep an output off
+    them. A positional argument is named by its own name."""
+    out = []
+    for name in names:
+        value = getattr(args, name, None)
+        option = f"--{name.replace('_', '-')}" if name not in _POSITIONALS else name
+        for path in value if isinstance(value, list) else [value]:
+            if isinstance(path, str) and path:
+                out.append((option, path))
+    return out
+
+
+_POSITIONALS = frozenset({"directory"})
 
 
 def is_burlap_state_file(path: str) -> bool:

@@ -6,8 +6,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from groundlang.commands import (PALETTE_HELP, add_language_model_settings, add_lexicon_option, json_bytes,
-                                 language_model_settings, output_path, positive_int, seed)
+from groundlang.commands import (PALETTE_HELP, add_language_model_settings, add_lexicon_option, inputs_read,
+                                 json_bytes, language_model_settings, output_path, positive_int, seed)
 
 
 def _list_of(example: str):
@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.storage import check_destination, write_atomically
 
     if args.json:
-        check_destination(args.json, "--json")
+        check_destination(args.json, "--json", inputs_read(args, "corpus", "labels", "libraries", "palette", "lexicon"))
     if args.plot:
         from groundlang.render import check_picture_destination
 

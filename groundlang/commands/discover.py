@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from groundlang.commands import PALETTE_HELP, fraction, json_text, output_path, positive_int
+from groundlang.commands import PALETTE_HELP, fraction, inputs_read, json_text, output_path, positive_int
 
 
 def register(subparsers) -> None:
@@ -50,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.storage import check_destination
 
     start = time.perf_counter()
-    check_destination(args.output, "-o")
+    check_destination(args.output, "-o", inputs_read(args, "directory", "pfs", "palette", "lexicon"))
     pfs = TaskLibrary.load(args.pfs) if args.pfs else None  # a bad file is refused before any work
     corpus = read_corpus(args.directory, args.palette)
     if not corpus.instances:

@@ -6,9 +6,9 @@ import argparse
 from pathlib import Path
 
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
-                                 add_language_model_settings, add_lexicon_option, fraction, json_bytes,
-                                 language_model_settings, library_given, open_fraction, output_path, positive_int,
-                                 require_palette)
+                                 add_language_model_settings, add_lexicon_option, fraction, inputs_read,
+                                 json_bytes, language_model_settings, library_given, open_fraction, output_path,
+                                 positive_int, require_palette)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
@@ -80,7 +80,8 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.published import comparison, format_comparison
 
     if args.json:
-        check_destination(args.json, "--json")
+        check_destination(args.json, "--json", inputs_read(args, "corpus", "test", "labels", "layouts", "library",
+                                                           "novel_envs", "palette", "lexicon"))
     if _is_pairs(args):
         return run_pairs(args)
     if args.test:
@@ -168,11 +169,11 @@ def run_pairs(args: argparse.Namespace) -> int:
         split = "the tuning split" if args.tuning else "the held-out split"
         train, test = held_out_by_text(train, args.holdout, tuning=args.tuning)
         if not test:
-            raise ValueError(f"{args.corpus}: --holdout {args.holdout:g} holds out no command (no text falls in "
+            raise ValueError(f"{args.corpus}: --holdout {args.holdout!r} holds out no command (no text falls in "
                              f"{split}); nothing to score: hold out a larger fraction")
         if not train:
             where = "the development or the tuning split" if args.tuning else split
-            raise ValueError(f"{args.corpus}: --holdout {args.holdout:g} leaves no command to train on (every text "
+            raise ValueError(f"{args.corpus}: --holdout {args.holdout!r} leaves no command to train on (every text "
                              f"falls in {where}): hold out a smaller fraction")
     from groundlang.model.language_models import get_language_model
 
