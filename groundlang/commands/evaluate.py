@@ -13,7 +13,8 @@ from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("evaluate", help="leave-one-out or train-set accuracy against gold labels")
+    p = subparsers.add_parser("evaluate", help="accuracy: leave-one-out or train-set against gold labels (*.txt corpus), "
+                                                   "or on held-out (start, end) pairs (.bdm corpus: --holdout, --test)")
     p.add_argument("--corpus", required=True, metavar="DIR",
                    help="training corpus: a folder of *.txt files, or a .bdm file or folder of them (Williams 2018)")
     p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
@@ -50,7 +51,7 @@ def register(subparsers) -> None:
                    "corpus is scored by its test pairs, every one)")
     p.add_argument("--cold-folds", action="store_true",
                    help="fit every leave-one-out fold from scratch instead of from the full model "
-                        "(about 6x slower: 123 s against 21 s on the simplified crowd commands)")
+                        "(several times slower: each fold's EM starts from the prior)")
     p.add_argument("--min-confidence", type=fraction, default=DEFAULT_MIN_CONFIDENCE, metavar="P",
                    help="report coverage and accuracy of the commands read with confidence P or more, as "
                         f"follow would act on them (default {DEFAULT_MIN_CONFIDENCE}, follow's); predictions unchanged")
