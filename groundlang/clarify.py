@@ -21,10 +21,12 @@ import re
 from collections.abc import Callable, Sequence
 
 from groundlang.confidence import GoalGroup
+from groundlang.logic.atoms import shown
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.phrase_keys import entity_words
 from groundlang.model.world import object_class
 from groundlang.model.world import State
+from groundlang.results import FollowResult
 from groundlang.wording import choice_list, goal_phrase, object_phrase
 
 __all__ = ["AnswerError", "competing", "unknown_words", "question", "choose", "clear_choice"]
@@ -102,6 +104,18 @@ def _words(text: str) -> set[str]:
     return set(re.findall(r"[a-z0-9]+", text.lower()))
 
 
+def answer_text(answer, result) -> str:
+    """``clarify``'s answer as text (an int is a choice's number), TypeError for arguments of the wrong type."""
+    if not isinstance(result, FollowResult):
+        raise TypeError(f"clarify: result must be the FollowResult follow() returned, got {type(result).__name__}")
+    if isinstance(answer, int) and not isinstance(answer, bool):
+        return str(answer)
+    if not isinstance(answer, str):
+        raise TypeError(f"clarify: answer must be a str (words, or a choice's number) or an int, got "
+                        f"{type(answer).__name__}")
+    return answer
+
+
 def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: TaskLibrary,
            read: Callable[[str, Sequence[GoalGroup]], GoalGroup | None] | None = None) -> GoalGroup:
     """The choice ``answer`` names: a number from 1, or words (see the module docstring).
@@ -112,9 +126,10 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
         raise AnswerError("empty answer: expected a number or words naming one of the choices")
     phrases = option_phrases(choices, state, library)
     if text.isdecimal():  # int() reads every decimal digit ("٣"), not every digit ("²")
-        k = int(text)
-        if not 1 <= k <= len(choices):
-            raise AnswerError(f"answer {k}: expected a number from 1 to {len(choices)}")
+        # int() refuses more than 4300 digits with its own error; no choice has a number that long
+        k = int(text) if len(text) <= 18 else None
+        if k is None or not 1 <= k <= len(choices):
+            raise AnswerError(f"answer {shown(text)}: expected a number from 1 to {len(choices)}")
         return choices[k - 1]
     named = [_words(p) for p in phrases]
     telling = set().union(*named) - set.intersection(*named)  # words some phrases have and others lack
@@ -125,7 +140,7 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
         return choices[overlap.index(best)]
     chosen = read(text, choices) if read is not None else None
     if chosen is None:
-        raise AnswerError(f"{text!r} names none of the choices ({choice_list(phrases)}): "
+        raise AnswerError(f"{shown(repr(text), limit=60)} names none of the choices ({choice_list(phrases)}): "
                           f"answer with their number, 1 to {len(choices)}, or their words")
     return chosen
 

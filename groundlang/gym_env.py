@@ -187,8 +187,12 @@ class CleanupEnv(gymnasium.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported; expected one of "
                              f"{', '.join(self.metadata['render_modes'])} or None")
-        if max_steps < 1:
-            raise ValueError(f"max_steps must be at least 1, got {max_steps}")
+        if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
+            raise ValueError(f"max_steps must be a positive integer, got {max_steps!r:.40}")
+        if state is not None and not isinstance(state, State):
+            raise TypeError(f"state must be a State (or None for the example corpus's), got {type(state).__name__}")
+        if not isinstance(command, str):
+            raise TypeError(f"command must be a str, got {type(command).__name__}")
         self.render_mode = render_mode
         self.max_steps = int(max_steps)
         self._fixed_state = state
@@ -207,13 +211,20 @@ class CleanupEnv(gymnasium.Env):
         self.command = ""
         self.goal: tuple[Atom, ...] | None = None
         self.steps = 0
+        self._over = False  # terminated or truncated: only reset() goes on
         self._static: np.ndarray | None = None
 
     @staticmethod
     def _goal(goal) -> tuple[Atom, ...] | None:
         if goal is None or goal == "" or goal == ():
             return None
-        return parse_goal(goal) if isinstance(goal, str) else tuple(goal)
+        if isinstance(goal, str):
+            return parse_goal(goal)
+        if isinstance(goal, Atom):
+            return (goal,)
+        if isinstance(goal, (tuple, list)) and all(isinstance(a, Atom) for a in goal):
+            return tuple(goal)
+        raise TypeError(f"goal must be a goal string, an Atom or a sequence of Atoms, got {type(goal).__name__}")
 
     def _holds(self) -> bool:
         from groundlang.labels import goal_holds
@@ -229,7 +240,15 @@ class CleanupEnv(gymnasium.Env):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
+        if options is not None and not isinstance(options, dict):
+            raise TypeError(f"options must be a dict, got {type(options).__name__}")
         options = dict(options or {})
+        if unknown := sorted(set(options) - {"state", "command", "goal"}):
+            raise ValueError(f"options {', '.join(map(repr, unknown))}: expected state, command or goal")
+        if "state" in options and not isinstance(options["state"], State):
+            raise TypeError(f"options['state'] must be a State, got {type(options['state']).__name__}")
+        if "command" in options and not isinstance(options["command"], str):
+            raise TypeError(f"options['command'] must be a str, got {type(options['command']).__name__}")
         state, command, goal = self._fixed_state, self._fixed_command, self._fixed_goal
         if "state" not in options and state is None:
             pool = _example_pool()
@@ -246,21 +265,33 @@ class CleanupEnv(gymnasium.Env):
         if state.layout.height > self.grid_shape[0] or state.layout.width > self.grid_shape[1]:
             raise ValueError(f"state of size {state.layout.height}x{state.layout.width} does not fit the "
                              f"observation grid {self.grid_shape[0]}x{self.grid_shape[1]} of this env")
-        self.state, self.command, self.goal, self.steps = state, command, goal, 0
+        palette = state.layout.palette
+        if max(len(palette.colours), len(palette.shapes)) + 1 > self.observation_space["grid"].high.max():
+            raise ValueError(f"state of palette {palette.name}: its {len(palette.colours)} colours and "
+                             f"{len(palette.shapes)} shapes do not fit the observation space of this env; "
+                             "make the env with a state of that palette")
+        self.state, self.command, self.goal, self.steps, self._over = state, command, goal, 0, False
         self._static = _static_grid(state, self.grid_shape)
         return self._observation(), self._info()
 
     def step(self, action):
         if self.state is None:
             raise RuntimeError("call reset() before step()")
+        if self._over:
+            raise RuntimeError("the episode is over (terminated or truncated): call reset() before step()")
+        # int(1.5) would take a move no policy chose; an integer type only, in range
+        if isinstance(action, bool) or not isinstance(action, (int, np.integer)) or not 0 <= action < len(CleanupAction):
+            raise ValueError(f"action must be an integer from 0 to {len(CleanupAction) - 1} (CleanupAction), "
+                             f"got {action!r:.40}")
         action = CleanupAction(int(action))
         self.steps += 1
         if action == CleanupAction.TERMINATE:
-            holds = self._holds()
-            return self._observation(), float(holds), True, False, self._info()
+            self._over = True
+            return self._observation(), float(self._holds()), True, False, self._info()
         self.state = step(self.state, action)
         holds = self._holds()
         truncated = not holds and self.steps >= self.max_steps
+        self._over = holds or truncated
         return self._observation(), float(holds), holds, truncated, self._info()
 
     def render(self):
@@ -308,10 +339,16 @@ class CommandPolicy:
         self.mask = np.asarray(mask, dtype=bool)  # [S]
 
     def state_index(self, observation) -> int:
-        grid = observation["grid"] if isinstance(observation, dict) else observation
+        grid = observation.get("grid") if isinstance(observation, dict) else observation
         if isinstance(grid, State):
             return int(self.space.indices_of(grid.positions[None])[0])
-        candidates = _position_candidates(np.asarray(grid), self.space.layout)
+        grid = np.asarray(grid) if isinstance(grid, np.ndarray) else None
+        lay = self.space.layout
+        if grid is None or grid.ndim != 3 or grid.shape[2] != len(CHANNELS) or grid.shape[0] < lay.height \
+                or grid.shape[1] < lay.width:
+            raise ValueError(f"observation must be an env's (a dict whose 'grid' is [H, W, {len(CHANNELS)}], at "
+                             f"least {lay.height}x{lay.width} here) or a State, got {type(observation).__name__}")
+        candidates = _position_candidates(grid, lay)
         if not candidates:
             return -1
         found = self.space.indices_of(np.stack(candidates))
@@ -341,6 +378,10 @@ def policy(learner, command: str, state) -> CommandPolicy:
     from groundlang.model.pf_tables import pf_tables
     from groundlang.model.relevance import state_space_for
 
+    from groundlang.learner import Learner
+
+    if not isinstance(learner, Learner):
+        raise TypeError(f"policy: learner must be a trained Learner, got {type(learner).__name__}")
     if isinstance(state, gymnasium.Env):
         state = state.unwrapped.state
         if state is None:

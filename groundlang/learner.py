@@ -16,7 +16,7 @@ from pathlib import Path
 import torch
 
 from groundlang.grammar.parser import parse
-from groundlang.clarify import AnswerError, choose, clear_choice, competing, question, unknown_words
+from groundlang.clarify import AnswerError, answer_text, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import given_achievable, group_goals
 from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at
 from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
@@ -36,8 +36,8 @@ from groundlang.model.language_models import BagOfWords, LanguageModel, get_lang
 from groundlang.model.relevance import check_abstraction_possible
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
-from groundlang.learner_state import (check_count, check_state, check_training_options, learner_from_state,
-                                       learner_state)
+from groundlang.learner_state import (check_count, check_model_parts, check_state, check_threshold,
+                                       check_training_options, learner_from_state, learner_state)
 from groundlang.model_io import check_parameter_bound, read_model, write_model
 from groundlang.results import FollowResult, Posterior
 from groundlang.training_vocabulary import build_vocabulary, palette_schema, schema_words, word_files_beside
@@ -81,6 +81,7 @@ class Learner:
         lexicon: WordSource | Sequence[WordSource] | None = None,
         em_acceleration: str = "squarem",
     ):
+        check_model_parts(language_model, library)
         self.lm = get_language_model(language_model) if isinstance(language_model, str) else language_model
         self.library = library if library is not None else TaskLibrary.load()
         if not self.library.tasks:  # a file of PFs only (discover --pfs) is a library of none
@@ -303,6 +304,7 @@ class Learner:
         ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer.
         """
         check_count("follow", "max_steps", max_steps)
+        check_threshold("follow", "min_confidence", min_confidence)
         self._require_fitted()
         self._check_state("follow", command, state)
         check_abstraction_possible(state)
@@ -331,12 +333,17 @@ class Learner:
         found = expected_success_states(goals, masks, self.lm.step_cost, self.habits if self.lm.end_habits else None)
         return None if found is None else (space, masks, goals, *found)
 
-    def clarify(self, result: FollowResult, answer: str, max_steps: int = 200) -> FollowResult:
+    def clarify(self, result: FollowResult, answer: str | int, max_steps: int = 200) -> FollowResult:
         """Act on the choice ``answer`` names among an abstained ``result``'s ``choices``: a number
-        from 1 or words ("the green one"). Raises AnswerError when it names none or several."""
+        from 1 (an int, or its digits) or words ("the green one"). Raises AnswerError when it names none
+        or several; TypeError for arguments of the wrong type."""
+        answer = answer_text(answer, result)
+        check_count("clarify", "max_steps", max_steps)
         if not result.abstained:
             raise ValueError("clarify() takes a result that abstained; this one acted already")
         state = result.states[0]
+        self._require_fitted()  # a numeric answer never reads the words, but acting is this model's
+        self._check_state("clarify", result.command, state)
         chosen = choose(answer, result.choices, state, self.library,
                         read=lambda text, choices: clear_choice(
                             dict(self.posterior(f"{result.command}, {text}", state).goals()), choices))
@@ -383,6 +390,7 @@ class Learner:
         used: a token no training interpretation offered keeps its flat prior
         distribution and is left out, so that it does not dilute the table.
         """
+        check_count("lexicon", "top", top)  # a slice would have taken -1 as "all but the last"
         self._require_fitted()
         return word_meanings(self.globals, self.vocab, top)
 

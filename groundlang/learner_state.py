@@ -24,7 +24,15 @@ __all__ = ["learner_state", "learner_from_state", "check_count", "check_training
 def check_count(method: str, name: str, value) -> None:
     """ValueError unless ``value`` is a positive integer (``method`` and ``name`` say where)."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{method}: {name} must be a positive integer, got {value!r}")
+        raise ValueError(f"{method}: {name} must be a positive integer, got {value!r:.40}")
+
+
+def check_threshold(method: str, name: str, value) -> None:
+    """ValueError unless ``value`` is None or a number from 0 to 1 (a confidence threshold): with nan, every
+    comparison is false and the learner acted however unsure."""
+    if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.floating))
+                              or not 0 <= value <= 1):
+        raise ValueError(f"{method}: {name} must be a number from 0 to 1 (or None), got {value!r:.40}")
 
 
 def check_state(palettes: list[dict] | None, method: str, command: str, state: State) -> None:
@@ -45,13 +53,28 @@ def check_state(palettes: list[dict] | None, method: str, command: str, state: S
                          f"palette {trained}{same_name} (colours and shapes must be the same to read its words)")
 
 
+def check_model_parts(language_model, library) -> None:
+    """TypeError unless ``Learner(language_model=..., library=...)`` are a model's name or a LanguageModel,
+    and a TaskLibrary or None: either, wrong, failed only inside fit with an AttributeError."""
+    from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.language_models import LANGUAGE_MODELS, LanguageModel
+
+    if not isinstance(language_model, (str, LanguageModel)):
+        raise TypeError(f"Learner: language_model must be a name ({', '.join(LANGUAGE_MODELS)}) or a "
+                        f"LanguageModel, got {type(language_model).__name__}")
+    if library is not None and not isinstance(library, TaskLibrary):
+        raise TypeError(f"Learner: library must be a TaskLibrary (TaskLibrary.load(path)) or None, got "
+                        f"{type(library).__name__}")
+
+
 def check_training_options(steps, lr, seed, settings, em_acceleration) -> None:
     """The checks of ``Learner(...)``'s training options, whether given or read from a saved model."""
     check_count("Learner", "steps", steps)
     if isinstance(lr, bool) or not isinstance(lr, (int, float)) or not 0 < lr < float("inf"):
         raise ValueError(f"Learner: lr must be a positive number, got {lr!r}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise ValueError(f"Learner: seed must be an integer, got {seed!r}")
+    # numpy's and torch's generators take seeds of 32 bits; a wider one failed only inside fit, minutes in
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**32:
+        raise ValueError(f"Learner: seed must be an integer from 0 to 2**32 - 1, got {seed!r:.40}")
     if settings is not None and not isinstance(settings, TaskSettings):
         raise TypeError(f"Learner: settings must be a TaskSettings, got {type(settings).__name__}")
     if em_acceleration not in EM_ACCELERATIONS:

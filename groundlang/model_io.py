@@ -76,6 +76,11 @@ def check_model_destination(directory: str | Path, option: str = "") -> Path:
     except ValueError as exc:
         raise ModelFormatError(f"{exc}; a model is written to a folder") from None
     storage.check_writable(directory, MODEL_JSON, where)  # /proc/m, a read-only mount: now, not after training
+    # Inside another model's folder, the new one would be a stray file of that model's, which refuses its next save.
+    owner = next((p for p in directory.resolve().parents if (p / MODEL_JSON).is_file()), None)
+    if owner is not None:
+        raise ModelFormatError(f"{where}: inside the folder of the model in {owner}; write the model to a folder "
+                               "of its own")
     if not directory.is_dir():
         return directory
     others = sorted(p.name for p in directory.iterdir() if p.name != MODEL_JSON

@@ -17,7 +17,7 @@ from groundlang.confidence import GoalGroup
 from groundlang.corpus import Instance
 from groundlang.inference.incremental import fold_in, grow_words, word_totals
 from groundlang.inference.likelihoods import behaviour_likelihood_table
-from groundlang.logic.atoms import Atom, format_goal, parse_goal
+from groundlang.logic.atoms import Atom, format_goal, parse_goal, shown
 from groundlang.model.encoding import Observation
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import Action, WorldError, replay
@@ -37,7 +37,7 @@ def as_goals(goal) -> tuple[tuple[Atom, ...], ...]:
         try:
             return (parse_goal(goal),)
         except ValueError as exc:
-            raise ValueError(f"update: goal {goal!r} is not a goal ({exc})") from None
+            raise ValueError(f"update: goal {shown(repr(goal), limit=60)} is not a goal ({shown(str(exc), limit=200)})") from None
     if isinstance(goal, Atom):
         return ((goal,),)
     if isinstance(goal, tuple) and goal and all(isinstance(a, Atom) for a in goal):
@@ -51,6 +51,11 @@ def as_actions(demonstration) -> tuple[Action, ...]:
     string of words as corpus files hold them ("south,south,west")."""
     if isinstance(demonstration, str):
         demonstration = [w for w in demonstration.split(",") if w.strip()]
+    elif isinstance(demonstration, (list, tuple)):
+        odd = next((a for a in demonstration if not isinstance(a, (Action, str))), None)
+        if odd is not None:
+            raise TypeError(f"update: demonstration: each action must be an Action or its word ('north'), got "
+                            f"{type(odd).__name__}")
     try:
         actions = tuple(a if isinstance(a, Action) else Action.parse(a) for a in demonstration)
     except TypeError:

@@ -126,6 +126,68 @@ def test_bad_arguments_are_value_errors(state):
         CleanupEnv(state, max_steps=0)
     with pytest.raises(ValueError, match="at most"):
         command_text("x" * 2000)
+    for steps in (1.5, "10", None, float("nan"), True):
+        with pytest.raises(ValueError, match="max_steps must be a positive integer"):
+            CleanupEnv(state, max_steps=steps)
+    with pytest.raises(TypeError, match="state must be a State"):
+        CleanupEnv(state="x")
+    with pytest.raises(TypeError, match="command must be a str"):
+        CleanupEnv(state, command=5)
+    with pytest.raises(TypeError, match="goal must be a goal string"):
+        CleanupEnv(state, goal=5)
+
+
+def test_an_action_must_be_one_of_the_spaces_and_the_episode_ends_for_good(state):
+    """``step(1.5)`` moved as 1 and ``step(4.9)`` terminated; after TERMINATE, a step still moved and paid."""
+    env = CleanupEnv(state, goal="agentInRoom(agent0, room0)")
+    env.reset(seed=0)
+    for action in (1.5, 4.9, "3", True, None, -1, 5, "up"):
+        with pytest.raises(ValueError, match=r"action must be an integer from 0 to 4 \(CleanupAction\)"):
+            env.step(action)
+    assert env.steps == 0  # nothing was taken
+    env.step(np.int64(int(CleanupAction.TERMINATE)))
+    with pytest.raises(RuntimeError, match="the episode is over"):
+        env.step(0)
+    env.reset(seed=0)
+    env.step(0)  # a new episode steps again
+    truncated = CleanupEnv(state, max_steps=1)
+    truncated.reset(seed=0)
+    assert truncated.step(0)[3] is True
+    with pytest.raises(RuntimeError, match="the episode is over"):
+        truncated.step(0)
+
+
+def test_reset_options_are_checked(state):
+    env = CleanupEnv(state)
+    for options, error, message in [("x", TypeError, "options must be a dict"),
+                                    ({"sate": state}, ValueError, "options 'sate': expected state, command or goal"),
+                                    ({"state": None}, TypeError, r"options\['state'\] must be a State"),
+                                    ({"command": None}, TypeError, r"options\['command'\] must be a str")]:
+        with pytest.raises(error, match=message):
+            env.reset(options=options)
+
+
+def test_a_state_whose_palette_outgrows_the_observation_space_is_refused(state):
+    from groundlang.model.palette import Palette
+
+    wide = Palette("wide", tuple(f"c{i}" for i in range(25)), state.layout.palette.shapes)
+    env = CleanupEnv(state)
+    other = parse_state(STATE, wide)
+    with pytest.raises(ValueError, match="do not fit the observation space"):
+        env.reset(options={"state": other})
+
+
+def test_a_policy_refuses_what_is_not_an_observation(state):
+    from groundlang.corpus import read_corpus
+    from groundlang.learner import Learner
+
+    learner = Learner(steps=20, cache_dir=False).fit(read_corpus(example_corpus_path(), "sokoban").instances[:6])
+    act = policy(learner, "go to the red room", state)
+    for observation in (None, 5, {"grid": np.zeros((2, 2, 2), dtype=np.uint8)}, {"command": "x"}):
+        with pytest.raises(ValueError, match="observation must be an env's"):
+            act(observation)
+    with pytest.raises(TypeError, match="policy: learner must be a trained Learner"):
+        policy(None, "go to the red room", state)
 
 
 @pytest.mark.slow

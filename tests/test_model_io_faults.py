@@ -148,6 +148,16 @@ def test_kill_9_between_the_steps_of_a_save_keeps_the_previous_model(learners, t
     assert _same_globals(Learner.load(model), new)
 
 
+def test_a_model_is_never_saved_inside_another_models_folder(learners, tmp_path):
+    """``save("m"); save("m/backup")`` succeeded, and then ``save("m")`` was refused: m held other files."""
+    learners[0].save(tmp_path / "m")
+    with pytest.raises(ModelFormatError, match=f"m/backup: inside the folder of the model in {tmp_path / 'm'}"):
+        learners[1].save(tmp_path / "m" / "backup")
+    assert not (tmp_path / "m" / "backup").exists()
+    learners[1].save(tmp_path / "m")  # still a folder of one model, replaced whole
+    assert _same_globals(Learner.load(tmp_path / "m"), learners[1])
+
+
 def test_a_save_removes_temporary_files_of_interrupted_saves_and_keeps_others(learners, tmp_path):
     old, _ = learners
     model = old.save(tmp_path / "m")

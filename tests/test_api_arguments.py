@@ -1,0 +1,72 @@
+"""The Python API refuses arguments a notebook user gets wrong with one clear error naming the argument,
+before any work, instead of an AttributeError from deep inside or a silently wrong answer."""
+
+from __future__ import annotations
+
+import pytest
+
+from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
+from groundlang.learner import Learner, NotFittedError
+
+EXAMPLES = example_corpus_path()
+
+
+@pytest.fixture(scope="module")
+def trained():
+    return Learner(steps=30, cache_dir=False).fit(read_corpus(EXAMPLES, "sokoban").instances[:8])
+
+
+@pytest.fixture(scope="module")
+def novel():
+    return read_state_file(EXAMPLES / "novel_b.state", "sokoban")
+
+
+@pytest.mark.parametrize("options, error, message", [
+    ({"language_model": None}, TypeError, "Learner: language_model must be a name"),
+    ({"library": "tasks"}, TypeError, r"Learner: library must be a TaskLibrary \(TaskLibrary.load\(path\)\)"),
+    ({"seed": -1}, ValueError, r"Learner: seed must be an integer from 0 to 2\*\*32 - 1, got -1"),
+    ({"seed": 2**70}, ValueError, "Learner: seed must be an integer from 0 to 2"),  # failed inside fit before
+])
+def test_constructor_arguments_are_checked_at_construction(options, error, message):
+    with pytest.raises(error, match=message):
+        Learner(**options)
+
+
+@pytest.mark.parametrize("threshold", [-1, 2, float("nan"), "0.5", True])
+def test_follow_checks_min_confidence(trained, novel, threshold):
+    """nan acted however unsure (every comparison with it is false); -1 and 2 were taken as given."""
+    with pytest.raises(ValueError, match="follow: min_confidence must be a number from 0 to 1"):
+        trained.follow("go to the red room", novel, min_confidence=threshold)
+
+
+def test_clarify_takes_a_choice_by_number_and_checks_the_rest(trained, novel):
+    asked = trained.follow("go to the purple room", novel, min_confidence=0.999)
+    assert asked.abstained
+    by_int, by_text = trained.clarify(asked, 1), trained.clarify(asked, "1")
+    assert by_int.goal == by_text.goal and by_int.states == by_text.states
+    with pytest.raises(TypeError, match="clarify: answer must be a str"):
+        trained.clarify(asked, 2.0)
+    with pytest.raises(TypeError, match="clarify: result must be the FollowResult"):
+        trained.clarify(None, "1")
+    with pytest.raises(ValueError, match="clarify: max_steps must be a positive integer"):
+        trained.clarify(asked, "1", max_steps=0)
+    with pytest.raises(NotFittedError):
+        Learner().clarify(asked, "1")  # a number reads no words, but acting is a trained model's
+    too_long = trained.clarify  # an answer of 5000 digits is one short line, not int()'s own error
+    with pytest.raises(ValueError, match=r"answer 99999999999999999999\.\.\. \(5000 characters\): expected a number"):
+        too_long(asked, "9" * 5000)
+
+
+def test_update_names_what_is_wrong_in_a_short_line(trained, novel):
+    with pytest.raises(TypeError, match="update: demonstration: each action must be an Action or its word"):
+        trained.update("go north", novel, demonstration=[1, 2])
+    with pytest.raises(ValueError, match="update: goal") as caught:
+        trained.update("go", novel, goal="agentInRoom(agent0" + ", room1" * 100000)
+    assert len(str(caught.value)) < 400
+
+
+def test_lexicon_top_is_a_positive_count(trained):
+    assert all(len(m) <= 2 for m in trained.lexicon(top=2).values())
+    for top in (-1, 0, 1.5, "3"):
+        with pytest.raises(ValueError, match="lexicon: top must be a positive integer"):
+            trained.lexicon(top=top)
