@@ -39,8 +39,8 @@ def phrase_alignments(learner, command: str, state, interpretation: int | None =
         return []
     J = len(obs.interpretations)
     j = int(z[0, :J].argmax()) if interpretation is None else interpretation
-    if not 0 <= j < J:
-        raise ValueError(f"alignments: interpretation must be an index below {J}, not {interpretation!r}")
+    if isinstance(j, bool) or not isinstance(j, int) or not 0 <= j < J:  # 1.5 indexed a tensor, "0" compared a str
+        raise ValueError(f"alignments: interpretation must be an index below {J}, not {interpretation!r:.40}")
     s = int(structures[0].argmax())
     table = learner.lm.alignment_probabilities(learner.globals, batch, j, s)
     if table is None:

@@ -253,6 +253,8 @@ def read_corpus(directory: str | Path, palette: str | Palette, skip_inconsistent
     ``skip_inconsistent`` is logged as a warning and listed in ``Corpus.skipped``.
     Malformed files always raise CorpusError.
     """
+    if not isinstance(skip_inconsistent, bool):  # "no" would have counted as true
+        raise TypeError(f"read_corpus: skip_inconsistent must be True or False, got {skip_inconsistent!r:.40}")
     directory = Path(directory)
     palette = get_palette(palette)
     if not directory.is_dir():

@@ -70,3 +70,12 @@ def test_lexicon_top_is_a_positive_count(trained):
     for top in (-1, 0, 1.5, "3"):
         with pytest.raises(ValueError, match="lexicon: top must be a positive integer"):
             trained.lexicon(top=top)
+
+
+def test_alignments_take_an_index_and_read_corpus_a_flag(trained, novel):
+    for index in (1.5, "0", True, -1):
+        with pytest.raises(ValueError, match="alignments: interpretation must be an index below"):
+            trained.alignments("go to the red room", novel, interpretation=index)
+    assert trained.alignments("go to the red room", novel, interpretation=0)
+    with pytest.raises(TypeError, match="read_corpus: skip_inconsistent must be True or False, got 'no'"):
+        read_corpus(EXAMPLES, "sokoban", skip_inconsistent="no")
