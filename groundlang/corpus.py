@@ -301,6 +301,8 @@ def write_instance(path: str | Path, instance: Instance) -> None:
 def read_state_file(path: str | Path, palette: str | Palette) -> State:
     """Read a one-line ``.state`` file (a state in the corpus format)."""
     path = Path(path)
+    if path.is_dir():  # read_limited says only "Is a directory"; the CLI says what was expected
+        raise CorpusError(f"{path}: a folder, not a regular file; expected a state file")
     lines = _read_lines(path)
     if not lines:
         raise CorpusError(f"{path}: the file is empty; expected one state line")

@@ -222,6 +222,8 @@ class Learner:
             raise TypeError(f"fit: each instance needs command, initial_state, states and actions (a corpus "
                             f"Instance); got {type(bad).__name__}")
         check_count("fit", "steps", self.steps)
+        if init is not None and not (isinstance(init, Mapping) and all(isinstance(v, torch.Tensor) for v in init.values())):
+            raise TypeError(f"fit: init must map global names to tensors (a learner's globals), got {type(init).__name__}")
         if batch is None:
             if observations is None:
                 observations = self.observe(instances, progress=progress)

@@ -163,6 +163,10 @@ def prior_concentrations(batch: Batch, lm: LanguageModel, vocab: Vocabulary) -> 
 
 
 def _fit_em(model, sites, lm, steps, init, tol, progress, acceleration) -> FitResult:
+    for name, prior in sites.items():
+        if init and name in init and tuple(init[name].shape) != tuple(prior.mean.shape):
+            raise ValueError(f"fit: init[{name!r}] has shape {tuple(init[name].shape)}; this vocabulary's is "
+                             f"{tuple(prior.mean.shape)} (a warm start needs the vocabulary it was fitted with)")
     values = {
         name: (init[name].clone() if init and name in init else prior.mean.detach().clone())
         for name, prior in sites.items()

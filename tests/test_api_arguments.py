@@ -79,3 +79,25 @@ def test_alignments_take_an_index_and_read_corpus_a_flag(trained, novel):
     assert trained.alignments("go to the red room", novel, interpretation=0)
     with pytest.raises(TypeError, match="read_corpus: skip_inconsistent must be True or False, got 'no'"):
         read_corpus(EXAMPLES, "sokoban", skip_inconsistent="no")
+
+
+def test_a_warm_start_must_be_globals_of_this_vocabulary(trained):
+    instances = read_corpus(EXAMPLES, "sokoban").instances[:8]
+    with pytest.raises(TypeError, match="fit: init must map global names to tensors"):
+        trained.fit(instances, init=5)
+    with pytest.raises(TypeError, match="fit: init must map global names to tensors"):
+        trained.fit(instances, init={"phi": "x"})
+    import copy
+
+    import torch
+
+    again = copy.deepcopy(trained)
+    with pytest.raises(ValueError, match=r"fit: init\['phi'\] has shape \(2, 2\); this vocabulary's is"):
+        again.fit(instances, init={"phi": torch.zeros(2, 2)})
+
+
+def test_a_folder_given_as_a_state_file_is_named():
+    from groundlang.corpus import CorpusError
+
+    with pytest.raises(CorpusError, match=f"^{EXAMPLES}: a folder, not a regular file; expected a state file$"):
+        read_state_file(EXAMPLES, "sokoban")
