@@ -1,9 +1,9 @@
-"""Cleanup World as a gymnasium environment, and a learned model's policy for it.
+"""Cleanup World as a gymnasium environment; a learned model's policy for it is in :mod:`groundlang.gym_policy`.
 
-    import gymnasium, groundlang.gym_env          # registers "groundlang/Cleanup-v0"
+    import gymnasium, groundlang.gym_policy       # registers "groundlang/Cleanup-v0" (gym_env does)
     env = gymnasium.make("groundlang/Cleanup-v0", render_mode="rgb_array")
     obs, info = env.reset(seed=0)                 # obs["grid"]: [H, W, 6] uint8, obs["command"]: str
-    act = policy(learner, obs["command"], env.unwrapped.state)
+    act = groundlang.gym_policy.policy(learner, obs["command"], env.unwrapped.state)  # also gym_env.policy
     obs, reward, terminated, truncated, info = env.step(act(obs))
 
 Without ``gymnasium`` installed this module cannot be imported (``pip install
@@ -28,7 +28,6 @@ import enum
 import logging
 import string
 from functools import lru_cache
-from itertools import permutations
 from typing import Any, Callable
 
 import gymnasium
@@ -45,7 +44,7 @@ __all__ = [
     "CHANNELS",
     "COMMAND_CHARSET",
     "MAX_COMMAND_LENGTH",
-    "CommandPolicy",
+    "CommandPolicy",  # these three live in groundlang.gym_policy, read from here as before
     "policy",
     "observation_positions",
     "register_envs",
@@ -121,48 +120,6 @@ def _dynamic_grid(state: State, shape: tuple[int, int]) -> np.ndarray:
         grid[H - 1 - toy.y, toy.x, 1] = pal.colour_index(toy.colour) + 1
         grid[H - 1 - toy.y, toy.x, 2] = pal.shape_index(toy.shape) + 1
     return grid
-
-
-def observation_positions(grid: np.ndarray, layout) -> np.ndarray | None:
-    """Agent and toy positions ``[1 + k, 2]`` (x, y) read from an observation grid.
-
-    Toys are matched to the layout's toys by colour and shape; toys alike in
-    both are interchangeable, and every assignment of them is returned by
-    :func:`_position_candidates`. Returns None when the grid does not show the
-    layout's agent and toys.
-    """
-    candidates = _position_candidates(grid, layout)
-    return candidates[0] if candidates else None
-
-
-def _position_candidates(grid: np.ndarray, layout) -> list[np.ndarray]:
-    grid = np.asarray(grid)
-    H = grid.shape[0]
-    rows, cols = np.nonzero(grid[:, :, 3])
-    if len(rows) != 1:
-        return []
-    agent = (int(cols[0]), H - 1 - int(rows[0]))
-    pal = layout.palette
-    cells: dict[tuple[int, int], list[tuple[int, int]]] = {}
-    for r, c in zip(*np.nonzero(grid[:, :, 4])):
-        key = (int(grid[r, c, 4]) - 1, int(grid[r, c, 5]) - 1)
-        cells.setdefault(key, []).append((int(c), H - 1 - int(r)))
-    wanted: dict[tuple[int, int], list[int]] = {}
-    for i, (colour, shape) in enumerate(layout.toy_attributes):
-        wanted.setdefault((pal.colour_index(colour), pal.shape_index(shape)), []).append(i)
-    if {k: len(v) for k, v in wanted.items()} != {k: len(v) for k, v in cells.items()}:
-        return []
-    out = [np.zeros((1 + len(layout.toy_attributes), 2), dtype=np.int64)]
-    out[0][0] = agent
-    for key, toys in wanted.items():
-        extended = []
-        for base in out:
-            for perm in permutations(cells[key]):
-                new = base.copy()
-                new[[1 + t for t in toys]] = perm
-                extended.append(new)
-        out = extended
-    return out
 
 
 class CleanupEnv(gymnasium.Env):
@@ -321,84 +278,6 @@ def render_rgb(state: State, title: str | None = None, trajectory=None, dpi: int
     return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
 
 
-class CommandPolicy:
-    """A closed-loop policy for one command: observation -> CleanupAction.
-
-    Plans once, on every state reachable from the initial state (or, in a
-    world too large for that, from its relevance abstraction for the goal),
-    for the most probable grounded goal of the command; then each observation
-    is looked up in that state space. TERMINATE where the goal holds or when the observation
-    is outside the planned space (nothing sensible to do).
-    """
-
-    def __init__(self, goal, posterior, space, log_policy, mask):
-        self.goal = goal  # tuple[Atom, ...]
-        self.posterior = posterior
-        self.space = space
-        self.log_policy = np.asarray(log_policy)  # [S, 5]
-        self.mask = np.asarray(mask, dtype=bool)  # [S]
-
-    def state_index(self, observation) -> int:
-        grid = observation.get("grid") if isinstance(observation, dict) else observation
-        if isinstance(grid, State):
-            return int(self.space.indices_of(grid.positions[None])[0])
-        grid = np.asarray(grid) if isinstance(grid, np.ndarray) else None
-        lay = self.space.layout
-        if grid is None or grid.ndim != 3 or grid.shape[2] != len(CHANNELS) or grid.shape[0] < lay.height \
-                or grid.shape[1] < lay.width:
-            raise ValueError(f"observation must be an env's (a dict whose 'grid' is [H, W, {len(CHANNELS)}], at "
-                             f"least {lay.height}x{lay.width} here) or a State, got {type(observation).__name__}")
-        candidates = _position_candidates(grid, lay)
-        if not candidates:
-            return -1
-        found = self.space.indices_of(np.stack(candidates))
-        hits = found[found >= 0]
-        return int(hits[0]) if len(hits) else -1
-
-    def __call__(self, observation) -> CleanupAction:
-        s = self.state_index(observation)
-        if s < 0 or self.mask[s]:
-            return CleanupAction.TERMINATE
-        return CleanupAction(int(np.argmax(self.log_policy[s])))
-
-
-def policy(learner, command: str, state) -> CommandPolicy:
-    """Wrap a trained :class:`groundlang.Learner` into a callable ``observation -> action``.
-
-    ``state`` is the initial :class:`State` or a reset :class:`CleanupEnv`
-    (its current state). It ends where :meth:`Learner.follow` would
-    (:meth:`Learner.ending`: where the goals of the whole posterior most
-    probably hold, with the language model's ``expected_success``), else where
-    the posterior's most probable grounded goal holds, planned by soft value
-    iteration with the learner's settings. Raises NotFittedError for an
-    untrained learner.
-    """
-    from groundlang.inference.planning import solve_task
-    from groundlang.model.features import goal_mask
-    from groundlang.model.pf_tables import pf_tables
-    from groundlang.model.relevance import state_space_for
-
-    from groundlang.learner import Learner
-
-    if not isinstance(learner, Learner):
-        raise TypeError(f"policy: learner must be a trained Learner, got {type(learner).__name__}")
-    if isinstance(state, gymnasium.Env):
-        state = state.unwrapped.state
-        if state is None:
-            raise ValueError("the environment has no state yet: call reset() first")
-    post = learner.posterior(command, state)
-    ending = learner.ending(post, state)
-    if ending:
-        space, _, _, mask, goal = ending
-    else:
-        goal = post.best_goal
-        tables = pf_tables(state.layout, learner.library.tabulation_program)
-        space = state_space_for(state, goal, tables=tables)
-        mask = goal_mask(space, goal, tables)
-    solved = solve_task(space.next_state, mask, learner.settings)
-    return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask)
-
-
 def run_episode(env: gymnasium.Env, act: Callable, seed: int | None = None, options: dict | None = None):
     """Reset ``env`` and act until the episode ends; returns (states, actions, total reward, info)."""
     obs, info = env.reset(seed=seed, options=options)
@@ -412,6 +291,16 @@ def run_episode(env: gymnasium.Env, act: Callable, seed: int | None = None, opti
             states.append(info["state"])
         if terminated or truncated:
             return states, actions, total, info
+
+
+def __getattr__(name: str):
+    # The policy reads this module's observations, so it imports this module; importing it back lazily keeps
+    # ``from groundlang.gym_env import policy`` working without a cycle at import time.
+    if name in ("CommandPolicy", "policy", "observation_positions"):
+        from groundlang import gym_policy
+
+        return getattr(gym_policy, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def register_envs() -> None:

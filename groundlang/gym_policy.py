@@ -1,0 +1,137 @@
+"""A trained learner's closed-loop policy for :class:`groundlang.gym_env.CleanupEnv`: observations read back
+into states of the layout, and an action for each from one plan (see :mod:`groundlang.gym_env`).
+
+Without ``gymnasium`` installed this module cannot be imported (``pip install groundlang[gym]``).
+"""
+
+from __future__ import annotations
+
+from itertools import permutations
+
+import gymnasium
+import numpy as np
+
+from groundlang.gym_env import CHANNELS, CleanupAction
+from groundlang.model.world import State
+
+__all__ = ["CommandPolicy", "policy", "observation_positions"]
+
+
+def observation_positions(grid: np.ndarray, layout) -> np.ndarray | None:
+    """Agent and toy positions ``[1 + k, 2]`` (x, y) read from an observation grid.
+
+    Toys are matched to the layout's toys by colour and shape; toys alike in
+    both are interchangeable, and every assignment of them is returned by
+    :func:`_position_candidates`. Returns None when the grid does not show the
+    layout's agent and toys.
+    """
+    candidates = _position_candidates(grid, layout)
+    return candidates[0] if candidates else None
+
+
+def _position_candidates(grid: np.ndarray, layout) -> list[np.ndarray]:
+    grid = np.asarray(grid)
+    H = grid.shape[0]
+    rows, cols = np.nonzero(grid[:, :, 3])
+    if len(rows) != 1:
+        return []
+    agent = (int(cols[0]), H - 1 - int(rows[0]))
+    pal = layout.palette
+    cells: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    for r, c in zip(*np.nonzero(grid[:, :, 4])):
+        key = (int(grid[r, c, 4]) - 1, int(grid[r, c, 5]) - 1)
+        cells.setdefault(key, []).append((int(c), H - 1 - int(r)))
+    wanted: dict[tuple[int, int], list[int]] = {}
+    for i, (colour, shape) in enumerate(layout.toy_attributes):
+        wanted.setdefault((pal.colour_index(colour), pal.shape_index(shape)), []).append(i)
+    if {k: len(v) for k, v in wanted.items()} != {k: len(v) for k, v in cells.items()}:
+        return []
+    out = [np.zeros((1 + len(layout.toy_attributes), 2), dtype=np.int64)]
+    out[0][0] = agent
+    for key, toys in wanted.items():
+        extended = []
+        for base in out:
+            for perm in permutations(cells[key]):
+                new = base.copy()
+                new[[1 + t for t in toys]] = perm
+                extended.append(new)
+        out = extended
+    return out
+
+
+class CommandPolicy:
+    """A closed-loop policy for one command: observation -> CleanupAction.
+
+    Plans once, on every state reachable from the initial state (or, in a
+    world too large for that, from its relevance abstraction for the goal),
+    for the most probable grounded goal of the command; then each observation
+    is looked up in that state space. TERMINATE where the goal holds or when the observation
+    is outside the planned space (nothing sensible to do).
+    """
+
+    def __init__(self, goal, posterior, space, log_policy, mask):
+        self.goal = goal  # tuple[Atom, ...]
+        self.posterior = posterior
+        self.space = space
+        self.log_policy = np.asarray(log_policy)  # [S, 5]
+        self.mask = np.asarray(mask, dtype=bool)  # [S]
+
+    def state_index(self, observation) -> int:
+        grid = observation.get("grid") if isinstance(observation, dict) else observation
+        if isinstance(grid, State):
+            return int(self.space.indices_of(grid.positions[None])[0])
+        grid = np.asarray(grid) if isinstance(grid, np.ndarray) else None
+        lay = self.space.layout
+        if grid is None or grid.ndim != 3 or grid.shape[2] != len(CHANNELS) or grid.shape[0] < lay.height \
+                or grid.shape[1] < lay.width:
+            raise ValueError(f"observation must be an env's (a dict whose 'grid' is [H, W, {len(CHANNELS)}], at "
+                             f"least {lay.height}x{lay.width} here) or a State, got {type(observation).__name__}")
+        candidates = _position_candidates(grid, lay)
+        if not candidates:
+            return -1
+        found = self.space.indices_of(np.stack(candidates))
+        hits = found[found >= 0]
+        return int(hits[0]) if len(hits) else -1
+
+    def __call__(self, observation) -> CleanupAction:
+        s = self.state_index(observation)
+        if s < 0 or self.mask[s]:
+            return CleanupAction.TERMINATE
+        return CleanupAction(int(np.argmax(self.log_policy[s])))
+
+
+def policy(learner, command: str, state) -> CommandPolicy:
+    """Wrap a trained :class:`groundlang.Learner` into a callable ``observation -> action``.
+
+    ``state`` is the initial :class:`State` or a reset :class:`CleanupEnv`
+    (its current state). It ends where :meth:`Learner.follow` would
+    (:meth:`Learner.ending`: where the goals of the whole posterior most
+    probably hold, with the language model's ``expected_success``), else where
+    the posterior's most probable grounded goal holds, planned by soft value
+    iteration with the learner's settings. Raises NotFittedError for an
+    untrained learner.
+    """
+    from groundlang.inference.planning import solve_task
+    from groundlang.model.features import goal_mask
+    from groundlang.model.pf_tables import pf_tables
+    from groundlang.model.relevance import state_space_for
+
+    from groundlang.learner import Learner
+
+    if not isinstance(learner, Learner):
+        raise TypeError(f"policy: learner must be a trained Learner, got {type(learner).__name__}")
+    if isinstance(state, gymnasium.Env):
+        state = state.unwrapped.state
+        if state is None:
+            raise ValueError("the environment has no state yet: call reset() first")
+    post = learner.posterior(command, state)
+    ending = learner.ending(post, state)
+    if ending:
+        space, _, _, mask, goal = ending
+    else:
+        goal = post.best_goal
+        tables = pf_tables(state.layout, learner.library.tabulation_program)
+        space = state_space_for(state, goal, tables=tables)
+        mask = goal_mask(space, goal, tables)
+    solved = solve_task(space.next_state, mask, learner.settings)
+    return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask)
