@@ -6,7 +6,7 @@
 # * a **new propositional function** in a new PF class, `size`: `roomIsLarge(R)` holds of the room with the largest floor;
 # * a **new lifted task**, `agentToToy` ("walk up to the star"), whose goal is the existing position PF `agentTouchingToy`;
 #
-# looks at their groundings in a layout, and trains a learner with them. No Python code of the package changes: the rules go in as text (`TaskLibrary.from_text`, or `.lp` files with `TaskLibrary.load([...])` and `groundlang train --tasks`).
+# looks at their groundings in a layout, and trains a learner with them. No Python code of the package changes: the rules go in as text (`TaskLibrary.from_text`, or `.lp` files with `TaskLibrary.load([...])` and `groundlang train --library`).
 
 # %%
 import os

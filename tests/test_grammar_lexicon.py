@@ -162,6 +162,22 @@ def test_cli_parse_reads_extra_word_files(tmp_path, capsys):
     assert top == "put(star1, table1), P1(table1, coffee)"
 
 
+def test_cli_parse_reads_a_palettes_names_as_a_learner_trained_on_it_does(tmp_path, capsys):
+    """A user's palette with a new shape: "ball" read as a noun, not also as the ball's modifier, as training
+    on states of that palette reads it (Learner.observe adds the schema's words)."""
+    palette = tmp_path / "toys.lp"
+    palette.write_text((LOGIC / "palettes" / "sokoban.lp").read_text() + "value(colour, 13, purple).\n"
+                       "value(shape, 5, ball).\n", encoding="utf-8")
+    command = "take the purple ball to the red room"
+    readings = {}
+    for extra in ([], ["--palette", str(palette)]):
+        assert main(["parse", "--json", command, *extra]) == 0
+        readings[bool(extra)] = [r["logical_form"] for r in json.loads(capsys.readouterr().out)["readings"]]
+    assert any("P2(ball1, ball)" in lf for lf in readings[False])
+    assert readings[True] == ["take(ball1, room1), P1(ball1, purple), P2(room1, red)",
+                              "take(ball1), P1(ball1, purple), P2(room1, red), to(ball1, room1)"]
+
+
 def test_the_longest_multiword_entry_that_fits_is_joined_and_a_prefix_alone_is_not(tmp_path):
     words = tmp_path / "long.words"
     # "up to the" is no entry, though "up to" and "up to the top of" are

@@ -33,6 +33,8 @@ def register(subparsers) -> None:
     p.add_argument("--library", metavar="LP", action="append",
                    help="task library .lp file (repeatable): the words of its word file (mine.words beside "
                         "mine.lp) join the parser's, as a learner trained with it reads them" + LIBRARY_NAMES)
+    p.add_argument("--palette", help="a palette (a name or a .lp file): its colour and shape names join the "
+                                     "parser's words, as a learner trained on states of it reads them")
     p.set_defaults(func=run)
 
 
@@ -68,6 +70,14 @@ def run(args: argparse.Namespace) -> int:
     library = library_given(args)
     beside = word_files_beside(library) if library is not None else []
     words = domain_lexicon(extra_words([*beside, *args.lexicon]))
+    if args.palette:
+        from groundlang.logic.tasks import TaskLibrary
+        from groundlang.model.palette import get_palette
+        from groundlang.training_vocabulary import palette_schema, schema_words
+
+        # What Learner.observe adds: a value's name the lexicon does not list yet ("ball" a noun, "lilac" a hue)
+        named = schema_words(palette_schema(library or TaskLibrary.load(), get_palette(args.palette)))
+        words = words.extend({c: [w for w in ws if not words.listed(w)] for c, ws in named.items()})
     items = [("argument", args.text)] if args.file is None else _commands(args.file)
     full = fallback = empty = 0
     for source, command in items:
