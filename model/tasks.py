@@ -22,7 +22,7 @@ from .geometry import state_facts
 from .world import State
 
 __all__ = [
-    "Candidate", "candidate_tasks", "object_descriptions", "object_relations", "attribute_pfs", "spatial_descriptions",
+    "Candidate", "candidate_tasks", "check_position_pfs", "object_descriptions", "object_relations", "attribute_pfs", "spatial_descriptions",
     "narrow_by_known", "NarrowedCandidate",
 ]
 
@@ -50,6 +50,25 @@ def candidate_tasks(state: State, library: TaskLibrary, wholly_true: bool = Fals
     cached (the library is keyed by identity, the state by value). Raises AspError.
     """
     return [(g, list(c)) for g, c in _environment(state, library)[0] if wholly_true or len(g.holding) < len(g.goal)]
+
+
+def check_position_pfs(state: State, library: TaskLibrary, tables) -> None:
+    """TabulationError naming the first goal PF whose table (``tables``, tabulated over placements of its own
+    arguments, every other object standing everywhere at once) and the state's own grounding disagree at
+    ``state``'s positions. A position PF that reads where another object is (``at(T2, ...)`` of a toy not
+    among its arguments) does: its table then holds wherever that object could be, so planning and the
+    groundings would each say something else, silently."""
+    from groundlang.model.pf_tables import TabulationError
+
+    for grounded, _ in candidate_tasks(state, library, wholly_true=True):
+        held = {tables.check(a) for a in grounded.holding}
+        for atom in map(tables.check, grounded.goal):
+            if atom.predicate in tables.tabulated and bool(tables.column(atom, state.positions[None])[0]) != (atom in held):
+                says = "holds" if atom in held else "does not hold"
+                raise TabulationError(
+                    f"{atom} {says} in the state, but its table over the positions of its arguments says otherwise: "
+                    f"a position PF may read the positions (at/3) of its own arguments only; does {atom.predicate} "
+                    "read where another object is?")
 
 
 def object_descriptions(state: State, library: TaskLibrary) -> Mapping[str, Mapping[str, tuple[str, ...]]]:

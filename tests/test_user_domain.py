@@ -219,3 +219,23 @@ def test_a_word_file_beside_a_library_that_is_not_a_file_is_refused_not_passed_o
     (tmp_path / "mine.words").mkdir()
     assert main(["--quiet", "parse", "--library", str(library), "go"]) == 2
     assert capsys.readouterr().err == f"groundlang parse: error: {tmp_path / 'mine.words'}: Is a directory\n"
+
+
+def test_a_position_pf_that_reads_another_objects_position_is_refused_by_tasks(tmp_path, capsys):
+    """Tabulated with every other object standing everywhere, such a PF held wherever the cell east of the
+    agent is walkable, while the state's own grounding said it did not: `tasks` listed it both ways."""
+    from groundlang.cli import main
+    from groundlang.corpus import example_corpus_path
+
+    near = tmp_path / "near.lp"
+    near.write_text('pf(position, agentNearToy, (agent, toy)).\n'
+                    'holds(agentNearToy, (A, T)) :- agent(A), toy(T), at(A, X, Y), toy(T2), at(T2, X+1, Y).\n'
+                    'task(near). var(near, "A", agent). var(near, "T", toy).\n'
+                    'goal(near, agentNearToy, ("A", "T")).\n', encoding="utf-8")
+    state = example_corpus_path() / "novel_b.state"
+    assert main(["tasks", str(state), "--palette", "sokoban", "--library", "tasks", "--library", str(near)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "agentNearToy(agent0, block0) does not hold in the state, but its table" in err
+    assert "a position PF may read the positions (at/3) of its own arguments only" in err
+    near.write_text(near.read_text().replace("toy(T2), at(T2, X+1, Y)", "at(T, X+1, Y)"), encoding="utf-8")
+    assert main(["tasks", str(state), "--palette", "sokoban", "--library", "tasks", "--library", str(near)]) == 0
