@@ -280,6 +280,9 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
         if not goals[n]:
             raise AspError(f"{program.user_names}: task {n} has no goal/3 atom")
         by_name = {v.name: v.cls for v in vs}
+        if unknown := sorted({v.cls for v in vs} - set(CLASS_ORDER)):  # a typo ("rooom") matched nothing later
+            raise AspError(f"{program.user_names}: task {n}: var/3 names class {unknown[0]!r}, which the domain "
+                           f"does not declare (classes: {', '.join(CLASS_ORDER)})")
         for pred, args in goals[n]:
             if not 1 <= len(args) <= MAX_GOAL_ARITY:
                 raise AspError(f"{program.user_names}: task {n}: goal {pred} has {len(args)} arguments "

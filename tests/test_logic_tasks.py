@@ -474,6 +474,14 @@ def test_a_variable_outside_the_goal_is_refused_at_load_time():
         TaskLibrary.from_text(_TOY_TO_ROOM + 'var(toyToRoom, "D", door).\n', "x.lp")
 
 
+def test_a_variable_of_a_class_the_domain_lacks_is_named_at_load_time():
+    """A typo ("rooom") was reported only as a goal PF needing other classes, never as a class that is not one."""
+    text = 'task(t). var(t, "A", agent). var(t, "R", rooom). goal(t, agentInRoom, ("A", "R")).\n'
+    with pytest.raises(AspError, match=r"^x.lp: task t: var/3 names class 'rooom', which the domain does not "
+                                       r"declare \(classes: agent, toy, room, door\)$"):
+        TaskLibrary.from_text(text, "x.lp")
+
+
 def test_a_pf_signature_that_is_no_tuple_is_refused_at_load_time(tmp_path):
     path = tmp_path / "glow.lp"
     path.write_text(_TOY_TO_ROOM + "pf(colour, toyGlows, (toy)). holds(toyGlows, (T,)) :- toy(T).\n")
