@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.model.interpretations import object_names
     from groundlang.model.pf_tables import TabulationError, library_pf_tables
     from groundlang.logic.classes import domain_classes
-    from groundlang.model.tasks import check_position_pfs, candidate_tasks, object_descriptions, object_relations
+    from groundlang.model.tasks import candidate_tasks, check_position_pfs, object_descriptions, object_relations
     from groundlang.model.world import object_class
 
     check_state_file(args.file, "tasks")
@@ -62,16 +62,13 @@ def run(args: argparse.Namespace) -> int:
                                   for pf, index, other in related[obj] if object_class(other) in describing])}
     # Relations (toyInRoom, a user's agentNextToToy, ...) as the PF tables planning uses say they hold.
     try:
-        tables = library_pf_tables(state.layout, library)
-        untabulated = None
+        tables, untabulated = library_pf_tables(state.layout, library), None
     except TabulationError as exc:  # a layout too large to tabulate still lists its tasks
         tables, untabulated = None, str(exc)
+    holding = []
     if tables is not None:
         check_position_pfs(state, library, tables)  # a library's mistake: refused, not listed both ways
-    try:
-        holding = [a for a in tables.holding(state.positions) if len(a.args) > 1] if tables is not None else []
-    except TabulationError as exc:
-        holding, untabulated = [], str(exc)
+        holding = [a for a in tables.holding(state.positions) if len(a.args) > 1]
     relations = {obj: atoms for obj in object_names(state) if (atoms := [a for a in holding if obj in a.args])}
     if args.json:
         out = {
