@@ -340,7 +340,7 @@ ROWS += [
                 "no plan can make it true", "agentInRoom")),
     Row("asp/goal over a variable of another class", (*_TASKS, str(BAD / "goal_wrong_class.lp")),
         pieces=("task t: goal agentInRoom(A, R) needs arguments of classes ('agent', 'room')",
-                "the task's var/3 give (A: robot, R: room)")),
+                "the task's var/3 give (A: toy, R: room)")),
     Row("asp/PF over a class no object has", (*_TASKS, str(BAD / "pf_of_no_class.lp")),
         pieces=(f"{BAD / 'pf_of_no_class.lp'} (palette sokoban): PF toyHue(", "is declared over class lamp, "
                 "which no object has")),
