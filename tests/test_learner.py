@@ -291,3 +291,17 @@ def test_extra_words_are_saved_with_the_model_so_it_parses_alike(corpus, tmp_pat
                  "--model", str(tmp_path / "cli"), "--lexicon", str(more)]) == 2
     assert capsys.readouterr().err == (f"groundlang follow: error: {more}:1: expected `CATEGORY: word word ...`, "
                                        "got 'NOUN gizmo'\n")
+
+
+def test_lexicon_says_where_a_word_unknown_alone_was_learned(tmp_path, capsys):
+    """"next" alone is no word of the model, but "next to" was learned as one preposition: say so, not only
+    "(unknown word)", which left a user unsure whether a word file entry had taken."""
+    from pathlib import Path
+
+    small = Path(__file__).parent / "fixtures" / "williams2018" / "small.bdm"
+    assert main(["--quiet", "train", str(small), "-o", str(tmp_path / "m"), "--no-cache"]) == 0
+    capsys.readouterr()
+    assert main(["--quiet", "lexicon", str(tmp_path / "m"), "--words", "next", "zzz"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"^next +\(unknown word alone; learned within next_to\)$", out, re.M), out
+    assert re.search(r"^zzz +\(unknown word\)$", out, re.M), out

@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.wording import token_meanings
 
     learner = Learner.load(args.model)
-    prepositions = preposition_tasks(learner.globals, learner.vocab, top=args.top)
+    prepositions = learned = preposition_tasks(learner.globals, learner.vocab, top=args.top)
     if args.words:  # a multiword preposition is one token: "next to" is next_to
         asked = {"_".join(w.split()) for w in args.words}
         prepositions = {p: tasks for p, tasks in prepositions.items() if p in asked}
@@ -92,8 +92,12 @@ def run(args: argparse.Namespace) -> int:
     print(f"{WORD_HEADING:<16} {MEANINGS_HEADING}")
     for word, meanings in lexicon.items():
         preposition = "_".join(word.split()) in prepositions  # learned in the preposition table below
+        # "corner" unknown alone, yet read inside the learned preposition to_the_corner_of
+        within = sorted(p for p in learned if word in p.split("_") and p != word)
         text = (", ".join(f"{token} {p:.2f}" for token, p in meanings)
-                or ("(a preposition: see the table below)" if preposition else "(unknown word)"))
+                or ("(a preposition: see the table below)" if preposition
+                    else f"(unknown word alone; learned within {', '.join(within[:3])})" if within
+                    else "(unknown word)"))
         print(f"{word:<16} {text}")
     if prepositions:  # relations are learned there, not as a preposition word's tokens above
         print()
