@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from .phrases import NP, PP, VP
 
+# The preposition of a verb's second bare noun phrase ("give the robot the star"): none was said.
+UNSAID_PREPOSITION = "_"
 _NP_CATS = frozenset({"DET", "NUM", "ADJ", "COLOR", "NOUN", "MEASURE", "GER"})
 _BREAK_CATS = frozenset({"COMMA", "CONJ", "SUB", "REL"})
 
@@ -52,7 +54,7 @@ def chunk(words: list[str], cats: list[frozenset[str]]) -> tuple[VP, ...]:
         elif obj is None:
             obj = np
         else:
-            comps.append(PP("_", np))  # a second bare noun phrase: related to the verb, relation unknown
+            comps.append(PP(UNSAID_PREPOSITION, np))  # a second bare noun phrase: related to the verb, relation unknown
         np_words = []
         prep = None
 

@@ -34,6 +34,7 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
+from groundlang.learner_state import check_count
 from groundlang.logic.atoms import Atom, parse_goal
 from groundlang.model.world import Action, State, step
 
@@ -122,6 +123,11 @@ def _dynamic_grid(state: State, shape: tuple[int, int]) -> np.ndarray:
     return grid
 
 
+def _largest_value(palette) -> int:
+    """The largest value a grid cell of this palette holds: a colour or shape index + 1 (0 is none)."""
+    return max(len(palette.colours), len(palette.shapes)) + 1
+
+
 class CleanupEnv(gymnasium.Env):
     """Cleanup World with a command: move (and push toys), then TERMINATE.
 
@@ -144,8 +150,7 @@ class CleanupEnv(gymnasium.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported; expected one of "
                              f"{', '.join(self.metadata['render_modes'])} or None")
-        if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
-            raise ValueError(f"max_steps must be a positive integer, got {max_steps!r:.40}")
+        check_count("CleanupEnv", "max_steps", max_steps)
         if state is not None and not isinstance(state, State):
             raise TypeError(f"state must be a State (or None for the example corpus's), got {type(state).__name__}")
         if not isinstance(command, str):
@@ -158,7 +163,7 @@ class CleanupEnv(gymnasium.Env):
         layouts = [state.layout] if state is not None else [s.layout for s, _, _ in _example_pool()]
         self.grid_shape = (max(l.height for l in layouts), max(l.width for l in layouts))
         # Colour and shape indices + 1 must fit uint8.
-        top = max(max(len(l.palette.colours), len(l.palette.shapes)) for l in layouts) + 1
+        top = max(_largest_value(l.palette) for l in layouts)
         self.action_space = spaces.Discrete(len(CleanupAction))
         self.observation_space = spaces.Dict({
             "grid": spaces.Box(0, top, shape=(*self.grid_shape, len(CHANNELS)), dtype=np.uint8),
@@ -223,7 +228,7 @@ class CleanupEnv(gymnasium.Env):
             raise ValueError(f"state of size {state.layout.height}x{state.layout.width} does not fit the "
                              f"observation grid {self.grid_shape[0]}x{self.grid_shape[1]} of this env")
         palette = state.layout.palette
-        if max(len(palette.colours), len(palette.shapes)) + 1 > self.observation_space["grid"].high.max():
+        if _largest_value(palette) > self.observation_space["grid"].high.max():
             raise ValueError(f"state of palette {palette.name}: its {len(palette.colours)} colours and "
                              f"{len(palette.shapes)} shapes do not fit the observation space of this env; "
                              "make the env with a state of that palette")

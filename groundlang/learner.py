@@ -40,7 +40,8 @@ from groundlang.learner_state import (check_count, check_model_parts, check_stat
                                        check_training_options, learner_from_state, learner_state)
 from groundlang.model_io import check_parameter_bound, read_model, write_model
 from groundlang.results import FollowResult, Posterior
-from groundlang.training_vocabulary import build_vocabulary, palette_schema, schema_words, word_files_beside
+from groundlang.training_vocabulary import (build_vocabulary, palette_schema, unlisted_schema_words,
+                                            word_files_beside)
 from groundlang.wording import goal_phrase
 
 __all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError", "AnswerError", "DEFAULT_MIN_CONFIDENCE"]
@@ -139,13 +140,7 @@ class Learner:
     def observe(self, instances: Sequence, progress: bool = False) -> list[Observation]:
         """Observations with behaviour likelihoods for training instances (cached on disk)."""
         palettes = {inst.initial_state.layout.palette: None for inst in instances}
-        # Only words the lexicon does not list: a value's name is not always a word of its category
-        # (williams2018 stores box sizes, "small", in the colour field).
-        words = {}
-        for p in palettes:
-            named = schema_words(self._schema(p))
-            for category, entries in named.items():
-                words.setdefault(category, []).extend(w for w in entries if not self.word_lexicon.listed(w))
+        words = unlisted_schema_words(self.library, palettes, self.word_lexicon)
         if any(words.values()):
             self.add_words(words)
         shown = [getattr(inst, "actions", None) is not None for inst in instances]

@@ -15,7 +15,8 @@ from groundlang.model.phrase_keys import PhraseKeys, bare_preposition, entity_wo
 from groundlang.model.interpretations import alignable_roles, bystander_roles
 from groundlang.model.vocabulary import Vocabulary, class_token
 
-__all__ = ["build_vocabulary", "palette_schema", "schema_names", "schema_words", "word_files_beside"]
+__all__ = ["build_vocabulary", "palette_schema", "schema_names", "schema_words", "unlisted_schema_words",
+           "word_files_beside"]
 
 
 def palette_schema(library: TaskLibrary, palette):
@@ -111,6 +112,18 @@ def schema_names(schema) -> dict[str, tuple[str, str]]:
         if len(d.signature) == 1 and value in schema.values.get(d.pf_class, ()) and value.isalpha() and value.islower():
             out[d.name] = (value, d.pf_class)
     return out
+
+
+def unlisted_schema_words(library: TaskLibrary, palettes: Iterable, lexicon) -> dict[str, list[str]]:
+    """The words the schemas of ``library`` with ``palettes`` name that ``lexicon`` does not list yet, by
+    category: what a learner trained on states of those palettes adds to its parser ("ball" a noun, "lilac" a
+    hue). Only unlisted ones: a value's name is not always a word of its category (williams2018 stores box
+    sizes, "small", in the colour field)."""
+    words: dict[str, list[str]] = {}
+    for palette in palettes:
+        for category, entries in schema_words(palette_schema(library, palette)).items():
+            words.setdefault(category, []).extend(w for w in entries if not lexicon.listed(w))
+    return words
 
 
 def schema_words(schema) -> dict[str, list[str]]:

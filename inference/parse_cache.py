@@ -33,6 +33,7 @@ from pathlib import Path
 
 import lark
 
+from groundlang.grammar.chunker import UNSAID_PREPOSITION
 from groundlang.grammar.lexicon import Lexicon
 from groundlang.grammar.logical_form import Clause, Entity, LogicalForm, Reading, Relation
 from groundlang.grammar.parser import parse, tokenise
@@ -172,13 +173,10 @@ def _restore_entry(data: dict, key: str, tokens: list[str]) -> tuple[Reading, ..
     if (not all(0 < r.probability <= 1 for r in readings)
             or not math.isclose(sum(r.probability for r in readings), 1.0, abs_tol=1e-6)):
         raise ValueError("its readings' probabilities are not a distribution")
+    tokens = tuple(tokens)
     for reading in readings:
-        _check_form(reading.logical_form, tuple(tokens))
+        _check_form(reading.logical_form, tokens)
     return readings
-
-
-# The preposition the chunker gives a second bare noun phrase of a verb (grammar.chunker): no word of its own.
-_UNSAID_PREPOSITION = "_"
 
 
 def _check_form(form: LogicalForm, tokens: tuple[str, ...]) -> None:
@@ -187,7 +185,7 @@ def _check_form(form: LogicalForm, tokens: tuple[str, ...]) -> None:
     if len(form.entities) > len(tokens):
         raise ValueError(f"{len(form.entities)} noun phrases in {len(tokens)} words")
     names = {e.var for e in form.entities}
-    words = set(tokens) | {_UNSAID_PREPOSITION}
+    words = set(tokens) | {UNSAID_PREPOSITION}
     if len(names) != len(form.entities):
         raise ValueError("two noun phrases share a variable")
     if not all(0 <= r.probability <= 1 for r in form.relations):

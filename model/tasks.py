@@ -22,8 +22,8 @@ from .geometry import state_facts
 from .world import State
 
 __all__ = [
-    "Candidate", "candidate_tasks", "check_position_pfs", "object_descriptions", "object_relations", "attribute_pfs", "spatial_descriptions",
-    "narrow_by_known", "NarrowedCandidate",
+    "Candidate", "candidate_tasks", "check_position_pfs", "object_descriptions", "object_relations", "attribute_pfs",
+    "spatial_descriptions", "narrow_by_known", "NarrowedCandidate",
 ]
 
 Candidate = tuple[GroundedTask, list[BindingConstraint]]
@@ -60,15 +60,16 @@ def check_position_pfs(state: State, library: TaskLibrary, tables) -> None:
     groundings would each say something else, silently."""
     from groundlang.model.pf_tables import TabulationError
 
-    for grounded, _ in candidate_tasks(state, library, wholly_true=True):
-        held = {tables.check(a) for a in grounded.holding}
-        for atom in map(tables.check, grounded.goal):
-            if atom.predicate in tables.tabulated and bool(tables.column(atom, state.positions[None])[0]) != (atom in held):
-                says = "holds" if atom in held else "does not hold"
-                raise TabulationError(
-                    f"{atom} {says} in the state, but its table over the positions of its arguments says otherwise: "
-                    f"a position PF may read the positions (at/3) of its own arguments only; does {atom.predicate} "
-                    "read where another object is?")
+    # Each goal atom once (conjunctions share them), with whether the grounding found it holding at the start.
+    held = {tables.check(a): a in g.holding for g, _ in candidate_tasks(state, library, wholly_true=True)
+            for a in g.goal}
+    for atom, holds in held.items():
+        if atom.predicate in tables.tabulated and bool(tables.column(atom, state.positions[None])[0]) != holds:
+            says = "holds" if holds else "does not hold"
+            raise TabulationError(
+                f"{atom} {says} in the state, but its table over the positions of its arguments says otherwise: "
+                f"a position PF may read the positions (at/3) of its own arguments only; does {atom.predicate} "
+                "read where another object is?")
 
 
 def object_descriptions(state: State, library: TaskLibrary) -> Mapping[str, Mapping[str, tuple[str, ...]]]:

@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     for word, meanings in lexicon.items():
         preposition = "_".join(word.split()) in prepositions  # learned in the preposition table below
         # "corner" unknown alone, yet read inside the learned preposition to_the_corner_of
-        within = sorted(p for p in learned if word in p.split("_") and p != word)
+        within = sorted(p for p in learned if word in p.split("_"))
         text = (", ".join(f"{token} {p:.2f}" for token, p in meanings)
                 or ("(a preposition: see the table below)" if preposition
                     else f"(unknown word alone; learned within {', '.join(within[:3])})" if within

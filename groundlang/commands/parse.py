@@ -73,11 +73,9 @@ def run(args: argparse.Namespace) -> int:
     if args.palette:
         from groundlang.logic.tasks import TaskLibrary
         from groundlang.model.palette import get_palette
-        from groundlang.training_vocabulary import palette_schema, schema_words
+        from groundlang.training_vocabulary import unlisted_schema_words
 
-        # What Learner.observe adds: a value's name the lexicon does not list yet ("ball" a noun, "lilac" a hue)
-        named = schema_words(palette_schema(library or TaskLibrary.load(), get_palette(args.palette)))
-        words = words.extend({c: [w for w in ws if not words.listed(w)] for c, ws in named.items()})
+        words = words.extend(unlisted_schema_words(library or TaskLibrary.load(), [get_palette(args.palette)], words))
     items = [("argument", args.text)] if args.file is None else _commands(args.file)
     full = fallback = empty = 0
     for source, command in items:
