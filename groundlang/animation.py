@@ -17,6 +17,7 @@ from typing import Sequence
 import numpy as np
 
 from groundlang.logic.atoms import format_goal
+from groundlang.logic.storage import as_path
 from groundlang.model.world import State
 
 __all__ = ["save_animation", "animate_follow", "posterior_bar_chart", "POSTERIOR_KINDS"]
@@ -38,7 +39,7 @@ def save_animation(path: str | Path, states: Sequence[State], title: str | None 
 
     from groundlang.render import cell_inches, draw_state
 
-    path = Path(path)
+    path = as_path(path, "save_animation: path")
     if path.suffix.lower() != ".gif":
         raise ValueError(f"{path}: an animation is written as GIF; expected a path ending in .gif")
     states = list(states)

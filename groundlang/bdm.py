@@ -30,7 +30,7 @@ from pathlib import Path
 
 from groundlang.state_line import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, coordinate, shown, text_lines
 from groundlang.grammar.parser import command_fault
-from groundlang.logic.storage import FileRefused, read_limited
+from groundlang.logic.storage import FileRefused, as_path, read_limited
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
 __all__ = ["Pair", "Command", "DEFAULT_PALETTE", "parse_bdm_state", "read_bdm", "is_bdm", "bdm_files",
@@ -188,7 +188,7 @@ def format_bdm_state(state: State, toy_names: tuple[str, ...] | None = None) -> 
 
 def read_bdm(path: str | Path, palette: str | Palette = DEFAULT_PALETTE) -> list[Command]:
     """Every command of a ``.bdm`` file with its pairs; raises CorpusError naming the file and line."""
-    path = Path(path)
+    path = as_path(path, "read_bdm: path")
     try:  # regular files only, of a bounded size: a FIFO or /dev/zero is refused by name
         data = read_limited(path, MAX_FILE_BYTES, "a .bdm corpus file")
     except FileRefused as exc:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from groundlang.bdm import parse_bdm_state
 from groundlang.grammar.parser import command_fault
-from groundlang.logic.storage import read_limited, write_atomically
+from groundlang.logic.storage import as_path, read_limited, write_atomically
 from groundlang.model.world import Action, Layout, Palette, State, WorldError, get_palette, step
 from groundlang.state_line import (MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, format_state, parse_state, shared_cell,
                                    shown, text_lines, utf8_text)
@@ -182,7 +182,7 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
     Raises CorpusError (malformed file) or its subclass InconsistentDemonstration
     (a recorded state differs from the replay); OSError when the file cannot be read.
     """
-    path = Path(path)
+    path = as_path(path, "read_instance: path")
     palette = get_palette(palette)
     lines = _read_lines(path)
     if not lines:
@@ -255,7 +255,7 @@ def read_corpus(directory: str | Path, palette: str | Palette, skip_inconsistent
     """
     if not isinstance(skip_inconsistent, bool):  # "no" would have counted as true
         raise TypeError(f"read_corpus: skip_inconsistent must be True or False, got {skip_inconsistent!r:.40}")
-    directory = Path(directory)
+    directory = as_path(directory, "read_corpus: directory")
     palette = get_palette(palette)
     if not directory.is_dir():
         raise CorpusError(f"{directory}: not a directory; expected a folder of corpus files (*.txt)")
@@ -286,6 +286,7 @@ def write_instance(path: str | Path, instance: Instance) -> None:
 
     Raises CorpusError when the command spans lines or states and actions do not match in number.
     """
+    path = as_path(path, "write_instance: path")
     if "\n" in instance.command or "\r" in instance.command:
         raise CorpusError(f"{path}: the command must be one line")
     if len(instance.states) != len(instance.actions) + 1:
@@ -295,12 +296,12 @@ def write_instance(path: str | Path, instance: Instance) -> None:
         )
     lines = [instance.command, ",".join(a.word for a in instance.actions)]
     lines += [format_state(s) for s in instance.states]
-    write_atomically(Path(path), "\n".join(lines) + "\n")
+    write_atomically(path, "\n".join(lines) + "\n")
 
 
 def read_state_file(path: str | Path, palette: str | Palette) -> State:
     """Read a one-line ``.state`` file (a state in the corpus format)."""
-    path = Path(path)
+    path = as_path(path, "read_state_file: path")
     if path.is_dir():  # read_limited says only "Is a directory"; the CLI says what was expected
         raise CorpusError(f"{path}: a folder, not a regular file; expected a state file")
     lines = _read_lines(path)
@@ -318,7 +319,7 @@ def read_state_file(path: str | Path, palette: str | Palette) -> State:
 
 def read_initial_state(path: str | Path, palette: str | Palette) -> State:
     """The initial state of a corpus file, or the state of a one-line ``.state`` file."""
-    if Path(path).suffix in (".state", ".bdm"):
+    if as_path(path, "read_initial_state: path").suffix in (".state", ".bdm"):
         return read_state_file(path, palette)
     return read_instance(path, palette).initial_state
 

@@ -7,6 +7,8 @@ states to end in, step limit), with the state spaces they were made in, for a le
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from groundlang.confidence import NEGLIGIBLE, GoalMasks
@@ -26,6 +28,8 @@ __all__ = ["planning_space", "plan_for_goal", "plan_for_states", "expected_succe
 
 # State spaces kept for grouping goals and planning (crowd layouts: about 100 states each).
 _SPACES_KEPT = 16
+# A plan holds up to max_steps states; a follower that reads commands for hours keeps the latest this many.
+_PLANS_KEPT = 256
 
 
 def planning_space(state: State, goal: tuple[Atom, ...] | None, library: TaskLibrary) -> StateSpace:
@@ -131,8 +135,13 @@ class WorldPlans:
             ending: np.ndarray | None = None) -> tuple[list, list, bool, str]:
         """Plan for ``goal``, or to end in a state of ``ending`` (``[S]`` bool over ``self.space(state)``), and
         act: ``(states, actions, reached, reason)`` as :func:`plan_for_goal`."""
-        key = (state, goal if ending is None else ending.tobytes(), max_steps)  # the plan is the target's alone
+        # The plan is the target's alone; an ending is keyed by its digest, not its [S] bytes (megabytes).
+        target = goal if ending is None else hashlib.blake2b(np.packbits(ending).tobytes(), digest_size=16,
+                                                            person=str(len(ending)).encode()[:16]).digest()
+        key = (state, target, max_steps)
         if key not in self.plans:
+            if len(self.plans) >= _PLANS_KEPT:
+                self.plans.pop(next(iter(self.plans)))
             self.plans[key] = (plan_for_goal(self.space(state, goal), state, goal, self.library, self.settings,
                                              max_steps) if ending is None else
                                plan_for_states(self.space(state), ending, self.settings, max_steps))

@@ -7,6 +7,7 @@ Without ``gymnasium`` installed this module cannot be imported (``pip install gr
 from __future__ import annotations
 
 from itertools import permutations
+from math import factorial
 
 import gymnasium
 import numpy as np
@@ -17,19 +18,25 @@ from groundlang.model.world import State
 __all__ = ["CommandPolicy", "policy", "observation_positions"]
 
 
-def observation_positions(grid: np.ndarray, layout) -> np.ndarray | None:
+# Toys alike in colour and shape are told apart by where they were a step before; only those that cannot be
+# (after a reset to another state) are matched in every order, which grows as k! and is refused beyond this.
+MAX_ASSIGNMENTS = 5040
+
+
+def observation_positions(grid: np.ndarray, layout, previous: np.ndarray | None = None) -> np.ndarray | None:
     """Agent and toy positions ``[1 + k, 2]`` (x, y) read from an observation grid.
 
     Toys are matched to the layout's toys by colour and shape; toys alike in
-    both are interchangeable, and every assignment of them is returned by
-    :func:`_position_candidates`. Returns None when the grid does not show the
-    layout's agent and toys.
+    both are interchangeable: each keeps its cell in ``previous`` (positions
+    a step before) where a toy of its kind is still there, and the rest are
+    assigned in every order by :func:`_position_candidates`. Returns None
+    when the grid does not show the layout's agent and toys.
     """
-    candidates = _position_candidates(grid, layout)
+    candidates = _position_candidates(grid, layout, previous)
     return candidates[0] if candidates else None
 
 
-def _position_candidates(grid: np.ndarray, layout) -> list[np.ndarray]:
+def _position_candidates(grid: np.ndarray, layout, previous: np.ndarray | None = None) -> list[np.ndarray]:
     grid = np.asarray(grid)
     H = grid.shape[0]
     rows, cols = np.nonzero(grid[:, :, 3])
@@ -46,13 +53,34 @@ def _position_candidates(grid: np.ndarray, layout) -> list[np.ndarray]:
         wanted.setdefault((pal.colour_index(colour), pal.shape_index(shape)), []).append(i)
     if {k: len(v) for k, v in wanted.items()} != {k: len(v) for k, v in cells.items()}:
         return []
-    out = [np.zeros((1 + len(layout.toy_attributes), 2), dtype=np.int64)]
-    out[0][0] = agent
+    base = np.zeros((1 + len(layout.toy_attributes), 2), dtype=np.int64)
+    base[0] = agent
+    open_groups, assignments = [], 1
     for key, toys in wanted.items():
+        free = list(cells[key])
+        unmatched = []
+        for t in toys:
+            kept = tuple(int(v) for v in previous[1 + t]) if previous is not None else None
+            if kept in free:
+                free.remove(kept)
+                base[1 + t] = kept
+            else:
+                unmatched.append(t)
+        if len(unmatched) > 1:
+            open_groups.append((unmatched, free))
+            assignments *= factorial(len(unmatched))
+        elif unmatched:
+            base[1 + unmatched[0]] = free[0]
+    if assignments > MAX_ASSIGNMENTS:
+        raise ValueError(f"the observation shows toys alike in colour and shape that cannot be told apart in "
+                         f"{assignments:,} ways (at most {MAX_ASSIGNMENTS:,} are tried); step from the state the "
+                         "policy was made for, or make the policy for this state")
+    out = [base]
+    for toys, free in open_groups:
         extended = []
-        for base in out:
-            for perm in permutations(cells[key]):
-                new = base.copy()
+        for known in out:
+            for perm in permutations(free):
+                new = known.copy()
                 new[[1 + t for t in toys]] = perm
                 extended.append(new)
         out = extended
@@ -69,8 +97,9 @@ class CommandPolicy:
     is outside the planned space (nothing sensible to do).
     """
 
-    def __init__(self, goal, posterior, space, log_policy, mask):
+    def __init__(self, goal, posterior, space, log_policy, mask, start: np.ndarray | None = None):
         self.goal = goal  # tuple[Atom, ...]
+        self.previous = None if start is None else np.asarray(start)  # positions last seen: toys told apart
         self.posterior = posterior
         self.space = space
         self.log_policy = np.asarray(log_policy)  # [S, 5]
@@ -79,6 +108,7 @@ class CommandPolicy:
     def state_index(self, observation) -> int:
         grid = observation.get("grid") if isinstance(observation, dict) else observation
         if isinstance(grid, State):
+            self.previous = grid.positions
             return int(self.space.indices_of(grid.positions[None])[0])
         grid = np.asarray(grid) if isinstance(grid, np.ndarray) else None
         lay = self.space.layout
@@ -86,12 +116,15 @@ class CommandPolicy:
                 or grid.shape[1] < lay.width:
             raise ValueError(f"observation must be an env's (a dict whose 'grid' is [H, W, {len(CHANNELS)}], at "
                              f"least {lay.height}x{lay.width} here) or a State, got {type(observation).__name__}")
-        candidates = _position_candidates(grid, lay)
+        candidates = _position_candidates(grid, lay, self.previous)
         if not candidates:
             return -1
         found = self.space.indices_of(np.stack(candidates))
-        hits = found[found >= 0]
-        return int(hits[0]) if len(hits) else -1
+        hits = np.flatnonzero(found >= 0)
+        if not len(hits):
+            return -1
+        self.previous = candidates[hits[0]]
+        return int(found[hits[0]])
 
     def __call__(self, observation) -> CleanupAction:
         s = self.state_index(observation)
@@ -134,4 +167,4 @@ def policy(learner, command: str, state) -> CommandPolicy:
         space = state_space_for(state, goal, tables=tables)
         mask = goal_mask(space, goal, tables)
     solved = solve_task(space.next_state, mask, learner.settings)
-    return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask)
+    return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask, start=state.positions)

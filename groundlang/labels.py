@@ -19,7 +19,7 @@ from groundlang.logic.atoms import Atom, AtomError, parse_goal
 from groundlang.logic.program import AspError
 from groundlang.model.features import atoms_hold
 from groundlang.model.pf_tables import library_pf_tables
-from groundlang.logic.storage import read_limited
+from groundlang.logic.storage import as_path, read_limited
 from groundlang.model.world import State
 
 __all__ = [
@@ -56,7 +56,7 @@ def read_labels(csv_path: str | Path) -> Labels:
 
     Raises LabelError naming the file and line of a bad header, row, goal or duplicate prefix.
     """
-    path = Path(csv_path)
+    path = as_path(csv_path, "read_labels: csv_path")
     data = read_limited(path, MAX_LABELS_BYTES, "a labels CSV")
     try:
         text = data.decode("utf-8-sig")

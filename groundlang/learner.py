@@ -26,6 +26,7 @@ from groundlang.inference.parse_cache import ParseCache
 from groundlang.inference.planning import TaskSettings
 from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.logic.atoms import Atom
+from groundlang.logic.storage import as_path
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
 from groundlang.model.encoding import Batch, Observation
@@ -158,7 +159,8 @@ class Learner:
             table = behaviour_likelihood_table(
                 instances, goals, self.settings, cache_dir=self.cache_dir, progress=progress, library=self.library
             )
-            behaviour = [[float(dict(zip(g, row))[i.goal]) for i in group] for g, row, group in zip(goals, table, interps)]
+            by_goal = [dict(zip(g, row)) for g, row in zip(goals, table)]
+            behaviour = [[float(lookup[i.goal]) for i in group] for lookup, group in zip(by_goal, interps)]
         else:
             raise ValueError("observe: instances with demonstrations and (start, end) pairs without them "
                              "cannot be mixed in one corpus")
@@ -409,10 +411,11 @@ class Learner:
 
     def save(self, directory: str | Path) -> Path:
         """Write the model to ``directory`` as JSON and tensors (see :mod:`groundlang.model_io`)."""
+        directory = as_path(directory, "Learner.save: directory")
         return write_model(self.state_dict(), directory)
 
     @classmethod
     def load(cls, directory: str | Path) -> "Learner":
         """Read a model :meth:`save` wrote; ModelFormatError on anything amiss."""
-        return read_model(directory, cls.from_state_dict)
+        return read_model(as_path(directory, "Learner.load: directory"), cls.from_state_dict)
 

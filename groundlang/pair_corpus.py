@@ -28,6 +28,7 @@ from groundlang.bdm import DEFAULT_PALETTE, Command, bdm_files, read_bdm
 from groundlang.corpus import CorpusError, InconsistentDemonstration, Instance
 from groundlang.inference.end_states import EndStateNoise
 from groundlang.inference.evidence_cache import EvidenceCache
+from groundlang.logic.storage import as_path
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.relevance import abstraction_bound, exact_fits, relevant_toys
 from groundlang.model.state_search import StateKeyError
@@ -101,7 +102,7 @@ class PairCorpus:
 
 def read_pair_corpus(path: str | Path, palette=DEFAULT_PALETTE) -> PairCorpus:
     """Every command of a ``.bdm`` file, or of the ``.bdm`` files of a folder (sorted by name)."""
-    paths = bdm_files(path)
+    paths = bdm_files(as_path(path, "read_pair_corpus: path"))
     if not paths:
         raise CorpusError(f"{path}: no .bdm file there (a .bdm file or a folder of them)")
     return PairCorpus(paths, [c for p in paths for c in read_bdm(p, palette)])

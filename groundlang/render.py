@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from groundlang.logic.storage import as_path
 from groundlang.model.world import State
 
 __all__ = ["glyph", "cell_inches", "draw_state", "picture_title", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
@@ -224,7 +225,7 @@ def save_picture(path: str | Path, state: State, trajectory=None, title: str | N
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    path = Path(path)
+    path = as_path(path, "save_picture: path")
     fmt = picture_format(path)
     lay = state.layout
     cell = cell_inches(state)

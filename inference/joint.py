@@ -297,7 +297,7 @@ def posterior_by_enumeration(
 
 
 def posteriors_by_enumeration(batch: Batch, lm: LanguageModel, vocab: Vocabulary, g: dict[str, torch.Tensor],
-                              use_behaviour: bool = False) -> tuple[torch.Tensor, torch.Tensor | None]:
+                              use_behaviour: bool = True) -> tuple[torch.Tensor, torch.Tensor | None]:
     """:func:`local_posteriors` read off Pyro's ``compute_marginals`` of the enumerated sites (a
     cross-check: Pyro's contraction loses a plate or an enumerated site of size 1, so the batch needs
     two instances and two structures)."""

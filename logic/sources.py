@@ -17,13 +17,17 @@ import functools
 import os
 import re
 import stat
+from collections.abc import Iterable
 from dataclasses import dataclass
 from importlib.resources import files
 from pathlib import Path
 
 import clingo.ast as ast
 
+from .storage import as_path
+
 __all__ = ["AspError", "AspSyntaxError", "AspScriptRefused", "Source", "package_source", "file_source",
+           "library_source", "library_sources",
            "MAX_PROGRAM_BYTES", "parse_source", "one_line"]
 
 
@@ -61,6 +65,16 @@ def library_names() -> dict[str, str]:
     domains = files("groundlang.logic") / "domains"
     names.update({p.name[:-3]: f"domains/{p.name}" for p in domains.iterdir() if p.name.endswith(".lp")})
     return names
+
+
+def library_sources(paths, what: str) -> list[Source]:
+    """The library files ``paths`` names: one path or an iterable of them (a str is one path, not letters to
+    read one by one); TypeError starting with ``what`` for anything else."""
+    if isinstance(paths, (str, os.PathLike)):
+        paths = [paths]
+    elif not isinstance(paths, Iterable):
+        raise TypeError(f"{what}: paths must be a path or paths, got {type(paths).__name__}")
+    return [library_source(as_path(p, f"{what}: each path")) for p in paths]
 
 
 def library_source(path: str | Path) -> Source:

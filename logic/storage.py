@@ -27,12 +27,21 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-__all__ = ["FileRefused", "atomic_path", "check_destination", "check_folder", "check_writable", "file_kind",
+__all__ = ["FileRefused", "as_path", "atomic_path", "check_destination", "check_folder", "check_writable", "file_kind",
            "read_limited", "write_atomically"]
 
 
 class FileRefused(ValueError):
     """A file that is not a regular file, or larger than its kind may be; the message names the path."""
+
+
+def as_path(value, what: str) -> Path:
+    """``value`` as a Path; TypeError naming ``what`` (the function and argument) for anything that is not a
+    str or os.PathLike. pathlib's own message ("expected str, bytes or os.PathLike object, not int") names
+    no argument, and bytes would become a path of their repr."""
+    if not isinstance(value, (str, os.PathLike)):
+        raise TypeError(f"{what} must be a path (a str or os.PathLike), got {type(value).__name__}")
+    return Path(value)
 
 
 def file_kind(mode: int) -> str:

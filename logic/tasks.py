@@ -352,13 +352,14 @@ class TaskLibrary:
         self.tasks, self.spatial_pfs, self.relational_pfs = lifted
 
     @classmethod
-    def load(cls, paths: Iterable[str | Path] | None = None, allow_scripts: bool = False,
+    def load(cls, paths: str | Path | Iterable[str | Path] | None = None, allow_scripts: bool = False,
              time_limit: float | None = DEFAULT_TIME_LIMIT) -> "TaskLibrary":
-        """The default library (``paths=None``) or the lifted tasks of the given ``.lp`` files."""
+        """The default library (``paths=None``) or the lifted tasks of the given ``.lp`` files (one path, or
+        several; a shipped library by its name, ``"williams2018"``)."""
         if paths is None:
             return cls((package_source("tasks.lp"),), allow_scripts=allow_scripts,
                        time_limit=time_limit)
-        return cls([_sources.library_source(p) for p in paths], allow_scripts=allow_scripts,
+        return cls(_sources.library_sources(paths, "TaskLibrary.load"), allow_scripts=allow_scripts,
                    time_limit=time_limit)
 
     @classmethod

@@ -3,10 +3,16 @@ before any work, instead of an AttributeError from deep inside or a silently wro
 
 from __future__ import annotations
 
+from importlib.resources import files
+from pathlib import Path
+
 import pytest
 
-from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
+from groundlang.corpus import example_corpus_path, read_corpus, read_instance, read_state_file
+from groundlang.labels import read_labels
 from groundlang.learner import Learner, NotFittedError
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.pair_corpus import read_pair_corpus
 
 EXAMPLES = example_corpus_path()
 
@@ -101,3 +107,29 @@ def test_a_folder_given_as_a_state_file_is_named():
 
     with pytest.raises(CorpusError, match=f"^{EXAMPLES}: a folder, not a regular file; expected a state file$"):
         read_state_file(EXAMPLES, "sokoban")
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: read_state_file(3, "sokoban"), "read_state_file: path must be a path"),
+    (lambda: read_corpus(None, "sokoban"), "read_corpus: directory must be a path"),
+    (lambda: read_instance(b"corpus/a.txt", "sokoban"), "read_instance: path must be a path"),
+    (lambda: read_pair_corpus(7), "read_pair_corpus: path must be a path"),
+    (lambda: read_labels(None), "read_labels: csv_path must be a path"),
+    (lambda: Learner.load(None), "Learner.load: directory must be a path"),
+    (lambda: Learner().save(0), "Learner.save: directory must be a path"),  # before "not trained"
+    (lambda: TaskLibrary.load([3]), "TaskLibrary.load: each path must be a path"),
+    (lambda: TaskLibrary.load(3), "TaskLibrary.load: paths must be a path or paths"),
+])
+def test_a_path_argument_of_another_type_is_named(call, message):
+    """pathlib's own message ("expected str, bytes or os.PathLike object, not int") names no argument."""
+    with pytest.raises(TypeError, match=message):
+        call()
+
+
+def test_a_library_given_as_one_path_is_read_as_one_file(tmp_path):
+    """A str is iterable: it had been read letter by letter ("no such file ... 't'")."""
+    shipped = TaskLibrary.load(["williams2018"])
+    assert [t.name for t in TaskLibrary.load("williams2018").tasks] == [t.name for t in shipped.tasks]
+    own = tmp_path / "mine.lp"
+    own.write_text((Path(str(files("groundlang.logic"))) / "tasks.lp").read_text())
+    assert [t.name for t in TaskLibrary.load(own).tasks] == [t.name for t in TaskLibrary.load().tasks]

@@ -222,3 +222,21 @@ def test_actions_are_the_worlds_moves_then_the_planners_terminate():
 
     assert [(a.name, int(a)) for a in CleanupAction][:-1] == [(a.name, int(a)) for a in Action]
     assert CleanupAction.TERMINATE == TERMINATE == len(Action)
+
+
+def test_toys_alike_are_told_apart_by_where_they_were(state):
+    """Eight yellow stars: matching them to the layout's toys in every order took 8! = 40320 arrays per
+    observation (10 stars hung); each keeps the cell it had a step before, so one candidate is read."""
+    stars = " ".join(f"block,12,0,{x},{y}" for x, y in [(1, 1), (2, 1), (3, 1), (1, 2), (2, 2), (3, 2), (1, 3),
+                                                          (2, 3)])
+    many = parse_state(STATE.replace("block,12,0,8,2", stars), "sokoban")
+    env = CleanupEnv(many, command="go to the green room")
+    grid = env.reset(seed=0)[0]["grid"]
+    with pytest.raises(ValueError, match="cannot be told apart in 40,320 ways"):
+        observation_positions(grid, many.layout)
+    assert (observation_positions(grid, many.layout, previous=many.positions) == many.positions).all()
+    # One star pushed a cell east (as a step moves at most one): the others keep their cells, it takes the free one.
+    moved = many.positions.copy()
+    moved[3] = (4, 1)
+    grid = CleanupEnv(many.with_positions(moved)).reset(seed=0)[0]["grid"]
+    assert (observation_positions(grid, many.layout, previous=many.positions) == moved).all()
