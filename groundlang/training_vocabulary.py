@@ -8,6 +8,7 @@ from collections.abc import Iterable
 from importlib.resources import files
 from pathlib import Path
 
+from groundlang.logic.classes import domain_classes
 from groundlang.logic.schema import domain_schema
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.encoding import Observation, machine_string
@@ -69,7 +70,7 @@ def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, li
                 vocab.names[token] = word
                 vocab.name_families[token] = family
         tokens.extend(d.name for d in schema.pfs.values() if len(d.signature) == 1
-                      and d.pf_class not in ("position", "spatial"))
+                      and library.pf_roles.property_class(d.pf_class))
         classes.extend(schema.classes)
     tokens.extend(class_token(c) for c in dict.fromkeys(classes))
     if names:
@@ -127,9 +128,11 @@ def unlisted_schema_words(library: TaskLibrary, palettes: Iterable, lexicon) -> 
 
 
 def schema_words(schema) -> dict[str, list[str]]:
-    """The words a domain's schema names: its classes and shapes are nouns, its colours hues (values
-    written in camelCase, ``darkGray``, are not words anyone types and are left out)."""
-    nouns = [c for c in schema.classes] + list(schema.values.get("shape", ()))
-    hues = list(schema.values.get("colour", ()))
+    """The words a domain's schema names: its classes and the values of attributes that name kinds (``kind/1``
+    of ``domain.lp``: shapes) are nouns, the values of its other attributes (colours) hues (values written in
+    camelCase, ``darkGray``, are not words anyone types and are left out)."""
+    kinds = domain_classes().kinds
+    nouns = [c for c in schema.classes] + [v for a, values in schema.values.items() if a in kinds for v in values]
+    hues = [v for a, values in schema.values.items() if a not in kinds for v in values]
     return {category: [w for w in words if w.isalpha() and w.islower()]
             for category, words in (("NOUN", nouns), ("HUE", hues))}

@@ -4,15 +4,14 @@ Nothing here names a colour, shape, PF or task. An object is described from
 what clingo says is true of it (:func:`groundlang.model.tasks.attribute_pfs`,
 :func:`~groundlang.model.tasks.object_descriptions`): the value of each of its
 attribute PFs as the library writes the term (``roomIs(red)`` gives "red"),
-the value of its ``shape`` PF as the head noun when it has one, else its class
-name; spatial PFs (``doorWestOfAgent`` gives "west of the agent") only where
+the value of a PF of a kind attribute (``kind/1`` of ``domain.lp``: its shape)
+as the head noun when it has one, else its class name; viewpoint PFs (``doorWestOfAgent`` gives "west of the agent") only where
 two objects would otherwise read alike. A goal atom is read from its
 predicate's camel-case words, each class word replaced by its object's
 phrase (``toyInRoom`` gives "<the toy> in <the room>"). The model's
 semantic tokens are explained from the domain's schema the same way
 (:func:`token_meanings`: ``roomIsRed`` is "a room's colour is red", read from
-its declaration ``pf(colour, roomIs(red), (room,))``). When the domain schema
-moves into data files this is the one place to re-point.
+its declaration ``pf(colour, roomIs(red), (room,))``).
 """
 
 from __future__ import annotations
@@ -21,17 +20,17 @@ import re
 from collections.abc import Iterable, Sequence
 
 from groundlang.logic.atoms import Atom, format_goal
+from groundlang.logic.classes import domain_classes
 from groundlang.logic.schema import Domain, PFDeclaration
 from groundlang.logic.tasks import LiftedTask, TaskLibrary
 from groundlang.model.interpretations import OTHER_ROLES, object_names
-from groundlang.model.tasks import attribute_pfs, object_descriptions
+from groundlang.model.tasks import attribute_pfs, object_descriptions, viewpoint_pfs
 from groundlang.model.vocabulary import NULL, class_token
 from groundlang.model.world import State, object_class
 
 __all__ = ["object_phrase", "goal_phrase", "labelled_goal", "choice_list", "token_meanings", "DASH"]
 
 DASH = "\u2014"  # between words and ids: "the red room — room0"
-HEAD_CLASS = "shape"  # the PF class whose value names the thing ("the star"), as model.interpretations reads it
 _TERM = re.compile(r"^[^()]*\((.*)\)$")
 _CLASSES = frozenset(r.removeprefix("other:") for r in OTHER_ROLES)
 _CAMEL = re.compile(r"[A-Z]?[a-z0-9]+|[A-Z]+(?![a-z])")
@@ -50,7 +49,8 @@ def _value(term: str) -> str | None:
 def _plain_phrase(obj: str, state: State, library: TaskLibrary) -> str:
     cls = object_class(obj)
     described = object_descriptions(state, library).get(obj, {})
-    heads = set(described.get(HEAD_CLASS, ()))
+    # The PFs of attributes whose values name kinds (kind/1, domain.lp: shape) give the head noun ("the star").
+    heads = {pf for kind in domain_classes().kinds for pf in described.get(kind, ())}
     modifiers, head = [], None
     for name, term in attribute_pfs(state, library).get(obj, ()):
         value = _value(term)
@@ -66,7 +66,7 @@ def _plain_phrase(obj: str, state: State, library: TaskLibrary) -> str:
 def _spatial(obj: str, state: State, library: TaskLibrary) -> str:
     cls = object_class(obj)
     sides = []
-    for name in object_descriptions(state, library).get(obj, {}).get("spatial", ()):
+    for name in viewpoint_pfs(object_descriptions(state, library).get(obj, {}), library):
         words = _camel_words(name)
         if words and words[0] == cls:
             words = words[1:]

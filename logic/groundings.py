@@ -12,7 +12,8 @@ import clingo
 
 from .atoms import Atom
 from .program import AspError, AspTimeout
-from .tasks import CLASS_ORDER, BindingConstraint, GroundedTask, TaskLibrary, _natural_key, _text, _tuple_args, pf_name
+from .tasks import CLASS_ORDER, BindingConstraint, GroundedTask, TaskLibrary
+from .terms import natural_key, pf_name, symbol_text, tuple_args
 
 __all__ = ["binding_constraints", "enumerate_groundings", "ground_environment", "Descriptions", "PFTerms", "Relations"]
 
@@ -63,7 +64,7 @@ def ground_environment(
     which chooses no task (so an environment where nothing can be asked is still described).
     Order: library order of tasks, then bound objects in variable order (``room2`` before ``room10``).
 
-    A ``restrict/3`` that names no colour or shape PF of one object of its variable's class that
+    A ``restrict/3`` that names no property PF (colour, shape, ...) of one object of its variable's class that
     pf/3 declares with these facts (a palette value they lack, a typo) would bind nothing; it raises
     AspError naming the library's files, the task, ``environment`` (e.g. "palette sokoban") and
     what it does declare. (So declare a family of PFs for every palette value, as pfs.lp does, not
@@ -81,23 +82,23 @@ def ground_environment(
     def decode(sym: clingo.Symbol) -> tuple[str, object]:
         kind, args = sym.name, sym.arguments
         if kind == "chosen" and len(args) == 1:
-            return kind, _text(args[0])
+            return kind, symbol_text(args[0])
         if kind == "bind" and len(args) == 2:
-            return kind, (_text(args[0]), _text(args[1]))
+            return kind, (symbol_text(args[0]), symbol_text(args[1]))
         if kind == "described" and len(args) == 3:
-            return kind, (_text(args[0]), pf_name(args[1]), _text(args[2]), str(args[1]))
+            return kind, (symbol_text(args[0]), pf_name(args[1]), symbol_text(args[2]), str(args[1]))
         if kind == "related" and len(args) == 4:
-            return kind, (_text(args[2]), (pf_name(args[0]), args[1].number, _text(args[3])))
+            return kind, (symbol_text(args[2]), (pf_name(args[0]), args[1].number, symbol_text(args[3])))
         if kind == "unusable_restriction" and len(args) == 3:
-            return kind, (_text(args[0]), _text(args[1]), args[2])
+            return kind, (symbol_text(args[0]), symbol_text(args[1]), args[2])
         if kind == "restrictable" and len(args) == 2:
-            return kind, (_text(args[0]), args[1])
+            return kind, (symbol_text(args[0]), args[1])
         if kind in ("pf_of_no_class", "attribute_pf_not_unary") and len(args) == 2:
             return kind, (str(args[0]), str(args[1]))
         if kind in ("pf_of_two_arities", "holds_of_other_arity") and len(args) == 3:
             return kind, (str(args[0]), args[1].number, args[2].number)
         if kind in ("goal_atom", "constraint_atom", "goal_atom_holds") and len(args) == 2:
-            return kind, Atom(pf_name(args[0]), tuple(_text(a) for a in _tuple_args(args[1])))
+            return kind, Atom(pf_name(args[0]), tuple(symbol_text(a) for a in tuple_args(args[1])))
         return "other", None  # atoms a user library shows for its own purposes
 
     limit = library.time_limit if time_limit is None else time_limit
@@ -144,8 +145,8 @@ def ground_environment(
                 first, second = value
                 problem = (f"PF {first} is declared over class {second}, which no object has (classes: "
                            f"{', '.join(sorted(CLASS_ORDER))})" if kind == "pf_of_no_class" else
-                           f"{first} PF {second} takes more than one argument; colour and shape PFs describe "
-                           f"one object, e.g. pf({first}, {second}, (toy,))")
+                           f"{first} PF {second} takes more than one argument; the other {first} PFs, as "
+                           f"property PFs do, describe one object each, e.g. pf({first}, {second}, (toy,))")
                 raise AspError(f"{library.program.user_names}{where}: {problem}")
             elif kind in ("pf_of_two_arities", "holds_of_other_arity"):
                 name, first, second = value
@@ -159,11 +160,11 @@ def ground_environment(
         lifted = tasks[chosen]
         binding = tuple((v.name, bind[v.name]) for v in lifted.variables)
         # Goal atoms sorted (one text per goal, whatever the binding), constraint atoms in variable order.
-        goal.sort(key=lambda a: (a.predicate, tuple(_natural_key(o) for o in a.args)))
+        goal.sort(key=lambda a: (a.predicate, tuple(natural_key(o) for o in a.args)))
         position = {o: i for i, (_, o) in enumerate(binding)}
         extra.sort(key=lambda a: (min(position[o] for o in a.args), a.predicate, a.args))
         grounded = GroundedTask(chosen, binding, tuple(goal), tuple(a for a in goal if a in holding))
-        key = (order[chosen], tuple(_natural_key(o) for _, o in binding))
+        key = (order[chosen], tuple(natural_key(o) for _, o in binding))
         found.append((key, grounded, binding_constraints(extra)))
     if unusable:
         first = min(unusable, key=lambda u: (u[0], u[1], str(u[2])))
@@ -173,10 +174,10 @@ def ground_environment(
     found.sort(key=lambda item: item[0])
     descriptions = {
         o: {cls: tuple(sorted(names)) for cls, names in sorted(described[o].items())}
-        for o in sorted(described, key=_natural_key)
+        for o in sorted(described, key=natural_key)
     }
-    relations = {o: tuple(sorted(related[o], key=lambda r: (r[0], r[1], _natural_key(r[2]))))
-                 for o in sorted(related, key=_natural_key)}
+    relations = {o: tuple(sorted(related[o], key=lambda r: (r[0], r[1], natural_key(r[2]))))
+                 for o in sorted(related, key=natural_key)}
     return ([(g, c) for _, g, c in found if wholly_true or len(g.holding) < len(g.goal)], descriptions,
             dict(sorted(terms.items())), relations)
 
@@ -196,4 +197,4 @@ def _unusable_restriction_message(library: TaskLibrary, restriction: tuple[str, 
         hint = f"; it declares none of a {cls}"
     where = f"the environment ({environment})" if environment else "the environment"
     return (f'{library.grounding_program.user_names}: task {task}: restrict({task}, "{var}", {term}): '
-            f"{where} declares no colour or shape PF {term} of a {cls}, so the task would bind nothing{hint}")
+            f"{where} declares no property PF (colour, shape, ...) {term} of a {cls}, so the task would bind nothing{hint}")

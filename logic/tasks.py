@@ -19,16 +19,17 @@ world model.
 from __future__ import annotations
 
 import functools
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Sequence
 
 import clingo
 
-from .atoms import Atom, attribute_pf, format_goal
+from .atoms import Atom, format_goal
 from .classes import domain_classes
+from .library_checks import Declarations, PFRoles, declare, declare_restricted_families, restriction_problem
 from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, package_source
+from .terms import natural_key, pf_name, symbol_text, tuple_args
 from . import sources as _sources
 
 __all__ = [
@@ -37,6 +38,10 @@ __all__ = [
     "GroundedTask",
     "BindingConstraint",
     "TaskLibrary",
+    "PFRoles",
+    "natural_key",
+    "tuple_args",
+    "symbol_text",
     "pf_name",
     "format_lifted_task",
     "DOMAIN_FILES",
@@ -114,31 +119,6 @@ class BindingConstraint:
         return " ∧ ".join(str(a) for a in self.atoms) if self.atoms else "true"
 
 
-def pf_name(term: clingo.Symbol) -> str:
-    """groundlang's name for a PF term: ``toyInRoom`` stays, ``roomIs(darkGray)`` -> ``roomIsDarkGray``."""
-    if term.type is not clingo.SymbolType.Function or not term.name:
-        raise AspError(f"PF name {term} must be a constant or a term like roomIs(green)")
-    name = term.name
-    for arg in term.arguments:
-        name = attribute_pf(name, arg.string if arg.type is clingo.SymbolType.String else str(arg))
-    return name
-
-
-def _natural_key(name: str) -> tuple:
-    """``room2`` before ``room10``."""
-    return tuple(int(t) if t.isdigit() else t for t in re.findall(r"\d+|\D+", name))
-
-
-def _tuple_args(term: clingo.Symbol) -> tuple[clingo.Symbol, ...]:
-    if term.type is clingo.SymbolType.Function and term.name == "":
-        return tuple(term.arguments)
-    return (term,)  # a lone value written without parentheses
-
-
-def _text(term: clingo.Symbol) -> str:
-    return term.string if term.type is clingo.SymbolType.String else str(term)
-
-
 def format_lifted_task(task: LiftedTask) -> str:
     """ASP facts that define ``task`` (loadable as a library); the inverse of reading one."""
     lines = [f"task({task.name})."]
@@ -151,76 +131,21 @@ def format_lifted_task(task: LiftedTask) -> str:
 
 
 # Shown atoms of a library solved without an environment (a user's own #show cannot hide them).
-_LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #show goal/3. #show pf/3. #show restrict/3.")
+_LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #show goal/3. #show pf/3. #show restrict/3. "
+                       "#show goal_class/1. #show viewpoint_class/1.")
 
 
-# PF classes (pfs.lp) a restrict/3 atom may name: what an object is, not where it lies. The load-time
-# check; groundings.lp's restrictable/2 states the same two classes for the check per environment.
-_RESTRICTION_CLASSES = ("colour", "shape")
-# PF term -> its declarations: (PF class, classes of its arguments), one per pf/3 atom.
-_Declarations = dict[clingo.Symbol, list[tuple[str, tuple[str, ...]]]]
-
-
-def _declare(declared: _Declarations, pf_atom: clingo.Symbol) -> None:
-    cls_, name, sig = pf_atom.arguments
-    declared.setdefault(name, []).append((_text(cls_), tuple(_text(s) for s in _tuple_args(sig))))
-
-
-def _declare_restricted_families(program: Program, restrictions: dict[str, list[tuple[str, clingo.Symbol]]],
-                                 declared: _Declarations, time_limit: float | None) -> None:
-    """Add to ``declared`` the pf/3 atoms of PFs named by restrict/3 that only an environment declares.
-
-    Colour and shape PFs are families over the environment's palette (``pf(colour, roomIs(C), (room,))
-    :- palette_colour(C)``), so the library solved alone declares none of them. One more solve, with
-    the values the restrictions name added as palette colours and shapes, declares those that exist,
-    so that a family of the wrong class (``roomIs(red)`` on a toy) is refused at load time. Whether a
-    value is in a given environment's palette is that environment's business: :func:`ground_environment`
-    refuses a restriction the environment cannot honour.
-    """
-    missing = {p for rs in restrictions.values() for _, p in rs if p not in declared}
-    values = sorted({str(x) for p in missing if p.type is clingo.SymbolType.Function for x in p.arguments})
-    if not values:
-        return
-    probe = "".join(f"palette_colour({x}). palette_shape({x}).\n" for x in values)
-    models = program.solve(probe, models=1, time_limit=time_limit)
-    if not models:
-        raise AspError(f"{program.user_names}: the task library has no answer set once the palette values its "
-                       f"restrict/3 PFs name ({', '.join(values)}) are added, so they cannot be checked")
-    for a in models[0]:
-        if a.name == "pf" and len(a.arguments) == 3 and a.arguments[1] in missing:
-            _declare(declared, a)
-
-
-def _restriction_problem(term: clingo.Symbol, var: str, cls: str,
-                         declarations: Sequence[tuple[str, tuple[str, ...]]]) -> str | None:
-    """What is wrong with restricting variable ``var`` of class ``cls`` by PF ``term``, declared as
-    ``declarations`` (not empty); None: nothing."""
-    usable = [(c, sig) for c, sig in declarations if c in _RESTRICTION_CLASSES]
-    if not usable:
-        found = {c for c, _ in declarations}
-        classes = " and ".join(sorted(found))
-        hint = " (a position PF belongs in goal/3)" if "position" in found else ""
-        return f"PF {term} is a {classes} PF; restrict needs a colour or shape PF of one {cls}{hint}"
-    if all(sig != (cls,) for _, sig in usable):
-        classes = " and ".join(sorted({c for c, _ in usable}))
-        sigs = " or ".join(sorted({"(" + ", ".join(sig) + ("," if len(sig) == 1 else "") + ")"
-                                   for _, sig in usable}))
-        return (f"PF {term} is a {classes} PF of arguments {sigs}, but variable {var!r} is a {cls}; "
-                f"restrict needs a colour or shape PF of one {cls}")
-    return None
-
-
-def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tuple[LiftedTask, ...], tuple[str, ...],
-                                                                            tuple[tuple[str, tuple[str, str]], ...]]:
+def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
+        tuple[LiftedTask, ...], tuple[str, ...], tuple[tuple[str, tuple[str, str]], ...], PFRoles]:
     """Solve the library without an environment: the lifted tasks (task/1, var/3, goal/3,
-    restrict/3), the names of the unary spatial PFs (pf/3 of class spatial), sorted, and the PFs of
-    two objects but the spatial ones with their signatures, sorted (what ``related/4`` of
-    ``groundings.lp`` may relate objects by).
+    restrict/3), the names of the unary PFs of a viewpoint class (spatial), sorted, the PFs of
+    two objects but the viewpoint ones with their signatures, sorted (what ``related/4`` of
+    ``groundings.lp`` may relate objects by), and the part each PF class plays.
 
     Checked here, each a one-line AspError naming the sources and the task: variables, goal PFs
-    and their argument classes, and that every restrict/3 whose PF the library declares (alone or
-    with the palette values restrictions name) names a colour or shape PF of one argument of its
-    variable's class. A PF no pf/3 declares here may be declared by an environment (a family over
+    (of a goal class) and their argument classes, and that every restrict/3 whose PF the library
+    declares (alone or with the palette values restrictions name) names a property PF of one
+    argument of its variable's class. A PF no pf/3 declares here may be declared by an environment (a family over
     its facts): :func:`ground_environment` refuses it where none is."""
     models = program.solve("", models=1, time_limit=time_limit)
     if not models:
@@ -228,15 +153,17 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
     by_signature: dict[tuple[str, int], list] = {}
     for sym in models[0]:
         by_signature.setdefault((sym.name, len(sym.arguments)), []).append(sym)
-    names = sorted(_text(a.arguments[0]) for a in by_signature.get(("task", 1), []))
+    roles = PFRoles(*(frozenset(symbol_text(a.arguments[0]) for a in by_signature.get((part, 1), []))
+                      for part in ("goal_class", "viewpoint_class")))
+    names = sorted(symbol_text(a.arguments[0]) for a in by_signature.get(("task", 1), []))
     variables: dict[str, list[Variable]] = {n: [] for n in names}
     goals: dict[str, list[tuple[str, tuple[str, ...]]]] = {n: [] for n in names}
     restrictions: dict[str, list[tuple[str, clingo.Symbol]]] = {n: [] for n in names}
     signatures: dict[str, tuple[str, ...]] = {}
     spatial = set()
     relational = set()
-    movable = set()  # PFs the agent's moves change: what a goal may be
-    declared: _Declarations = {}
+    movable = set()  # PFs of a goal class: the agent's moves change them
+    declared: Declarations = {}
     for a in by_signature.get(("pf", 3), []):
         cls_, name, sig = a.arguments
         if sig.type is not clingo.SymbolType.Function or sig.name:
@@ -244,33 +171,33 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
             # by such a PF nor let restrict/3 name it.
             raise AspError(f"{program.user_names}: {a}: the signature of PF {name} must be a tuple of classes, "
                            f"written ({sig},) for one argument (the comma makes it a tuple)")
-        _declare(declared, a)
-        if cls_.name == "position":
-            signatures[pf_name(name)] = tuple(_text(s) for s in _tuple_args(sig))
-        elif cls_.name == "spatial" and len(_tuple_args(sig)) == 1:
-            spatial.add(pf_name(name))  # groundings.lp describes objects by unary spatial PFs only
-        if cls_.name != "spatial" and len(_tuple_args(sig)) == 2:
-            relational.add((pf_name(name), tuple(_text(s) for s in _tuple_args(sig))))
-        if cls_.name in ("position", "spatial"):
+        declare(declared, a)
+        cls = symbol_text(cls_)
+        if cls in roles.goal_classes:
+            signatures[pf_name(name)] = tuple(symbol_text(s) for s in tuple_args(sig))
             movable.add(pf_name(name))
+        elif cls in roles.viewpoint_classes and len(tuple_args(sig)) == 1:
+            spatial.add(pf_name(name))  # groundings.lp describes objects by unary viewpoint PFs only
+        if cls not in roles.viewpoint_classes and len(tuple_args(sig)) == 2:
+            relational.add((pf_name(name), tuple(symbol_text(s) for s in tuple_args(sig))))
     for a in by_signature.get(("var", 3), []):
-        t, v, c = (_text(x) for x in a.arguments)
+        t, v, c = (symbol_text(x) for x in a.arguments)
         if t not in variables:
             raise AspError(f"{program.user_names}: var({t}, \"{v}\", {c}) names no task({t})")
         variables[t].append(Variable(v, c))
     for a in by_signature.get(("goal", 3), []):
         t, p, args = a.arguments
-        t = _text(t)
+        t = symbol_text(t)
         if t not in goals:
             raise AspError(f"{program.user_names}: goal({t}, ...) names no task({t})")
-        goals[t].append((pf_name(p), tuple(_text(x) for x in _tuple_args(args))))
+        goals[t].append((pf_name(p), tuple(symbol_text(x) for x in tuple_args(args))))
     for a in by_signature.get(("restrict", 3), []):
         t, v, p = a.arguments
-        t, v = _text(t), _text(v)
+        t, v = symbol_text(t), symbol_text(v)
         if t not in restrictions:
             raise AspError(f"{program.user_names}: restrict({t}, ...) names no task({t})")
         restrictions[t].append((v, p))
-    _declare_restricted_families(program, restrictions, declared, time_limit)
+    declare_restricted_families(program, restrictions, declared, time_limit)
     tasks = []
     rank = {c: i for i, c in enumerate(CLASS_ORDER)}
     for n in names:
@@ -292,8 +219,9 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
                     raise AspError(f"{program.user_names}: task {n}: goal {pred} uses variable "
                                    f"{arg!r} that has no var({n}, \"{arg}\", Class)")
             if pred not in movable:
-                raise AspError(f"{program.user_names}: task {n}: goal {pred} is not a declared position or spatial PF, so no "
-                               f"plan can make it true (position and spatial PFs: {', '.join(sorted(movable))})")
+                raise AspError(f"{program.user_names}: task {n}: goal {pred} is not a declared PF of a goal class "
+                               f"({', '.join(sorted(roles.goal_classes)) or 'none: goal_class/1'}), so no plan can "
+                               f"make it true (their PFs: {', '.join(sorted(movable))})")
             sig = signatures.get(pred)
             if sig is not None and tuple(by_name[a] for a in args) != sig:
                 given = ", ".join(f"{a}: {by_name[a]}" for a in args)
@@ -311,12 +239,12 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[tupl
                                f"that has no var({n}, \"{v}\", Class)")
             if term not in declared:
                 continue  # only an environment declares it (or nothing does): ground_environment checks
-            problem = _restriction_problem(term, v, by_name[v], declared[term])
+            problem = restriction_problem(term, v, by_name[v], declared[term], roles)
             if problem:
                 raise AspError(f"{program.user_names}: task {n}: restrict({n}, \"{v}\", {term}): {problem}")
         kept = {(v, str(term)) for v, term in restrictions[n]}
         tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n]))), tuple(sorted(kept))))
-    return tuple(tasks), tuple(sorted(spatial)), tuple(sorted(relational))
+    return tuple(tasks), tuple(sorted(spatial)), tuple(sorted(relational)), roles
 
 
 @functools.lru_cache(maxsize=32)
@@ -349,7 +277,8 @@ class TaskLibrary:
         kept = sum(len(s.text) for s in self.program.sources) <= _sources.KEPT_SOURCE_BYTES
         lifted = (_lifted_tasks_of if kept else _lifted_tasks_of.__wrapped__)(self.program.sources, allow_scripts,
                                                                                isolated, time_limit)
-        self.tasks, self.spatial_pfs, self.relational_pfs = lifted
+        # spatial_pfs: the unary PFs of a viewpoint class; pf_roles: the part each PF class plays (PFRoles).
+        self.tasks, self.spatial_pfs, self.relational_pfs, self.pf_roles = lifted
 
     @classmethod
     def load(cls, paths: str | Path | Iterable[str | Path] | None = None, allow_scripts: bool = False,

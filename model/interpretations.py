@@ -15,9 +15,9 @@ a noun phrase may describe an object that is not part of the goal, and its
 words are then generated from that object's colour and shape PFs. This keeps
 all words grounded: the colour words of the rooms a worker walks *through*
 teach the colours as well as those of the goal, and no free distribution is
-left for phrases to escape into (an earlier design with one "unaligned"
-distribution learned to explain every phrase there: measured 58% on the
-crowd corpus). A phrase may still align with nothing (role ``none``); its
+left for phrases to escape into (one free "unaligned" distribution learns to
+explain every phrase there; ABLATIONS.md, "Figures moved out of comments").
+A phrase may still align with nothing (role ``none``); its
 words then come from ``NULL``.
 
 The room the agent starts in has a bystander role of its own, ``other:start``
@@ -59,7 +59,7 @@ from groundlang.model.features import atoms_hold_along
 from groundlang.model.geometry import cell_tables
 from groundlang.model.pf_tables import PFTables
 from groundlang.model.relational import relational_links, relational_roles
-from groundlang.model.tasks import candidate_tasks, object_descriptions, object_relations
+from groundlang.model.tasks import candidate_tasks, object_descriptions, object_relations, viewpoint_pfs
 from groundlang.model.vocabulary import NO_ROLE
 from groundlang.logic.classes import domain_classes
 from groundlang.model.world import WORLD_CLASSES, State
@@ -184,7 +184,7 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
     for var, role in zip(lifted.variables, task_roles(lifted)):
         obj = binding[var.name]
         about = described.get(obj, {})
-        said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + about.get("spatial", ())
+        said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + viewpoint_pfs(about, library)
         bindings.append(RoleBinding(role, obj, var.cls, said + relation, _kinds(about) + relation))
     bound = set(binding.values())
     classes = {name: cls for cls, name, _ in state.layout.objects}

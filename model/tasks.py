@@ -23,7 +23,7 @@ from .world import State
 
 __all__ = [
     "Candidate", "candidate_tasks", "check_position_pfs", "object_descriptions", "object_relations", "attribute_pfs",
-    "spatial_descriptions", "narrow_by_known", "NarrowedCandidate",
+    "spatial_descriptions", "viewpoint_pfs", "narrow_by_known", "NarrowedCandidate",
 ]
 
 Candidate = tuple[GroundedTask, list[BindingConstraint]]
@@ -73,7 +73,7 @@ def check_position_pfs(state: State, library: TaskLibrary, tables) -> None:
 
 
 def object_descriptions(state: State, library: TaskLibrary) -> Mapping[str, Mapping[str, tuple[str, ...]]]:
-    """Object -> PF class -> the unary PFs of that class (every class but position) true of it in
+    """Object -> PF class -> the unary PFs of that class (every class but a goal class) true of it in
     ``state``: colours and shapes, the spatial PFs where the agent stands, and any class a user's
     library declares (``{"room0": {"colour": ("roomIsGreen",)}}``).
 
@@ -92,24 +92,31 @@ def object_relations(state: State, library: TaskLibrary) -> Mapping[str, tuple[t
 
 
 def attribute_pfs(state: State, library: TaskLibrary) -> Mapping[str, tuple[tuple[str, str], ...]]:
-    """Object -> its colour and shape PFs in ``state`` (the PFs ``restrict/3`` may name), colour first:
-    ``((name, term), ...)`` with the name as groundlang writes it and the term as a library does,
-    ``{"room0": (("roomIsGreen", "roomIs(green)"),)}``. Every family the library declares counts,
-    pfs.lp's and a user's own (``toyHue(purple)``); objects with none are absent. From the same
-    cached solve as :func:`candidate_tasks`. Raises AspError."""
+    """Object -> its property PFs in ``state`` (colour, shape, a library's own classes: the PFs ``restrict/3``
+    may name), by class name (colour first): ``((name, term), ...)`` with the name as groundlang writes it and
+    the term as a library does, ``{"room0": (("roomIsGreen", "roomIs(green)"),)}``. Every family the
+    library declares counts, pfs.lp's and a user's own (``toyHue(purple)``); objects with none are absent.
+    From the same cached solve as :func:`candidate_tasks`. Raises AspError."""
     described = object_descriptions(state, library)
     terms = _environment(state, library)[2]
     return MappingProxyType({
         obj: pairs for obj, by_class in described.items()
-        if (pairs := tuple((name, terms[name]) for cls in ("colour", "shape") for name in by_class.get(cls, ())))
+        if (pairs := tuple((name, terms[name]) for cls in sorted(by_class) if library.pf_roles.property_class(cls)
+                           for name in by_class[cls]))
     })
 
 
+def viewpoint_pfs(about: Mapping[str, tuple[str, ...]], library: TaskLibrary) -> tuple[str, ...]:
+    """The PFs of a viewpoint class (``viewpoint_class/1``: spatial) among one object's descriptions
+    ``about`` (class -> PFs, an entry of :func:`object_descriptions`)."""
+    return tuple(pf for cls in sorted(library.pf_roles.viewpoint_classes) for pf in about.get(cls, ()))
+
+
 def spatial_descriptions(state: State, library: TaskLibrary) -> Mapping[str, tuple[str, ...]]:
-    """The spatial PFs (``pfs.lp``) true of each object where the agent stands in ``state``:
-    the ``spatial`` class of :func:`object_descriptions`; objects none holds of are absent."""
+    """The PFs of a viewpoint class (``pfs.lp``: spatial) true of each object where the agent stands in
+    ``state``; objects none holds of are absent."""
     described = object_descriptions(state, library)
-    return MappingProxyType({obj: d["spatial"] for obj, d in described.items() if "spatial" in d})
+    return MappingProxyType({obj: said for obj, d in described.items() if (said := viewpoint_pfs(d, library))})
 
 
 @dataclass(frozen=True)

@@ -288,7 +288,7 @@ _TOY_TO_ROOM = 'task(toyToRoom). var(toyToRoom, "T", toy). var(toyToRoom, "R", r
 @pytest.mark.parametrize("restriction, pieces", [
     # a position PF: where an object ends up is the goal's business
     ('restrict(toyToRoom, "R", toyInRoom).',
-     ('restrict(toyToRoom, "R", toyInRoom)', "toyInRoom is a position PF", "needs a colour or shape PF")),
+     ('restrict(toyToRoom, "R", toyInRoom)', "toyInRoom is a position PF", "needs a property PF")),
     # a spatial PF: where an object lies seen from the agent is no property it keeps
     ('restrict(toyToRoom, "T", doorWestOfAgent).',
      ('restrict(toyToRoom, "T", doorWestOfAgent)', "doorWestOfAgent is a spatial PF")),
@@ -393,6 +393,45 @@ def test_a_pf_that_only_describes_bystanders_gets_a_token_of_its_own():
     assert learner.vocab.has_token("toyIsShiny")  # not read as NULL: words may learn it
 
 
+def test_a_property_class_of_a_users_own_may_restrict_a_task():
+    """A PF class that neither goal_class/1 nor viewpoint_class/1 declares is a property, as colour and shape
+    are: restrict/3 may name its PFs (a size PF had been refused, "restrict needs a colour or shape PF")."""
+    shiny = TaskLibrary.from_text(_TOY_TO_ROOM + 'restrict(toyToRoom, "T", toyIsShiny).\n' + _SHINY_TOYS)
+    assert shiny.tasks[0].restrictions == (("T", "toyIsShiny"),)
+    ((grounded, constraints),) = enumerate_groundings(shiny, TWO_TOYS)  # block0, the yellow star, in room0
+    assert grounded.goal_text == "toyInRoom(block0, room1)"
+    assert Atom("toyIsShiny", ("block0",)) in constraints[0].atoms
+
+
+# A goal class and a viewpoint class of the library's own: beside a toy, and a toy east of the agent.
+_OWN_PARTS = """goal_class(place). viewpoint_class(side).
+pf(place, agentBesideToy, (agent, toy)).
+holds(agentBesideToy, (A, T)) :- agent(A), toy(T), at(A, X, Y), beside(X, Y, U, V), at(T, U, V).
+pf(side, toyEastOfAgent, (toy,)). holds(toyEastOfAgent, (T,)) :- toy(T), at(T, X, _), agent(A), at(A, U, _), X > U.
+task(agentToToy). var(agentToToy, "A", agent). var(agentToToy, "T", toy). goal(agentToToy, agentBesideToy, ("A", "T")).
+"""
+
+
+def test_the_part_a_pf_class_plays_is_declared_in_asp():
+    """goal_class/1 and viewpoint_class/1 (pfs.lp) say which PF classes goals are made of and which describe an
+    object from where the agent stands; a library declares its own classes' parts with no Python edit."""
+    from groundlang.model.pf_tables import pf_tables
+
+    own = TaskLibrary.from_text(_OWN_PARTS)
+    assert own.pf_roles.goal_classes == {"position", "place"}
+    assert own.pf_roles.viewpoint_classes == {"spatial", "side"}
+    assert "toyEastOfAgent" in own.spatial_pfs
+    found = enumerate_groundings(own, TWO_TOYS)
+    assert [g.goal_text for g, _ in found] == ["agentBesideToy(agent0, block0)", "agentBesideToy(agent0, block1)"]
+    assert not any(a.predicate == "toyEastOfAgent" for _, cs in found for c in cs for a in c.atoms)  # no binding
+    assert _descriptions(own, TWO_TOYS)["block1"]["side"] == ("toyEastOfAgent",)  # it describes
+    tables = pf_tables(two_toy_state().layout, own.tabulation_program)
+    assert "agentBesideToy" in tables.order  # tabulated over placements, so a plan can reach it
+    assert not any(a.predicate == "toyEastOfAgent" for a in tables.static)
+    with pytest.raises(AspError, match=r"goal agentBesideToy is not a declared PF of a goal class \(position\)"):
+        TaskLibrary.from_text(_OWN_PARTS.replace("goal_class(place).", ""))
+
+
 def test_cli_output_cut_short_by_its_reader_is_no_error(fixtures):
     """`groundlang tasks ... | head`: the reader leaves early; no error message, no traceback."""
     state = fixtures / "sokoban2_corpus" / "L1_novel.state"
@@ -435,7 +474,7 @@ def test_a_restriction_the_environment_cannot_honour_is_refused_where_it_is_know
     assert "\n" not in message
     cls = "room" if var == "R" else "toy"
     assert message.startswith(f'{path}: task t: restrict(t, "{var}", {term}): the environment (palette sokoban) '
-                              f"declares no colour or shape PF {term} of a {cls}, so the task would bind nothing; ")
+                              f"declares no property PF (colour, shape, ...) {term} of a {cls}, so the task would bind nothing; ")
     assert tail in message
 
 
@@ -449,7 +488,7 @@ def test_a_users_colour_family_restricts_a_task_and_its_values_are_checked_where
     assert library.tasks[0].restrictions == (("T", "toyHue(red)"),)
     assert [g.goal_text for g, _ in enumerate_groundings(library, TWO_TOYS)] == ["toyInRoom(block1, room0)"]
     purple = TaskLibrary.from_text(_TOY_TO_ROOM + 'restrict(toyToRoom, "T", toyHue(purple)).\n' + hue, "hue.lp")
-    with pytest.raises(AspError, match=r"hue.lp: task toyToRoom: .*the environment declares no colour or shape PF "
+    with pytest.raises(AspError, match=r"hue.lp: task toyToRoom: .*the environment declares no property PF \(colour, shape, \.\.\.\) "
                                        r"toyHue\(purple\) of a toy.* toyHue\(blue\), toyHue\(green\), "
                                        r"toyHue\(red\), toyHue\(yellow\)"):
         enumerate_groundings(purple, TWO_TOYS)

@@ -1,0 +1,82 @@
+"""What a task library's own solve says of its PF classes, and the checks of restrict/3 made when it is loaded:
+the part each PF class plays (``goal_class/1``, ``viewpoint_class/1`` of pfs.lp or a library), and whether
+a restriction names a property PF of its variable's class."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import clingo
+
+from .program import AspError, Program
+from .terms import symbol_text, tuple_args
+
+__all__ = ["PFRoles", "Declarations", "declare", "declare_restricted_families", "restriction_problem"]
+
+
+@dataclass(frozen=True)
+class PFRoles:
+    """The part each PF class plays (``goal_class/1`` and ``viewpoint_class/1``, pfs.lp or a library's own):
+    goals are made of a goal class's PFs; a viewpoint class's describe an object as seen from the agent at
+    the start; every other class is a property (what an object is: restrict/3 may name one)."""
+
+    goal_classes: frozenset[str] = frozenset()
+    viewpoint_classes: frozenset[str] = frozenset()
+
+    def property_class(self, cls: str) -> bool:
+        return cls not in self.goal_classes and cls not in self.viewpoint_classes
+
+
+# PF term -> its declarations: (PF class, classes of its arguments), one per pf/3 atom.
+Declarations = dict[clingo.Symbol, list[tuple[str, tuple[str, ...]]]]
+
+
+def declare(declared: Declarations, pf_atom: clingo.Symbol) -> None:
+    cls_, name, sig = pf_atom.arguments
+    declared.setdefault(name, []).append((symbol_text(cls_), tuple(symbol_text(s) for s in tuple_args(sig))))
+
+
+def declare_restricted_families(program: Program, restrictions: dict[str, list[tuple[str, clingo.Symbol]]],
+                                 declared: Declarations, time_limit: float | None) -> None:
+    """Add to ``declared`` the pf/3 atoms of PFs named by restrict/3 that only an environment declares.
+
+    Colour and shape PFs are families over the environment's palette (``pf(colour, roomIs(C), (room,))
+    :- palette_colour(C)``), so the library solved alone declares none of them. One more solve, with
+    the values the restrictions name added as palette colours and shapes, declares those that exist,
+    so that a family of the wrong class (``roomIs(red)`` on a toy) is refused at load time. Whether a
+    value is in a given environment's palette is that environment's business: :func:`ground_environment`
+    refuses a restriction the environment cannot honour.
+    """
+    missing = {p for rs in restrictions.values() for _, p in rs if p not in declared}
+    values = sorted({str(x) for p in missing if p.type is clingo.SymbolType.Function for x in p.arguments})
+    if not values:
+        return
+    probe = "".join(f"palette_colour({x}). palette_shape({x}).\n" for x in values)
+    models = program.solve(probe, models=1, time_limit=time_limit)
+    if not models:
+        raise AspError(f"{program.user_names}: the task library has no answer set once the palette values its "
+                       f"restrict/3 PFs name ({', '.join(values)}) are added, so they cannot be checked")
+    for a in models[0]:
+        if a.name == "pf" and len(a.arguments) == 3 and a.arguments[1] in missing:
+            declare(declared, a)
+
+
+def restriction_problem(term: clingo.Symbol, var: str, cls: str,
+                         declarations: Sequence[tuple[str, tuple[str, ...]]], roles: PFRoles) -> str | None:
+    """What is wrong with restricting variable ``var`` of class ``cls`` by PF ``term``, declared as
+    ``declarations`` (not empty); None: nothing."""
+    usable = [(c, sig) for c, sig in declarations if roles.property_class(c)]
+    wanted = f"a property PF (colour, shape: a class neither goal_class/1 nor viewpoint_class/1) of one {cls}"
+    if not usable:
+        found = {c for c, _ in declarations}
+        classes = " and ".join(sorted(found))
+        hint = " (a goal's PF belongs in goal/3)" if found & roles.goal_classes else ""
+        return f"PF {term} is a {classes} PF; restrict needs {wanted}{hint}"
+    if all(sig != (cls,) for _, sig in usable):
+        classes = " and ".join(sorted({c for c, _ in usable}))
+        sigs = " or ".join(sorted({"(" + ", ".join(sig) + ("," if len(sig) == 1 else "") + ")"
+                                   for _, sig in usable}))
+        return (f"PF {term} is a {classes} PF of arguments {sigs}, but variable {var!r} is a {cls}; "
+                f"restrict needs {wanted}")
+    return None
