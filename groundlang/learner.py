@@ -21,17 +21,13 @@ from groundlang.confidence import given_achievable, group_goals
 from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at
 from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
-from groundlang.inference.likelihoods import behaviour_likelihood_table
-from groundlang.inference.parse_cache import ParseCache
 from groundlang.inference.planning import TaskSettings
-from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.logic.atoms import Atom
 from groundlang.logic.storage import as_path
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.domain_words import WordSource, domain_lexicon, extra_words
 from groundlang.model.encoding import Batch, Observation
-from groundlang.model.interpretations import Interpretation, NoTaskError, interpretations, without_unbroken_held_parts
-from groundlang.model.pf_tables import library_pf_tables
+from groundlang.model.interpretations import Interpretation, interpretations
 from groundlang.model.language_model_base import word_meanings
 from groundlang.model.language_models import BagOfWords, LanguageModel, get_language_model
 from groundlang.model.relevance import check_abstraction_possible
@@ -41,8 +37,7 @@ from groundlang.learner_state import (check_count, check_model_parts, check_stat
                                        check_training_options, learner_from_state, learner_state)
 from groundlang.model_io import check_parameter_bound, read_model, write_model
 from groundlang.results import FollowResult, Posterior
-from groundlang.training_vocabulary import (build_vocabulary, palette_schema, unlisted_schema_words,
-                                            word_files_beside)
+from groundlang.training_vocabulary import build_vocabulary, palette_schema, word_files_beside
 from groundlang.wording import goal_phrase
 
 __all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError", "AnswerError", "DEFAULT_MIN_CONFIDENCE"]
@@ -139,51 +134,11 @@ class Learner:
         return self._interp_cache[key]
 
     def observe(self, instances: Sequence, progress: bool = False) -> list[Observation]:
-        """Observations with behaviour likelihoods for training instances (cached on disk)."""
-        palettes = {inst.initial_state.layout.palette: None for inst in instances}
-        words = unlisted_schema_words(self.library, palettes, self.word_lexicon)
-        if any(words.values()):
-            self.add_words(words)
-        shown = [getattr(inst, "actions", None) is not None for inst in instances]
-        interps = []
-        for inst in instances:
-            try:
-                interps.append(self._interpretations(inst.initial_state, demonstrated=all(shown)))
-            except NoTaskError as exc:  # one state of many: say whose (corpus readers leave most such out)
-                where = f"{inst.path}, line {inst.line}" if hasattr(inst, "line") else str(inst.path)
-                raise NoTaskError(f"{where}: {exc}") from None
-        if not any(shown):  # (start, end) pairs: end states' likelihoods (inference.end_states, shared_meaning)
-            behaviour = end_state_behaviour(instances, interps, self.library)
-        elif all(shown):
-            goals = [sorted({i.goal for i in group}) for group in interps]
-            table = behaviour_likelihood_table(
-                instances, goals, self.settings, cache_dir=self.cache_dir, progress=progress, library=self.library
-            )
-            by_goal = [dict(zip(g, row)) for g, row in zip(goals, table)]
-            behaviour = [[float(lookup[i.goal]) for i in group] for lookup, group in zip(by_goal, interps)]
-        else:
-            raise ValueError("observe: instances with demonstrations and (start, end) pairs without them "
-                             "cannot be mixed in one corpus")
-        if all(shown) and self.lm.held_parts:
-            tables = [library_pf_tables(inst.initial_state.layout, self.library) for inst in instances]
-            interps, behaviour = without_unbroken_held_parts(interps, behaviour, [i.states for i in instances], tables)
-        observations = []
-        parsed: dict[str, tuple] = {}  # a text said again is parsed once
-        parses = ParseCache(self.cache_dir)
-        for inst, group, values in zip(instances, interps, behaviour):
-            if inst.command not in parsed:
-                parsed[inst.command] = parses.readings(inst.command, self.lm.parser_weights, self.word_lexicon)
-            readings = parsed[inst.command]
-            observations.append(
-                Observation(
-                    tuple(readings[0].logical_form.words),
-                    readings,
-                    tuple(group),
-                    tuple(values),
-                )
-            )
-        parses.report()
-        return observations
+        """Observations with behaviour likelihoods for training instances (cached on disk): see
+        :func:`groundlang.observing.observations`."""
+        from groundlang.observing import observations
+
+        return observations(self, instances, progress)
 
     def _command_observation(self, command: str, state: State) -> Observation:
         readings = tuple(parse(command, weights=self.lm.parser_weights, word_lexicon=self.word_lexicon))
