@@ -80,9 +80,26 @@ def many_multiword_entries() -> None:
           f"{len(tokens)} words: {times[60000] / times[6000]:.1f}x for 10x the entries (a trie: 1x, a list: 10x)")
 
 
+def long_hues() -> None:
+    """Splitting a solid colour compound against the length of a word file's longest hue, side by side: ten
+    times the length should cost about ten times as much (cuts only at hue lengths; every cut of the word,
+    each a slice, was quadratic: an 80,000-letter hue took seconds a word)."""
+    times = {}
+    for n in (20_000, 200_000):
+        hue = "a" * n
+        words = WORDS.extend({"HUE": [hue]})
+        t0 = time.process_time()
+        assert words.split_compound_colour(hue + "red") == (hue, "red")
+        times[n] = time.process_time() - t0
+    print(f"colour compounds: a 20,000-letter hue {times[20_000] * 1e3:.2f} ms cpu, 200,000 letters "
+          f"{times[200_000] * 1e3:.2f} ms cpu: {times[200_000] / times[20_000]:.1f}x for 10x the length "
+          "(linear: 10x, quadratic: 100x)")
+
+
 def main() -> int:
     long_commands()  # needs no corpus
     many_multiword_entries()
+    long_hues()
     given = len(sys.argv) > 1
     corpus = Path(sys.argv[1]) if given else DEFAULT_CORPUS
     folders = [corpus / "allTurkTrain", corpus / "allTurkTrainLimitedCommand"]

@@ -188,6 +188,10 @@ class Lexicon:
                 cats.add("ADJ")  # past participles modify nouns: "orange-floored room", "colored room"
         self._listed = {word: frozenset(cats) for word, cats in table.items()}
         self.hues = words["HUE"]
+        # A compound's first hue is one of these lengths: cutting only there keeps the split linear in the
+        # word's length (every cut of a word as long as the longest hue, each a slice of that length, was
+        # quadratic: a word file's 80,000-letter hue took seconds a word).
+        self._hue_lengths = tuple(sorted({len(h) for h in self.hues if len(h) >= 3}))
         self.negating_prepositions = words["PREP_NEGATING"]
         self.source_and_comitative_prepositions = words["PREP_SOURCE"]
         self.having_verbs = words["VERB_HAVING"]
@@ -285,10 +289,10 @@ class Lexicon:
         """A colour compound written solid split into its hues ("bluegreen" -> ("blue", "green")), as the
         tokeniser splits a hyphenated one; any other word is itself. Both parts must be hues, so words
         that merely start with one ("tangerine", "redo") are left whole."""
-        # A longer word cannot be two hues; without this bound a 1 MB "word" took minutes of slicing.
-        longest = max(map(len, self.hues), default=0)
-        if not self.is_colour(word) and len(word) <= 2 * longest:
-            for cut in range(3, len(word) - 2):
+        if not self.is_colour(word):
+            for cut in self._hue_lengths:
+                if cut > len(word) - 3:
+                    break
                 if word[:cut] in self.hues and word[cut:] in self.hues:
                     return word[:cut], word[cut:]
         return (word,)

@@ -66,6 +66,9 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, 
                 value, text = sym.arguments
                 if text.type is not clingo.SymbolType.String:
                     raise PaletteError(f'{source.name}: {sym} is not {sym.name}(Value, "text") with a quoted text')
+                if not text.string.strip():  # drawn as a mathtext "$ $": matplotlib's error named no palette
+                    raise PaletteError(f"{source.name}: {sym}: the text is empty; write one or more characters "
+                                       "(or leave the fact out: a glyph defaults to the value's first letter)")
                 drawing[sym.name][str(value)] = text.string
                 continue
             attribute, index, value = sym.arguments
@@ -92,4 +95,11 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, 
             raise PaletteError(f"{source.name}: {attribute} value {next(n for n in names if names.count(n) > 1)} "
                                "has two indices")
         values[attribute] = tuple(names)
+    # A value of two attributes names two families' PFs alike (toyIs(red), a colour and a shape): one PF.
+    seen: dict[str, str] = {}
+    for attribute, names in values.items():
+        for value in names:
+            if (other := seen.setdefault(value, attribute)) != attribute:
+                raise PaletteError(f"{source.name}: {value} is both a {other} and a {attribute}; a value names "
+                                   "one attribute's PFs (toyIs(" + value + ")), so rename one of them")
     return label, values, drawing

@@ -156,6 +156,10 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
     roles = PFRoles(*(frozenset(symbol_text(a.arguments[0]) for a in by_signature.get((part, 1), []))
                       for part in ("goal_class", "viewpoint_class")))
     names = sorted(symbol_text(a.arguments[0]) for a in by_signature.get(("task", 1), []))
+    if twice := next((n for n, m in zip(names, names[1:]) if n == m), None):
+        # task(t) and task("t") are two atoms of one name: their var/3 and goal/3 atoms would be mixed.
+        raise AspError(f'{program.user_names}: task {twice} is declared twice, as task({twice}) and task("{twice}"); '
+                       "write its name one way")
     variables: dict[str, list[Variable]] = {n: [] for n in names}
     goals: dict[str, list[tuple[str, tuple[str, ...]]]] = {n: [] for n in names}
     restrictions: dict[str, list[tuple[str, clingo.Symbol]]] = {n: [] for n in names}
@@ -171,6 +175,9 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
             # by such a PF nor let restrict/3 name it.
             raise AspError(f"{program.user_names}: {a}: the signature of PF {name} must be a tuple of classes, "
                            f"written ({sig},) for one argument (the comma makes it a tuple)")
+        if not 1 <= len(tuple_args(sig)) <= MAX_GOAL_ARITY:  # groundings.lp and tabulate.lp read up to three
+            raise AspError(f"{program.user_names}: {a}: PF {name} has {len(tuple_args(sig))} arguments; a PF "
+                           f"relates 1 to {MAX_GOAL_ARITY} objects")
         declare(declared, a)
         cls = symbol_text(cls_)
         if cls in roles.goal_classes:

@@ -161,9 +161,13 @@ _HOLDS = re.compile(r"holds\((.+?),\((.*)\)\)")
 _ARGUMENT = re.compile(r'v\(([^,()]+),(-?\d+),(-?\d+)\)|("(?:[^"\\]|\\.)*"|[^,()]+)')
 
 
-def _decode(text: str, names: dict[str, str]) -> tuple[str, tuple[str, ...], tuple[int, ...]]:
-    """``(PF name, object names, cells of the copies)`` of one ``holds/2`` atom's text."""
+def _decode(text: str, names: dict[str, str], where: str) -> tuple[str, tuple[str, ...], tuple[int, ...]]:
+    """``(PF name, object names, cells of the copies)`` of one ``holds/2`` atom's text; TabulationError
+    starting with ``where`` (the library's files) for one whose arguments are no tuple."""
     m = _HOLDS.fullmatch(text)
+    if m is None:
+        raise TabulationError(f"{where}: {text}: the objects of holds/2 must be a tuple, written (A,) for one "
+                              "object or (A, R) for two, as pf/3 declares them")
     term = m.group(1)
     if term not in names:
         names[term] = pf_name(clingo.parse_term(term))
@@ -238,13 +242,15 @@ def pf_tables(layout: Layout, program: Program | None = None,
     if not models:
         raise TabulationError(f"{program.user_names}: no answer set for the layout (a constraint always fails)")
     movable_index = {name: i for i, name in enumerate(layout.movable_names)}
+    objects = {name: cls for cls, name, _ in layout.objects}
     found: dict[Atom, list[tuple[int, ...]]] = {}
     static = set()
     names: dict[str, str] = {}
     for sym in models[0]:
         if sym.name != "holds":
             continue
-        name, objects_of, cells_of = _decode(str(sym), names)
+        name, objects_of, cells_of = _decode(str(sym), names, program.user_names)
+        _check_classes(name, objects_of, declared.signatures, objects, program.user_names)
         if name in declared.movers:
             found.setdefault(Atom(name, objects_of), []).append(cells_of)
         else:
@@ -256,8 +262,26 @@ def pf_tables(layout: Layout, program: Program | None = None,
         grid[tuple(np.array(placements, dtype=np.intp).T)] = True
         grid.flags.writeable = False
         grids[atom] = (movers, grid)
-    objects = {name: cls for cls, name, _ in layout.objects}
     return PFTables(layout, declared.signatures, declared.order, grids, frozenset(static), objects)
+
+
+def _check_classes(name: str, objects_of: tuple[str, ...], signatures: dict[str, tuple[str, ...]],
+                   objects: dict[str, str], where: str) -> None:
+    """TabulationError starting with ``where`` (the library's files) where a PF's holds/2 rules say it of
+    objects its pf/3 does not declare it over: its table would be read with objects of another class (a
+    goal over rooms checked against doors) or not at all."""
+    classes = signatures.get(name)
+    if classes is None or len(classes) != len(objects_of):
+        return  # no declaration, or another arity: groundings.lp names those (holds_of_other_arity)
+    for obj, cls in zip(objects_of, classes):
+        if objects.get(obj) != cls:
+            what = _a(objects[obj]) if obj in objects else "no object of the layout"
+            raise TabulationError(f"{where}: holds({name}, {_asp_tuple(objects_of)}): {obj} is {what}, but "
+                                  f"pf/3 declares {name} over {_asp_tuple(classes)}")
+
+
+def _asp_tuple(items: tuple[str, ...]) -> str:
+    return "(" + ", ".join(items) + ("," if len(items) == 1 else "") + ")"
 
 
 def library_pf_tables(layout: Layout, library=None) -> PFTables:

@@ -190,3 +190,15 @@ def test_the_longest_multiword_entry_that_fits_is_joined_and_a_prefix_alone_is_n
     many = CLEANUP.extend({"PREP": [f"the side{i} of" for i in range(200)]})
     tokens = ["the", "side199", "of"] * 30 + ["the", "side", "of", "the", "box"]
     assert many.join_multiword(tokens) == ["the_side199_of"] * 30 + ["the", "side", "of", "the", "box"]
+
+
+def test_a_colour_compound_is_cut_only_where_a_hue_ends():
+    """A word file's 300,000-letter hue: every cut of a word that long had been tried, each a slice of it
+    (hours); cuts only at the hues' lengths (benchmarks/bench_parse.py prints the cost against the length)."""
+    hue = "q" * 300_000
+    words = CLEANUP.extend({"HUE": [hue]})
+    assert words.split_compound_colour(hue + "red") == (hue, "red")
+    assert words.split_compound_colour("red" + hue) == ("red", hue)
+    assert words.split_compound_colour(hue + "x") == (hue + "x",)
+    assert words.split_compound_colour("bluegreen") == ("blue", "green")
+    assert words.split_compound_colour("redo") == ("redo",) and words.split_compound_colour("tangerine") == ("tangerine",)

@@ -1,0 +1,85 @@
+"""What a domain author writes wrong, in a task library or a palette, is refused in one line naming the file
+and what is wrong, before it can train a model on something else than was meant."""
+
+from __future__ import annotations
+
+from importlib.resources import files
+from pathlib import Path
+
+import pytest
+
+from groundlang.corpus import example_corpus_path, read_state_file
+from groundlang.logic.palette_files import PaletteError, read_palette
+from groundlang.logic.program import AspError
+from groundlang.logic.sources import file_source
+from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.pf_tables import TabulationError, pf_tables
+
+STATE = example_corpus_path() / "novel_a.state"
+_SOKOBAN = Path(str(files("groundlang.logic"))) / "palettes" / "sokoban.lp"
+
+
+def _library(tmp_path, text: str, name: str = "mine.lp") -> TaskLibrary:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return TaskLibrary([file_source(path)])
+
+
+def test_a_task_named_as_a_constant_and_as_a_string_is_refused(tmp_path):
+    """task(t) and task("t") are two atoms of one name: their variables were mixed (KeyError: 'A')."""
+    text = ('task(t). var(t, "A", agent). var(t, "R", room). goal(t, agentInRoom, ("A", "R")).\n'
+            'task("t"). var("t", "B", agent). var("t", "Q", room). goal("t", agentInRoom, ("B", "Q")).\n')
+    with pytest.raises(AspError, match=r'mine.lp: task t is declared twice, as task\(t\) and task\("t"\)'):
+        _library(tmp_path, text)
+
+
+def test_a_pf_of_more_objects_than_the_domain_reads_is_refused_by_its_arity(tmp_path):
+    """It had been said to have "no argument of a class that moves", though it had an agent and a toy."""
+    text = ("pf(position, agentWithAll, (agent, toy, toy, room)).\n"
+            "holds(agentWithAll, (A, T, U, R)) :- agent(A), toy(T), toy(U), room(R), T != U.\n")
+    with pytest.raises(AspError, match=r"mine.lp: .*PF agentWithAll has 4 arguments; a PF relates 1 to 3 objects"):
+        _library(tmp_path, text)
+
+
+@pytest.mark.parametrize("rule, message", [
+    # the objects not written as a tuple: an AttributeError from inside the table's reader
+    ("pf(position, agentNear, (agent,)). holds(agentNear, A) :- agent(A), at(A, X, Y), X > 3.",
+     r"mine.lp: holds\(agentNear,v\(agent0,\d+,\d+\)\): the objects of holds/2 must be a tuple"),
+    # said of doors, declared over rooms: the error named no file
+    ("pf(position, agentNear, (agent, room)). holds(agentNear, (A, D)) :- agent(A), at(A, X, Y), door_cell(D, X, Y).",
+     r"mine.lp: holds\(agentNear, \(agent0, door\d\)\): door\d is a door, but pf/3 declares agentNear over "
+     r"\(agent, room\)"),
+    # a colour PF of toys said of rooms: silently never true of a toy
+    ("pf(colour, toyBright, (toy,)). holds(toyBright, (R,)) :- room(R).",
+     r"mine.lp: holds\(toyBright, \(room\d,\)\): room\d is a room, but pf/3 declares toyBright over \(toy,\)"),
+])
+def test_a_pf_whose_rules_disagree_with_its_declaration_is_named_with_its_file(tmp_path, rule, message):
+    library = _library(tmp_path, rule + "\n")
+    state = read_state_file(STATE, "sokoban")
+    with pytest.raises(TabulationError, match=message):
+        pf_tables(state.layout, library.tabulation_program)
+
+
+def test_a_palette_value_of_two_attributes_is_refused(tmp_path):
+    """A shape called red made toyIs(red) both a colour PF and a shape PF: a yellow toy was listed as red."""
+    palette = tmp_path / "clash.lp"
+    palette.write_text(_SOKOBAN.read_text().replace("value(shape, 0, star).", "value(shape, 0, red)."))
+    with pytest.raises(PaletteError, match=r"clash.lp: red is both a colour and a shape"):
+        read_palette(str(palette))
+
+
+@pytest.mark.parametrize("glyph", ['""', '" "'])
+def test_an_empty_glyph_is_refused_where_the_palette_is_read(tmp_path, glyph):
+    """It had failed only when drawing, with matplotlib's mathtext error naming no file."""
+    palette = tmp_path / "blank.lp"
+    palette.write_text(_SOKOBAN.read_text() + f"glyph(star, {glyph}).\n")
+    with pytest.raises(PaletteError, match=r"blank.lp: glyph\(star,\"\s?\"\): the text is empty"):
+        read_palette(str(palette))
+
+
+def test_a_goal_over_a_viewpoint_pf_is_refused_at_load(tmp_path):
+    """A side seen from the agent is no goal (tabulate.lp tabulates goal classes only): it had loaded, and
+    every follow then said no reachable state satisfies it."""
+    with pytest.raises(AspError, match=r"mine.lp: task t: goal doorWestOfAgent is not a declared PF of a goal class"):
+        _library(tmp_path, 'task(t). var(t, "D", door). goal(t, doorWestOfAgent, ("D",)).\n')
+
