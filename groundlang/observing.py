@@ -31,8 +31,7 @@ def observations(learner, instances: Sequence, progress: bool = False) -> list[O
         try:
             interps.append(learner._interpretations(inst.initial_state, demonstrated=all(shown)))
         except NoTaskError as exc:  # one state of many: say whose (corpus readers leave most such out)
-            where = f"{inst.path}, line {inst.line}" if hasattr(inst, "line") else str(inst.path)
-            raise NoTaskError(f"{where}: {exc}") from None
+            raise NoTaskError(f"{_where(inst)}: {exc}") from None
     if not any(shown):  # (start, end) pairs: end states' likelihoods (inference.end_states, shared_meaning)
         behaviour = end_state_behaviour(instances, interps, learner.library)
     elif all(shown):
@@ -48,6 +47,10 @@ def observations(learner, instances: Sequence, progress: bool = False) -> list[O
     if all(shown) and learner.lm.held_parts:
         tables = [library_pf_tables(inst.initial_state.layout, learner.library) for inst in instances]
         interps, behaviour = without_unbroken_held_parts(interps, behaviour, [i.states for i in instances], tables)
+        if (empty := next((inst for inst, group in zip(instances, interps) if not group), None)) is not None:
+            # Every task the state admits already holds there and the demonstration never breaks it.
+            raise NoTaskError(f"{_where(empty)}: no task of the library is carried out by this demonstration: every "
+                              "goal the start state admits holds there already and along the demonstration")
     out = []
     parsed: dict[str, tuple] = {}  # a text said again is parsed once
     parses = ParseCache(learner.cache_dir)
@@ -65,3 +68,7 @@ def observations(learner, instances: Sequence, progress: bool = False) -> list[O
         )
     parses.report()
     return out
+
+
+def _where(inst) -> str:
+    return f"{inst.path}, line {inst.line}" if hasattr(inst, "line") else str(inst.path)

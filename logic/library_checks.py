@@ -4,15 +4,33 @@ a restriction names a property PF of its variable's class."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import clingo
 
-from .program import AspError, Program
+from .program import AspError, Program, Source
+from .sources import parse_source
 from .terms import symbol_text, tuple_args
 
-__all__ = ["PFRoles", "Declarations", "declare", "declare_restricted_families", "restriction_problem"]
+__all__ = ["PFRoles", "Declarations", "declare", "declare_restricted_families", "restriction_problem",
+           "check_tasks_declared_once"]
+
+_TASK_FACT = re.compile(r'task\(("?)([^"()]+)\1\)\.')
+
+
+def check_tasks_declared_once(sources: Sequence[Source], allow_scripts: bool) -> None:
+    """AspError naming both files where two sources declare a task of one name (``task(t).``): its var/3
+    and goal/3 atoms would join into one task (a user's ``agentToRoom`` over the package's: a goal of
+    both), where a task of its own was meant. Within one file, a task's atoms are written as meant."""
+    declared: dict[str, str] = {}
+    for source in sources:
+        names = {m.group(2) for stm in parse_source(source, allow_scripts) if (m := _TASK_FACT.fullmatch(str(stm)))}
+        for name in sorted(names):
+            if (first := declared.setdefault(name, source.name)) != source.name:
+                raise AspError(f"task {name} is declared in both {first} and {source.name}: its atoms would join "
+                               "into one task; rename the task of one of them")
 
 
 @dataclass(frozen=True)

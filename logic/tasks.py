@@ -27,7 +27,8 @@ import clingo
 
 from .atoms import Atom, format_goal
 from .classes import domain_classes
-from .library_checks import Declarations, PFRoles, declare, declare_restricted_families, restriction_problem
+from .library_checks import (Declarations, PFRoles, check_tasks_declared_once, declare, declare_restricted_families,
+                             restriction_problem)
 from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, package_source
 from .terms import natural_key, pf_name, symbol_text, tuple_args
 from . import sources as _sources
@@ -273,6 +274,7 @@ class TaskLibrary:
         # User files are solved in a killable child process; the package's own rules in-process.
         isolated = not all(s.name.startswith("groundlang.logic/") for s in self.sources)
         self.program = Program(domain + self.sources + (_LIBRARY_SHOW,), allow_scripts, isolated)
+        check_tasks_declared_once(self.sources, allow_scripts)
         self.grounding_program = Program(
             domain + self.sources + (package_source("groundings.lp"),), allow_scripts, isolated
         )

@@ -83,3 +83,43 @@ def test_a_goal_over_a_viewpoint_pf_is_refused_at_load(tmp_path):
     with pytest.raises(AspError, match=r"mine.lp: task t: goal doorWestOfAgent is not a declared PF of a goal class"):
         _library(tmp_path, 'task(t). var(t, "D", door). goal(t, doorWestOfAgent, ("D",)).\n')
 
+
+
+@pytest.mark.parametrize("language_model", ["parse", "bow"])
+def test_a_demonstration_no_task_explains_is_named_for_every_language_model(tmp_path, language_model):
+    """One room, the agent in it: the parse model (which keeps goals that hold at the start, for
+    "... and come back") had failed with "max() arg is an empty sequence"; bow named the file."""
+    from groundlang.corpus import read_corpus
+    from groundlang.learner import Learner
+    from groundlang.model.interpretations import NoTaskError
+
+    folder = tmp_path / "oneroom"
+    folder.mkdir()
+    (folder / "agent2blue_0.txt").write_text("go to the blue room\nnorth,south\nroom,1,0,4,4,0 agent,1,1\n"
+                                             "room,1,0,4,4,0 agent,1,2\nroom,1,0,4,4,0 agent,1,1\n")
+    corpus = read_corpus(folder, "sokoban")
+    with pytest.raises(NoTaskError, match=r"oneroom/agent2blue_0.txt: no task of the library"):
+        Learner(language_model, steps=5, cache_dir=False).fit(corpus.instances)
+
+
+def test_a_library_of_many_facts_loads_and_its_rules_are_still_placed_by_file_and_line(tmp_path):
+    """Ground facts are not walked to name their places (a library of 40,000 facts had taken a minute and
+    then been refused as a solve over its time limit); a rule's messages still name its file and line."""
+    facts = "".join(f"fact({i}, \"x\", f(a)).\n" for i in range(20_000))
+    library = _library(tmp_path, facts + 'task(t). var(t, "A", agent). var(t, "R", room). '
+                                          'goal(t, agentInRoom, ("A", "R")).\n')
+    assert [t.name for t in library.tasks] == ["t"]
+    with pytest.raises(AspError, match=r"mine.lp:20002:\d+-\d+: error: unsafe variables"):
+        _library(tmp_path, facts + "fact(0, x, f(a)).\nbad(X) :- fact(0, _, _).\n")
+
+
+def test_a_task_declared_in_two_files_is_refused_naming_both(tmp_path):
+    """A user's agentToRoom beside the package's had joined it: "go to the red room" planned for the agent in
+    the red room and the star in another."""
+    path = tmp_path / "mine.lp"
+    path.write_text('task(agentToRoom). var(agentToRoom, "T", toy). var(agentToRoom, "Q", room).\n'
+                    'goal(agentToRoom, toyInRoom, ("T", "Q")).\n')
+    with pytest.raises(AspError, match=r"task agentToRoom is declared in both groundlang.logic/tasks.lp and "
+                                       r".*mine.lp: its atoms would join into one task"):
+        TaskLibrary.load(["tasks", path])
+    assert [t.name for t in TaskLibrary.load([path]).tasks] == ["agentToRoom"]  # alone, it is the user's own
