@@ -18,6 +18,7 @@ import clingo
 from .classes import ranked
 from .palette_files import read_palette
 from .program import Program, Source
+from .library_checks import PFRoles
 from .tasks import LiftedTask, TaskLibrary, pf_name
 
 __all__ = ["PFDeclaration", "Domain", "domain_schema"]
@@ -49,6 +50,14 @@ class Domain:
     values: dict[str, tuple[str, ...]]  # attribute -> values by the index corpus files use
     pfs: dict[str, PFDeclaration]  # in the order the files declare them
     tasks: tuple[LiftedTask, ...]
+    roles: PFRoles = PFRoles()  # the part each PF class plays (goal_class/1, viewpoint_class/1)
+
+    def role(self, pf_class: str) -> str:
+        """``goal`` (goals are made of its PFs), ``viewpoint`` (describes from where the agent stands) or
+        ``property`` (what an object is: restrict/3 may name it)."""
+        if pf_class in self.roles.goal_classes:
+            return "goal"
+        return "viewpoint" if pf_class in self.roles.viewpoint_classes else "property"
 
     def pfs_of_class(self, pf_class: str) -> list[PFDeclaration]:
         return [d for d in self.pfs.values() if d.pf_class == pf_class]
@@ -62,9 +71,9 @@ class Domain:
         lines = [f"classes: {', '.join(c + (' (moves)' if c in self.movable else '') for c in self.classes)}",
                  f"palette {self.palette}:"]
         lines += [f"  {attribute}: {', '.join(values)}" for attribute, values in self.values.items()]
-        lines.append(f"PFs ({len(self.pfs)}), by PF class:")
+        lines.append(f"PFs ({len(self.pfs)}), by PF class (and its part: goal, viewpoint or property):")
         for pf_class in self.pf_classes:
-            lines.append(f"  {pf_class}: " + ", ".join(f"{d.name}({', '.join(d.signature)})"
+            lines.append(f"  {pf_class} ({self.role(pf_class)}): " + ", ".join(f"{d.name}({', '.join(d.signature)})"
                                                       for d in self.pfs_of_class(pf_class)))
         lines.append(f"lifted tasks ({len(self.tasks)}):")
         lines += [f"  {t}" for t in self.tasks]
@@ -111,4 +120,4 @@ def domain_schema(library: TaskLibrary | None = None, palette: str | tuple = "so
 
     pfs = {d.name: d for d in sorted(found.values(), key=key)}
     return Domain(ranked(classes, rank), frozenset(movable),
-                  name, values, pfs, library.tasks)
+                  name, values, pfs, library.tasks, library.pf_roles)

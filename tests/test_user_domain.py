@@ -180,7 +180,10 @@ def test_the_schema_is_read_from_the_files(domain, library):
                            "--library", str(domain / "pfs.lp"), "--library", str(domain / "tasks.lp")],
                           capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    assert "  size: roomIsLargest(room)" in done.stdout and "  shape: toyIsStar(toy), toyIsMug(toy)" in done.stdout
+    assert "  size (property): roomIsLargest(room)" in done.stdout
+    assert "  shape (property): toyIsStar(toy), toyIsMug(toy)" in done.stdout
+    assert "  position (goal): agentInRoom(agent, room)" in done.stdout
+    assert [schema.role(c) for c in ("position", "spatial", "size")] == ["goal", "viewpoint", "property"]
 
 
 def test_the_worlds_kinds_of_object_are_the_classes_domain_lp_declares():
