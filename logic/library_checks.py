@@ -14,7 +14,7 @@ from .program import AspError, Program, Source
 from .sources import parse_source
 from .terms import symbol_text, tuple_args
 
-__all__ = ["PFRoles", "Declarations", "declare", "declare_restricted_families", "restriction_problem",
+__all__ = ["PFRoles", "Declarations", "declare", "declare_restricted_families", "read_pf_roles", "restriction_problem",
            "check_tasks_declared_once"]
 
 _TASK_FACT = re.compile(r'task\(("?)([^"()]+)\1\)\.')
@@ -44,6 +44,22 @@ class PFRoles:
 
     def property_class(self, cls: str) -> bool:
         return cls not in self.goal_classes and cls not in self.viewpoint_classes
+
+
+def read_pf_roles(by_signature: dict[tuple[str, int], list[clingo.Symbol]], where: str) -> PFRoles:
+    """The PF roles among a library's shown atoms (by name and arity); AspError starting with ``where`` for
+    a class named by a string or a number (the rules of groundings.lp would read it as another class than
+    pf/3's), or of two parts (a goal's PFs are tabulated, a viewpoint's never)."""
+    parts = {}
+    for part in ("goal_class", "viewpoint_class"):
+        for atom in by_signature.get((part, 1), []):
+            if atom.arguments[0].type is not clingo.SymbolType.Function or atom.arguments[0].arguments:
+                raise AspError(f"{where}: {atom}: a PF class is a name as pf/3 writes it, such as {part}(position)")
+        parts[part] = frozenset(str(a.arguments[0]) for a in by_signature.get((part, 1), []))
+    if both := sorted(parts["goal_class"] & parts["viewpoint_class"]):
+        raise AspError(f"{where}: PF class {both[0]} is declared both goal_class and viewpoint_class; a class "
+                       "plays one part (goals are made of where objects are, not of how they look from the start)")
+    return PFRoles(parts["goal_class"], parts["viewpoint_class"])
 
 
 # PF term -> its declarations: (PF class, classes of its arguments), one per pf/3 atom.

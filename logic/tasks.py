@@ -28,7 +28,7 @@ import clingo
 from .atoms import Atom, format_goal
 from .classes import domain_classes
 from .library_checks import (Declarations, PFRoles, check_tasks_declared_once, declare, declare_restricted_families,
-                             restriction_problem)
+                             read_pf_roles, restriction_problem)
 from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, package_source
 from .terms import natural_key, pf_name, symbol_text, tuple_args
 from . import sources as _sources
@@ -154,8 +154,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
     by_signature: dict[tuple[str, int], list] = {}
     for sym in models[0]:
         by_signature.setdefault((sym.name, len(sym.arguments)), []).append(sym)
-    roles = PFRoles(*(frozenset(symbol_text(a.arguments[0]) for a in by_signature.get((part, 1), []))
-                      for part in ("goal_class", "viewpoint_class")))
+    roles = read_pf_roles(by_signature, program.user_names)
     names = sorted(symbol_text(a.arguments[0]) for a in by_signature.get(("task", 1), []))
     if twice := next((n for n, m in zip(names, names[1:]) if n == m), None):
         # task(t) and task("t") are two atoms of one name: their var/3 and goal/3 atoms would be mixed.

@@ -208,9 +208,9 @@ def _declarations(program: Program, palette_facts: str, time_limit: float | None
         elif kind == "position_pf_never_moves":
             never.append(pf_name(sym.arguments[0]))
     if never:
-        raise TabulationError(f"{program.user_names}: position PF {min(never)} has no argument of a class that "
-                              f"moves ({', '.join(sorted(movable))}): no state could change it; "
-                              "declare it in another PF class")
+        raise TabulationError(f"{program.user_names}: PF {min(never)} is of a goal class (goal_class/1: goals are "
+                              f"made of where objects are) but has no argument of a class that moves "
+                              f"({', '.join(sorted(movable))}): no state could change it; declare it in another PF class")
     signatures = {n: tuple(a[i] for i in sorted(a)) for n, a in args.items()}
     declared = {name: i for i, name in enumerate(program.declared_order("pf", 3, 1))}
     order = tuple(sorted(tabulated, key=lambda n: (declared.get(n, len(declared)), n)))

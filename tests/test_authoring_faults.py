@@ -123,3 +123,23 @@ def test_a_task_declared_in_two_files_is_refused_naming_both(tmp_path):
                                        r".*mine.lp: its atoms would join into one task"):
         TaskLibrary.load(["tasks", path])
     assert [t.name for t in TaskLibrary.load([path]).tasks] == ["agentToRoom"]  # alone, it is the user's own
+
+
+@pytest.mark.parametrize("declaration, message", [
+    ("viewpoint_class(position).", r"mine.lp: PF class position is declared both goal_class and viewpoint_class"),
+    ('goal_class("position").', r'mine.lp: goal_class\("position"\): a PF class is a name as pf/3 writes it'),
+])
+def test_the_part_of_a_pf_class_is_declared_once_and_by_name(tmp_path, declaration, message):
+    """A class of two parts was described by neither and related by neither; a quoted class name is one
+    the rules of groundings.lp would read as another class than pf/3's."""
+    with pytest.raises(AspError, match=message):
+        _library(tmp_path, declaration + '\ntask(t). var(t, "A", agent). var(t, "R", room). '
+                                          'goal(t, agentInRoom, ("A", "R")).\n')
+
+
+def test_a_goal_class_whose_pfs_no_move_can_change_is_refused_when_tabulated(tmp_path):
+    library = _library(tmp_path, "goal_class(colour).\n")
+    state = read_state_file(STATE, "sokoban")
+    with pytest.raises(TabulationError, match=r"mine.lp: PF roomIsBlack is of a goal class .* but has no argument "
+                                              r"of a class that moves \(agent, toy\)"):
+        pf_tables(state.layout, library.tabulation_program)
