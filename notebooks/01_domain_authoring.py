@@ -98,7 +98,7 @@ fig.tight_layout()
 # %% [markdown]
 # ## Spatial PFs: words about where things are
 #
-# A PF of class `spatial` (`pfs.lp` declares `doorWestOfAgent(D)` and its three siblings) is not a binding constraint: a door's side of the agent is not a property it keeps in another layout. The parse model still lets words describe an object by it ("the door on the left"). `spatial_descriptions` is what clingo finds where the agent stands; `groundlang tasks FILE --palette sokoban` prints them with each object's other unary PFs (colours, shapes, and any class your library declares), all of which words may say of an object.
+# A PF of class `spatial` (`pfs.lp` declares `doorWestOfAgent(D)` and its three siblings) is not a binding constraint: a door's side of the agent is not a property it keeps in another layout. `pfs.lp` says so in ASP, `viewpoint_class(spatial).`, as `goal_class(position).` says goals are made of position PFs; every other class (colour, shape, the `size` above) is a property, which `restrict/3` may name. A library declares the part of a class of its own the same way, and `library.pf_roles` holds what was read. The parse model still lets words describe an object by it ("the door on the left"). `spatial_descriptions` is what clingo finds where the agent stands; `groundlang tasks FILE --palette sokoban` prints them with each object's other unary PFs (colours, shapes, and any class your library declares), all of which words may say of an object.
 
 # %%
 from groundlang.model.tasks import spatial_descriptions
@@ -106,6 +106,8 @@ from groundlang.model.tasks import spatial_descriptions
 for name, s in [("training layout", train_state), ("novel_a", novel["a"])]:
     print(name, dict(spatial_descriptions(s, library)))
 assert all(a.predicate not in library.spatial_pfs for _, cs in candidate_tasks(state, library) for c in cs for a in c.atoms)
+print(library.pf_roles)
+assert library.pf_roles.property_class("size") and "spatial" in library.pf_roles.viewpoint_classes
 
 
 # %% [markdown]
