@@ -18,6 +18,13 @@ Following weighs each goal ``g`` of the posterior in a state ``s`` by
 ``prod_{R not in L(g)} (1 - q(R | L(g)) + q(R | L(g)) [some fact of R holds in s])``
 (:func:`groundlang.goal_plans.expected_success_states`): a goal's states where its usual company holds
 are worth more than those where it does not, and none is worth more than the goal alone.
+
+A demonstrator also leaves alone what the goal does not need moved. A pair in which a toy (a movable
+object but the one commands speak to) ends elsewhere than it started counts the pseudo-relation
+:data:`MOVED` among its new ones, and with ``moved_toys`` a goal's states where a toy moved are weighed by
+``q(MOVED | L(g))`` (those where none did by 1): sent to a room, a follower does not push a chair along to
+stand beside it there, where the demonstrators of such goals left the chairs where they were. Where every
+state of the goal has a toy moved (a toy's goal), moving is the goal's own business and weighs nothing.
 """
 
 from __future__ import annotations
@@ -35,7 +42,10 @@ from groundlang.model.features import atoms_hold_along
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.world import State
 
-__all__ = ["EndHabits", "new_relations", "demonstrated_pairs", "known_new_relations"]
+__all__ = ["EndHabits", "MOVED", "new_relations", "demonstrated_pairs", "known_new_relations"]
+
+# The pseudo-relation of a pair in which a toy ends elsewhere than it started (no PF has this name).
+MOVED = "(a toy moved)"
 
 # A saved model's table is untrusted: bounds on what a crafted file can make the loader build.
 MAX_RELATION_SETS = 10_000
@@ -44,22 +54,23 @@ MAX_DEMONSTRATIONS = 10**12
 
 def new_relations(start: State, end: State, library) -> frozenset[str]:
     """The relations a task of ``library`` asks for of which some fact holds in ``end`` and not in
-    ``start`` (the same layout)."""
+    ``start`` (the same layout), and :data:`MOVED` where a toy ends elsewhere than it started."""
     return _new_relations([(start, end)], library)[0]
 
 
 def _new_relations(pairs: Sequence[tuple[State, State]], library) -> list[frozenset[str]]:
     """:func:`new_relations` of pairs of one layout, their states' facts read in one pass."""
     layout = pairs[0][0].layout
+    moved = [bool((end.positions[1:] != start.positions[1:]).any()) for start, end in pairs]
     tables = library_pf_tables(layout, library)
     asked = frozenset(map(canonical_predicate, library.goal_relations))
     atoms = [a for a in tables.grids if canonical_predicate(a.predicate) in asked]
     if not atoms:
-        return [frozenset()] * len(pairs)
+        return [frozenset([MOVED] if m else []) for m in moved]
     names = np.array([canonical_predicate(a.predicate) for a in atoms])
     holds = atoms_hold_along(layout, np.stack([s.positions for pair in pairs for s in pair]), atoms, tables)
     new = holds[1::2] & ~holds[0::2]
-    return [frozenset(names[row].tolist()) for row in new]
+    return [frozenset(names[row].tolist() + ([MOVED] if m else [])) for row, m in zip(new, moved)]
 
 
 def demonstrated_pairs(instances) -> list[tuple[State, State]]:
@@ -133,25 +144,41 @@ class EndHabits:
         return {given: {r: self.rate(r, frozenset([given])) for r in sorted(self.relations - {given})}
                 for given in sorted(self.relations)}
 
-    def weights(self, goals: Iterable[tuple[Atom, ...]], masks, within: np.ndarray) -> list[np.ndarray | None]:
+    def weights(self, goals: Iterable[tuple[Atom, ...]], masks, within: np.ndarray,
+                moved_toys: bool = False) -> list[np.ndarray | None]:
         """Per goal, ``[S]``: each state's weight for it over ``masks.space`` (a :class:`GoalMasks`), the
         product over the relations demonstrations showed that can hold with it in a state of ``within``
         (``[S]`` bool, those the agent can reach); None where it is 1 everywhere. A relation that cannot
         hold where the goal does is not one its demonstrators could have left true there, so it weighs
-        nothing: habits say where to end among a goal's states, not which goal to prefer."""
+        nothing: habits say where to end among a goal's states, not which goal to prefer. With
+        ``moved_toys``, :data:`MOVED` weighs the goal's states where a toy moved (module docstring)."""
         holds: dict[str, np.ndarray] = {}
+        # Counted whether or not a demonstration moved a toy: none ever did is the strongest evidence.
+        relations = self.relations | {MOVED} if moved_toys and self.demonstrations else self.relations - {MOVED}
+        if MOVED in relations:
+            holds[MOVED] = _moved(masks.space)
         out = []
         for goal in goals:
             given = frozenset(canonical_predicate(a.predicate) for a in goal)
             region = masks.mask(goal) & within
+            # Where the goal can hold with every toy in place, its company is looked for there: demonstrators
+            # who left the toys alone left true only what could hold without moving one.
+            still = region & ~holds[MOVED] if MOVED in holds else region
+            company = still if still.any() else region
             weight = None
-            for relation in sorted(self.relations - given):
+            for relation in sorted(relations - given):
                 q = self.rate(relation, given)
                 if q <= 0.0:
                     continue
                 if relation not in holds:
                     holds[relation] = _holds(relation, masks)
-                if not (holds[relation] & region).any():
+                if relation == MOVED:
+                    if not still.any():
+                        continue  # no state of the goal leaves every toy in place: moving one is its business
+                    factor = 1.0 - (1.0 - q) * holds[MOVED]
+                    weight = factor if weight is None else weight * factor
+                    continue
+                if not (holds[relation] & company).any():
                     continue
                 factor = (1.0 - q) + q * holds[relation]
                 weight = factor if weight is None else weight * factor
@@ -176,6 +203,12 @@ class EndHabits:
         if len({s for s, _ in shown}) != len(shown):
             raise ValueError("end_habits names a set of relations twice")
         return cls(tuple(shown))
+
+
+def _moved(space) -> np.ndarray:
+    """``[S]`` bool over ``space`` (enumerated from its initial state): where a toy is elsewhere than there."""
+    start = space.initial.positions[1:]
+    return (space.positions[:, 1:] != start[None]).any(axis=(1, 2))
 
 
 def _holds(relation: str, masks) -> np.ndarray:

@@ -37,7 +37,7 @@ class LanguageModel:
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False,
                  achievable_goals: bool = True, expected_success: bool = True, step_cost: float = 0.005,
-                 end_habits: bool = True):
+                 end_habits: bool = True, moved_toys: bool = False):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
         "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
         ``name_share``, and its learned words otherwise: the names a domain's author gives are words
@@ -50,7 +50,8 @@ class LanguageModel:
         probable goal does (``goal_plans.expected_success_states``); ``step_cost``, at least 0, is how much
         probability of success a step is worth there. ``end_habits``: there, each goal is weighed by what
         the training demonstrations of such goals also left true where they ended
-        (:mod:`groundlang.inference.end_habits`)."""
+        (:mod:`groundlang.inference.end_habits`); with ``moved_toys`` as well, by how often they moved a
+        toy (a state where one moved weighs that rate)."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
@@ -63,12 +64,13 @@ class LanguageModel:
         self.expected_success = expected_success
         self.step_cost = step_cost
         self.end_habits = end_habits
+        self.moved_toys = moved_toys
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
                 "schema_names": self.schema_names, "achievable_goals": self.achievable_goals,
                 "expected_success": self.expected_success, "step_cost": self.step_cost,
-                "end_habits": self.end_habits}
+                "end_habits": self.end_habits, "moved_toys": self.moved_toys}
 
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""

@@ -74,6 +74,7 @@ class ParseAligned(LanguageModel):
         expected_success: bool = True,
         step_cost: float = 0.005,
         end_habits: bool = True,
+        moved_toys: bool = False,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -124,7 +125,8 @@ class ParseAligned(LanguageModel):
                 require_positive(self.name, name, value)
         require_positive(self.name, "argument_bonus", argument_bonus, added=True)
         super().__init__(word_concentration, schema_names=schema_names, achievable_goals=achievable_goals,
-                         expected_success=expected_success, step_cost=step_cost, end_habits=end_habits)
+                         expected_success=expected_success, step_cost=step_cost, end_habits=end_habits,
+                         moved_toys=moved_toys)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus
         self.mention_concentration = mention_concentration
@@ -180,6 +182,7 @@ class ParseAligned(LanguageModel):
             "expected_success": self.expected_success,
             "step_cost": self.step_cost,
             "end_habits": self.end_habits,
+            "moved_toys": self.moved_toys,
             "last_phrase_key": self.last_phrase_key,
             "object_key": self.object_key,
             "last_passes_over_source": self.last_passes_over_source,

@@ -13,7 +13,7 @@ from groundlang.bdm import parse_bdm_state
 from groundlang.bdm_check import default_library
 from groundlang.confidence import GoalMasks
 from groundlang.goal_plans import expected_success_states, planning_space
-from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations, new_relations
+from groundlang.inference.end_habits import MOVED, EndHabits, demonstrated_pairs, known_new_relations, new_relations
 from groundlang.inference.end_states import distances
 from groundlang.learner import Learner
 from groundlang.logic.atoms import parse_goal
@@ -85,6 +85,32 @@ def test_following_ends_where_the_goals_usual_company_holds_too():
     # a habit is never worth more than the goal: a goal's states all weigh at most 1, so none leaves it
     for weight in habits.weights([parse_goal(room), parse_goal(next_to)], masks, dist >= 0):
         assert weight is not None and 0.0 < weight.min() and weight.max() <= 1.0
+
+
+def test_with_moved_toys_a_habit_is_not_bought_by_pushing_a_toy_its_demonstrators_left_alone():
+    """Sent to the blue room, demonstrators stopped next to a toy there, and never moved one. The chair is
+    in the red room: a follower that counts only the company pushes it into the blue room to stand beside
+    it; with moved_toys (a toy moved is counted as shown, and the company looked for where none moved) it
+    walks to the blue room and leaves the chair where it is."""
+    start = _state((2, 6), chair=(6, 2))
+    space = planning_space(start, None, LIBRARY)
+    masks = GoalMasks(space, LIBRARY)
+    room = "agentInRoom(agent0, room2)"
+    goals = [(parse_goal(room), 1.0)]
+    habits = EndHabits(((frozenset({"agentInRoom"}), 1), (frozenset({"agentInRoom", "agentNextToToy"}), 3)))
+    chair = space.positions[:, 1]
+    pushed, _ = expected_success_states(goals, masks, 0.005, habits)
+    assert (chair[pushed] != (6, 2)).any(axis=1).all()  # it ends where the chair was pushed along
+    left, said = expected_success_states(goals, masks, 0.005, habits, moved_toys=True)
+    assert said == parse_goal(room) and left.any()
+    assert (chair[left] == (6, 2)).all() and (left <= _mask(masks, room)).all()
+    # a pair that moved a toy shows it; a goal whose every state moves one (a toy's) is not weighed by it
+    assert MOVED in new_relations(start, _state((6, 5), chair=(6, 6)), LIBRARY)
+    toy_goal = parse_goal("toyInRoom(block0, room2)")
+    dist = distances(space)
+    (counted,) = habits.weights([toy_goal], masks, dist >= 0, moved_toys=True)
+    (plain,) = habits.weights([toy_goal], masks, dist >= 0)
+    assert np.array_equal(counted, plain)
 
 
 def test_a_habit_that_cannot_hold_with_the_goal_does_not_make_another_goal_preferred():

@@ -22,7 +22,7 @@ def test_settings_make_the_model_they_name():
     assert get_language_model("bow", null_token=False).settings() == {"word_concentration": 1.05, "null_token": False,
                                                                         "schema_names": False, "achievable_goals": True,
                                                                         "expected_success": True, "step_cost": 0.005,
-                                                                        "end_habits": True}
+                                                                        "end_habits": True, "moved_toys": False}
 
 
 @pytest.mark.parametrize("name, settings, message", [
