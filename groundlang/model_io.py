@@ -204,7 +204,7 @@ def _read_json(directory: Path, any_version: bool = False) -> dict:
         meta = json.loads(storage.read_limited(path, MAX_JSON_BYTES, "a model's model.json").decode("utf-8"))
     except storage.FileRefused as exc:
         raise ModelFormatError(str(exc)) from None
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError, UnicodeDecodeError, an integer of 4,300+ digits
         raise ModelFormatError(f"{path}: not valid JSON ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise ModelFormatError(f"{path}: not a groundlang model (format field is not {FORMAT!r})")

@@ -38,6 +38,7 @@ full) gives one warning and the run goes on without writing to it.
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import logging
@@ -138,7 +139,7 @@ def read_entry_json(path: Path, max_bytes: int, what: str) -> dict | None:
         raise DamagedEntry(f"unreadable: {exc.strerror if isinstance(exc, OSError) and exc.strerror else exc}") from None
     try:
         data = json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+    except (ValueError, RecursionError):  # JSONDecodeError, UnicodeDecodeError, an integer of 4,300+ digits
         raise DamagedEntry("not JSON (truncated or overwritten)") from None
     if not isinstance(data, dict):
         raise DamagedEntry("not a cache entry (no key)")
@@ -310,6 +311,8 @@ def _store(root, key: str, value: float, goal) -> Path | None:
         _write_entry(_entry_path(root, key), key, value, goal)
         return root
     except OSError as exc:
+        if exc.errno in (errno.EISDIR, errno.ENOTDIR) and Path(root).is_dir():
+            return root  # this entry's own path is taken by a folder (counted as damaged when read): only it is lost
         logger.warning("behaviour cache %s cannot be written (%s: %s); going on without writing "
                        "to it", root, exc.filename or root, exc.strerror or exc)
         return None

@@ -97,6 +97,25 @@ def test_corrupt_entries_are_recomputed_with_a_warning(small_instances, tmp_path
     assert '"log_likelihood"' in entries[0].read_text()  # rewritten whole
 
 
+def test_an_entry_of_an_unreadable_number_or_a_folder_costs_only_that_entry(small_instances, tmp_path, caplog):
+    """An integer of 5,000 digits is a ValueError json does not call a decode error: it had stopped every
+    run ("Exceeds the limit (4300 digits)"); a folder at one entry's path had stopped every later write."""
+    goals = [_agent_goals(i.initial_state.layout) for i in small_instances]
+    good = behaviour_likelihood_table(small_instances, goals, cache_dir=tmp_path)
+    entries = sorted((tmp_path / "behaviour").rglob("*.json"))
+    entries[0].write_text('{"key": ' + "1" * 5000 + "}")
+    for entry in entries[1:3]:
+        entry.unlink()
+    entries[1].mkdir()
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.likelihoods"):
+        again = behaviour_likelihood_table(small_instances, goals, cache_dir=tmp_path)
+    for a, b in zip(good, again):
+        np.testing.assert_allclose(a, b)
+    assert '"log_likelihood"' in entries[0].read_text()  # recomputed and rewritten
+    assert entries[2].is_file()  # written after the folder's entry failed: the cache was still written
+    assert not any("cannot be written" in r.getMessage() for r in caplog.records)
+
+
 def test_cache_location_and_no_cache(tmp_path, monkeypatch, small_instances):
     monkeypatch.setenv("GROUNDLANG_CACHE", str(tmp_path / "env"))
     assert cache_directory() == tmp_path / "env"

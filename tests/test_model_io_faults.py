@@ -158,6 +158,14 @@ def test_a_model_is_never_saved_inside_another_models_folder(learners, tmp_path)
     assert _same_globals(Learner.load(tmp_path / "m"), learners[1])
 
 
+def test_a_model_json_number_too_long_to_read_is_named_as_bad_json(learners, tmp_path):
+    """json raises a plain ValueError for an integer of 4,300+ digits: its message had named no file."""
+    learners[0].save(tmp_path / "m")
+    (tmp_path / "m" / "model.json").write_text('{"format": ' + "7" * 5000 + "}")
+    with pytest.raises(ModelFormatError, match=r"m/model.json: not valid JSON \(Exceeds the limit"):
+        Learner.load(tmp_path / "m")
+
+
 def test_a_save_removes_temporary_files_of_interrupted_saves_and_keeps_others(learners, tmp_path):
     old, _ = learners
     model = old.save(tmp_path / "m")
