@@ -133,6 +133,9 @@ def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: 
             if attr == "output":
                 what = _OUTPUT_KIND.get(getattr(args, "command", None), what)
             parts.append(_describe_output(Path(value), what, started))
+    if getattr(args, "learn", False) is True and isinstance(getattr(args, "model", None), (str, Path)):
+        # follow --learn saves what it learned over its --model: an output as much as -o is
+        parts.append(_describe_output(Path(args.model), "model", started))
     # Only when the cache's module was imported whole: an interrupt during its import (torch's takes seconds)
     # leaves torch half-initialised, and importing it again can crash the process in native code. A failed
     # import is not in sys.modules: no entry was written. Nor before the entries at the start were counted
@@ -142,7 +145,7 @@ def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: 
             and cache_entries_before is not None):
         root = likelihoods.cache_directory(getattr(args, "cache_dir", None))
         count = cache_entry_count(args) - cache_entries_before
-        if count:
+        if count > 0:  # fewer than at the start: the cache was cleared meanwhile, and no count says what is new
             entries = "entry is" if count == 1 else "entries are"
             parts.append(f"{count} new behaviour-likelihood cache {entries} kept in {root} (a rerun resumes from them)")
     return "; ".join(parts) or "no output files were due"

@@ -418,6 +418,21 @@ ROWS += [
     Row("input/train an empty --cache-dir",
         ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model", "--cache-dir", ""),
         pieces=("--cache-dir: empty; name a folder",), absent=("{tmp}/model",)),
+    # the run had trained to the end, then been refused its save: the folder held the cache too
+    Row("input/train a --cache-dir inside the model folder",
+        ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model", "--cache-dir", "{tmp}/model/cache"),
+        pieces=("--cache-dir {tmp}/model/cache: inside the model folder -o {tmp}/model",), absent=("{tmp}/model",)),
+    Row("input/train GROUNDLANG_CACHE inside the model folder",
+        ("train", str(_WILLIAMS_SMALL), "-o", "{tmp}/model"), env={"GROUNDLANG_CACHE": "{tmp}/model"},
+        pieces=("GROUNDLANG_CACHE {tmp}/model: inside the model folder -o {tmp}/model",), absent=("{tmp}/model",)),
+    # discover had written its cache into the working folder, and taken both options silently
+    Row("input/discover an empty --cache-dir",
+        ("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "{tmp}/x.lp", "--cache-dir", ""),
+        pieces=("--cache-dir: empty; name a folder",), absent=("{tmp}/x.lp",)),
+    Row("input/discover --no-cache with --cache-dir",
+        ("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "-o", "{tmp}/x.lp", "--no-cache",
+         "--cache-dir", "{tmp}/c"),
+        pieces=("--no-cache and --cache-dir {tmp}/c: choose one",), absent=("{tmp}/x.lp", "{tmp}/c")),
 ]
 ROWS.append(Row("input/check a .bdm whose layout is too large to tabulate: the error alone, no summary cut off by it",
                 ("check", str(BAD / "too_large_to_tabulate.bdm")),
@@ -472,7 +487,7 @@ def _fill(text: str, values: dict) -> str:
 def test_bad_input(row: Row, capsys, tmp_path, trained_model, monkeypatch):
     monkeypatch.setenv("GROUNDLANG_CACHE", str(tmp_path / "cache"))
     for key, value in row.env.items():
-        monkeypatch.setenv(key, value)
+        monkeypatch.setenv(key, value.replace("{tmp}", str(tmp_path)))
     values = {"model": trained_model, "tmp": tmp_path}
     if row.broken is not None:
         values["model"] = tmp_path / "broken-model"

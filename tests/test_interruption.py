@@ -145,6 +145,27 @@ def test_what_was_kept_describes_each_output(tmp_path):
     assert "cache" not in what_was_kept(Args, start, uses_cache=True, cache_entries_before=None)
 
 
+def test_what_follow_learn_kept_names_its_model_and_no_negative_count(tmp_path):
+    """follow --learn saves over --model: an interrupt had said "no output files were due" after the save.
+    And a cache cleared during the run had been reported as "-45 new ... entries"."""
+    import groundlang.inference.likelihoods  # noqa: F401
+
+    class Args:
+        command = "follow"
+        learn = True
+        model = str(tmp_path / "model")
+        cache_dir = str(tmp_path / "cache")
+
+    (tmp_path / "model").mkdir()
+    (tmp_path / "model" / "model.json").write_text("{}")
+    start = time.time()
+    os.utime(tmp_path / "model" / "model.json", (start - 100, start - 100))
+    assert what_was_kept(Args, start, uses_cache=True, cache_entries_before=45) == (
+        f"{tmp_path / 'model'} left as it was (the previous complete model)")
+    os.utime(tmp_path / "model" / "model.json", (start + 1, start + 1))
+    assert what_was_kept(Args, start, uses_cache=False) == f"the model in {tmp_path / 'model'} was complete before the interruption"
+
+
 # ----------------------------------------------------------------- real processes
 def _cache_entries(cache: Path) -> list[Path]:
     """Whole entries only: temporary files (".tmp-...") are not entries yet."""

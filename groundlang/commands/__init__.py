@@ -221,3 +221,32 @@ def check_state_file(path: str, what: str) -> None:
         if Path(path).suffix == ".bdm" and not is_burlap_state_file(path):
             raise ValueError(f"{path}: line 1 is not a state line; {what} reads a one-line .bdm or .state file, "
                              "or a corpus file (*.txt), not a .bdm file of commands")
+
+
+def cache_option(args: argparse.Namespace):
+    """The cache folder ``--cache-dir`` / ``--no-cache`` name: False for none, None for the default. ValueError
+    for both, or an empty --cache-dir (which would be the working folder)."""
+    if args.cache_dir is not None and not args.cache_dir.strip():
+        raise ValueError("--cache-dir: empty; name a folder (or leave the option out for $GROUNDLANG_CACHE "
+                         "or ./.groundlang-cache)")
+    if args.no_cache and args.cache_dir is not None:
+        raise ValueError(f"--no-cache and --cache-dir {args.cache_dir}: choose one (no cache, or this one)")
+    return False if args.no_cache else args.cache_dir
+
+
+def check_cache_outside(cache, model: str) -> None:
+    """ValueError, before any work, where the cache folder (``cache``: :func:`cache_option`'s value) is the
+    model folder ``-o model`` or inside it: the save at the end would find the folder holding other files
+    than a model's, and the training would be lost."""
+    if cache is False:
+        return
+    from groundlang.inference.likelihoods import cache_directory
+
+    root, folder = cache_directory(cache).resolve(), Path(model).resolve()
+    if root == folder or folder in root.parents:
+        named = f"--cache-dir {cache}" if cache is not None else (
+            f"GROUNDLANG_CACHE {os.environ['GROUNDLANG_CACHE']}" if os.environ.get("GROUNDLANG_CACHE")
+            else f"the cache folder {root}")
+        raise ValueError(f"{named}: inside the model folder -o {model}, which holds one model only; name a cache "
+                         "folder elsewhere")
+

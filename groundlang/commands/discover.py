@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from groundlang.commands import PALETTE_HELP, fraction, inputs_read, json_text, output_path, positive_int
+from groundlang.commands import PALETTE_HELP, cache_option, fraction, inputs_read, json_text, output_path, positive_int
 
 
 def register(subparsers) -> None:
@@ -51,13 +51,13 @@ def run(args: argparse.Namespace) -> int:
 
     start = time.perf_counter()
     check_destination(args.output, "-o", inputs_read(args, "directory", "pfs", "palette", "lexicon"))
+    cache = cache_option(args)
     pfs = TaskLibrary.load(args.pfs) if args.pfs else None  # a bad file is refused before any work
     corpus = read_corpus(args.directory, args.palette)
     if not corpus.instances:
         raise ValueError(f"{args.directory}: no corpus files (*.txt) found")
     settings = DiscoverySettings(weight_margin=args.weight_margin, max_conjuncts=args.max_conjuncts,
                                  max_tasks=args.max_tasks, restrict=args.restrict)
-    cache = False if args.no_cache else args.cache_dir
     quiet = args.json or getattr(args, "quiet", False)
     discovery = discover_tasks(corpus.instances, settings, cache_dir=cache, progress=not quiet and getattr(args, "progress", False), pfs=pfs)
     path = write_library(discovery, args.output)

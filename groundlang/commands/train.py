@@ -8,8 +8,8 @@ import time
 from groundlang.bdm import bdm_files
 from groundlang.corpus import read_corpus
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
-                                 add_language_model_settings, add_lexicon_option, language_model_settings,
-                                 library_given, output_path, require_palette, seed)
+                                 add_language_model_settings, add_lexicon_option, cache_option, check_cache_outside,
+                                 language_model_settings, library_given, output_path, require_palette, seed)
 
 
 def register(subparsers) -> None:
@@ -40,9 +40,10 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.model_io import check_model_destination
 
     check_model_destination(args.output, "-o")  # before training, not after it
+    check_cache_outside(cache_option(args), args.output)
     words = extra_words(args.lexicon)  # a malformed word file stops here, before the corpus is read
     lm = get_language_model(args.language_model, **language_model_settings(args.lm_settings))  # and a setting
-    _cache(args)
+    cache_option(args)
     started = time.perf_counter()
     instances, library = _pairs(args) if bdm_files(args.corpus) else (None, None)
     if instances is None:
@@ -52,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
         instances = corpus.instances
         library = library_given(args)
-    learner = Learner(lm, library=library, seed=args.seed, lexicon=words, cache_dir=_cache(args),
+    learner = Learner(lm, library=library, seed=args.seed, lexicon=words, cache_dir=cache_option(args),
                       em_acceleration=args.em_acceleration)
     learner.fit(instances, progress=args.progress)
     learner.save(args.output)
@@ -74,19 +75,8 @@ def _pairs(args: argparse.Namespace):
 
     library = default_library(args.library)
     commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE).commands
-    made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent, cache_dir=_cache(args))
+    made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent, cache_dir=cache_option(args))
     skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
     print(f"{len(commands)} commands, {sum(len(i.pairs) for i in made.instances)} pairs used"
           + (f"; pairs skipped: {skipped}" if skipped else ""))
     return made.instances, library
-
-
-def _cache(args: argparse.Namespace):
-    """The cache folder the options name: False for none, None for the default. ValueError for both
-    --no-cache and --cache-dir, or an empty --cache-dir (which would be the working folder)."""
-    if args.cache_dir is not None and not args.cache_dir.strip():
-        raise ValueError("--cache-dir: empty; name a folder (or leave the option out for $GROUNDLANG_CACHE "
-                         "or ./.groundlang-cache)")
-    if args.no_cache and args.cache_dir is not None:
-        raise ValueError(f"--no-cache and --cache-dir {args.cache_dir}: choose one (no cache, or this one)")
-    return False if args.no_cache else args.cache_dir
