@@ -113,6 +113,13 @@ def _restore(data: dict, key: str, library: TaskLibrary, noise: EndStateNoise) -
         raise ValueError("goals, values and groundings do not match")
     if any(v != v or v > 0 for v in [*values, contents["floor"]]):
         raise ValueError("holds a number that is not a log-probability")
+    if values and max(values) == float("-inf"):
+        raise ValueError("no goal of it has a probability above 0")  # a pair's evidence would be nan
+    # The checksum says the entry is whole, not that it is this library's: a grounding's task and variables
+    # are looked up by name where the evidence is read.
+    variables = {t.name: {v.name for v in t.variables} for t in library.tasks}
+    if any(task not in variables or not set(props) <= variables[task] for task, props, _ in groundings):
+        raise ValueError("names a task or variable the library does not have")
     if not isinstance(contents["new"], list) or not all(isinstance(r, str) and r for r in contents["new"]):
         raise ValueError("its new relations are not a list of names")
     return LayoutEvidence.from_parts(library, noise, goals, values, groundings, contents["floor"],

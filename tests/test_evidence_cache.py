@@ -183,3 +183,27 @@ def test_a_number_too_large_for_a_float_is_a_damaged_entry(williams_commands, wi
         cache.evidence(start, end)
         cache.report()
     assert (cache.damaged, cache.computed) == (1, 1) and "1 corrupt entry recomputed" in caplog.records[0].getMessage()
+
+
+@pytest.mark.parametrize("forge", ["variable", "values"])
+def test_an_entry_whole_but_not_of_this_library_is_a_damaged_entry(williams_commands, williams_library, tmp_path,
+                                                                    caplog, forge):
+    """Its checksum matching (a writer's bug, a hand edit): a grounding of a variable its task lacks had
+    stopped training with a KeyError traceback, values all -inf with torch's nan error."""
+    start, end = _pairs(williams_commands)[0]
+    EvidenceCache(williams_library, EndStateNoise(), tmp_path).evidence(start, end)
+    (path,) = (tmp_path / "evidence").rglob("*.json")
+    data = json.loads(path.read_text())
+    if forge == "variable":
+        task, props, g = data["groundings"][0]
+        data["groundings"][0] = [task, {**props, "NOSUCH": ["x"]}, g]
+    else:
+        data["values"] = ["-Infinity"] * len(data["values"])
+    data["checksum"] = evidence_cache._checksum(data["key"], {k: data[k] for k in ("goals", "values", "groundings",
+                                                                                  "floor", "new")})
+    path.write_text(json.dumps(data))
+    cache = EvidenceCache(williams_library, EndStateNoise(), tmp_path)
+    with caplog.at_level(logging.WARNING, logger="groundlang.inference.evidence_cache"):
+        cache.evidence(start, end)
+        cache.report()
+    assert (cache.damaged, cache.computed) == (1, 1) and "1 corrupt entry recomputed" in caplog.records[0].getMessage()
