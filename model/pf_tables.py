@@ -246,6 +246,7 @@ def pf_tables(layout: Layout, program: Program | None = None,
     found: dict[Atom, list[tuple[int, ...]]] = {}
     static = set()
     names: dict[str, str] = {}
+    copies: dict[Atom, int] = {}  # a static PF's atoms over movable objects: on how many placements each holds
     for sym in models[0]:
         if sym.name != "holds":
             continue
@@ -255,6 +256,9 @@ def pf_tables(layout: Layout, program: Program | None = None,
             found.setdefault(Atom(name, objects_of), []).append(cells_of)
         else:
             static.add(Atom(name, objects_of))
+            if cells_of:
+                copies[Atom(name, objects_of)] = copies.get(Atom(name, objects_of), 0) + 1
+    _check_unmoved(copies, int(layout.walkable.sum()), movable_index, program.user_names)
     grids = {}
     for atom, placements in found.items():
         movers = tuple(movable_index[o] for o in atom.args if o in movable_index)
@@ -263,6 +267,19 @@ def pf_tables(layout: Layout, program: Program | None = None,
         grid.flags.writeable = False
         grids[atom] = (movers, grid)
     return PFTables(layout, declared.signatures, declared.order, grids, frozenset(static), objects)
+
+
+def _check_unmoved(copies: dict[Atom, int], cells: int, movable_index: dict[str, int], where: str) -> None:
+    """TabulationError starting with ``where`` where a PF that is not of a goal class (so kept the same in
+    every state, a binding constraint) holds of a movable object on some placements and not on others: it
+    reads where things stand, as a side seen from the agent does, and would bind objects by where they
+    happen to be at the start."""
+    for atom, held in copies.items():
+        if held != cells ** sum(o in movable_index for o in atom.args):
+            raise TabulationError(f"{where}: PF {atom.predicate} is of a property class (neither goal_class/1 nor "
+                                  f"viewpoint_class/1), but whether it holds of {', '.join(atom.args)} changes as "
+                                  "objects move; declare its class with viewpoint_class/1 if it says where an "
+                                  "object lies seen from the agent's start, or goal_class/1 if a goal is made of it")
 
 
 def _check_classes(name: str, objects_of: tuple[str, ...], signatures: dict[str, tuple[str, ...]],

@@ -143,3 +143,17 @@ def test_a_goal_class_whose_pfs_no_move_can_change_is_refused_when_tabulated(tmp
     with pytest.raises(TabulationError, match=r"mine.lp: PF roomIsBlack is of a goal class .* but has no argument "
                                               r"of a class that moves \(agent, toy\)"):
         pf_tables(state.layout, library.tabulation_program)
+
+
+def test_a_property_pf_that_reads_where_things_stand_is_refused(tmp_path):
+    """A side of the agent declared in a class of its own with no viewpoint_class/1 had silently become a
+    binding constraint: objects bound by where they happened to be at the start."""
+    rule = "pf(bearing, toyEastOfAgent, (toy,)). holds(toyEastOfAgent, (T,)) :- toy(T), at(T, X, _), agent(A), " \
+           "at(A, U, _), X > U.\n"
+    state = read_state_file(STATE, "sokoban")
+    with pytest.raises(TabulationError, match=r"mine.lp: PF toyEastOfAgent is of a property class .* changes as "
+                                              r"objects move; declare its class with viewpoint_class/1"):
+        pf_tables(state.layout, _library(tmp_path, rule).tabulation_program)
+    viewpoint = _library(tmp_path, "viewpoint_class(bearing).\n" + rule, "mine2.lp")
+    assert "toyEastOfAgent" in viewpoint.spatial_pfs
+    pf_tables(state.layout, viewpoint.tabulation_program)  # read as a side of the agent, it is no property
