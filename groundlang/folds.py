@@ -82,9 +82,26 @@ def _init_worker(context: dict) -> None:
     # goes to the parent, which reports the interruption once.
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _die_with_parent(signal.SIGTERM, context.get("parent"))
     torch.set_num_threads(1)
     _CONTEXT.clear()
     _CONTEXT.update(context)
+
+
+def _die_with_parent(sig: int, parent: int | None = None) -> None:
+    """Linux: the kernel sends ``sig`` to this worker when its parent dies (``prctl(PR_SET_PDEATHSIG)``).
+    A parent killed with -9 cannot stop its pool: its workers had gone on computing their fold and then
+    printed a BrokenPipe traceback each, after the command had ended. Elsewhere nothing is done."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        libc.prctl(1, int(sig), 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if parent is not None and os.getppid() != parent:  # it died before the call: no signal will come
+        os._exit(0)
 
 
 def usable_workers(workers: int, folds: int) -> int:
@@ -114,7 +131,7 @@ def run_folds(context: dict, indices: list[int], workers: int, ray_address: str 
             if bar is not None:
                 bar.update(1)
     else:
-        with multiprocessing.get_context("fork").Pool(workers, _init_worker, (context,)) as pool:
+        with multiprocessing.get_context("fork").Pool(workers, _init_worker, ({**context, "parent": os.getpid()},)) as pool:
             for record in pool.imap(_fold, indices, chunksize=max(1, len(indices) // (8 * workers))):
                 records.append(record)
                 if bar is not None:

@@ -331,3 +331,32 @@ def test_an_interrupt_during_the_cache_modules_import_does_not_import_it_again(t
         cache_dir = str(tmp_path / "cache")
 
     assert what_was_kept(Args(), time.time(), uses_cache=True) == f"nothing written to {tmp_path / 'model'}"
+
+
+def test_a_fold_worker_dies_with_its_parent(tmp_path):
+    """evaluate --workers killed with -9: its workers had gone on with their folds and printed BrokenPipe
+    tracebacks after the command had ended; the kernel now stops them when the parent dies (Linux)."""
+    script = tmp_path / "parent.py"
+    script.write_text(
+        "import os, signal, sys, time\n"
+        "from groundlang.folds import _die_with_parent\n"
+        "parent = os.getpid()\n"
+        "if os.fork() == 0:\n"
+        "    _die_with_parent(signal.SIGTERM, parent)\n"
+        "    print(os.getpid(), flush=True)\n"
+        "    time.sleep(60)\n"
+        "    os._exit(0)\n"
+        "time.sleep(60)\n")
+    parent = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True)
+    worker = int(parent.stdout.readline())
+    parent.kill()
+    parent.wait()
+    deadline = time.time() + 10
+    while time.time() < deadline:
+        state = Path(f"/proc/{worker}/status")
+        if not state.exists() or "\nState:\tZ" in state.read_text():
+            break
+        time.sleep(0.05)
+    else:
+        os.kill(worker, signal.SIGKILL)
+        pytest.fail("the worker outlived its parent")
