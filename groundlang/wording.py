@@ -20,11 +20,10 @@ import re
 from collections.abc import Iterable, Sequence
 
 from groundlang.logic.atoms import Atom, format_goal
-from groundlang.logic.classes import domain_classes
 from groundlang.logic.schema import Domain, PFDeclaration
 from groundlang.logic.tasks import LiftedTask, TaskLibrary
 from groundlang.model.interpretations import OTHER_ROLES, object_names
-from groundlang.model.tasks import attribute_pfs, object_descriptions, viewpoint_pfs
+from groundlang.model.tasks import attribute_pfs, kind_pfs, object_descriptions, viewpoint_pfs
 from groundlang.model.vocabulary import NULL, class_token
 from groundlang.model.world import State, object_class
 
@@ -49,8 +48,7 @@ def _value(term: str) -> str | None:
 def _plain_phrase(obj: str, state: State, library: TaskLibrary) -> str:
     cls = object_class(obj)
     described = object_descriptions(state, library).get(obj, {})
-    # The PFs of attributes whose values name kinds (kind/1, domain.lp: shape) give the head noun ("the star").
-    heads = {pf for kind in domain_classes().kinds for pf in described.get(kind, ())}
+    heads = set(kind_pfs(described))  # their values give the head noun ("the star")
     modifiers, head = [], None
     for name, term in attribute_pfs(state, library).get(obj, ()):
         value = _value(term)

@@ -153,31 +153,24 @@ class EndHabits:
         nothing: habits say where to end among a goal's states, not which goal to prefer. With
         ``moved_toys``, :data:`MOVED` weighs the goal's states where a toy moved (module docstring)."""
         holds: dict[str, np.ndarray] = {}
-        # Counted whether or not a demonstration moved a toy: none ever did is the strongest evidence.
-        relations = self.relations | {MOVED} if moved_toys and self.demonstrations else self.relations - {MOVED}
-        if MOVED in relations:
-            holds[MOVED] = _moved(masks.space)
+        # Weighed whether or not a demonstration moved a toy: that none ever did is the strongest evidence.
+        moving = _moved(masks.space) if moved_toys and self.demonstrations else None
         out = []
         for goal in goals:
             given = frozenset(canonical_predicate(a.predicate) for a in goal)
             region = masks.mask(goal) & within
-            # Where the goal can hold with every toy in place, its company is looked for there: demonstrators
-            # who left the toys alone left true only what could hold without moving one.
-            still = region & ~holds[MOVED] if MOVED in holds else region
-            company = still if still.any() else region
-            weight = None
-            for relation in sorted(relations - given):
+            weight, company = None, region
+            # Where no state of the goal leaves every toy in place, moving one is the goal's own business.
+            if moving is not None and (still := region & ~moving).any():
+                weight = 1.0 - (1.0 - self.rate(MOVED, given)) * moving
+                # Demonstrators who left the toys alone left true only what could hold without moving one.
+                company = still
+            for relation in sorted(self.relations - given - {MOVED}):
                 q = self.rate(relation, given)
                 if q <= 0.0:
                     continue
                 if relation not in holds:
                     holds[relation] = _holds(relation, masks)
-                if relation == MOVED:
-                    if not still.any():
-                        continue  # no state of the goal leaves every toy in place: moving one is its business
-                    factor = 1.0 - (1.0 - q) * holds[MOVED]
-                    weight = factor if weight is None else weight * factor
-                    continue
                 if not (holds[relation] & company).any():
                     continue
                 factor = (1.0 - q) + q * holds[relation]

@@ -10,8 +10,7 @@ from dataclasses import dataclass
 
 import clingo
 
-from .program import AspError, Program, Source
-from .sources import parse_source
+from .program import AspError, Program
 from .terms import symbol_text, tuple_args
 
 __all__ = ["PFRoles", "Declarations", "declare", "declare_restricted_families", "read_pf_roles", "restriction_problem",
@@ -20,13 +19,13 @@ __all__ = ["PFRoles", "Declarations", "declare", "declare_restricted_families", 
 _TASK_FACT = re.compile(r'task\(("?)([^"()]+)\1\)\.')
 
 
-def check_tasks_declared_once(sources: Sequence[Source], allow_scripts: bool) -> None:
-    """AspError naming both files where two sources declare a task of one name (``task(t).``): its var/3
-    and goal/3 atoms would join into one task (a user's ``agentToRoom`` over the package's: a goal of
-    both), where a task of its own was meant. Within one file, a task's atoms are written as meant."""
+def check_tasks_declared_once(program: Program) -> None:
+    """AspError naming both files where two sources of ``program`` declare a task of one name (``task(t).``):
+    its var/3 and goal/3 atoms would join into one task (a user's task over the package's one of that name:
+    a goal of both), where a task of its own was meant. Within one file, a task's atoms are written as meant."""
     declared: dict[str, str] = {}
-    for source in sources:
-        names = {m.group(2) for stm in parse_source(source, allow_scripts) if (m := _TASK_FACT.fullmatch(str(stm)))}
+    for source, statements in program.statements_by_source():
+        names = {m.group(2) for stm in statements if (m := _TASK_FACT.fullmatch(str(stm)))}
         for name in sorted(names):
             if (first := declared.setdefault(name, source.name)) != source.name:
                 raise AspError(f"task {name} is declared in both {first} and {source.name}: its atoms would join "
@@ -44,6 +43,12 @@ class PFRoles:
 
     def property_class(self, cls: str) -> bool:
         return cls not in self.goal_classes and cls not in self.viewpoint_classes
+
+    def part(self, cls: str) -> str:
+        """``goal``, ``viewpoint`` or ``property``: the part PF class ``cls`` plays."""
+        if cls in self.goal_classes:
+            return "goal"
+        return "viewpoint" if cls in self.viewpoint_classes else "property"
 
 
 def read_pf_roles(by_signature: dict[tuple[str, int], list[clingo.Symbol]], where: str) -> PFRoles:

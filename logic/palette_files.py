@@ -95,11 +95,11 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, 
             raise PaletteError(f"{source.name}: {attribute} value {next(n for n in names if names.count(n) > 1)} "
                                "has two indices")
         values[attribute] = tuple(names)
-    # A value of two attributes names two families' PFs alike (toyIs(red), a colour and a shape): one PF.
+    # A value of two attributes would name two families' PFs alike (a colour's and a shape's): one PF.
     seen: dict[str, str] = {}
     for attribute, names in values.items():
         for value in names:
             if (other := seen.setdefault(value, attribute)) != attribute:
-                raise PaletteError(f"{source.name}: {value} is both a {other} and a {attribute}; a value names "
-                                   "one attribute's PFs (toyIs(" + value + ")), so rename one of them")
+                raise PaletteError(f"{source.name}: {value} is both a {other} and a {attribute}; the PFs of the "
+                                   "two would have one name, so rename one of them")
     return label, values, drawing

@@ -136,12 +136,16 @@ class Program:
     allow_scripts: bool = False
     isolated: bool = False  # solve() in a killable child process (for user-supplied sources)
     _statements: tuple = field(init=False, repr=False, compare=False)
+    _by_source: tuple = field(init=False, repr=False, compare=False)  # each source's statements
 
     def __post_init__(self) -> None:
-        statements = []
-        for source in self.sources:
-            statements.extend(parse_source(source, self.allow_scripts))
-        object.__setattr__(self, "_statements", tuple(statements))
+        by_source = tuple(tuple(parse_source(source, self.allow_scripts)) for source in self.sources)
+        object.__setattr__(self, "_by_source", by_source)
+        object.__setattr__(self, "_statements", tuple(stm for statements in by_source for stm in statements))
+
+    def statements_by_source(self) -> Iterable[tuple[Source, tuple]]:
+        """Each source with its parsed statements (read only), as the program was parsed once."""
+        return zip(self.sources, self._by_source)
 
     @classmethod
     def from_sources(cls, sources: Iterable[Source], allow_scripts: bool = False,

@@ -52,13 +52,6 @@ class Domain:
     tasks: tuple[LiftedTask, ...]
     roles: PFRoles = PFRoles()  # the part each PF class plays (goal_class/1, viewpoint_class/1)
 
-    def role(self, pf_class: str) -> str:
-        """``goal`` (goals are made of its PFs), ``viewpoint`` (describes from where the agent stands) or
-        ``property`` (what an object is: restrict/3 may name it)."""
-        if pf_class in self.roles.goal_classes:
-            return "goal"
-        return "viewpoint" if pf_class in self.roles.viewpoint_classes else "property"
-
     def pfs_of_class(self, pf_class: str) -> list[PFDeclaration]:
         return [d for d in self.pfs.values() if d.pf_class == pf_class]
 
@@ -73,7 +66,7 @@ class Domain:
         lines += [f"  {attribute}: {', '.join(values)}" for attribute, values in self.values.items()]
         lines.append(f"PFs ({len(self.pfs)}), by PF class (and its part: goal, viewpoint or property):")
         for pf_class in self.pf_classes:
-            lines.append(f"  {pf_class} ({self.role(pf_class)}): " + ", ".join(f"{d.name}({', '.join(d.signature)})"
+            lines.append(f"  {pf_class} ({self.roles.part(pf_class)}): " + ", ".join(f"{d.name}({', '.join(d.signature)})"
                                                       for d in self.pfs_of_class(pf_class)))
         lines.append(f"lifted tasks ({len(self.tasks)}):")
         lines += [f"  {t}" for t in self.tasks]

@@ -273,7 +273,7 @@ class TaskLibrary:
         # User files are solved in a killable child process; the package's own rules in-process.
         isolated = not all(s.name.startswith("groundlang.logic/") for s in self.sources)
         self.program = Program(domain + self.sources + (_LIBRARY_SHOW,), allow_scripts, isolated)
-        check_tasks_declared_once(self.sources, allow_scripts)
+        check_tasks_declared_once(self.program)
         self.grounding_program = Program(
             domain + self.sources + (package_source("groundings.lp"),), allow_scripts, isolated
         )

@@ -59,7 +59,7 @@ from groundlang.model.features import atoms_hold_along
 from groundlang.model.geometry import cell_tables
 from groundlang.model.pf_tables import PFTables
 from groundlang.model.relational import relational_links, relational_roles
-from groundlang.model.tasks import candidate_tasks, object_descriptions, object_relations, viewpoint_pfs
+from groundlang.model.tasks import candidate_tasks, kind_pfs, object_descriptions, object_relations, viewpoint_pfs
 from groundlang.model.vocabulary import NO_ROLE
 from groundlang.logic.classes import domain_classes
 from groundlang.model.world import WORLD_CLASSES, State
@@ -185,7 +185,7 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
         obj = binding[var.name]
         about = described.get(obj, {})
         said = tuple(a.predicate for a in constraint.atoms if a.args == (obj,)) + viewpoint_pfs(about, library)
-        bindings.append(RoleBinding(role, obj, var.cls, said + relation, _kinds(about) + relation))
+        bindings.append(RoleBinding(role, obj, var.cls, said + relation, kind_pfs(about) + relation))
     bound = set(binding.values())
     classes = {name: cls for cls, name, _ in state.layout.objects}
     links = relational_links([(binding[v.name], r) for v, r in zip(lifted.variables, task_roles(lifted))], relations,
@@ -197,11 +197,11 @@ def _roles(task: GroundedTask, constraint: BindingConstraint, state: State, libr
             about = described.get(obj, {})
             said = tuple(name for names in about.values() for name in names)
             if obj in start_set:
-                bindings.append(RoleBinding(START_ROLE, obj, cls, said, _kinds(about)))
+                bindings.append(RoleBinding(START_ROLE, obj, cls, said, kind_pfs(about)))
                 if start_known:
                     continue
             other = f"other:{cls}" if by_class or cls in UNALIGNED_CLASSES else BYSTANDER_ROLE
-            bindings.append(RoleBinding(links.get(obj, other), obj, cls, said, _kinds(about)))
+            bindings.append(RoleBinding(links.get(obj, other), obj, cls, said, kind_pfs(about)))
     return tuple(bindings)
 
 
@@ -329,9 +329,3 @@ def without_unbroken_held_parts(groups: Sequence[Sequence[Interpretation]], beha
         kept_groups.append([i for i, o in zip(group, out) if not o])
         kept_values.append([v for v, o in zip(values, out) if not o])
     return kept_groups, kept_values
-
-
-def _kinds(about: dict[str, tuple[str, ...]]) -> tuple[str, ...]:
-    """The PFs of an object's attributes whose values name kinds (``kind/1`` of ``domain.lp``: a toy's shape),
-    which a head noun may say besides its class."""
-    return tuple(pf for attribute in sorted(domain_classes().kinds) for pf in about.get(attribute, ()))

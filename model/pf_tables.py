@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+from collections import Counter
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 
@@ -246,18 +247,21 @@ def pf_tables(layout: Layout, program: Program | None = None,
     found: dict[Atom, list[tuple[int, ...]]] = {}
     static = set()
     names: dict[str, str] = {}
-    copies: dict[Atom, int] = {}  # a static PF's atoms over movable objects: on how many placements each holds
+    checked: set[tuple[str, tuple[str, ...]]] = set()
+    copies: Counter[Atom] = Counter()  # a static PF's atoms over movable objects: on how many placements each holds
     for sym in models[0]:
         if sym.name != "holds":
             continue
         name, objects_of, cells_of = _decode(str(sym), names, program.user_names)
-        _check_classes(name, objects_of, declared.signatures, objects, program.user_names)
+        if (name, objects_of) not in checked:  # an atom of movable objects recurs once per placement
+            _check_classes(name, objects_of, declared.signatures, objects, program.user_names)
+            checked.add((name, objects_of))
         if name in declared.movers:
             found.setdefault(Atom(name, objects_of), []).append(cells_of)
         else:
             static.add(Atom(name, objects_of))
             if cells_of:
-                copies[Atom(name, objects_of)] = copies.get(Atom(name, objects_of), 0) + 1
+                copies[Atom(name, objects_of)] += 1
     _check_unmoved(copies, int(layout.walkable.sum()), movable_index, program.user_names)
     grids = {}
     for atom, placements in found.items():
@@ -269,7 +273,7 @@ def pf_tables(layout: Layout, program: Program | None = None,
     return PFTables(layout, declared.signatures, declared.order, grids, frozenset(static), objects)
 
 
-def _check_unmoved(copies: dict[Atom, int], cells: int, movable_index: dict[str, int], where: str) -> None:
+def _check_unmoved(copies: Counter[Atom], cells: int, movable_index: dict[str, int], where: str) -> None:
     """TabulationError starting with ``where`` where a PF that is not of a goal class (so kept the same in
     every state, a binding constraint) holds of a movable object on some placements and not on others: it
     reads where things stand, as a side seen from the agent does, and would bind objects by where they

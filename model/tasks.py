@@ -15,6 +15,7 @@ from types import MappingProxyType
 from typing import Collection, Mapping, Sequence
 
 from groundlang.logic.atoms import Atom
+from groundlang.logic.classes import domain_classes
 from groundlang.logic.groundings import ground_environment
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
 
@@ -23,7 +24,7 @@ from .world import State
 
 __all__ = [
     "Candidate", "candidate_tasks", "check_position_pfs", "object_descriptions", "object_relations", "attribute_pfs",
-    "spatial_descriptions", "viewpoint_pfs", "narrow_by_known", "NarrowedCandidate",
+    "spatial_descriptions", "viewpoint_pfs", "kind_pfs", "narrow_by_known", "NarrowedCandidate",
 ]
 
 Candidate = tuple[GroundedTask, list[BindingConstraint]]
@@ -110,6 +111,12 @@ def viewpoint_pfs(about: Mapping[str, tuple[str, ...]], library: TaskLibrary) ->
     """The PFs of a viewpoint class (``viewpoint_class/1``: spatial) among one object's descriptions
     ``about`` (class -> PFs, an entry of :func:`object_descriptions`)."""
     return tuple(pf for cls in sorted(library.pf_roles.viewpoint_classes) for pf in about.get(cls, ()))
+
+
+def kind_pfs(about: Mapping[str, tuple[str, ...]]) -> tuple[str, ...]:
+    """The PFs of attributes whose values name kinds (``kind/1`` of ``domain.lp``: a toy's shape) among one
+    object's descriptions ``about``: what a head noun may say of it besides its class ("the star")."""
+    return tuple(pf for attribute in sorted(domain_classes().kinds) for pf in about.get(attribute, ()))
 
 
 def spatial_descriptions(state: State, library: TaskLibrary) -> Mapping[str, tuple[str, ...]]:

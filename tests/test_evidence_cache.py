@@ -169,36 +169,27 @@ def test_commands_that_share_their_pairs_are_scored_once(williams_commands, will
     assert repeated == alone * 3 and len(computed) == len(instances)
 
 
-def test_a_number_too_large_for_a_float_is_a_damaged_entry(williams_commands, williams_library, tmp_path, caplog):
+def _forge_grounding(data: dict) -> None:
+    task, props, g = data["groundings"][0]
+    data["groundings"][0] = [task, {**props, "NOSUCH": ["x"]}, g]
+
+
+@pytest.mark.parametrize("forge", [
+    # passes "at most 0", then overflows a float
+    lambda data: data.update(floor=-(10 ** 400)),
+    # a grounding of a variable its task lacks: it had stopped training with a KeyError traceback
+    _forge_grounding,
+    # every goal impossible: torch's nan error had stopped training
+    lambda data: data.update(values=["-Infinity"] * len(data["values"])),
+], ids=["float overflow", "foreign variable", "all -inf"])
+def test_an_entry_whole_but_unusable_is_a_damaged_entry(williams_commands, williams_library, tmp_path, caplog,
+                                                         forge):
+    """Its checksum matching (a writer's bug, a hand edit), the entry is still checked and recomputed."""
     start, end = _pairs(williams_commands)[0]
     EvidenceCache(williams_library, EndStateNoise(), tmp_path).evidence(start, end)
     (path,) = (tmp_path / "evidence").rglob("*.json")
     data = json.loads(path.read_text())
-    data["floor"] = -(10 ** 400)  # passes "at most 0", then overflows a float; its checksum made to match
-    data["checksum"] = evidence_cache._checksum(data["key"], {k: data[k] for k in ("goals", "values", "groundings",
-                                                                                  "floor", "new")})
-    path.write_text(json.dumps(data))
-    cache = EvidenceCache(williams_library, EndStateNoise(), tmp_path)
-    with caplog.at_level(logging.WARNING, logger="groundlang.inference.evidence_cache"):
-        cache.evidence(start, end)
-        cache.report()
-    assert (cache.damaged, cache.computed) == (1, 1) and "1 corrupt entry recomputed" in caplog.records[0].getMessage()
-
-
-@pytest.mark.parametrize("forge", ["variable", "values"])
-def test_an_entry_whole_but_not_of_this_library_is_a_damaged_entry(williams_commands, williams_library, tmp_path,
-                                                                    caplog, forge):
-    """Its checksum matching (a writer's bug, a hand edit): a grounding of a variable its task lacks had
-    stopped training with a KeyError traceback, values all -inf with torch's nan error."""
-    start, end = _pairs(williams_commands)[0]
-    EvidenceCache(williams_library, EndStateNoise(), tmp_path).evidence(start, end)
-    (path,) = (tmp_path / "evidence").rglob("*.json")
-    data = json.loads(path.read_text())
-    if forge == "variable":
-        task, props, g = data["groundings"][0]
-        data["groundings"][0] = [task, {**props, "NOSUCH": ["x"]}, g]
-    else:
-        data["values"] = ["-Infinity"] * len(data["values"])
+    forge(data)
     data["checksum"] = evidence_cache._checksum(data["key"], {k: data[k] for k in ("goals", "values", "groundings",
                                                                                   "floor", "new")})
     path.write_text(json.dumps(data))

@@ -183,7 +183,7 @@ def test_the_schema_is_read_from_the_files(domain, library):
     assert "  size (property): roomIsLargest(room)" in done.stdout
     assert "  shape (property): toyIsStar(toy), toyIsMug(toy)" in done.stdout
     assert "  position (goal): agentInRoom(agent, room)" in done.stdout
-    assert [schema.role(c) for c in ("position", "spatial", "size")] == ["goal", "viewpoint", "property"]
+    assert [schema.roles.part(c) for c in ("position", "spatial", "size")] == ["goal", "viewpoint", "property"]
 
 
 def test_the_worlds_kinds_of_object_are_the_classes_domain_lp_declares():

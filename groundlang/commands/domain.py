@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
             "classes": list(schema.classes),
             "movable": sorted(schema.movable),
             "palette": {"name": schema.palette, "values": {a: list(v) for a, v in schema.values.items()}},
-            "pfs": [{"name": d.name, "class": d.pf_class, "part": schema.role(d.pf_class),
+            "pfs": [{"name": d.name, "class": d.pf_class, "part": schema.roles.part(d.pf_class),
                      "signature": list(d.signature), "term": d.term} for d in schema.pfs.values()],
             "tasks": [str(t) for t in schema.tasks],
         }, indent=1))
