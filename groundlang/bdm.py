@@ -51,6 +51,8 @@ _NEEDED = {
     "door": ("top", "left", "bottom", "right"),
     "block": ("x", "y", "shape", "colour"),
 }
+# The world's class of each .bdm class a palette may give attributes (attribute/2 of its file).
+_WORLD_CLASS = {"room": "room", "door": "door", "block": "toy"}
 
 
 @dataclass(frozen=True)
@@ -159,11 +161,29 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
                          _int(a["x"], where, "x", name), _int(a["y"], where, "y", name)) for name, a in blocks)
         (agent_name, a), = objects["agent"].items()
         agent = Agent(_int(a["x"], where, "x", agent_name), _int(a["y"], where, "y", agent_name))
-        state = State(Layout(rooms, doors, tuple((t.colour, t.shape) for t in toys), palette), agent, toys)
+        added = tuple(triple for cls, named in (("room", ordered("room")), ("door", ordered("door")),
+                                                ("block", blocks))
+                      for triple in _added_values(cls, named, palette, where))
+        state = State(Layout(rooms, doors, tuple((t.colour, t.shape) for t in toys), palette, added), agent, toys)
         state.validate()
     except WorldError as exc:
         raise CorpusError(f"{where}: {exc}") from None
     return state, tuple(name for name, _ in blocks)
+
+
+def _added_values(cls: str, named: list[tuple[str, dict[str, str]]], palette: Palette,
+                  where: str) -> list[tuple[str, str, str]]:
+    """``(layout name, attribute, value)`` of the attributes the palette adds to ``cls``'s objects (in
+    layout order, ``named``: file name and attributes); a missing or unknown value names the file's object."""
+    out = []
+    for i, (name, a) in enumerate(named):
+        for attribute in palette.attributes_of(_WORLD_CLASS[cls]):
+            if attribute.lower() not in a:  # attribute names are read in lower case, as canBeLocked varies
+                raise CorpusError(f"{where}: {cls} {name} has no {attribute}; palette {palette.name} gives every "
+                                  f"{_WORLD_CLASS[cls]} one")
+            value = _value(a[attribute.lower()], palette.values_of(attribute), where, name)
+            out.append((f"{cls}{i}", attribute, value))  # the layout's names: room0, door0, block0, ...
+    return out
 
 
 def _value(value: str, values: tuple[str, ...], where: str, name: str) -> str:
@@ -175,14 +195,19 @@ def _value(value: str, values: tuple[str, ...], where: str, name: str) -> str:
 
 def format_bdm_state(state: State, toy_names: tuple[str, ...] | None = None) -> str:
     """A state as a BURLAP state string (what ``parse_bdm_state`` reads back)."""
-    names = toy_names or tuple(state.layout.toy_names)
+    lay = state.layout
+    names = toy_names or tuple(lay.toy_names)
+
+    def more(name: str) -> str:  # the attributes the palette adds, after the fixed ones
+        return "".join(f"{a}: {{{v}}} " for a, v in lay.added_values(name).items())
+
     parts = [f"agent0 (agent): [x: {{{state.agent.x}}} y: {{{state.agent.y}}} ]"]
-    parts += [f"{n} (door): [top: {{{d.top}}} left: {{{d.left}}} bottom: {{{d.bottom}}} right: {{{d.right}}} ]"
-              for n, d in zip(state.layout.door_names, state.layout.doors)]
-    parts += [f"{n} (block): [x: {{{t.x}}} y: {{{t.y}}} shape: {{{t.shape}}} colour: {{{t.colour}}} ]"
-              for n, t in zip(names, state.toys)]
+    parts += [f"{n} (door): [top: {{{d.top}}} left: {{{d.left}}} bottom: {{{d.bottom}}} right: {{{d.right}}} {more(n)}]"
+              for n, d in zip(lay.door_names, lay.doors)]
+    parts += [f"{n} (block): [x: {{{t.x}}} y: {{{t.y}}} shape: {{{t.shape}}} colour: {{{t.colour}}} {more(own)}]"
+              for n, own, t in zip(names, lay.toy_names, state.toys)]
     parts += [f"{n} (room): [top: {{{r.top}}} left: {{{r.left}}} bottom: {{{r.bottom}}} right: {{{r.right}}} "
-              f"colour: {{{r.colour}}} ]" for n, r in zip(state.layout.room_names, state.layout.rooms)]
+              f"colour: {{{r.colour}}} {more(n)}]" for n, r in zip(lay.room_names, lay.rooms)]
     return "{" + " , ".join(parts) + " , }"
 
 

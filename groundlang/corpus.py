@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
-from groundlang.bdm import parse_bdm_state
+from groundlang.bdm import format_bdm_state, parse_bdm_state
 from groundlang.grammar.parser import command_fault
 from groundlang.logic.storage import as_path, read_limited, write_atomically
 from groundlang.model.world import Action, Layout, Palette, State, WorldError, get_palette, step
@@ -315,6 +315,13 @@ def read_state_file(path: str | Path, palette: str | Palette) -> State:
     if lines[0].lstrip().startswith("{"):  # a BURLAP state string, as the Williams et al. corpus writes them
         return parse_bdm_state(lines[0], palette, where=f"{path}, line 1")[0]
     return parse_state(lines[0], palette, where=f"{path}, line 1")
+
+
+def format_state_like(state: State, path: str | Path) -> str:
+    """``state`` as a line of the format the one-line state file ``path`` was written in (a BURLAP
+    string, as :func:`read_state_file` read it, or a corpus state line)."""
+    lines = _read_lines(as_path(path, "format_state_like: path"))
+    return format_bdm_state(state) if lines and lines[0].lstrip().startswith("{") else format_state(state)
 
 
 def read_initial_state(path: str | Path, palette: str | Palette) -> State:

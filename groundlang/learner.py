@@ -188,8 +188,7 @@ class Learner:
                     raise ValueError(f"the corpus cannot be learned from: {exc} (a model could not be loaded "
                                      "back): fewer distinct words, or a smaller corpus") from None
                 self.vocab = vocab
-                self.palettes = [{"name": p.name, "colours": list(p.colours), "shapes": list(p.shapes)}
-                                 for p in palettes]
+                self.palettes = [p.record() for p in palettes]
                 init = None
             batch = self.lm.encode(observations, self.vocab)
         elif self.vocab is None:

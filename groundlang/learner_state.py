@@ -14,6 +14,7 @@ from groundlang.inference.end_habits import EndHabits
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.geometry import ASP_CONSTANT
+from groundlang.model.palette import added_attribute_problem
 from groundlang.model.language_models import get_language_model
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
@@ -44,13 +45,13 @@ def check_state(palettes: list[dict] | None, method: str, command: str, state: S
         raise TypeError(f"{method}: state must be a State (read_state_file, read_initial_state), "
                         f"got {type(state).__name__}")
     palette = state.layout.palette
-    seen = {"name": palette.name, "colours": list(palette.colours), "shapes": list(palette.shapes)}
+    seen = palette.record()
     if palettes is not None and seen not in palettes:
         trained = ", ".join(p["name"] for p in palettes)
         same_name = (" of the same name but other colours or shapes"
                      if any(p["name"] == palette.name for p in palettes) else "")
         raise ValueError(f"{method}: the state is of palette {palette.name!r}; this model was trained on "
-                         f"palette {trained}{same_name} (colours and shapes must be the same to read its words)")
+                         f"palette {trained}{same_name} (colours and shapes must be the same to read its words, and any attribute the palette adds)")
 
 
 def check_model_parts(language_model, library) -> None:
@@ -134,7 +135,8 @@ def learner_from_state(cls, state: dict, where: str):
 
 
 def _checked_palettes(palettes) -> list[dict]:
-    """The palettes a model was trained on, as written: a list of {name, colours, shapes}."""
+    """The palettes a model was trained on, as written: a list of {name, colours, shapes} (and the attributes
+    a palette added, ``Palette.record``)."""
     if not isinstance(palettes, list) or not palettes:
         raise ValueError("palettes must be a non-empty list")
     for p in palettes:
@@ -148,4 +150,26 @@ def _checked_palettes(palettes) -> list[dict]:
             if not values or odd is not None or len(set(values)) != len(values):
                 raise ValueError(f"palette {p['name']!r}: {field} must be distinct lowerCamelCase names, at least "
                                  f"one" + (f" ({odd!r} is not one)" if odd is not None else ""))
+        if "added" in p or "added_values" in p:
+            _check_added(p)
     return palettes
+
+
+def _check_added(p: dict) -> None:
+    """The attributes a palette record adds: ``added`` [[class, attribute], ...], each attribute's values
+    under ``added_values`` {attribute: [value, ...]}, as ``Palette.record`` writes them."""
+    added, values = p.get("added"), p.get("added_values")
+    shape = f"palette {p['name']!r}: added must be [[class, attribute], ...] and added_values {{attribute: [values]}}"
+    if (not isinstance(added, list) or not isinstance(values, dict)
+            or not all(isinstance(x, list) and len(x) == 2 and all(isinstance(s, str) for s in x) for x in added)):
+        raise ValueError(shape)
+    if {a for _, a in added} != set(values):
+        raise ValueError(f"{shape}, the same attributes in both")
+    for cls, attribute in added:
+        if problem := added_attribute_problem(cls, attribute):
+            raise ValueError(f"palette {p['name']!r}: attribute({cls}, {attribute}): {problem}")
+    for attribute, vs in values.items():
+        if (not isinstance(vs, list) or not vs or not all(isinstance(v, str) and ASP_CONSTANT.match(v) for v in vs)
+                or len(set(vs)) != len(vs)):
+            raise ValueError(f"palette {p['name']!r}: {attribute} values must be distinct lowerCamelCase names, "
+                             "at least one")

@@ -108,13 +108,13 @@ def _legend(ax, state: State, moved: list[int], has_path: bool, cell: float) -> 
         colour, mark = _rgb(toy.colour, palette), _mathtext(glyph(toy.shape, palette))
         start = " at the start" if k in moved else ""
         handles.append(Line2D([], [], marker=mark, ls="none", ms=size * 1.2, color=colour, mec="black", mew=0.3,
-                              label=f"{name} ({toy.colour} {toy.shape}){start}"))
+                              label=f"{name} ({toy.colour} {toy.shape}{_added(lay, name)}){start}"))
         if k in moved:
             handles += [Line2D([], [], ls="--", lw=2, color=colour, label=f"{name}'s path"),
                         Line2D([], [], marker=mark, ls="none", ms=size * 1.2 * END_SCALE, color=colour,
                                mec="black", mew=0.3, label=f"{name} at the end (small, upper right)")]
     handles += [Patch(facecolor=0.45 * _rgb(r.colour, palette) + 0.55, edgecolor="black", lw=0.5,
-                      label=f"{name} ({r.colour})") for name, r in zip(lay.room_names, lay.rooms)]
+                      label=f"{name} ({r.colour}{_added(lay, name)})") for name, r in zip(lay.room_names, lay.rooms)]
     handles += [Patch(facecolor=_DOOR, edgecolor="black", lw=0.5, label="door"),
                 Patch(facecolor=_WALL, edgecolor="black", lw=0.5, label="wall")]
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.04 if cell >= 0.3 else -0.02),
@@ -269,6 +269,13 @@ def ascii_state(state: State) -> str:
     grid[state.agent.x, state.agent.y] = "A"
     rows = ["".join(grid[:, y]).rstrip() for y in range(lay.height - 1, -1, -1)]
     legend = ["legend: # wall, + door, A agent0"]
-    legend += [f"  {s} {name} ({t.colour} {t.shape})" for s, name, t in zip(symbols, lay.toy_names, state.toys)]
-    legend += [f"  {r.colour[:1].lower()} {name} ({r.colour})" for name, r in zip(lay.room_names, lay.rooms)]
+    legend += [f"  {s} {name} ({t.colour} {t.shape}{_added(lay, name)})"
+               for s, name, t in zip(symbols, lay.toy_names, state.toys)]
+    legend += [f"  {r.colour[:1].lower()} {name} ({r.colour}{_added(lay, name)})"
+               for name, r in zip(lay.room_names, lay.rooms)]
     return "\n".join(rows + legend)
+
+
+def _added(layout, name: str) -> str:
+    """The values of the attributes the palette adds to object ``name``, each after a space (" metal")."""
+    return "".join(f" {v}" for v in layout.added_values(name).values())

@@ -128,6 +128,12 @@ def parse_state(line: str, palette: str | Palette, where: str = "state", shared_
             raise CorpusError(f"{where}: {quoted!r}: {exc}") from None
     if len(agents) != 1:
         raise CorpusError(f"{where}: found {len(agents)} agents; expected exactly one agent,X,Y")
+    if palette.added:  # no field of a line gives them: a corpus of such a palette is written as .bdm
+        present = {"room": rooms, "door": doors, "toy": toys}
+        cls, attribute = next(((c, a) for c, a in palette.added if present[c]), (None, None))
+        if cls is not None:
+            raise CorpusError(f"{where}: palette {palette.name} gives every {cls} a {attribute}, which this format has "
+                              "no field for; write the states as .bdm lines (attribute: {value})")
     layout = Layout(tuple(rooms), tuple(doors), tuple((t.colour, t.shape) for t in toys), palette)
     state = State(layout, agents[0], tuple(toys))
     try:
@@ -163,6 +169,10 @@ def format_state(state: State) -> str:
     """Write a state as one corpus line: rooms, doors, blocks, agent (round-trips with parse_state)."""
     lay = state.layout
     pal = lay.palette
+    if lay.added_attributes:
+        name, attribute, _ = lay.added_attributes[0]
+        raise WorldError(f"{name}'s {attribute} has no field in a commands-to-tasks state line; write the state "
+                         "with format_bdm_state")
     objs = [f"room,{pal.colour_index(r.colour)},{r.left},{r.top},{r.right},{r.bottom}" for r in lay.rooms]
     objs += [f"door,{d.left},{d.top},{d.right},{d.bottom}" for d in lay.doors]
     objs += [

@@ -21,8 +21,8 @@ __all__ = ["build_vocabulary", "palette_schema", "schema_names", "schema_words",
 
 
 def palette_schema(library: TaskLibrary, palette):
-    """The domain's schema with ``palette``'s values (its colour and shape families depend on them)."""
-    return domain_schema(library, (palette.name, (("colour", palette.colours), ("shape", palette.shapes))))
+    """The domain's schema with ``palette``'s values (its property PFs' families depend on them)."""
+    return domain_schema(library, (palette.name, palette.all_values))
 
 
 def build_vocabulary(observations: Iterable[Observation], palettes: Iterable, library: TaskLibrary,

@@ -73,7 +73,7 @@ def evidence_key(start: State, end: State, digest: str, noise: EndStateNoise, sp
     description = {
         "version": EVIDENCE_VERSION,
         "layout": layout_description(start.layout),
-        "palette": [list(palette.colours), list(palette.shapes)],
+        "palette": [list(vs) for _, vs in palette.all_values],
         "start": start.positions.tolist(),
         "end": end.positions.tolist(),
         "library": digest,

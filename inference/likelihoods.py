@@ -85,6 +85,7 @@ def layout_description(layout) -> dict:
         "doors": [[d.left, d.top, d.right, d.bottom] for d in layout.doors],
         "toys": [list(t) for t in layout.toy_attributes],
         "palette": layout.palette.name,
+        **({"added": [list(t) for t in layout.added_attributes]} if layout.added_attributes else {}),
     }
 
 

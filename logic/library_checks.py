@@ -67,6 +67,9 @@ def read_pf_roles(by_signature: dict[tuple[str, int], list[clingo.Symbol]], wher
     return PFRoles(parts["goal_class"], parts["viewpoint_class"])
 
 
+# A palette_A/1 atom in a library's text: the families over an attribute's values (comments too, harmlessly).
+_PALETTE_ATOM = re.compile(r"\bpalette_([a-z][A-Za-z0-9_]*)\s*\(")
+
 # PF term -> its declarations: (PF class, classes of its arguments), one per pf/3 atom.
 Declarations = dict[clingo.Symbol, list[tuple[str, tuple[str, ...]]]]
 
@@ -80,9 +83,10 @@ def declare_restricted_families(program: Program, restrictions: dict[str, list[t
                                  declared: Declarations, time_limit: float | None) -> None:
     """Add to ``declared`` the pf/3 atoms of PFs named by restrict/3 that only an environment declares.
 
-    Colour and shape PFs are families over the environment's palette (``pf(colour, roomIs(C), (room,))
-    :- palette_colour(C)``), so the library solved alone declares none of them. One more solve, with
-    the values the restrictions name added as palette colours and shapes, declares those that exist,
+    Property PFs are families over the environment's palette (``pf(colour, roomIs(C), (room,))
+    :- palette_colour(C)``; a palette's added attribute ``material`` has ``palette_material/1``), so the
+    library solved alone declares none of them. One more solve, with the values the restrictions name
+    added as values of every attribute the library's files name a ``palette_A/1`` of, declares those that exist,
     so that a family of the wrong class (``roomIs(red)`` on a toy) is refused at load time. Whether a
     value is in a given environment's palette is that environment's business: :func:`ground_environment`
     refuses a restriction the environment cannot honour.
@@ -91,7 +95,8 @@ def declare_restricted_families(program: Program, restrictions: dict[str, list[t
     values = sorted({str(x) for p in missing if p.type is clingo.SymbolType.Function for x in p.arguments})
     if not values:
         return
-    probe = "".join(f"palette_colour({x}). palette_shape({x}).\n" for x in values)
+    attributes = sorted({"colour", "shape"} | {a for source in program.sources for a in _PALETTE_ATOM.findall(source.text)})
+    probe = "".join(f"palette_{a}({x}).\n" for x in values for a in attributes)
     models = program.solve(probe, models=1, time_limit=time_limit)
     if not models:
         raise AspError(f"{program.user_names}: the task library has no answer set once the palette values its "

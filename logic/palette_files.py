@@ -4,6 +4,9 @@ A palette is a file of facts ``value(Attribute, Index, Name)``
 (``logic/palettes/sokoban.lp``: ``value(colour, 10, red).``). The package ships
 one file per corpus palette; a user's own is any ``.lp`` file of such facts,
 named by its path (``--palette my_palette.lp``) and called by its stem.
+Rooms have a colour and toys a colour and a shape in every palette (the corpus
+formats give them); ``attribute(Class, Attribute)`` gives the objects of a class
+an attribute more (``attribute(toy, material).``), whose values the file lists.
 """
 
 from __future__ import annotations
@@ -36,10 +39,12 @@ def _is_path(name: str) -> bool:
 
 
 @lru_cache(maxsize=64)
-def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, dict[str, str]]]:
-    """``(palette name, {attribute: values by index}, drawing)`` of a shipped palette or a palette file;
-    ``drawing`` holds the optional ``glyph(Value, "text")`` and ``rgb(Value, "colour")`` facts as
-    ``{"glyph": {value: text}, "rgb": {value: colour}}``.
+def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, dict[str, str]],
+                                      tuple[tuple[str, str], ...]]:
+    """``(palette name, {attribute: values by index}, drawing, added)`` of a shipped palette or a palette
+    file; ``drawing`` holds the optional ``glyph(Value, "text")`` and ``rgb(Value, "colour")`` facts as
+    ``{"glyph": {value: text}, "rgb": {value: colour}}``; ``added`` the ``attribute(Class, Attribute)``
+    facts as sorted ``(class, attribute)`` pairs.
 
     Raises PaletteError (one line, naming the file and the fact) for an unknown name, a file that is
     not one, indices that skip or repeat, or a value that is not an ASP constant.
@@ -60,8 +65,14 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, 
     program = Program((source,), isolated=not source.name.startswith("groundlang."))
     found: dict[str, dict[int, str]] = {}
     drawing: dict[str, dict[str, str]] = {"glyph": {}, "rgb": {}}
-    for model in program.solve("#show value/3. #show glyph/2. #show rgb/2.", models=1):
+    added: set[tuple[str, str]] = set()
+    for model in program.solve("#show value/3. #show glyph/2. #show rgb/2. #show attribute/2.", models=1):
         for sym in model:
+            if sym.name == "attribute":
+                if not all(a.type is clingo.SymbolType.Function and not a.arguments for a in sym.arguments):
+                    raise PaletteError(f"{source.name}: {sym} is not attribute(Class, Attribute) with two names")
+                added.add(tuple(a.name for a in sym.arguments))
+                continue
             if sym.name in drawing:
                 value, text = sym.arguments
                 if text.type is not clingo.SymbolType.String:
@@ -102,4 +113,8 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, 
             if (other := seen.setdefault(value, attribute)) != attribute:
                 raise PaletteError(f"{source.name}: {value} is both a {other} and a {attribute}; the PFs of the "
                                    "two would have one name, so rename one of them")
-    return label, values, drawing
+    for cls, attribute in sorted(added):
+        if attribute not in values:
+            raise PaletteError(f"{source.name}: attribute({cls}, {attribute}) names an attribute of no "
+                               f"value/3 fact; list its values as value({attribute}, Index, Name)")
+    return label, values, drawing, tuple(sorted(added))

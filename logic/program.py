@@ -179,6 +179,16 @@ class Program:
                 out.setdefault(str(term.arguments[position]), None)
         return list(out)
 
+    def head_signatures(self) -> set[tuple[str, int]]:
+        """``(name, arity)`` of every predicate a rule head of the program defines."""
+        out = set()
+        for stm in self._statements:
+            if stm.ast_type == ast.ASTType.Rule and stm.head.ast_type == ast.ASTType.Literal:
+                atom = stm.head.atom
+                if atom.ast_type == ast.ASTType.SymbolicAtom and atom.symbol.ast_type == ast.ASTType.Function:
+                    out.add((atom.symbol.name, len(atom.symbol.arguments)))
+        return out
+
     def control(
         self, facts: str = "", *, time_limit: float | None = DEFAULT_TIME_LIMIT,
         arguments: Sequence[str] = (),

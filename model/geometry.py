@@ -39,12 +39,10 @@ def fact(cls: str, name: str, facts) -> str:
 
 
 def palette_facts(layout: Layout) -> str:
-    """``palette_colour/1`` and ``palette_shape/1``: every value of the layout's palette (pfs.lp declares
-    its colour and shape families over them)."""
-    pal = layout.palette
-    lines = [f"palette_colour({_constant(c, 'colour')})." for c in pal.colours]
-    lines += [f"palette_shape({_constant(s, 'shape')})." for s in pal.shapes]
-    return "\n".join(lines)
+    """``palette_A/1`` for each attribute ``A`` of the layout's palette: ``palette_colour/1``,
+    ``palette_shape/1`` and one per added attribute (pfs.lp declares its families over them)."""
+    return "\n".join(f"palette_{attribute}({_constant(v, attribute)})."
+                     for attribute, values in layout.palette.all_values for v in values)
 
 
 def layout_facts(layout: Layout, movable: bool = True) -> str:

@@ -15,6 +15,7 @@ calls them blocks, hence their names.
 from __future__ import annotations
 
 import enum
+from collections import Counter
 from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
 
@@ -134,6 +135,9 @@ class Layout:
     doors: tuple[Door, ...]
     toy_attributes: tuple[tuple[str, str], ...]  # (colour, shape) per toy
     palette: Palette = field(compare=True)
+    # The values of the attributes the palette adds (Palette.added): (object name, attribute, value), one
+    # per object of a class the palette gives the attribute, in the order of the objects' names.
+    added_attributes: tuple[tuple[str, str, str], ...] = ()
 
     @cached_property
     def width(self) -> int:
@@ -195,7 +199,16 @@ class Layout:
                 for n, d in zip(self.door_names, self.doors)]
         out += [(TOY_CLASS, n, (("colour", (c,)), ("shape", (s,))))
                 for n, (c, s) in zip(self.toy_names, self.toy_attributes)]
+        if self.added_attributes:
+            more: dict[str, list] = {}
+            for name, attribute, value in self.added_attributes:
+                more.setdefault(name, []).append((attribute, (value,)))
+            out = [(cls, name, facts + tuple(more.get(name, ()))) for cls, name, facts in out]
         return tuple(out)
+
+    def added_values(self, name: str) -> dict[str, str]:
+        """The added attributes' values of object ``name`` (``{"material": "wood"}``; empty: none)."""
+        return {a: v for n, a, v in self.added_attributes if n == name}
 
     @property
     def movable_names(self) -> list[str]:
@@ -214,6 +227,7 @@ class Layout:
         if count > MAX_LAYOUT_OBJECTS:  # checking them costs time in their number (rooms: its square)
             raise WorldError(f"the layout has {count:,} rooms, doors and toys ({len(self.rooms):,}, {len(self.doors):,}, "
                              f"{len(self.toy_attributes):,}); at most {MAX_LAYOUT_OBJECTS:,} are read")
+        self._validate_added_attributes()
         for i, r in enumerate(self.rooms):
             if r.right - r.left < 2 or r.top - r.bottom < 2:
                 raise WorldError(
@@ -238,6 +252,29 @@ class Layout:
             problem = _door_problem(bounds, d)
             if problem:
                 raise WorldError(f"{where} {problem}")
+
+
+    def _validate_added_attributes(self) -> None:
+        """Every object of a class the palette gives an attribute has one of its values, and no other
+        object has one."""
+        pal = self.palette
+        twice = [k for k, c in Counter((n, a) for n, a, _ in self.added_attributes).items() if c > 1]
+        if twice:
+            raise WorldError(f"{twice[0][0]} is given two values of {twice[0][1]}")
+        given = {(n, a): v for n, a, v in self.added_attributes}
+        names = {ROOM_CLASS: self.room_names, DOOR_CLASS: self.door_names, TOY_CLASS: self.toy_names}
+        wanted = {(n, a) for cls, objects in names.items() for a in pal.attributes_of(cls) for n in objects}
+        if extra := sorted(set(given) - wanted):
+            n, a = extra[0]
+            raise WorldError(f"{n} has a {a}, which palette {pal.name!r} does not give its class "
+                             "(attribute/2 of the palette file)")
+        if missing := sorted(wanted - set(given)):
+            n, a = missing[0]
+            raise WorldError(f"{n} has no {a}; palette {pal.name!r} gives every {object_class(n)} one")
+        for (n, a), v in given.items():
+            if v not in pal.values_of(a):
+                raise WorldError(f"{n} has the {a} {v!r}, which palette {pal.name!r} does not have "
+                                 f"(it has {', '.join(pal.values_of(a))})")
 
 
 def _door_problem(bounds: np.ndarray, d: Door) -> str | None:

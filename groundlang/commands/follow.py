@@ -122,7 +122,7 @@ def _refuse(result, args) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundlang.corpus import format_state, read_initial_state
+    from groundlang.corpus import format_state_like, read_initial_state
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
     from groundlang.logic.palette_files import palette_names
@@ -151,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
         # under its name) needs no --palette, and a shipped palette changed since keeps the model's meaning. The
         # name is never opened as a path; a shipped palette of the same values lends its drawing hints.
         record = learner.palettes[0]
-        palette = Palette(record["name"], tuple(record["colours"]), tuple(record["shapes"]))
+        palette = Palette.from_record(record)
         if palette.name in palette_names() and get_palette(palette.name) == palette:
             palette = get_palette(palette.name)
     state = read_initial_state(args.env, palette)
@@ -195,7 +195,7 @@ def run(args: argparse.Namespace) -> int:
                         unknown_words=list(result.unknown_words))
         else:
             data.update(goal=format_goal(result.goal), goal_words=result.goal_words,
-                        actions=[a.word for a in result.actions], final_state=format_state(result.final_state),
+                        actions=[a.word for a in result.actions], final_state=format_state_like(result.final_state, args.env),
                         reached=result.reached, reason=result.reason)
         print(json_text(data))
         if result.abstained:

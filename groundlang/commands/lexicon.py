@@ -38,17 +38,13 @@ WORD_HEADING, MEANINGS_HEADING = "word", "meanings, most probable first"
 
 def _schemas(learner) -> list:
     """The schemas of the palettes the model was trained on (a model saved without them: the default's)."""
-    from types import SimpleNamespace
-
     from groundlang.logic.schema import domain_schema
+    from groundlang.model.palette import Palette
     from groundlang.training_vocabulary import palette_schema
 
     if not learner.palettes:
         return [domain_schema(learner.library)]
-    # The model keeps each palette as JSON (lists); the schema reader caches by value, so tuples.
-    return [palette_schema(learner.library, SimpleNamespace(**{k: tuple(v) if isinstance(v, list) else v
-                                                               for k, v in p.items()}))
-            for p in learner.palettes]
+    return [palette_schema(learner.library, Palette.from_record(p)) for p in learner.palettes]
 
 
 def _print_prepositions(prepositions: dict, learner) -> None:
