@@ -284,7 +284,7 @@ class Learner:
         space = self._world.space(state)
         masks, goals = self._world.goal_masks(space), post.goals()
         found = expected_success_states(goals, masks, self.lm.step_cost, self.habits if self.lm.end_habits else None,
-                                        moved_toys=self.lm.moved_toys)
+                                        moved_toys=self.lm.moved_toys, made_true=self.lm.habits_made_true)
         return None if found is None else (space, masks, goals, *found)
 
     def clarify(self, result: FollowResult, answer: str | int, max_steps: int = 200) -> FollowResult:

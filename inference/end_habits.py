@@ -145,13 +145,15 @@ class EndHabits:
                 for given in sorted(self.relations)}
 
     def weights(self, goals: Iterable[tuple[Atom, ...]], masks, within: np.ndarray,
-                moved_toys: bool = False) -> list[np.ndarray | None]:
+                moved_toys: bool = False, made_true: bool = False) -> list[np.ndarray | None]:
         """Per goal, ``[S]``: each state's weight for it over ``masks.space`` (a :class:`GoalMasks`), the
         product over the relations demonstrations showed that can hold with it in a state of ``within``
         (``[S]`` bool, those the agent can reach); None where it is 1 everywhere. A relation that cannot
         hold where the goal does is not one its demonstrators could have left true there, so it weighs
         nothing: habits say where to end among a goal's states, not which goal to prefer. With
-        ``moved_toys``, :data:`MOVED` weighs the goal's states where a toy moved (module docstring)."""
+        ``moved_toys``, :data:`MOVED` weighs the goal's states where a toy moved (module docstring). With
+        ``made_true``, a relation weighs the states where some fact of it holds that did not in the space's
+        initial state (as :func:`new_relations` counted the demonstrations), not every state where one holds."""
         holds: dict[str, np.ndarray] = {}
         # Weighed whether or not a demonstration moved a toy: that none ever did is the strongest evidence.
         moving = _moved(masks.space) if moved_toys and self.demonstrations else None
@@ -170,7 +172,7 @@ class EndHabits:
                 if q <= 0.0:
                     continue
                 if relation not in holds:
-                    holds[relation] = _holds(relation, masks)
+                    holds[relation] = _holds(relation, masks, made_true)
                 if not (holds[relation] & company).any():
                     continue
                 factor = (1.0 - q) + q * holds[relation]
@@ -204,10 +206,14 @@ def _moved(space) -> np.ndarray:
     return (space.positions[:, 1:] != start[None]).any(axis=(1, 2))
 
 
-def _holds(relation: str, masks) -> np.ndarray:
-    """``[S]`` bool over ``masks.space``: where some fact of ``relation`` holds."""
+def _holds(relation: str, masks, made_true: bool = False) -> np.ndarray:
+    """``[S]`` bool over ``masks.space``: where some fact of ``relation`` holds (``made_true``: one that does
+    not hold in the initial state, index 0)."""
     atoms = [(a,) for a in masks.tables.grids if canonical_predicate(a.predicate) == relation]
     masks.prepare(atoms)
-    if not atoms:
+    found = [masks.mask(atom) for atom in atoms]
+    if made_true:
+        found = [mask for mask in found if not mask[0]]
+    if not found:
         return np.zeros(masks.space.num_states, dtype=bool)
-    return np.logical_or.reduce([masks.mask(atom) for atom in atoms])
+    return np.logical_or.reduce(found)

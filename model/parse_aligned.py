@@ -75,6 +75,7 @@ class ParseAligned(LanguageModel):
         step_cost: float = 0.005,
         end_habits: bool = True,
         moved_toys: bool = False,
+        habits_made_true: bool = False,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -126,7 +127,7 @@ class ParseAligned(LanguageModel):
         require_positive(self.name, "argument_bonus", argument_bonus, added=True)
         super().__init__(word_concentration, schema_names=schema_names, achievable_goals=achievable_goals,
                          expected_success=expected_success, step_cost=step_cost, end_habits=end_habits,
-                         moved_toys=moved_toys)
+                         moved_toys=moved_toys, habits_made_true=habits_made_true)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus
         self.mention_concentration = mention_concentration
@@ -183,6 +184,7 @@ class ParseAligned(LanguageModel):
             "step_cost": self.step_cost,
             "end_habits": self.end_habits,
             "moved_toys": self.moved_toys,
+            "habits_made_true": self.habits_made_true,
             "last_phrase_key": self.last_phrase_key,
             "object_key": self.object_key,
             "last_passes_over_source": self.last_passes_over_source,

@@ -113,6 +113,27 @@ def test_with_moved_toys_a_habit_is_not_bought_by_pushing_a_toy_its_demonstrator
     assert np.array_equal(counted, plain)
 
 
+def test_with_habits_made_true_a_relation_that_held_at_the_start_weighs_nothing():
+    """Sent next to the chair, demonstrators mostly ended in a room they had not been in. The chair is in the
+    green room, where the agent starts: every state next to it has the agent in the room it started in,
+    which weighs those states by the habit where facts that hold count, and not where only facts made
+    true count."""
+    start = _state((1, 6), chair=(2, 6))
+    space = planning_space(start, None, LIBRARY)
+    masks = GoalMasks(space, LIBRARY)
+    goal = parse_goal("agentNextToToy(agent0, block0)")
+    habits = EndHabits(((frozenset({"agentNextToToy", "agentInRoom"}), 3), (frozenset({"agentNextToToy"}), 1)))
+    dist = distances(space)
+    (holding,) = habits.weights([goal], masks, dist >= 0)
+    (made,) = habits.weights([goal], masks, dist >= 0, made_true=True)
+    in_green = _mask(masks, "agentInRoom(agent0, room1)")
+    in_blue = _mask(masks, "agentInRoom(agent0, room2)")
+    assert holding[in_green].max() == 1.0 and made[in_green].max() < 1.0
+    assert made[in_blue].min() == 1.0  # another room is made true there
+    plain, _ = expected_success_states([(goal, 1.0)], masks, 0.005, habits)
+    assert (plain <= in_green).all() and dist[plain].min() == 0  # next to the chair already, and in a room
+
+
 def test_a_habit_that_cannot_hold_with_the_goal_does_not_make_another_goal_preferred():
     """0.6 the green room, without a toy, 0.4 the blue room, with the chair: demonstrators sent to the green
     room could not have stopped next to a toy there, so the green room keeps its 0.6 against the blue

@@ -22,7 +22,8 @@ def test_settings_make_the_model_they_name():
     assert get_language_model("bow", null_token=False).settings() == {"word_concentration": 1.05, "null_token": False,
                                                                         "schema_names": False, "achievable_goals": True,
                                                                         "expected_success": True, "step_cost": 0.005,
-                                                                        "end_habits": True, "moved_toys": False}
+                                                                        "end_habits": True, "moved_toys": False,
+                                                                        "habits_made_true": False}
 
 
 @pytest.mark.parametrize("name, settings, message", [
