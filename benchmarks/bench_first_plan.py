@@ -1,0 +1,70 @@
+"""When "auto" compiles the value-iteration sweep: one plan in a fresh process, and many.
+
+``sweeps.use_compiled`` under "auto" sweeps a large space eagerly until the process has swept
+``COMPILE_AFTER_WORK`` state-sweeps so, then compiles (the ski-rental rule: compile once the eager
+work has cost about what compiling does; a space of ``COMPILE_AT_ONCE_STATES`` or more compiles at
+once). Prints, side by side in one run, for the ~10^5-state world
+of ``bench_statespace.benchmark_layouts()`` and a goal across the layout, the wall time of a fresh
+Python process (imports excluded: timed inside it) that solves the task once and one that solves it
+``--plans`` times, with the backend "eager" (never compile), "compiled" (always, from the first
+sweep: the rule before) and "auto", and each against the better of the other two.
+
+No timing asserts. Usage: python benchmarks/bench_first_plan.py [--plans N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).parent
+
+_CHILD = """
+import sys, time
+sys.path.insert(0, {here!r})
+import torch
+from bench_statespace import benchmark_layouts
+from groundlang.inference import planning
+from groundlang.logic.atoms import Atom
+from groundlang.model.features import goal_mask
+from groundlang.model.pf_tables import pf_tables
+from groundlang.model.statespace import enumerate_states
+
+name, state = benchmark_layouts()[1]
+space = enumerate_states(state)
+goal = goal_mask(space, [Atom("toyInRoom", ("block0", "room1"))], pf_tables(space.layout))
+start = time.perf_counter()
+for _ in range({plans}):
+    planning.solve_task(space.next_state, goal, backend={backend!r})
+print(space.num_states, time.perf_counter() - start)
+"""
+
+
+def run(backend: str, plans: int) -> tuple[int, float]:
+    code = _CHILD.format(here=str(HERE), plans=plans, backend=backend)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env=dict(os.environ, PYTHONWARNINGS="ignore"))
+    states, seconds = out.stdout.split()
+    return int(states), float(seconds)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--plans", type=int, default=30, help="solves in the second process (default 30)")
+    args = parser.parse_args()
+    print(f"load average (1, 5, 15 min) at start: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    for plans in (1, args.plans):
+        times = {}
+        for backend in ("eager", "compiled", "auto"):
+            states, times[backend] = run(backend, plans)
+        better = min(times["eager"], times["compiled"])
+        print(f"{plans} solve(s) of {states:,} states in a fresh process: eager {times['eager']:.2f} s, "
+              f"compiled {times['compiled']:.2f} s, auto {times['auto']:.2f} s "
+              f"(auto / the better of the two: {times['auto'] / better:.2f})")
+
+
+if __name__ == "__main__":
+    main()
