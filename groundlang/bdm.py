@@ -152,12 +152,13 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
         return sorted(objects[cls].items(), key=lambda kv: (*_number_order(kv[0]), kv[0]))
 
     try:
-        rooms = tuple(Room(_value(a["colour"], palette.colours, where, name), *(
+        rooms = tuple(Room(_value(a["colour"], palette.colours, where, name, "colour"), *(
             _int(a[k], where, k, name) for k in ("left", "top", "right", "bottom"))) for name, a in ordered("room"))
         doors = tuple(Door(*(_int(a[k], where, k, name) for k in ("left", "top", "right", "bottom")))
                       for name, a in ordered("door"))
         blocks = ordered("block")
-        toys = tuple(Toy(_value(a["colour"], palette.colours, where, name), _value(a["shape"], palette.shapes, where, name),
+        toys = tuple(Toy(_value(a["colour"], palette.colours, where, name, "colour"),
+                         _value(a["shape"], palette.shapes, where, name, "shape"),
                          _int(a["x"], where, "x", name), _int(a["y"], where, "y", name)) for name, a in blocks)
         (agent_name, a), = objects["agent"].items()
         agent = Agent(_int(a["x"], where, "x", agent_name), _int(a["y"], where, "y", agent_name))
@@ -181,14 +182,14 @@ def _added_values(cls: str, named: list[tuple[str, dict[str, str]]], palette: Pa
             if attribute.lower() not in a:  # attribute names are read in lower case, as canBeLocked varies
                 raise CorpusError(f"{where}: {cls} {name} has no {attribute}; palette {palette.name} gives every "
                                   f"{_WORLD_CLASS[cls]} one")
-            value = _value(a[attribute.lower()], palette.values_of(attribute), where, name)
+            value = _value(a[attribute.lower()], palette.values_of(attribute), where, name, attribute)
             out.append((f"{cls}{i}", attribute, value))  # the layout's names: room0, door0, block0, ...
     return out
 
 
-def _value(value: str, values: tuple[str, ...], where: str, name: str) -> str:
+def _value(value: str, values: tuple[str, ...], where: str, name: str, attribute: str) -> str:
     if value not in values:
-        raise CorpusError(f"{where}: {name} has the value {value!r}, which the palette does not have "
+        raise CorpusError(f"{where}: {name} has the {attribute} {value!r}, which the palette does not have "
                           f"(it has {', '.join(values)})")
     return value
 
@@ -281,7 +282,18 @@ def _in_layout_of(first: State, names: tuple[str, ...], last: State, end_names: 
     moved = tuple(toys[n] for n in names)
     if tuple((t.colour, t.shape) for t in moved) != a.toy_attributes:
         return None
+    if (a.added_attributes or b.added_attributes) and _added_by_object(a, names) != _added_by_object(b, end_names):
+        return None
     return State(a, last.agent, moved)
+
+
+def _added_by_object(layout: Layout, toy_names: tuple[str, ...]) -> dict:
+    """The added attributes' values of each object, keyed by what the object is (a room or door by its
+    rectangle, a toy by its name in the file), so two lines listing one layout in two orders compare."""
+    keys = [("room", repr(r)) for r in layout.rooms] + [("door", repr(d)) for d in layout.doors]
+    keys += [("block", n) for n in toy_names]
+    names = layout.room_names + layout.door_names + layout.toy_names
+    return {key: layout.added_values(name) for key, name in zip(keys, names)}
 
 
 def _command(path: Path, line: int, block: list[tuple[int, str]], palette,

@@ -168,8 +168,12 @@ def _check_added(p: dict) -> None:
     for cls, attribute in added:
         if problem := added_attribute_problem(cls, attribute):
             raise ValueError(f"palette {p['name']!r}: attribute({cls}, {attribute}): {problem}")
+    seen = set(p["colours"]) | set(p["shapes"])
     for attribute, vs in values.items():
         if (not isinstance(vs, list) or not vs or not all(isinstance(v, str) and ASP_CONSTANT.match(v) for v in vs)
                 or len(set(vs)) != len(vs)):
             raise ValueError(f"palette {p['name']!r}: {attribute} values must be distinct lowerCamelCase names, "
                              "at least one")
+        if twice := sorted(seen & set(vs)):  # as a palette file may not: the PFs of the two would be one
+            raise ValueError(f"palette {p['name']!r}: {twice[0]} is a value of {attribute} and of another attribute")
+        seen |= set(vs)

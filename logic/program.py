@@ -179,14 +179,16 @@ class Program:
                 out.setdefault(str(term.arguments[position]), None)
         return list(out)
 
-    def head_signatures(self) -> set[tuple[str, int]]:
-        """``(name, arity)`` of every predicate a rule head of the program defines."""
-        out = set()
-        for stm in self._statements:
-            if stm.ast_type == ast.ASTType.Rule and stm.head.ast_type == ast.ASTType.Literal:
-                atom = stm.head.atom
-                if atom.ast_type == ast.ASTType.SymbolicAtom and atom.symbol.ast_type == ast.ASTType.Function:
-                    out.add((atom.symbol.name, len(atom.symbol.arguments)))
+    def definitions(self) -> dict[tuple[str, int], str]:
+        """``(name, arity)`` of every predicate a rule head of the program defines, with the name of the
+        first source defining it."""
+        out: dict[tuple[str, int], str] = {}
+        for source, statements in self.statements_by_source():
+            for stm in statements:
+                if stm.ast_type == ast.ASTType.Rule and stm.head.ast_type == ast.ASTType.Literal:
+                    atom = stm.head.atom
+                    if atom.ast_type == ast.ASTType.SymbolicAtom and atom.symbol.ast_type == ast.ASTType.Function:
+                        out.setdefault((atom.symbol.name, len(atom.symbol.arguments)), source.name)
         return out
 
     def control(

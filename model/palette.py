@@ -7,13 +7,15 @@ re-exports: a palette index out of range is an invalid world too.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 from groundlang.logic.palette_files import read_palette
 from groundlang.logic.program import AspError, Program, package_source
 
-__all__ = ["ATTRIBUTED_CLASSES", "Palette", "WorldError", "added_attribute_problem", "get_palette"]
+__all__ = ["ATTRIBUTED_CLASSES", "Palette", "WorldError", "added_attribute_problem", "check_attribute_clash",
+           "get_palette"]
 
 
 class WorldError(ValueError):
@@ -112,6 +114,11 @@ def get_palette(name: str | Palette) -> Palette:
         problem = added_attribute_problem(cls, attribute)
         if problem:
             raise WorldError(f"palette {name}: attribute({cls}, {attribute}): {problem}")
+    alike = sorted({a for _, a in added}, key=str.lower)
+    for a, b in zip(alike, alike[1:]):
+        if a.lower() == b.lower():  # a .bdm line's attribute names are read in lower case
+            raise WorldError(f"palette {name}: attributes {a} and {b} differ in case only; a .bdm line could not "
+                             "tell them apart")
     added_values = tuple((a, values[a]) for a in sorted({a for _, a in added}))
     return Palette(label, values["colour"], values["shape"], tuple(sorted(drawing["glyph"].items())),
                    tuple(sorted(drawing["rgb"].items())), added, added_values)
@@ -119,23 +126,53 @@ def get_palette(name: str | Palette) -> Palette:
 
 # The classes whose objects a palette may give attributes; the agent is the one addressed, not described.
 ATTRIBUTED_CLASSES = ("room", "door", "toy")
+# The world's own attributes of its objects (where they are), which a state line writes beside a palette's.
+WORLD_ATTRIBUTES = ("x", "y", "left", "top", "right", "bottom")
+# An attribute's name as a state's facts write it (and a .bdm line, read in lower case).
+_NAME = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
 
 
 def added_attribute_problem(cls: str, attribute: str) -> str | None:
-    """What is wrong with a palette giving objects of ``cls`` ``attribute``; None: nothing."""
+    """What is wrong with a palette giving objects of ``cls`` ``attribute``; None: nothing. A clash with a
+    task library's own predicates is checked where the two meet (:func:`check_attribute_clash`)."""
     if cls not in ATTRIBUTED_CLASSES:
         return f"{cls} is not a class whose objects a palette describes ({', '.join(ATTRIBUTED_CLASSES)})"
+    if not _NAME.match(attribute):
+        return "an attribute is a lowerCamelCase name"
     if attribute in ("colour", "shape"):
         return ("rooms' colour and toys' colour and shape are every palette's, as the corpus formats give them; "
                 "attribute/2 adds others")
-    if attribute in _domain_predicates():
-        return (f"a state writes it as {attribute}(Object, Value), which domain.lp or pfs.lp already defines; "
-                "rename the attribute")
+    if attribute.lower() in WORLD_ATTRIBUTES:
+        return f"{attribute} is where an object is ({', '.join(WORLD_ATTRIBUTES)} are the world's); rename the attribute"
+    defined = _package_predicates().get(attribute)
+    if defined:
+        return f"a state writes it as {attribute}(Object, Value), which {defined} already defines; rename the attribute"
     return None
 
 
+def check_attribute_clash(palette: Palette, program: Program) -> None:
+    """AspError (one line) when ``program`` defines a predicate of two arguments named like an attribute
+    ``palette`` adds: a state's facts of the attribute would add to it (a library's ``area(R, A)`` and a
+    room's ``area``: every room the largest)."""
+    if not palette.added:
+        return
+    definitions = _definitions(program)
+    for cls, attribute in palette.added:
+        if (attribute, 2) in definitions:
+            raise AspError(f"palette {palette.name}: attribute({cls}, {attribute}): a state writes it as "
+                           f"{attribute}(Object, Value), which {definitions[(attribute, 2)]} defines too; rename "
+                           "the attribute")
+
+
+@lru_cache(maxsize=32)
+def _definitions(program: Program) -> dict[tuple[str, int], str]:
+    return program.definitions()
+
+
 @lru_cache(maxsize=1)
-def _domain_predicates() -> frozenset[str]:
-    """The names domain.lp and pfs.lp define with two arguments: an attribute's facts must not be one."""
-    program = Program((package_source("domain.lp"), package_source("pfs.lp")))
-    return frozenset(name for name, arity in program.head_signatures() if arity == 2)
+def _package_predicates() -> dict[str, str]:
+    """The names the package's ASP files define with two arguments, each with its file: an attribute's facts
+    must not be one."""
+    names = ("domain.lp", "pfs.lp", "groundings.lp", "tabulate.lp", "tasks.lp", "domains/williams2018.lp")
+    program = Program(tuple(package_source(n) for n in names))
+    return {name: source for (name, arity), source in program.definitions().items() if arity == 2}

@@ -30,6 +30,7 @@ from groundlang.logic.program import DEFAULT_TIME_LIMIT, AspError, Program, pack
 from groundlang.logic.tasks import pf_name
 
 from .geometry import fact, layout_facts, palette_facts
+from .palette import check_attribute_clash
 from .world import Layout
 
 __all__ = ["PFTables", "TabulationError", "pf_tables", "library_pf_tables", "tabulation_program", "MAX_TABLE_CELLS",
@@ -233,6 +234,7 @@ def pf_tables(layout: Layout, program: Program | None = None,
         raise TabulationError(f"this layout has {moving:,} movable objects on {cells:,} walkable cells; PFs are "
                               f"tabulated for at most {MAX_TABULATED_COPIES:,} objects x cells (every movable "
                               "object is copied onto each cell)")
+    check_attribute_clash(layout.palette, program)
     declared = _declarations(program, palette_facts(layout), time_limit)
     for n, movers in declared.movers.items():
         if cells ** movers > MAX_TABLE_CELLS:

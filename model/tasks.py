@@ -20,6 +20,7 @@ from groundlang.logic.groundings import ground_environment
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
 
 from .geometry import state_facts
+from .palette import check_attribute_clash
 from .world import State
 
 __all__ = [
@@ -35,6 +36,7 @@ Candidate = tuple[GroundedTask, list[BindingConstraint]]
 # dropped each state just before it was needed again. An entry is a layout's candidates, tens of kB.
 @lru_cache(maxsize=256)
 def _environment(state: State, library: TaskLibrary) -> tuple:
+    check_attribute_clash(state.layout.palette, library.grounding_program)
     palette = state.layout.palette.name
     found, described, terms, related = ground_environment(library, state_facts(state),
                                                           environment=f"palette {palette}", wholly_true=True)

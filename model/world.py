@@ -200,15 +200,21 @@ class Layout:
         out += [(TOY_CLASS, n, (("colour", (c,)), ("shape", (s,))))
                 for n, (c, s) in zip(self.toy_names, self.toy_attributes)]
         if self.added_attributes:
-            more: dict[str, list] = {}
-            for name, attribute, value in self.added_attributes:
-                more.setdefault(name, []).append((attribute, (value,)))
-            out = [(cls, name, facts + tuple(more.get(name, ()))) for cls, name, facts in out]
+            out = [(cls, name, facts + tuple((a, (v,)) for a, v in self.added_values(name).items()))
+                   for cls, name, facts in out]
         return tuple(out)
 
     def added_values(self, name: str) -> dict[str, str]:
         """The added attributes' values of object ``name`` (``{"material": "wood"}``; empty: none)."""
-        return {a: v for n, a, v in self.added_attributes if n == name}
+        return dict(self._added_by_name.get(name, ()))
+
+    @cached_property
+    def _added_by_name(self) -> dict[str, tuple[tuple[str, str], ...]]:
+        # Indexed once: an object at a time, a scan per object was quadratic in a large layout's objects.
+        by_name: dict[str, list[tuple[str, str]]] = {}
+        for name, attribute, value in self.added_attributes:
+            by_name.setdefault(name, []).append((attribute, value))
+        return {name: tuple(pairs) for name, pairs in by_name.items()}
 
     @property
     def movable_names(self) -> list[str]:

@@ -54,7 +54,7 @@ def test_a_bdm_state_gives_each_toy_its_material_under_the_layouts_name(tmp_path
 
 @pytest.mark.parametrize("line, message", [
     (_line(block3=""), "state: block block3 has no material; palette materials gives every toy one"),
-    (_line(block3="material: {glass} "), "state: block3 has the value 'glass', which the palette does not have "
+    (_line(block3="material: {glass} "), "state: block3 has the material 'glass', which the palette does not have "
                                          "(it has wood, metal)"),
 ])
 def test_a_toy_without_its_material_or_with_another_is_refused_naming_it(line, message):
@@ -93,7 +93,15 @@ def test_the_commands_to_tasks_format_has_no_field_for_an_added_attribute():
 @pytest.mark.parametrize("facts, message", [
     ("attribute(agent, material).", "agent is not a class whose objects a palette describes (room, door, toy)"),
     ("attribute(toy, colour).", "rooms' colour and toys' colour and shape are every palette's"),
-    ("attribute(toy, wall). value(wall, 0, thick).", "a state writes it as wall(Object, Value), which domain.lp"),
+    ("attribute(toy, wall). value(wall, 0, thick).", "a state writes it as wall(Object, Value), which "
+                                                     "groundlang.logic/domain.lp already defines"),
+    ("attribute(toy, goal_atom). value(goal_atom, 0, thick).", "which groundlang.logic/groundings.lp already"),
+    # williams2018's area/2: a room's area facts would make every room the largest
+    ("attribute(room, area). value(area, 0, big).", "which groundlang.logic/domains/williams2018.lp already"),
+    ("attribute(toy, x). value(x, 0, big).", "x is where an object is"),
+    ("attribute(room, top). value(top, 0, big).", "top is where an object is"),
+    ("attribute(toy, matKind). attribute(toy, matkind). value(matKind, 0, a). value(matkind, 0, b).",
+     "attributes matKind and matkind differ in case only"),
     ("attribute(toy, weight).", "attribute(toy, weight) names an attribute of no value/3 fact"),
     ('attribute(toy, "material").', 'is not attribute(Class, Attribute) with two names'),
 ])
@@ -102,6 +110,39 @@ def test_an_added_attribute_that_cannot_be_one_is_refused_naming_the_fact(tmp_pa
     palette.write_text("value(colour, 0, red). value(shape, 0, chair). value(material, 0, wood).\n" + facts + "\n")
     with pytest.raises(WorldError, match=message.replace("(", r"\(").replace(")", r"\)")):
         get_palette(str(palette))
+
+
+def test_a_library_defining_the_attributes_predicate_is_refused_where_the_two_meet(tmp_path):
+    palette, library = tmp_path / "weights.lp", tmp_path / "heavy.lp"
+    palette.write_text("value(colour, 0, red). value(colour, 1, green). value(shape, 0, chair). value(heavy, 0, yes). "
+                       "value(heavy, 1, no).\n"
+                       "attribute(toy, heavy).\n")
+    library.write_text("heavy(T, yes) :- toy(T), shape(T, chair).\n")
+    state = tmp_path / "one.bdm"
+    state.write_text(_line().replace("material: {wood} ", "heavy: {no} ").replace("material: {metal} ", "heavy: {no} ")
+                     + "\n")
+    for args in (["domain"], ["tasks", str(state)]):
+        run = _cli(*args, "--palette", str(palette), "--library", str(library))
+        assert run.returncode != 0 and "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1
+        assert (f"palette weights: attribute(toy, heavy): a state writes it as heavy(Object, Value), which {library} "
+                "defines too") in run.stderr
+
+
+def test_domain_refuses_a_palette_every_other_command_refuses(tmp_path):
+    palette = tmp_path / "agent.lp"
+    palette.write_text("value(colour, 0, red). value(shape, 0, chair). value(mood, 0, calm). attribute(agent, mood).\n")
+    run = _cli("domain", "--palette", str(palette))
+    assert run.returncode != 0 and "agent is not a class whose objects a palette describes" in run.stderr
+
+
+def test_an_end_state_whose_toys_are_made_of_something_else_is_refused(tmp_path):
+    start, end = _line(), _line().replace("{wood}", "{metal}")
+    corpus = tmp_path / "swapped.bdm"
+    corpus.write_text(f"go next to the metal chair\n{start}\n{end}\ntrue\n")
+    with pytest.raises(CorpusError, match=r"swapped.bdm, line 3: the end state's rooms, doors or blocks differ"):
+        read_bdm(corpus, PALETTE)
+    corpus.write_text(f"go next to the metal chair\n{start}\n{start}\ntrue\n")
+    assert len(read_bdm(corpus, PALETTE)[0].pairs) == 1
 
 
 def test_the_schema_shows_the_added_attributes_pf_class_as_a_property():
@@ -161,3 +202,18 @@ def test_words_for_materials_are_learned_and_followed_in_a_layout_training_never
     assert run.returncode == 0, run.stderr
     final, _ = parse_bdm_state(json.loads(run.stdout)["final_state"], PALETTE)
     assert _next_to(final, "metal")
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"added": [["toy", "Material"]], "added_values": {"Material": ["wood"]}}, "an attribute is a lowerCamelCase name"),
+    ({"added_values": {"material": ["red", "metal"]}}, "red is a value of material and of another attribute"),
+    ({"added": [["toy", "material"]], "added_values": {}}, "the same attributes in both"),
+    ({"added": "toy"}, "added must be [[class, attribute], ...]"),
+])
+def test_a_saved_models_record_of_added_attributes_is_checked(change, message):
+    from groundlang.learner_state import _checked_palettes
+
+    record = {**get_palette(PALETTE).record(), **change}
+    with pytest.raises(ValueError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        _checked_palettes([record])
+    assert _checked_palettes([get_palette(PALETTE).record()])

@@ -23,9 +23,12 @@ def register(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundlang.logic.schema import domain_schema
     from groundlang.logic.tasks import TaskLibrary
+    from groundlang.model.palette import check_attribute_clash, get_palette
 
     library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
-    schema = domain_schema(library, args.palette)
+    palette = get_palette(args.palette)  # checked as every other command checks it
+    check_attribute_clash(palette, library.grounding_program)
+    schema = domain_schema(library, (palette.name, palette.all_values))
     if args.json:
         print(json_text({
             "classes": list(schema.classes),
