@@ -8,7 +8,9 @@ the value of a PF of a kind attribute (``kind/1`` of ``domain.lp``: its shape)
 as the head noun when it has one, else its class name; viewpoint PFs (``doorWestOfAgent`` gives "west of the agent") only where
 two objects would otherwise read alike. A goal atom is read from its
 predicate's camel-case words, each class word replaced by its object's
-phrase (``toyInRoom`` gives "<the toy> in <the room>"). The model's
+phrase (``toyInRoom`` gives "<the toy> in <the room>"), unless the library
+says how a PF reads (``phrase(agentInCornerOfRoom, "{1} in a corner of {2}")``;
+``phrase(toyIsShiny, "shiny")`` describes an object). The model's
 semantic tokens are explained from the domain's schema the same way
 (:func:`token_meanings`: ``roomIsRed`` is "a room's colour is red", read from
 its declaration ``pf(colour, roomIs(red), (room,))``).
@@ -33,6 +35,7 @@ DASH = "\u2014"  # between words and ids: "the red room — room0"
 _TERM = re.compile(r"^[^()]*\((.*)\)$")
 _CLASSES = frozenset(r.removeprefix("other:") for r in OTHER_ROLES)
 _CAMEL = re.compile(r"[A-Z]?[a-z0-9]+|[A-Z]+(?![a-z])")
+_PLACE = re.compile(r"\{(\d+)\}")
 
 
 def _camel_words(name: str) -> list[str]:
@@ -51,7 +54,8 @@ def _plain_phrase(obj: str, state: State, library: TaskLibrary) -> str:
     heads = set(kind_pfs(described))  # their values give the head noun ("the star")
     modifiers, head = [], None
     for name, term in attribute_pfs(state, library).get(obj, ()):
-        value = _value(term)
+        said = library.phrases.get(name)
+        value = said if said is not None and "{" not in said else _value(term)
         if value is None:
             continue
         if name in heads and head is None:
@@ -65,6 +69,9 @@ def _spatial(obj: str, state: State, library: TaskLibrary) -> str:
     cls = object_class(obj)
     sides = []
     for name in viewpoint_pfs(object_descriptions(state, library).get(obj, {}), library):
+        if (said := library.phrases.get(name)) is not None and "{" not in said:
+            sides.append(said)
+            continue
         words = _camel_words(name)
         if words and words[0] == cls:
             words = words[1:]
@@ -89,6 +96,9 @@ def object_phrase(obj: str, state: State, library: TaskLibrary) -> str:
 
 
 def _atom_phrase(atom: Atom, state: State, library: TaskLibrary) -> str:
+    said = library.phrases.get(atom.predicate)
+    if said is not None and "{1}" in said:  # the library says how the atom reads (phrase/2)
+        return _PLACE.sub(lambda m: object_phrase(atom.args[int(m.group(1)) - 1], state, library), said)
     words = _camel_words(atom.predicate)
     out, used = [], 0
     for word in words:

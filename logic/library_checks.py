@@ -11,10 +11,39 @@ from dataclasses import dataclass
 import clingo
 
 from .program import AspError, Program
-from .terms import symbol_text, tuple_args
+from .terms import pf_name, symbol_text, tuple_args
 
 __all__ = ["PFRoles", "Declarations", "declare", "declare_restricted_families", "read_pf_roles", "restriction_problem",
-           "check_tasks_declared_once"]
+           "check_tasks_declared_once", "read_phrases"]
+
+_PLACE = re.compile(r"\{(\d+)\}")  # "{1}": a phrase's place for a PF's first argument
+
+
+def read_phrases(atoms: Sequence[clingo.Symbol], declared: "Declarations", where: str) -> dict[str, str]:
+    """``phrase(PF, "words")`` atoms as ``{PF name: words}``: how a person reads the PF. Words with places
+    ``{1}``, ``{2}``, ... for its arguments read an atom (``"{1} in a corner of {2}"``); words without
+    them describe the one object a PF of one argument holds of (``"shiny"``). AspError starting with
+    ``where`` for a PF named twice, words that are not a non-empty string, or places that are not
+    ``{1}`` to ``{n}`` of a PF of n arguments, each once."""
+    out: dict[str, str] = {}
+    for atom in sorted(atoms):
+        term, text = atom.arguments
+        if term.type is not clingo.SymbolType.Function or text.type is not clingo.SymbolType.String \
+                or not text.string.strip():
+            raise AspError(f'{where}: {atom} is not phrase(PF, "words") with a PF and words in quotes')
+        name = pf_name(term)
+        if name in out:
+            raise AspError(f"{where}: PF {name} has two phrases, {out[name]!r} and {text.string!r}")
+        places = [int(p) for p in _PLACE.findall(text.string)]
+        arities = {len(sig) for _, sig in declared.get(term, ())}
+        arity = arities.pop() if len(arities) == 1 else None
+        if places or (arity or 1) > 1:
+            n = arity or max(places)
+            if sorted(places) != list(range(1, n + 1)):
+                raise AspError(f"{where}: {atom}: the words of a PF of {n} argument{'s' * (n > 1)} have the places "
+                               f"{', '.join('{%d}' % k for k in range(1, n + 1))}, each once")
+        out[name] = text.string
+    return out
 
 _TASK_FACT = re.compile(r'task\(("?)([^"()]+)\1\)\.')
 

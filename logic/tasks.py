@@ -28,7 +28,7 @@ import clingo
 from .atoms import Atom, format_goal
 from .classes import domain_classes
 from .library_checks import (Declarations, PFRoles, check_tasks_declared_once, declare, declare_restricted_families,
-                             read_pf_roles, restriction_problem)
+                             read_pf_roles, read_phrases, restriction_problem)
 from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, package_source
 from .terms import natural_key, pf_name, symbol_text, tuple_args
 from . import sources as _sources
@@ -133,15 +133,17 @@ def format_lifted_task(task: LiftedTask) -> str:
 
 # Shown atoms of a library solved without an environment (a user's own #show cannot hide them).
 _LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #show goal/3. #show pf/3. #show restrict/3. "
-                       "#show goal_class/1. #show viewpoint_class/1.")
+                       "#show goal_class/1. #show viewpoint_class/1. #show phrase/2.")
 
 
 def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
-        tuple[LiftedTask, ...], tuple[str, ...], tuple[tuple[str, tuple[str, str]], ...], PFRoles]:
+        tuple[LiftedTask, ...], tuple[str, ...], tuple[tuple[str, tuple[str, str]], ...], PFRoles,
+        tuple[tuple[str, str], ...]]:
     """Solve the library without an environment: the lifted tasks (task/1, var/3, goal/3,
     restrict/3), the names of the unary PFs of a viewpoint class (spatial), sorted, the PFs of
     two objects but the viewpoint ones with their signatures, sorted (what ``related/4`` of
-    ``groundings.lp`` may relate objects by), and the part each PF class plays.
+    ``groundings.lp`` may relate objects by), the part each PF class plays, and the PFs' phrases
+    (``phrase/2``, :func:`read_phrases`) as sorted pairs.
 
     Checked here, each a one-line AspError naming the sources and the task: variables, goal PFs
     (of a goal class) and their argument classes, and that every restrict/3 whose PF the library
@@ -205,6 +207,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
             raise AspError(f"{program.user_names}: restrict({t}, ...) names no task({t})")
         restrictions[t].append((v, p))
     declare_restricted_families(program, restrictions, declared, time_limit)
+    phrases = read_phrases(by_signature.get(("phrase", 2), []), declared, program.user_names)
     tasks = []
     rank = {c: i for i, c in enumerate(CLASS_ORDER)}
     for n in names:
@@ -251,7 +254,7 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
                 raise AspError(f"{program.user_names}: task {n}: restrict({n}, \"{v}\", {term}): {problem}")
         kept = {(v, str(term)) for v, term in restrictions[n]}
         tasks.append(LiftedTask(n, tuple(vs), tuple(sorted(set(goals[n]))), tuple(sorted(kept))))
-    return tuple(tasks), tuple(sorted(spatial)), tuple(sorted(relational)), roles
+    return tuple(tasks), tuple(sorted(spatial)), tuple(sorted(relational)), roles, tuple(sorted(phrases.items()))
 
 
 @functools.lru_cache(maxsize=32)
@@ -285,8 +288,10 @@ class TaskLibrary:
         kept = sum(len(s.text) for s in self.program.sources) <= _sources.KEPT_SOURCE_BYTES
         lifted = (_lifted_tasks_of if kept else _lifted_tasks_of.__wrapped__)(self.program.sources, allow_scripts,
                                                                                isolated, time_limit)
-        # spatial_pfs: the unary PFs of a viewpoint class; pf_roles: the part each PF class plays (PFRoles).
-        self.tasks, self.spatial_pfs, self.relational_pfs, self.pf_roles = lifted
+        # spatial_pfs: the unary PFs of a viewpoint class; pf_roles: the part each PF class plays (PFRoles);
+        # phrases: how a person reads a PF, {name: words} (phrase/2).
+        self.tasks, self.spatial_pfs, self.relational_pfs, self.pf_roles, phrases = lifted
+        self.phrases = dict(phrases)
 
     @classmethod
     def load(cls, paths: str | Path | Iterable[str | Path] | None = None, allow_scripts: bool = False,
