@@ -48,10 +48,10 @@ def check_state(palettes: list[dict] | None, method: str, command: str, state: S
     seen = palette.record()
     if palettes is not None and seen not in palettes:
         trained = ", ".join(p["name"] for p in palettes)
-        same_name = (" of the same name but other colours or shapes"
+        same_name = (" of the same name but other values"
                      if any(p["name"] == palette.name for p in palettes) else "")
         raise ValueError(f"{method}: the state is of palette {palette.name!r}; this model was trained on "
-                         f"palette {trained}{same_name} (colours and shapes must be the same to read its words, and any attribute the palette adds)")
+                         f"palette {trained}{same_name} (colours and shapes must be the same to read its words)")
 
 
 def check_model_parts(language_model, library) -> None:

@@ -49,10 +49,9 @@ def solve_blocks(blocks: Sequence[tuple[np.ndarray, np.ndarray]], settings: Task
             stop = torch.cat([rewards[b][1] for b in active])
             terminal = None if rewards[active[0]][2] is None else torch.cat([rewards[b][2] for b in active])
             carry, spare = torch.cat([carries[b] for b in active]), torch.empty_like(arrival)
+            sweep = (lambda *a: run_compiled(carry_sweep, *a)) if use_compiled(len(arrival), backend) else carry_sweep
             while True:
                 chunk = min(CHECK_EVERY, settings.max_sweeps - sweeps)
-                sweep = ((lambda *a: run_compiled(carry_sweep, *a)) if use_compiled(len(arrival), backend, chunk)
-                         else carry_sweep)
                 for _ in range(chunk):
                     sweep(spare, carry, union, arrival, None, stop, discount, temperature, terminal, False)
                     carry, spare = spare, carry

@@ -24,7 +24,7 @@ iteration moves ``discount * pi(a|s) * lambda(s)`` onto successors. It is
 written as a gather over a predecessor table built once per problem
 (:func:`~groundlang.inference.sweeps.predecessor_table`; no serial
 scatter-add), costs about one sweep per step, stores no history and is
-compiled with the forward sweep (``sweeps.use_compiled``). The
+compiled with the forward sweep from ``COMPILE_MIN_STATES`` states. The
 gradient is then one vector-Jacobian product of a single backup. Memory is a
 handful of ``[S]``, ``[S, A]`` and ``[K, S]`` (K = largest in-degree)
 arrays plus the features. The forward solve warm-starts from the previous

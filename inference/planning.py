@@ -186,8 +186,8 @@ def soft_value_iteration(
         tol: converged when ``max |V_new - V| <= tol`` (checked every few sweeps).
         initial_values: ``[S]`` warm start (default zeros).
         backend: "eager", "compiled" (torch.compile; falls back to eager if it fails)
-            or "auto" (compiled from ``COMPILE_MIN_STATES`` states once the process has swept
-            ``COMPILE_AFTER_WORK`` state-sweeps eagerly: ``sweeps.use_compiled``).
+            or "auto" (compiled from ``COMPILE_MIN_STATES`` states; in a process that plans once,
+            ``sweeps.plan_once()``, from ``COMPILE_AT_ONCE_STATES``).
         policy_states: indices of the states whose values, Q-values and policy are wanted (default
             all): a demonstration's likelihood needs its own states' only, and the last backup over
             every state of a large space costs as much as a few sweeps.

@@ -28,6 +28,7 @@ __all__ = [
     "carry_sweep",
     "run_compiled",
     "use_compiled",
+    "plan_once",
     "solve_values",
     "policy_from_carry",
     "predecessor_table",
@@ -43,21 +44,23 @@ TERMINATE = 4
 # Sweeps per convergence check: the fused residual reads W once more and
 # converts to a Python float; every few sweeps is enough.
 CHECK_EVERY = 8
-# From this many states "auto" may compile: the kernel is 5-10x faster than
+# From this many states "auto" compiles: the kernel is 5-10x faster than
 # eager there, and one dynamic-shape compilation (a few seconds, once per
 # process) serves every state count.
 COMPILE_MIN_STATES = 50_000
-# ... once the process has swept that many states eagerly (state-sweeps, counted in
-# EAGER_WORK): about what one compilation costs (3 to 8 s; an eager state-sweep takes
-# 250 to 650 ns here), so a process that plans once (one `follow`) does not pay for a
-# compiler it would not use long enough, and one that plans much pays at most about
-# twice what the better choice in hindsight would have (the ski-rental rule). A count,
-# not a clock, so that which sweeps run compiled does not depend on the machine's load.
-# From COMPILE_AT_ONCE_STATES states one solve (some 60 sweeps) is worth a compilation
-# alone. Figures: benchmarks/bench_first_plan.py.
-COMPILE_AFTER_WORK = 10_000_000
+# ... in a process that plans once (`groundlang follow`: plan_once()), from this many:
+# one solve (some 70 sweeps, 250 to 650 ns a state eager) is then worth a compilation
+# (3 to 8 s) alone. A rule of the state count and the process's kind, not of what the
+# process did before, so that a solve's values do not depend on which solves came first
+# (compiled and eager sweeps differ in the last bits). Figures: benchmarks/bench_first_plan.py.
 COMPILE_AT_ONCE_STATES = 500_000
-EAGER_WORK = [0]  # state-sweeps swept eagerly in this process on spaces of COMPILE_MIN_STATES or more
+_COMPILE_FROM = [COMPILE_MIN_STATES]
+
+
+def plan_once() -> None:
+    """Say that this process plans once (a command-line ``follow``): "auto" compiles only from
+    :data:`COMPILE_AT_ONCE_STATES` states, where one solve pays for the compilation."""
+    _COMPILE_FROM[0] = COMPILE_AT_ONCE_STATES
 
 # Below this many states one thread is faster: each op is a few microseconds
 # of work, and waking a second OpenMP thread costs more than it saves (10x
@@ -165,17 +168,10 @@ def run_compiled(fn, *args, **kwargs):
     return fn(*args, **kwargs)
 
 
-def use_compiled(num_states: int, backend: str, sweeps: int = 1) -> bool:
-    """Whether the next ``sweeps`` sweeps over ``num_states`` states run compiled; under "auto", those that
-    run eagerly on a space compiling would speed up are counted towards :data:`COMPILE_AFTER_WORK`."""
+def use_compiled(num_states: int, backend: str) -> bool:
     if backend not in ("auto", "eager", "compiled"):
         raise PlanningError(f"backend must be 'auto', 'eager' or 'compiled', got {backend!r}")
-    if backend != "auto" or num_states < COMPILE_MIN_STATES:
-        return backend == "compiled"
-    if EAGER_WORK[0] >= COMPILE_AFTER_WORK or num_states >= COMPILE_AT_ONCE_STATES:
-        return True
-    EAGER_WORK[0] += num_states * sweeps
-    return False
+    return backend == "compiled" or (backend == "auto" and num_states >= _COMPILE_FROM[0])
 
 
 def _split_reward(reward):
@@ -195,6 +191,7 @@ def solve_values(values, columns, reward, stop, discount, temperature, terminal,
     Raises PlanningError when the values diverge.
     """
     arrival, action_reward = _split_reward(reward)
+    step = run_compiled if use_compiled(columns.shape[1], backend) else _eager
     carry = (arrival + discount * values).expand(columns.shape[1]).contiguous()
     spare = torch.empty_like(carry)
     sweeps, residual = 0, float("inf")
@@ -202,7 +199,6 @@ def solve_values(values, columns, reward, stop, discount, temperature, terminal,
         while sweeps < max_sweeps:
             sweeps += 1
             check = sweeps % CHECK_EVERY == 0 or sweeps == max_sweeps
-            step = run_compiled if use_compiled(columns.shape[1], backend) else _eager
             res = step(carry_sweep, spare, carry, columns, arrival, action_reward, stop, discount, temperature, terminal, check)
             carry, spare = spare, carry
             if not check:
@@ -284,10 +280,11 @@ def solve_adjoint(grad, move_prob, predecessors, discount: float, tol: float, ma
     weights = flat[slots]  # [K, S]
     lam = grad.clone() if initial is None or initial.dtype != grad.dtype else initial.clone()
     spare = torch.empty_like(lam)
+    fast = use_compiled(grad.shape[0], backend)
     step = 0
     while step < max_steps:
         step += 1
-        if use_compiled(grad.shape[0], backend):
+        if fast:
             stats = run_compiled(adjoint_sweep, spare, lam, grad, weights, states, discount)
         else:
             stats = adjoint_sweep(spare, lam, grad, weights, states, discount)

@@ -180,15 +180,21 @@ class Program:
         return list(out)
 
     def definitions(self) -> dict[tuple[str, int], str]:
-        """``(name, arity)`` of every predicate a rule head of the program defines, with the name of the
-        first source defining it."""
+        """``(name, arity)`` of every predicate a rule head of the program may make true (a plain head, a
+        choice, a disjunction, a head aggregate's elements) or ``#external`` declares, with the name of the
+        first source defining it. Conditions and bodies are not definitions."""
         out: dict[tuple[str, int], str] = {}
         for source, statements in self.statements_by_source():
             for stm in statements:
-                if stm.ast_type == ast.ASTType.Rule and stm.head.ast_type == ast.ASTType.Literal:
-                    atom = stm.head.atom
-                    if atom.ast_type == ast.ASTType.SymbolicAtom and atom.symbol.ast_type == ast.ASTType.Function:
-                        out.setdefault((atom.symbol.name, len(atom.symbol.arguments)), source.name)
+                if stm.ast_type == ast.ASTType.Rule:
+                    heads = _head_atoms(stm.head)
+                elif stm.ast_type == ast.ASTType.External:
+                    heads = [getattr(stm.atom, "symbol", stm.atom)]
+                else:
+                    continue
+                for term in heads:
+                    if term.ast_type == ast.ASTType.Function:
+                        out.setdefault((term.name, len(term.arguments)), source.name)
         return out
 
     def control(
@@ -253,6 +259,21 @@ class Program:
 
 
 _ERRORS = {c.__name__: c for c in (AspError, AspSyntaxError, AspScriptRefused, AspGroundingError, AspTimeout)}
+
+
+def _head_atoms(node) -> list:
+    """The symbols of the atoms a rule's head ``node`` may make true: a literal's; a choice's, a disjunction's
+    or a head aggregate's elements' (their literals, not their conditions)."""
+    kind = node.ast_type
+    if kind == ast.ASTType.Literal:
+        return [node.atom.symbol] if node.atom.ast_type == ast.ASTType.SymbolicAtom else []
+    if kind == ast.ASTType.ConditionalLiteral:
+        return _head_atoms(node.literal)
+    if kind in (ast.ASTType.Aggregate, ast.ASTType.Disjunction):
+        return [a for element in node.elements for a in _head_atoms(element)]
+    if kind == ast.ASTType.HeadAggregate:
+        return [a for element in node.elements for a in _head_atoms(element.condition)]
+    return []
 
 
 def _solve_in_child(program: Program, facts: str, models: int, time_limit: float | None) -> list:

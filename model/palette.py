@@ -25,7 +25,7 @@ class WorldError(ValueError):
 
 @dataclass(frozen=True)
 class Palette:
-    """Names for the colour and shape indices a corpus file uses."""
+    """Names for the colour and shape indices a corpus file uses, and the attributes it adds to objects."""
 
     name: str
     colours: tuple[str, ...]
@@ -114,7 +114,7 @@ def get_palette(name: str | Palette) -> Palette:
         problem = added_attribute_problem(cls, attribute)
         if problem:
             raise WorldError(f"palette {name}: attribute({cls}, {attribute}): {problem}")
-    alike = sorted({a for _, a in added}, key=str.lower)
+    alike = sorted({a for _, a in added}, key=lambda a: (a.lower(), a))
     for a, b in zip(alike, alike[1:]):
         if a.lower() == b.lower():  # a .bdm line's attribute names are read in lower case
             raise WorldError(f"palette {name}: attributes {a} and {b} differ in case only; a .bdm line could not "
@@ -140,8 +140,8 @@ def added_attribute_problem(cls: str, attribute: str) -> str | None:
     if not _NAME.match(attribute):
         return "an attribute is a lowerCamelCase name"
     if attribute in ("colour", "shape"):
-        return ("rooms' colour and toys' colour and shape are every palette's, as the corpus formats give them; "
-                "attribute/2 adds others")
+        return ("colour and shape are the corpus formats' own fields (a room's colour, a toy's colour and shape); "
+                "attribute/2 adds attributes of other names")
     if attribute.lower() in WORLD_ATTRIBUTES:
         return f"{attribute} is where an object is ({', '.join(WORLD_ATTRIBUTES)} are the world's); rename the attribute"
     defined = _package_predicates().get(attribute)
@@ -173,6 +173,6 @@ def _definitions(program: Program) -> dict[tuple[str, int], str]:
 def _package_predicates() -> dict[str, str]:
     """The names the package's ASP files define with two arguments, each with its file: an attribute's facts
     must not be one."""
-    names = ("domain.lp", "pfs.lp", "groundings.lp", "tabulate.lp", "tasks.lp", "domains/williams2018.lp")
+    names = ("domain.lp", "pfs.lp", "groundings.lp", "tabulate.lp", "tasks.lp")
     program = Program(tuple(package_source(n) for n in names))
     return {name: source for (name, arity), source in program.definitions().items() if arity == 2}

@@ -164,39 +164,18 @@ class ParseAligned(LanguageModel):
         return encode_parse_fields(enc, self.phrase_keys(), negated_verbs_frame=self.negated_verbs_frame,
                                    mention_task_objects=self.mention_task_objects)
 
+    # What settings() reports, in this order (each an attribute of the same name but largest_constraint).
+    _SETTINGS = ("word_concentration", "align_concentration", "argument_bonus", "mention_concentration",
+                 "arity_concentration", "align_by_task", "mention_phrases", "align_backoff", "relation_words",
+                 "preposition_concentration", "held_parts", "relational_descriptions", "schema_names",
+                 "achievable_goals", "expected_success", "step_cost", "end_habits", "moved_toys", "habits_made_true",
+                 "last_phrase_key", "object_key", "last_passes_over_source", "noun_attached_key", "negation_key",
+                 "start_role", "bystander_roles", "largest_constraint", "negated_verbs_frame", "mention_task_objects",
+                 "parser_weights")
+
     def settings(self) -> dict:
-        return {
-            "word_concentration": self.word_concentration,
-            "align_concentration": self.align_concentration,
-            "argument_bonus": self.argument_bonus,
-            "mention_concentration": self.mention_concentration,
-            "arity_concentration": self.arity_concentration,
-            "align_by_task": self.align_by_task,
-            "mention_phrases": self.mention_phrases,
-            "align_backoff": self.align_backoff,
-            "relation_words": self.relation_words,
-            "preposition_concentration": self.preposition_concentration,
-            "held_parts": self.held_parts,
-            "relational_descriptions": self.relational_descriptions,
-            "schema_names": self.schema_names,
-            "achievable_goals": self.achievable_goals,
-            "expected_success": self.expected_success,
-            "step_cost": self.step_cost,
-            "end_habits": self.end_habits,
-            "moved_toys": self.moved_toys,
-            "habits_made_true": self.habits_made_true,
-            "last_phrase_key": self.last_phrase_key,
-            "object_key": self.object_key,
-            "last_passes_over_source": self.last_passes_over_source,
-            "noun_attached_key": self.noun_attached_key,
-            "negation_key": self.negation_key,
-            "start_role": self.start_role,
-            "bystander_roles": self.bystander_roles,
-            "largest_constraint": not self.enumerates_constraints,
-            "negated_verbs_frame": self.negated_verbs_frame,
-            "mention_task_objects": self.mention_task_objects,
-            "parser_weights": self.parser_weights,
-        }
+        return {name: (not self.enumerates_constraints if name == "largest_constraint" else getattr(self, name))
+                for name in self._SETTINGS}
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=(),
                        name_families=0):

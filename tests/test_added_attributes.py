@@ -92,12 +92,10 @@ def test_the_commands_to_tasks_format_has_no_field_for_an_added_attribute():
 
 @pytest.mark.parametrize("facts, message", [
     ("attribute(agent, material).", "agent is not a class whose objects a palette describes (room, door, toy)"),
-    ("attribute(toy, colour).", "rooms' colour and toys' colour and shape are every palette's"),
+    ("attribute(toy, colour).", "colour and shape are the corpus formats' own fields"),
     ("attribute(toy, wall). value(wall, 0, thick).", "a state writes it as wall(Object, Value), which "
                                                      "groundlang.logic/domain.lp already defines"),
     ("attribute(toy, goal_atom). value(goal_atom, 0, thick).", "which groundlang.logic/groundings.lp already"),
-    # williams2018's area/2: a room's area facts would make every room the largest
-    ("attribute(room, area). value(area, 0, big).", "which groundlang.logic/domains/williams2018.lp already"),
     ("attribute(toy, x). value(x, 0, big).", "x is where an object is"),
     ("attribute(room, top). value(top, 0, big).", "top is where an object is"),
     ("attribute(toy, matKind). attribute(toy, matkind). value(matKind, 0, a). value(matkind, 0, b).",
@@ -112,12 +110,14 @@ def test_an_added_attribute_that_cannot_be_one_is_refused_naming_the_fact(tmp_pa
         get_palette(str(palette))
 
 
-def test_a_library_defining_the_attributes_predicate_is_refused_where_the_two_meet(tmp_path):
+@pytest.mark.parametrize("rule", ["heavy(T, yes) :- toy(T), shape(T, chair).", "{ heavy(T, yes) } :- toy(T).",
+                                  "heavy(T, yes) ; light(T) :- toy(T)."])
+def test_a_library_defining_the_attributes_predicate_is_refused_where_the_two_meet(tmp_path, rule):
     palette, library = tmp_path / "weights.lp", tmp_path / "heavy.lp"
     palette.write_text("value(colour, 0, red). value(colour, 1, green). value(shape, 0, chair). value(heavy, 0, yes). "
                        "value(heavy, 1, no).\n"
                        "attribute(toy, heavy).\n")
-    library.write_text("heavy(T, yes) :- toy(T), shape(T, chair).\n")
+    library.write_text(rule + "\n")
     state = tmp_path / "one.bdm"
     state.write_text(_line().replace("material: {wood} ", "heavy: {no} ").replace("material: {metal} ", "heavy: {no} ")
                      + "\n")
@@ -126,6 +126,12 @@ def test_a_library_defining_the_attributes_predicate_is_refused_where_the_two_me
         assert run.returncode != 0 and "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1
         assert (f"palette weights: attribute(toy, heavy): a state writes it as heavy(Object, Value), which {library} "
                 "defines too") in run.stderr
+    # the shipped Williams library's area/2: a room's area facts would make every room the largest
+    rooms = tmp_path / "rooms.lp"
+    rooms.write_text("value(colour, 0, red). value(shape, 0, chair). value(area, 0, big). attribute(room, area).\n")
+    run = _cli("domain", "--palette", str(rooms), "--library", "williams2018")
+    assert run.returncode != 0 and "which groundlang.logic/domains/williams2018.lp defines too" in run.stderr
+    assert _cli("domain", "--palette", str(rooms)).returncode == 0  # a library without area/2 has no clash
 
 
 def test_domain_refuses_a_palette_every_other_command_refuses(tmp_path):
@@ -217,3 +223,37 @@ def test_a_saved_models_record_of_added_attributes_is_checked(change, message):
     with pytest.raises(ValueError, match=message.replace("[", r"\[").replace("]", r"\]")):
         _checked_palettes([record])
     assert _checked_palettes([get_palette(PALETTE).record()])
+
+
+def test_a_material_reads_in_the_librarys_words():
+    from groundlang.logic.tasks import TaskLibrary
+    from groundlang.wording import object_phrase
+
+    library = TaskLibrary.load(["williams2018", str(MATERIALS / "materials_pfs.lp")])
+    state, _ = parse_bdm_state(_line(), PALETTE)
+    # phrase(toyIs(wood), "wooden") in materials_pfs.lp; metal has none and reads as its value
+    assert object_phrase("block0", state, library) == "the red wooden chair"
+    assert object_phrase("block1", state, library) == "the red metal chair"
+
+
+def test_rooms_listed_in_another_order_keep_their_added_values(tmp_path):
+    palette = tmp_path / "floors.lp"
+    palette.write_text("value(colour, 0, red). value(colour, 1, green). value(shape, 0, chair). "
+                       "value(floor, 0, wood). value(floor, 1, tile). attribute(room, floor).\n")
+    rooms = ("room0 (room): [top: {7} left: {0} bottom: {0} right: {4} colour: {red} floor: {%s} ]",
+             "room1 (room): [top: {7} left: {4} bottom: {0} right: {8} colour: {green} floor: {%s} ]")
+    door = "door0 (door): [top: {3} left: {4} bottom: {3} right: {4} ]"
+
+    def line(agent_x: int, first: int, floors: tuple[str, str]) -> str:
+        listed = [rooms[0] % floors[0], rooms[1] % floors[1]]
+        listed = listed if first == 0 else listed[::-1]
+        return "{agent0 (agent): [x: {%d} y: {2} ] , %s , %s , }" % (agent_x, door, " , ".join(listed))
+
+    corpus = tmp_path / "floors.bdm"
+    # the end line lists the rooms the other way round: the same rooms, the same floors
+    corpus.write_text(f"go to the tiled room\n{line(2, 0, ('wood', 'tile'))}\n{line(6, 1, ('wood', 'tile'))}\ntrue\n")
+    (command,) = read_bdm(corpus, str(palette))
+    assert command.pairs[0].end.layout.added_values("room1") == {"floor": "tile"}
+    corpus.write_text(f"go to the tiled room\n{line(2, 0, ('wood', 'tile'))}\n{line(6, 1, ('tile', 'wood'))}\ntrue\n")
+    with pytest.raises(CorpusError, match="line 3: the end state's rooms, doors or blocks differ"):
+        read_bdm(corpus, str(palette))

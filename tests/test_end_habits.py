@@ -171,6 +171,26 @@ def test_learned_in_training_saved_with_the_model_and_switched_off_by_a_setting(
     assert off.lm.settings()["end_habits"] is False and off.habits == learner.habits  # learned, not used
 
 
+def test_habits_made_true_reaches_where_following_ends_and_is_saved(williams_commands, trained, tmp_path,
+                                                                   monkeypatch):
+    import groundlang.learner as learner_module
+
+    instances, _, _ = trained
+    on = Learner(get_language_model("parse", habits_made_true=True), library=LIBRARY, cache_dir=False).fit(instances)
+    seen = []
+    real = learner_module.expected_success_states
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs.get("made_true"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(learner_module, "expected_success_states", spy)
+    command = williams_commands[0]
+    on.follow(command.text, command.pairs[0].start)
+    assert seen == [True]
+    assert Learner.load(on.save(tmp_path / "model")).lm.habits_made_true is True
+
+
 @pytest.mark.parametrize("value, expected", [
     ("many", "end_habits must be a list"),
     ([["agentInRoom", 3]], "is not \\[relations, count\\]"),

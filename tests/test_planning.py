@@ -185,31 +185,16 @@ def test_compiled_sweeps_agree_with_eager():
     np.testing.assert_allclose(compiled.values.numpy(), eager.values.numpy(), rtol=1e-5, atol=1e-4)
 
 
-def test_auto_sweeps_eagerly_until_the_process_has_swept_about_a_compilations_worth(monkeypatch):
-    monkeypatch.setattr(sweeps, "EAGER_WORK", [0])
+def test_a_process_that_plans_once_compiles_only_where_one_solve_pays_for_it(monkeypatch):
+    monkeypatch.setattr(sweeps, "_COMPILE_FROM", [sweeps.COMPILE_MIN_STATES])
     big = sweeps.COMPILE_MIN_STATES
-    assert not sweeps.use_compiled(big - 1, "auto") and sweeps.EAGER_WORK == [0]  # small: never, not counted
-    # a process that plans once (one follow) sweeps eagerly; one that goes on planning compiles
-    assert not any(sweeps.use_compiled(big, "auto") for _ in range(sweeps.COMPILE_AFTER_WORK // big))
-    assert sweeps.EAGER_WORK == [sweeps.COMPILE_AFTER_WORK] and sweeps.use_compiled(big, "auto")
+    assert not sweeps.use_compiled(big - 1, "auto") and sweeps.use_compiled(big, "auto")
+    sweeps.plan_once()  # groundlang follow
+    assert not sweeps.use_compiled(big, "auto") and not sweeps.use_compiled(sweeps.COMPILE_AT_ONCE_STATES - 1, "auto")
+    assert sweeps.use_compiled(sweeps.COMPILE_AT_ONCE_STATES, "auto")
     assert sweeps.use_compiled(1, "compiled") and not sweeps.use_compiled(10**9, "eager")
-    monkeypatch.setattr(sweeps, "EAGER_WORK", [0])
-    assert sweeps.use_compiled(sweeps.COMPILE_AT_ONCE_STATES, "auto")  # one solve alone is worth compiling
-
-
-@pytest.mark.slow
-def test_a_solve_that_starts_eager_and_goes_on_compiled_agrees_with_one_that_does_not(monkeypatch):
-    rng = np.random.default_rng(1)
-    size = sweeps.COMPILE_MIN_STATES
-    ns = rng.integers(0, size, size=(size, 4))
-    goal = np.zeros(size, bool)
-    goal[:50] = True
-    eager = solve_task(ns, goal, backend="eager")
-    # the count crosses the line after the solve's fourth sweep
-    monkeypatch.setattr(sweeps, "EAGER_WORK", [sweeps.COMPILE_AFTER_WORK - 4 * size])
-    mixed = solve_task(ns, goal, backend="auto")
-    assert sweeps.EAGER_WORK == [sweeps.COMPILE_AFTER_WORK] and mixed.sweeps == eager.sweeps
-    np.testing.assert_allclose(mixed.values.numpy(), eager.values.numpy(), rtol=1e-5, atol=1e-4)
+    with pytest.raises(PlanningError, match="backend must be 'auto', 'eager' or 'compiled', got 'bogus'"):
+        solve_task(np.zeros((3, 4), dtype=np.int64), np.array([True, False, False]), backend="bogus")
 
 
 @pytest.mark.parametrize("absorbing", [False, True])

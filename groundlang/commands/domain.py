@@ -21,14 +21,14 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundlang.logic.schema import domain_schema
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.palette import check_attribute_clash, get_palette
+    from groundlang.training_vocabulary import palette_schema
 
     library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
     palette = get_palette(args.palette)  # checked as every other command checks it
     check_attribute_clash(palette, library.grounding_program)
-    schema = domain_schema(library, (palette.name, palette.all_values))
+    schema = palette_schema(library, palette)
     if args.json:
         print(json_text({
             "classes": list(schema.classes),

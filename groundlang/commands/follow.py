@@ -123,6 +123,7 @@ def _refuse(result, args) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import format_state_like, read_initial_state
+    from groundlang.inference.sweeps import plan_once
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
     from groundlang.logic.palette_files import palette_names
@@ -136,6 +137,7 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.render import check_picture_destination
 
         check_picture_destination(args.out)
+    plan_once()  # one command: a compiler pays only where one solve is worth it
     learner = Learner.load(args.model)
     if args.learn:  # the model is saved after the answer: a folder that cannot take it is refused before asking
         from groundlang.model_io import check_model_destination
