@@ -32,6 +32,8 @@ def read_phrases(atoms: Sequence[clingo.Symbol], declared: "Declarations", where
                 or not text.string.strip():
             raise AspError(f'{where}: {atom} is not phrase(PF, "words") with a PF and words in quotes')
         name = pf_name(term)
+        if not term.arguments and term not in declared:  # a family's member is declared with a palette's values
+            raise AspError(f"{where}: {atom}: no pf/3 declares a PF {name}")
         if name in out:
             raise AspError(f"{where}: PF {name} has two phrases, {out[name]!r} and {text.string!r}")
         places = [int(p) for p in _PLACE.findall(text.string)]

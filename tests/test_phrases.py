@@ -61,6 +61,7 @@ def test_goals_and_objects_read_in_the_librarys_words(tmp_path):
     ('phrase(agentInCornerOfRoom, "in a corner of {2}").', "the words of a PF of 2 arguments have the places {1}, {2}"),
     ('phrase(agentInCornerOfRoom, "{1} in {2} of {3}").', "the words of a PF of 2 arguments have the places"),
     ('phrase(toyIsShiny, "{2} shines").', "the words of a PF of 1 argument have the places {1}, each once"),
+    ('phrase(toyIsShinny, "shiny").', "no pf/3 declares a PF toyIsShinny"),
 ])
 def test_a_phrase_that_cannot_be_read_is_refused_when_the_library_loads(tmp_path, text, message):
     with pytest.raises(AspError, match=message.replace("(", r"\(").replace(")", r"\)").replace("{", r"\{")
