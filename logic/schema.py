@@ -17,7 +17,7 @@ import clingo
 
 from .classes import ranked
 from .palette_files import read_palette
-from .program import Program, Source
+from .program import AspError, Program, Source
 from .library_checks import PFRoles
 from .tasks import LiftedTask, TaskLibrary, pf_name
 
@@ -93,7 +93,10 @@ def domain_schema(library: TaskLibrary | None = None, palette: str | tuple = "so
         if sym.name == "pf" and len(args) == 3 and args[2].type is clingo.SymbolType.Function:
             declared = PFDeclaration(pf_name(args[1]), str(args[0]), tuple(str(a) for a in args[2].arguments),
                                      str(args[1]))
-            found[declared.name] = declared
+            if (other := found.setdefault(declared.name, declared)).term != declared.term:
+                # a colour named largest makes toyIs(largest) the Williams size PF toyIsLargest: one would hide
+                raise AspError(f"{library.program.user_names}: PFs {other.term} and {declared.term} are both called "
+                               f"{declared.name} in groundlang; rename one of them (or the palette value)")
         elif sym.name == "class":
             classes.add(str(args[0]))
         elif sym.name == "class_rank":

@@ -257,3 +257,13 @@ def test_rooms_listed_in_another_order_keep_their_added_values(tmp_path):
     corpus.write_text(f"go to the tiled room\n{line(2, 0, ('wood', 'tile'))}\n{line(6, 1, ('tile', 'wood'))}\ntrue\n")
     with pytest.raises(CorpusError, match="line 3: the end state's rooms, doors or blocks differ"):
         read_bdm(corpus, str(palette))
+
+
+def test_a_value_whose_pf_takes_another_pfs_name_is_refused(tmp_path):
+    """A colour named largest makes toyIs(largest) toyIsLargest, the Williams library's size PF: the schema
+    had kept one of the two silently."""
+    palette = tmp_path / "big.lp"
+    palette.write_text("value(colour, 0, red). value(colour, 1, largest). value(shape, 0, chair).\n")
+    run = _cli("domain", "--palette", str(palette), "--library", "williams2018")
+    assert run.returncode != 0 and "Traceback" not in run.stderr
+    assert "PFs toyIsLargest and toyIs(largest) are both called toyIsLargest in groundlang" in run.stderr

@@ -240,3 +240,24 @@ def test_toys_alike_are_told_apart_by_where_they_were(state):
     moved[3] = (4, 1)
     grid = CleanupEnv(many.with_positions(moved)).reset(seed=0)[0]["grid"]
     assert (observation_positions(grid, many.layout, previous=many.positions) == moved).all()
+
+
+def test_toys_told_apart_only_by_an_attribute_the_observation_omits_are_not_guessed():
+    """Two red chairs, one wooden and one metal (an attribute the palette adds): the grid shows them alike, so
+    with nothing to tell them apart by they are not matched in an arbitrary order."""
+    from pathlib import Path
+
+    from groundlang.bdm import parse_bdm_state
+
+    palette = str(Path(__file__).parent / "fixtures" / "materials" / "materials.lp")
+    chairs, _ = parse_bdm_state(
+        "{agent0 (agent): [x: {2} y: {2} ] , door0 (door): [top: {3} left: {4} bottom: {3} right: {4} ] , "
+        "block0 (block): [x: {6} y: {2} shape: {chair} colour: {red} material: {wood} ] , "
+        "block1 (block): [x: {2} y: {5} shape: {chair} colour: {red} material: {metal} ] , "
+        "room0 (room): [top: {7} left: {0} bottom: {0} right: {4} colour: {red} ] , "
+        "room1 (room): [top: {7} left: {4} bottom: {0} right: {8} colour: {green} ] , }", palette)
+    grid = CleanupEnv(chairs, command="go next to the metal chair").reset(seed=0)[0]["grid"]
+    with pytest.raises(ValueError, match="block0 and block1 alike in colour and shape, and they differ in "
+                                         r"material, which it does not show; pass the env's state"):
+        observation_positions(grid, chairs.layout)
+    assert (observation_positions(grid, chairs.layout, previous=chairs.positions) == chairs.positions).all()
