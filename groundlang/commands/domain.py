@@ -37,7 +37,11 @@ def run(args: argparse.Namespace) -> int:
             "pfs": [{"name": d.name, "class": d.pf_class, "part": schema.roles.part(d.pf_class),
                      "signature": list(d.signature), "term": d.term} for d in schema.pfs.values()],
             "tasks": [str(t) for t in schema.tasks],
+            "phrases": library.phrases,
         }, indent=1))
         return 0
     print(schema.describe())
+    if library.phrases:  # phrase/2: how the library says its PFs read
+        print(f"phrases ({len(library.phrases)}):")
+        print("\n".join(f"  {name}: {words!r}" for name, words in sorted(library.phrases.items())))
     return 0
