@@ -101,11 +101,13 @@ def _checksum(key: str, contents: dict) -> str:
     return hashlib.sha256(f"{key} {text}".encode()).hexdigest()
 
 
-def _restore(data: dict, key: str, library: TaskLibrary, noise: EndStateNoise) -> LayoutEvidence:
+def _restore(data: dict, key: str, library: TaskLibrary, noise: EndStateNoise, objects: frozenset[str]) -> LayoutEvidence:
     contents = {name: data[name] for name in ("goals", "values", "groundings", "floor", "new")}
     if data.get("checksum") != _checksum(key, contents):
         raise ValueError("checksum does not match the contents")
     goals = [tuple(Atom(p, tuple(args)) for p, args in goal) for goal in contents["goals"]]
+    if any(not set(atom.args) <= objects for goal in goals for atom in goal):
+        raise ValueError("a goal names an object the layout does not have")
     values = [float(v) for v in contents["values"]]
     groundings = [(task, {var: frozenset(p) for var, p in props.items()}, int(g))
                   for task, props, g in contents["groundings"]]
@@ -149,7 +151,9 @@ class EvidenceCache:
             self.entries.hits += 1
             return self._memory[key]
         found = self.entries.read(key, MAX_ENTRY_BYTES, "an evidence cache entry",
-                                  lambda data: _restore(data, key, self.library, self.noise))
+                                  lambda data: _restore(data, key, self.library, self.noise,
+                                                        frozenset(start.layout.movable_names + start.layout.room_names
+                                                                  + start.layout.door_names)))
         if found is None:
             found = LayoutEvidence(start, end, self.library, self.noise, max_states)
             # What end habits learn from the pair, kept with it: a warm cache then grounds no layout's PFs.

@@ -184,6 +184,8 @@ def _check_form(form: LogicalForm, tokens: tuple[str, ...]) -> None:
         raise ValueError("its words are not the command's")
     if len(form.entities) > len(tokens):
         raise ValueError(f"{len(form.entities)} noun phrases in {len(tokens)} words")
+    if len(form.clauses) > len(tokens):  # a clause, even a verbless fragment, holds one word at least
+        raise ValueError(f"{len(form.clauses)} clauses in {len(tokens)} words")
     names = {e.var for e in form.entities}
     words = set(tokens) | {UNSAID_PREPOSITION}
     if len(names) != len(form.entities):

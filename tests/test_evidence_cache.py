@@ -181,7 +181,9 @@ def _forge_grounding(data: dict) -> None:
     _forge_grounding,
     # every goal impossible: torch's nan error had stopped training
     lambda data: data.update(values=["-Infinity"] * len(data["values"])),
-], ids=["float overflow", "foreign variable", "all -inf"])
+    # a goal of an object the layout lacks
+    lambda data: data["goals"][0][0].__setitem__(1, ["agent0", "block99"]),
+], ids=["float overflow", "foreign variable", "all -inf", "absent object"])
 def test_an_entry_whole_but_unusable_is_a_damaged_entry(williams_commands, williams_library, tmp_path, caplog,
                                                          forge):
     """Its checksum matching (a writer's bug, a hand edit), the entry is still checked and recomputed."""

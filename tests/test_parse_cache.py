@@ -183,12 +183,17 @@ def _thousands_of_noun_phrases(readings):
     readings[0][0][1] = [[f"x{i}", *entity[1:6], "to", None, None] for i in range(3000)]
 
 
+def _thousands_of_clauses(readings):
+    readings[0][0][0] = readings[0][0][0] * 3000
+
+
 def _a_vocabulary_token_as_preposition(readings):
     readings[0][0][1][0][6] = "<dobj>"
 
 
 @pytest.mark.parametrize("spoil", [_probabilities, _huge, _foreign_word, _nine, _no_words, _clause_out_of_range,
-                                   _unknown_variable, _thousands_of_noun_phrases, _a_vocabulary_token_as_preposition])
+                                   _unknown_variable, _thousands_of_noun_phrases, _thousands_of_clauses,
+                                   _a_vocabulary_token_as_preposition])
 def test_an_entry_made_to_match_its_checksum_is_still_checked(tmp_path, spoil, caplog):
     """The checksum catches damage, not an entry written on purpose: what the encoding relies on is checked
     too, and such an entry is reparsed, not read (nor a traceback)."""
