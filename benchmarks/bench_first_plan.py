@@ -3,8 +3,8 @@
 Under "auto" a space of ``COMPILE_MIN_STATES`` or more is swept by the compiled kernel; in a process
 that plans once (``sweeps.plan_once()``, what ``groundlang follow`` calls) only one of
 ``COMPILE_AT_ONCE_STATES`` or more, where one solve pays for the compilation. Prints, side by side in
-one run, for the ~10^5-state world of ``bench_statespace.benchmark_layouts()`` and a goal across the
-layout, the wall time of a fresh Python process (imports excluded: timed inside it) that solves the
+one run, for the ~10^5-state world of ``bench_statespace.benchmark_layouts()`` and the default
+library's first grounded goal that moves a toy, the wall time of a fresh Python process (imports excluded: timed inside it) that solves the
 task once and one that solves it ``--plans`` times, with the backend "eager" (never compile),
 "compiled" (always) and "auto" after ``plan_once()``, the last against the better of the other two.
 
@@ -29,14 +29,19 @@ from bench_statespace import benchmark_layouts
 from groundlang.inference import planning, sweeps
 if {once}:
     sweeps.plan_once()
-from groundlang.logic.atoms import Atom
+from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.features import goal_mask
 from groundlang.model.pf_tables import pf_tables
 from groundlang.model.statespace import enumerate_states
+from groundlang.model.tasks import candidate_tasks
 
 name, state = benchmark_layouts()[1]
 space = enumerate_states(state)
-goal = goal_mask(space, [Atom("toyInRoom", ("block0", "room1"))], pf_tables(space.layout))
+# the default library's first grounded goal that moves a toy (the planner pushes it through a door)
+toys = set(space.layout.toy_names)
+atoms = next(g.goal for g, _ in candidate_tasks(state, TaskLibrary.load())
+             if toys & set(arg for atom in g.goal for arg in atom.args))
+goal = goal_mask(space, list(atoms), pf_tables(space.layout))
 start = time.perf_counter()
 for _ in range({plans}):
     planning.solve_task(space.next_state, goal, backend={backend!r})

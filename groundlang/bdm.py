@@ -31,7 +31,8 @@ from pathlib import Path
 from groundlang.state_line import MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, coordinate, shown, text_lines
 from groundlang.grammar.parser import command_fault
 from groundlang.logic.storage import FileRefused, as_path, read_limited
-from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
+from groundlang.model.world import (NAME_PREFIXES, Agent, Door, Layout, Palette, Room, State, Toy, WorldError,
+                                   get_palette)
 
 __all__ = ["Pair", "Command", "DEFAULT_PALETTE", "parse_bdm_state", "read_bdm", "is_bdm", "bdm_files",
            "format_bdm_state"]
@@ -51,8 +52,8 @@ _NEEDED = {
     "door": ("top", "left", "bottom", "right"),
     "block": ("x", "y", "shape", "colour"),
 }
-# The world's class of each .bdm class a palette may give attributes (attribute/2 of its file).
-_WORLD_CLASS = {"room": "room", "door": "door", "block": "toy"}
+# The world's class of each .bdm class (a block is a toy), as objects' names say it.
+_WORLD_CLASS = dict(NAME_PREFIXES)
 
 
 @dataclass(frozen=True)

@@ -92,8 +92,8 @@ def _check_interchangeable(layout, toys: list[int]) -> None:
     """ValueError where toys the observation shows alike (in colour and shape) differ in an attribute the
     palette adds, which it does not show: matched in any order, one could be taken for the other."""
     names = [layout.toy_names[t] for t in toys]
-    differ = sorted({a for n in names for a, v in layout.added_values(n).items()
-                     if v != layout.added_values(names[0]).get(a)})
+    first = layout.added_values(names[0])
+    differ = sorted({a for n in names for a, v in layout.added_values(n).items() if v != first.get(a)})
     if differ:
         raise ValueError(f"the observation shows {' and '.join(names)} alike in colour and shape, and they differ in "
                          f"{', '.join(differ)}, which it does not show; pass the env's state (env.unwrapped.state) "

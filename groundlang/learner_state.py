@@ -13,7 +13,7 @@ from groundlang.inference.em import EM_ACCELERATIONS
 from groundlang.inference.end_habits import EndHabits
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.model.geometry import ASP_CONSTANT
+from groundlang.logic.terms import ASP_CONSTANT
 from groundlang.model.palette import added_attribute_problem
 from groundlang.model.language_models import get_language_model
 from groundlang.model.vocabulary import Vocabulary
@@ -145,14 +145,21 @@ def _checked_palettes(palettes) -> list[dict]:
                            for v in (p.get("colours"), p.get("shapes")))):
             raise ValueError("each palette must be {name: str, colours: [str], shapes: [str]}")
         for field in ("colours", "shapes"):  # a state is read with them (follow): each a value, once
-            values = p[field]
-            odd = next((v for v in values if not ASP_CONSTANT.match(v)), None)
-            if not values or odd is not None or len(set(values)) != len(values):
-                raise ValueError(f"palette {p['name']!r}: {field} must be distinct lowerCamelCase names, at least "
-                                 f"one" + (f" ({odd!r} is not one)" if odd is not None else ""))
+            _check_names(p["name"], field, p[field])
         if "added" in p or "added_values" in p:
             _check_added(p)
     return palettes
+
+
+def _check_names(palette: str, field: str, values) -> None:
+    """ValueError unless ``values`` are distinct lowerCamelCase names, at least one (a palette's values of one
+    attribute, as a state's facts write them)."""
+    if not isinstance(values, list) or not all(isinstance(v, str) for v in values):
+        raise ValueError(f"palette {palette!r}: {field} must be a list of names")
+    odd = next((v for v in values if not ASP_CONSTANT.match(v)), None)
+    if not values or odd is not None or len(set(values)) != len(values):
+        raise ValueError(f"palette {palette!r}: {field} must be distinct lowerCamelCase names, at least "
+                         f"one" + (f" ({odd!r} is not one)" if odd is not None else ""))
 
 
 def _check_added(p: dict) -> None:
@@ -170,10 +177,7 @@ def _check_added(p: dict) -> None:
             raise ValueError(f"palette {p['name']!r}: attribute({cls}, {attribute}): {problem}")
     seen = set(p["colours"]) | set(p["shapes"])
     for attribute, vs in values.items():
-        if (not isinstance(vs, list) or not vs or not all(isinstance(v, str) and ASP_CONSTANT.match(v) for v in vs)
-                or len(set(vs)) != len(vs)):
-            raise ValueError(f"palette {p['name']!r}: {attribute} values must be distinct lowerCamelCase names, "
-                             "at least one")
+        _check_names(p["name"], f"{attribute} values", vs)
         if twice := sorted(seen & set(vs)):  # as a palette file may not: the PFs of the two would be one
             raise ValueError(f"palette {p['name']!r}: {twice[0]} is a value of {attribute} and of another attribute")
         seen |= set(vs)

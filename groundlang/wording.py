@@ -48,14 +48,19 @@ def _value(term: str) -> str | None:
     return " ".join(_camel_words(m.group(1).strip('"'))) if m else None
 
 
+def _describing(name: str, library: TaskLibrary) -> str | None:
+    """The library's words describing an object a PF of one argument holds of (a phrase/2 without places)."""
+    said = library.phrases.get(name)
+    return said if said is not None and not _PLACE.search(said) else None
+
+
 def _plain_phrase(obj: str, state: State, library: TaskLibrary) -> str:
     cls = object_class(obj)
     described = object_descriptions(state, library).get(obj, {})
     heads = set(kind_pfs(described))  # their values give the head noun ("the star")
     modifiers, head = [], None
     for name, term in attribute_pfs(state, library).get(obj, ()):
-        said = library.phrases.get(name)
-        value = said if said is not None and "{" not in said else _value(term)
+        value = _describing(name, library) or _value(term)
         if value is None:
             continue
         if name in heads and head is None:
@@ -69,7 +74,7 @@ def _spatial(obj: str, state: State, library: TaskLibrary) -> str:
     cls = object_class(obj)
     sides = []
     for name in viewpoint_pfs(object_descriptions(state, library).get(obj, {}), library):
-        if (said := library.phrases.get(name)) is not None and "{" not in said:
+        if said := _describing(name, library):
             sides.append(said)
             continue
         words = _camel_words(name)
@@ -97,7 +102,7 @@ def object_phrase(obj: str, state: State, library: TaskLibrary) -> str:
 
 def _atom_phrase(atom: Atom, state: State, library: TaskLibrary) -> str:
     said = library.phrases.get(atom.predicate)
-    if said is not None and "{1}" in said:  # the library says how the atom reads (phrase/2)
+    if said is not None and _PLACE.search(said):  # the library says how the atom reads (phrase/2)
         return _PLACE.sub(lambda m: object_phrase(atom.args[int(m.group(1)) - 1], state, library), said)
     words = _camel_words(atom.predicate)
     out, used = [], 0

@@ -152,10 +152,6 @@ def compiled(fn):
     return _COMPILED[fn]
 
 
-def _eager(fn, *args, **kwargs):
-    return fn(*args, **kwargs)
-
-
 def run_compiled(fn, *args, **kwargs):
     """Call the compiled ``fn`` if it works, else ``fn`` itself; a compiler failure is logged once."""
     kernel = compiled(fn)
@@ -191,7 +187,8 @@ def solve_values(values, columns, reward, stop, discount, temperature, terminal,
     Raises PlanningError when the values diverge.
     """
     arrival, action_reward = _split_reward(reward)
-    step = run_compiled if use_compiled(columns.shape[1], backend) else _eager
+    fast = use_compiled(columns.shape[1], backend)
+    step = (lambda *a, **k: run_compiled(carry_sweep, *a, **k)) if fast else carry_sweep
     carry = (arrival + discount * values).expand(columns.shape[1]).contiguous()
     spare = torch.empty_like(carry)
     sweeps, residual = 0, float("inf")
@@ -199,7 +196,7 @@ def solve_values(values, columns, reward, stop, discount, temperature, terminal,
         while sweeps < max_sweeps:
             sweeps += 1
             check = sweeps % CHECK_EVERY == 0 or sweeps == max_sweeps
-            res = step(carry_sweep, spare, carry, columns, arrival, action_reward, stop, discount, temperature, terminal, check)
+            res = step(spare, carry, columns, arrival, action_reward, stop, discount, temperature, terminal, check)
             carry, spare = spare, carry
             if not check:
                 continue

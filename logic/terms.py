@@ -10,7 +10,9 @@ import clingo
 from .atoms import attribute_pf
 from .program import AspError
 
-__all__ = ["pf_name", "tuple_args", "symbol_text", "natural_key"]
+__all__ = ["ASP_CONSTANT", "pf_name", "tuple_args", "symbol_text", "natural_key"]
+
+ASP_CONSTANT = re.compile(r"[a-z][A-Za-z0-9_]*\Z")  # a name as facts write it: an attribute, or its value
 
 
 def pf_name(term: clingo.Symbol) -> str:

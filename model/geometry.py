@@ -8,19 +8,18 @@ values are computed from with numpy/torch (no clingo call per state).
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
 from groundlang.logic.program import DEFAULT_TIME_LIMIT, AspError, Program, package_source
+from groundlang.logic.terms import ASP_CONSTANT
 
 from .world import Layout, State
 
-__all__ = ["ASP_CONSTANT", "CellTables", "cell_tables", "layout_facts", "state_facts", "domain_program"]
+__all__ = ["CellTables", "cell_tables", "layout_facts", "state_facts", "domain_program"]
 
-ASP_CONSTANT = re.compile(r"[a-z][A-Za-z0-9_]*\Z")  # an attribute value as a state's facts write it
 
 
 def _constant(value: str, what: str) -> str:

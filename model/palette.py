@@ -7,12 +7,12 @@ re-exports: a palette index out of range is an invalid world too.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 from groundlang.logic.palette_files import read_palette
 from groundlang.logic.program import AspError, Program, package_source
+from groundlang.logic.terms import ASP_CONSTANT
 
 __all__ = ["ATTRIBUTED_CLASSES", "Palette", "WorldError", "added_attribute_problem", "check_attribute_clash",
            "get_palette"]
@@ -128,8 +128,6 @@ def get_palette(name: str | Palette) -> Palette:
 ATTRIBUTED_CLASSES = ("room", "door", "toy")
 # The world's own attributes of its objects (where they are), which a state line writes beside a palette's.
 WORLD_ATTRIBUTES = ("x", "y", "left", "top", "right", "bottom")
-# An attribute's name as a state's facts write it (and a .bdm line, read in lower case).
-_NAME = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
 
 
 def added_attribute_problem(cls: str, attribute: str) -> str | None:
@@ -137,7 +135,7 @@ def added_attribute_problem(cls: str, attribute: str) -> str | None:
     task library's own predicates is checked where the two meet (:func:`check_attribute_clash`)."""
     if cls not in ATTRIBUTED_CLASSES:
         return f"{cls} is not a class whose objects a palette describes ({', '.join(ATTRIBUTED_CLASSES)})"
-    if not _NAME.match(attribute):
+    if not ASP_CONSTANT.match(attribute):  # a state's facts write it as a predicate
         return "an attribute is a lowerCamelCase name"
     if attribute in ("colour", "shape"):
         return ("colour and shape are the corpus formats' own fields (a room's colour, a toy's colour and shape); "

@@ -259,7 +259,6 @@ class Layout:
             if problem:
                 raise WorldError(f"{where} {problem}")
 
-
     def _validate_added_attributes(self) -> None:
         """Every object of a class the palette gives an attribute has one of its values, and no other
         object has one."""
