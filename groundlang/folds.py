@@ -14,7 +14,7 @@ from groundlang.learner import Learner
 from groundlang.logic.atoms import format_goal
 from groundlang.wording import goal_phrase
 
-__all__ = ["run_folds"]
+__all__ = ["run_folds", "prepare_worker", "usable_workers"]
 
 _CONTEXT: dict = {}
 
@@ -73,19 +73,25 @@ def _fold(index: int) -> dict:
 
 
 def _init_worker(context: dict) -> None:
+    prepare_worker(context.get("parent"))
+    _CONTEXT.clear()
+    _CONTEXT.update(context)
+
+
+def prepare_worker(parent: int | None) -> None:
+    """What a forked worker of a pool does first: one torch thread (the pool's processes share the cores),
+    stopped silently by the pool's SIGTERM, deaf to Ctrl-C (the parent reports an interruption once) and
+    ended when ``parent`` dies."""
     import signal
 
     import torch
 
     # Forked workers inherit the CLI's SIGTERM-as-Ctrl-C handler; the pool
-    # stops them with SIGTERM when it closes, which must stay silent. Ctrl-C
-    # goes to the parent, which reports the interruption once.
+    # stops them with SIGTERM when it closes, which must stay silent.
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _die_with_parent(signal.SIGTERM, context.get("parent"))
+    _die_with_parent(signal.SIGTERM, parent)
     torch.set_num_threads(1)
-    _CONTEXT.clear()
-    _CONTEXT.update(context)
 
 
 def _die_with_parent(sig: int, parent: int | None = None) -> None:

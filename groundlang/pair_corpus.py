@@ -38,7 +38,7 @@ from groundlang.model.world import State, replay
 from groundlang.pair_tasks import REACHABILITY_MAX_STATES, shortest_actions
 
 __all__ = ["PairInstance", "PairedCommand", "PairCorpus", "LAYOUTS", "read_pair_corpus", "training_instances", "held_out_by_text",
-           "DEMONSTRATIONS"]
+           "text_position", "fold_of_text", "DEMONSTRATIONS"]
 
 DEMONSTRATIONS = ("end-state", "shortest-plan")
 # How a command's pairs in several layouts are used: as one instance of one lifted meaning, or each as
@@ -123,15 +123,30 @@ def held_out_by_text(commands: list[Command], fraction: float,
         raise ValueError(f"held-out fraction {fraction}: a tuning split holds out the next {fraction} of the "
                          "texts after the development split's, so it must be below 0.5")
 
-    def position(text: str) -> float:
-        digest = hashlib.sha256(text.strip().lower().encode("utf-8")).digest()
-        return int.from_bytes(digest[:8], "big") / 2**64
-
     low, high = (fraction, 2 * fraction) if tuning else (0.0, fraction)
-    where = [position(c.text) for c in commands]
+    where = [text_position(c.text) for c in commands]
     train = [c for c, x in zip(commands, where) if x >= high]
     test = [c for c, x in zip(commands, where) if low <= x < high]
     return train, test
+
+
+def text_position(text: str) -> float:
+    """Where a command's text falls in [0, 1): the first 8 bytes of the SHA-256 of the lower-cased,
+    stripped text. Every split by text cuts this range, so each copy of a text lands on one side."""
+    digest = hashlib.sha256(text.strip().lower().encode("utf-8")).digest()
+    return int.from_bytes(digest[:8], "big") / 2**64
+
+
+def fold_of_text(text: str, folds: int) -> int:
+    """The fold (0 to ``folds - 1``) that holds out ``text`` in a ``folds``-fold split by text: fold ``k``
+    holds out the texts whose position falls in ``[k / folds, (k + 1) / folds)``, so with five folds fold 0
+    is ``held_out_by_text(commands, 0.2)``'s held-out side and fold 1 the tuning split's."""
+    if folds < 2:
+        raise ValueError(f"{folds} folds: a split by text needs at least 2")
+    x = text_position(text)
+    # Compared with the same quotients held_out_by_text's bounds are (0.2, 2 * 0.2 == 2 / 5), not floor(x * k),
+    # whose rounding could put a text on the boundary into another fold than the held-out split does.
+    return next(k for k in range(folds) if x < (k + 1) / folds)
 
 
 @dataclass

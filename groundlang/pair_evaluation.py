@@ -91,17 +91,17 @@ class PairEvaluation:
         return data
 
     def summary(self) -> str:
-        def share(k: int, n: int) -> str:
-            if not n:
-                return "- (none)"
-            lo, hi = wilson_interval(k, n)
-            return f"{k / n:.2%} ({k}/{n}; 95% interval {lo:.1%}-{hi:.1%})"
-
         skipped = ", ".join(f"{n} {why}" for why, n in sorted(self.train_skipped.items())) or "none"
-        lines = [
+        return "\n".join([
             f"trained on {self.train_commands} commands, {self.train_pairs} pairs ({self.demonstrations}, "
-            f"layouts {self.layouts}); "
-            f"pairs skipped: {skipped}",
+            f"layouts {self.layouts}); pairs skipped: {skipped}",
+            *self.figure_lines(),
+            f"wall time: training {self.seconds_training:.1f} s, following {self.seconds_following:.1f} s"])
+
+    def figure_lines(self) -> list[str]:
+        """What was scored: accuracy per execution and per command, by task, failures by kind, confidence
+        and the published figure (no line on training or time: a pooled cross-validation has its own)."""
+        lines = [
             f"test: {self.test_commands} commands; {self.no_task_commands} whose pairs show no task (not scored)",
             f"per execution: {share(self.executions_correct, self.executions_n)}",
             f"per command (every pair right): {share(self.commands_correct, self.scored_commands)}",
@@ -131,8 +131,15 @@ class PairEvaluation:
                                             "confident layout)"))
         lines.append(f"published (Williams et al. 2018, Table II): F1 {PUBLISHED_F1:.2f} of validated parses, "
                      f"three pairs per command")
-        lines.append(f"wall time: training {self.seconds_training:.1f} s, following {self.seconds_following:.1f} s")
-        return "\n".join(lines)
+        return lines
+
+
+def share(k: int, n: int) -> str:
+    """``k`` of ``n`` as a percentage with its count and 95% (Wilson) interval."""
+    if not n:
+        return "- (none)"
+    lo, hi = wilson_interval(k, n)
+    return f"{k / n:.2%} ({k}/{n}; 95% interval {lo:.1%}-{hi:.1%})"
 
 
 def _task_kind(task) -> str:

@@ -178,7 +178,7 @@ def test_evaluate_on_pairs_refuses_what_it_would_ignore(args, message):
 
 def test_evaluate_on_pairs_needs_a_test_file_or_a_split():
     run = _cli("evaluate", "--corpus", str(FIXTURE / "small.bdm"))
-    assert run.returncode != 0 and "--test TEST.bdm and --holdout F" in run.stderr and "Traceback" not in run.stderr
+    assert run.returncode != 0 and "--test TEST.bdm, --holdout F and --folds K" in run.stderr and "Traceback" not in run.stderr
 
 def test_shortest_plan_demonstrations_without_separate_layouts_are_refused_in_the_options_names():
     run = _cli("evaluate", "--corpus", str(FIXTURE / "small.bdm"), "--holdout", "0.5",

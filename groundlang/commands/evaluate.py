@@ -27,6 +27,10 @@ def register(subparsers) -> None:
     p.add_argument("--holdout", type=open_fraction, metavar="F",
                    help="instead of --test: hold out the .bdm corpus's commands whose text hashes into a fraction "
                         "F (a development split disjoint by text, the same on every machine)")
+    p.add_argument("--folds", type=positive_int, metavar="K",
+                   help="instead of --test or --holdout: K folds by text (fold k holds out the texts hashing into "
+                        "its K-th of the range, so with 5 fold 0 is --holdout 0.2's split), each trained on the "
+                        "others; prints each fold's figures and the pooled ones (--workers folds at once)")
     p.add_argument("--tuning", action="store_true",
                    help="with --holdout F: hold out the next F of the texts and train on the rest beyond it, "
                         "never reading the development split (a split to choose mechanisms on)")
@@ -128,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 # Options of one corpus format only (name -> default): refused, not ignored, with the other.
-_PAIR_OPTIONS = {"holdout": None, "tuning": False, "layouts": "shared", "demonstrations": "end-state"}
+_PAIR_OPTIONS = {"holdout": None, "folds": None, "tuning": False, "layouts": "shared", "demonstrations": "end-state"}
 _TEXT_OPTIONS = ("labels", "novel_envs", "protocol", "limit", "cold_folds", "ray")
 
 
@@ -143,13 +147,12 @@ def run_pairs(args: argparse.Namespace) -> int:
     from groundlang.bdm import DEFAULT_PALETTE
     from groundlang.bdm_check import default_library
     from groundlang.model.domain_words import extra_words
-    from groundlang.logic.storage import write_atomically
     from groundlang.pair_corpus import held_out_by_text, read_pair_corpus
     from groundlang.pair_evaluation import evaluate_pairs
 
-    if (args.test is None) == (args.holdout is None):
-        raise ValueError(f"{args.corpus}: a corpus of (start, end) pairs is evaluated against a test file or a "
-                         "held-out split: pass one of --test TEST.bdm and --holdout F")
+    if sum(x is not None for x in (args.test, args.holdout, args.folds)) != 1:
+        raise ValueError(f"{args.corpus}: a corpus of (start, end) pairs is evaluated against a test file, a "
+                         "held-out split or folds: pass one of --test TEST.bdm, --holdout F and --folds K")
     given = [f"--{name.replace('_', '-')}" for name in _TEXT_OPTIONS if getattr(args, name)]
     if given:
         raise ValueError(f"{', '.join(given)}: for a *.txt corpus with labels; a .bdm corpus is scored by what its "
@@ -163,7 +166,9 @@ def run_pairs(args: argparse.Namespace) -> int:
     library = default_library(args.library)
     train = read_pair_corpus(args.corpus, palette).commands
     if args.tuning and args.holdout is None:
-        raise ValueError("--tuning splits the training side of --holdout F; pass --holdout too (not --test)")
+        raise ValueError("--tuning splits the training side of --holdout F; pass --holdout too (not --test or --folds)")
+    if args.folds is not None:
+        return _run_folds(args, train, library, _learner_options(args, words))
     if args.test:
         test = read_pair_corpus(args.test, palette).commands
     else:
@@ -176,18 +181,40 @@ def run_pairs(args: argparse.Namespace) -> int:
             where = "the development or the tuning split" if args.tuning else split
             raise ValueError(f"{args.corpus}: --holdout {args.holdout!r} leaves no command to train on (every text "
                              f"falls in {where}): hold out a smaller fraction")
+    result = evaluate_pairs(train, test, library, demonstrations=args.demonstrations,
+                            layouts=args.layouts,
+                            skip_inconsistent=args.skip_inconsistent, learner_options=_learner_options(args, words),
+                            progress=args.progress, min_confidence=args.min_confidence)
+    _report(args, result)
+    return 0
+
+
+def _learner_options(args: argparse.Namespace, words) -> dict:
     from groundlang.model.language_models import get_language_model
 
     options = {"language_model": get_language_model(args.language_model, **language_model_settings(args.lm_settings)),
                "em_acceleration": args.em_acceleration}
     if words:
         options["lexicon"] = words
-    result = evaluate_pairs(train, test, library, demonstrations=args.demonstrations,
-                            layouts=args.layouts,
-                            skip_inconsistent=args.skip_inconsistent, learner_options=options,
-                            progress=args.progress, min_confidence=args.min_confidence)
+    return options
+
+
+def _run_folds(args: argparse.Namespace, commands: list, library, options: dict) -> int:
+    """``--folds K``: cross-validation by text (groundlang.pair_folds), the folds in ``--workers`` processes."""
+    from groundlang.pair_folds import cross_validate_pairs
+
+    result = cross_validate_pairs(commands, args.folds, library, workers=args.workers,
+                                  min_confidence=args.min_confidence, demonstrations=args.demonstrations,
+                                  layouts=args.layouts, skip_inconsistent=args.skip_inconsistent,
+                                  learner_options=options)
+    _report(args, result)
+    return 0
+
+
+def _report(args: argparse.Namespace, result) -> None:
+    from groundlang.logic.storage import write_atomically
+
     print(result.summary())
     if args.json:
         write_atomically(Path(args.json), json_bytes(result.to_json()))
         print(f"result written to {args.json}")
-    return 0

@@ -1,0 +1,129 @@
+"""Cross-validation by text on a corpus of (start, end) pairs: ``evaluate --folds K`` (groundlang.pair_folds)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from groundlang.bdm import read_bdm
+from groundlang.confidence import calibration_report
+from groundlang.pair_corpus import fold_of_text, held_out_by_text
+from groundlang.pair_evaluation import PairEvaluation
+from groundlang.pair_folds import fold_indices, pool
+
+SMALL = Path(__file__).parent / "fixtures" / "williams2018" / "small.bdm"
+
+
+def _many(n: int = 300):
+    one = read_bdm(SMALL)[0]
+    return [replace(one, text=f"go to room number {k}") for k in range(n)]
+
+
+def test_five_folds_hold_out_the_development_split_then_the_tuning_split():
+    many = _many()
+    texts = lambda commands: [c.text for c in commands]
+    held = fold_indices(many, 5)
+    assert sorted(i for fold in held for i in fold) == list(range(len(many)))  # every command held out once
+    assert [many[i].text for i in held[0]] == texts(held_out_by_text(many, 0.2)[1])
+    assert [many[i].text for i in held[1]] == texts(held_out_by_text(many, 0.2, tuning=True)[1])
+    # a text's copies fall in one fold, wherever they stand in the corpus
+    doubled = many + many[::-1]
+    assert all(fold_of_text(doubled[i].text, 5) == k for k, fold in enumerate(fold_indices(doubled, 5)) for i in fold)
+    assert all(20 < len(fold) < 100 for fold in held)  # a fifth of 300 texts each, roughly
+    with pytest.raises(ValueError, match="at least 2"):
+        fold_of_text("go", 1)
+
+
+def _evaluation(rows: list[dict], **counts) -> PairEvaluation:
+    fields = dict(train_commands=4, train_pairs=12, train_skipped={"unreachable": 1}, test_commands=2,
+                  scored_commands=2, no_task_commands=0, executions_n=4, executions_correct=3, commands_correct=1,
+                  unseen_n=4, unseen_correct=3, skipped_executions=0, per_task={"agentInRoom": (3, 4)},
+                  failures={"another object": {"agentInRoom": 1}}, seconds_training=1.0, seconds_following=2.0,
+                  demonstrations="end-state", layouts="shared")
+    return PairEvaluation(**(fields | counts), executions=rows)
+
+
+def test_pooling_sums_the_folds_and_reads_confidence_again_from_every_row():
+    row = lambda index, pair, confidence, correct: {"index": index, "pair": pair, "confidence": confidence,
+                                                    "correct": correct}
+    # corpus commands 0 and 3 in the first fold, 1 and 2 in the second; command 2's second pair was not scored
+    first = _evaluation([row(3, 0, 0.9, True), row(3, 1, 0.4, True), row(0, 0, 0.8, False), row(0, 1, 0.7, True)])
+    second = _evaluation([row(1, 0, 0.6, True), row(1, 1, 0.95, True), row(2, 0, 0.2, False),
+                          {"index": 2, "pair": 1, "goal": None, "not_scored": "no task"}],
+                         per_task={"agentInRoom": (2, 2), "toyInRoom": (0, 1)}, executions_n=3, executions_correct=2,
+                         failures={"another object": {"toyInRoom": 1}, "more than the goal": {"toyInRoom": 2}},
+                         train_skipped={"unreachable": 2, "too large": 1}, no_task_executions=1)
+    pooled = pool([first, second], min_confidence=0.7)
+    assert (pooled.executions_n, pooled.executions_correct, pooled.commands_correct) == (7, 5, 2)
+    assert pooled.per_task == {"agentInRoom": (5, 6), "toyInRoom": (0, 1)}
+    assert pooled.failures == {"another object": {"agentInRoom": 1, "toyInRoom": 1}, "more than the goal": {"toyInRoom": 2}}
+    assert pooled.train_skipped == {"unreachable": 3, "too large": 1} and pooled.no_task_executions == 1
+    assert [(r["index"], r["pair"]) for r in pooled.executions] == [(0, 0), (0, 1), (1, 0), (1, 1), (2, 0), (2, 1), (3, 0), (3, 1)]
+    scored = [r for r in pooled.executions if "correct" in r]
+    assert pooled.calibration == calibration_report([r["confidence"] for r in scored], [r["correct"] for r in scored],
+                                                    threshold=0.7)
+    # per command: the least confident layout, right only when all are (0: 0.7 wrong; 1: 0.6 right; 2: 0.2
+    # wrong; 3: 0.4 right)
+    assert pooled.command_calibration == calibration_report([0.7, 0.6, 0.2, 0.4], [False, True, False, True],
+                                                            threshold=0.7)
+    assert pooled.seconds_training == 2.0 and pooled.seconds_following == 4.0
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "groundlang.cli", *args], capture_output=True, text=True, timeout=600)
+
+
+def test_evaluate_with_folds_pools_rows_numbered_by_the_corpus(tmp_path):
+    out = tmp_path / "folds.json"
+    run = _cli("evaluate", "--corpus", str(SMALL), "--folds", "2", "--json", str(out))
+    assert run.returncode == 0, run.stderr
+    assert "2 folds by text" in run.stdout and "pooled over the folds:" in run.stdout
+    assert "per execution: 100.00% (6/6" in run.stdout
+    data = json.loads(out.read_text())
+    commands = read_bdm(SMALL)
+    rows = data["executions"]
+    # each command held out by the fold its text falls in, its rows numbered as the file counts commands
+    assert [(r["index"], r["pair"], r["fold"]) for r in rows] == [
+        (i, k, fold_of_text(commands[i].text, 2)) for i in range(2) for k in range(3)]
+    assert [r["command"] for r in rows] == [commands[i].text for i in range(2) for _ in range(3)]
+    assert [f["held_out_commands"] for f in data["folds"]] == [1, 1]
+    assert [f["train_commands"] for f in data["folds"]] == [1, 1]
+    assert data["executions_correct"] == sum(f["executions_correct"] for f in data["folds"]) == 6
+
+
+@pytest.mark.slow
+def test_folds_in_two_processes_give_the_rows_of_one(tmp_path):
+    rows = {}
+    for workers in ("1", "2"):
+        out = tmp_path / f"folds{workers}.json"
+        run = _cli("evaluate", "--corpus", str(SMALL), "--folds", "2", "--workers", workers, "--json", str(out))
+        assert run.returncode == 0, run.stderr
+        rows[workers] = [(r["index"], r["pair"], r["goal"], r["final_state"]) for r in json.loads(out.read_text())["executions"]]
+    assert rows["1"] == rows["2"] and len(rows["1"]) == 6
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--folds", "1"], "--folds 1: expected 2 to 20 folds"),
+    (["--folds", "21"], "expected 2 to 20 folds"),
+    (["--folds", "0"], "--folds"),
+    (["--folds", "2", "--holdout", "0.2"], "pass one of --test TEST.bdm, --holdout F and --folds K"),
+    (["--folds", "2", "--test", str(SMALL)], "pass one of --test TEST.bdm, --holdout F and --folds K"),
+    (["--folds", "2", "--tuning"], "--tuning splits the training side of --holdout F"),
+    # the fixture's two texts hash to about 0.31 and 0.59: of 5 folds, fold 0 holds out neither
+    (["--folds", "5"], "fold 0 of 5 holds out no command (no text falls in it): use fewer folds"),
+])
+def test_evaluate_with_folds_refuses_in_one_line(args, message):
+    run = _cli("evaluate", "--corpus", str(SMALL), *args)
+    assert run.returncode == 2 and message in run.stderr, run.stderr
+    assert "Traceback" not in run.stderr and len(run.stderr.strip().splitlines()) == 1
+
+
+def test_folds_are_refused_for_a_text_corpus():
+    run = _cli("evaluate", "--corpus", "groundlang/examples", "--palette", "sokoban", "--labels", "x.csv",
+               "--folds", "5")
+    assert run.returncode == 2 and "--folds: for a .bdm corpus" in run.stderr and "Traceback" not in run.stderr
