@@ -35,7 +35,7 @@ from groundlang.model.world import (NAME_PREFIXES, Agent, Door, Layout, Palette,
                                    get_palette)
 
 __all__ = ["Pair", "Command", "DEFAULT_PALETTE", "parse_bdm_state", "read_bdm", "is_bdm", "bdm_files",
-           "format_bdm_state"]
+           "format_bdm_state", "object_names"]
 
 DEFAULT_PALETTE = "williams2018"
 # A command's text is one line; a state line of the published corpus is under 1 kB.
@@ -116,6 +116,31 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
                     where: str = "state") -> tuple[State, tuple[str, ...]]:
     """One BURLAP state string -> ``(State, the file's toy names in block order)``; raises CorpusError."""
     palette = get_palette(palette)
+    objects = _read_objects(line, where)
+    ordered = lambda cls: _ordered(objects, cls)  # noqa: E731 (the layout's order of a class)
+    try:
+        rooms = tuple(Room(_value(a["colour"], palette.colours, where, name, "colour"), *(
+            _int(a[k], where, k, name) for k in ("left", "top", "right", "bottom"))) for name, a in ordered("room"))
+        doors = tuple(Door(*(_int(a[k], where, k, name) for k in ("left", "top", "right", "bottom")))
+                      for name, a in ordered("door"))
+        blocks = ordered("block")
+        toys = tuple(Toy(_value(a["colour"], palette.colours, where, name, "colour"),
+                         _value(a["shape"], palette.shapes, where, name, "shape"),
+                         _int(a["x"], where, "x", name), _int(a["y"], where, "y", name)) for name, a in blocks)
+        (agent_name, a), = objects["agent"].items()
+        agent = Agent(_int(a["x"], where, "x", agent_name), _int(a["y"], where, "y", agent_name))
+        added = tuple(triple for cls, named in (("room", ordered("room")), ("door", ordered("door")),
+                                                ("block", blocks))
+                      for triple in _added_values(cls, named, palette, where))
+        state = State(Layout(rooms, doors, tuple((t.colour, t.shape) for t in toys), palette, added), agent, toys)
+        state.validate()
+    except WorldError as exc:
+        raise CorpusError(f"{where}: {exc}") from None
+    return state, tuple(name for name, _ in blocks)
+
+
+def _read_objects(line: str, where: str) -> dict[str, dict[str, dict[str, str]]]:
+    """A BURLAP state line's objects: class -> name -> attribute (lower case) -> value; raises CorpusError."""
     text = line.strip()
     if not (text.startswith("{") and text.endswith("}")):
         raise CorpusError(f"{where}: a state is {{object , object , ... , }}; this line does not start with {{ "
@@ -147,30 +172,23 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
         objects[cls][name] = attributes
     if len(objects["agent"]) != 1:
         raise CorpusError(f"{where}: found {len(objects['agent'])} agents; expected exactly one")
+    return objects
 
-    def ordered(cls: str) -> list[tuple[str, dict[str, str]]]:
-        # room10 after room9: by the number a name ends with, then by name.
-        return sorted(objects[cls].items(), key=lambda kv: (*_number_order(kv[0]), kv[0]))
 
-    try:
-        rooms = tuple(Room(_value(a["colour"], palette.colours, where, name, "colour"), *(
-            _int(a[k], where, k, name) for k in ("left", "top", "right", "bottom"))) for name, a in ordered("room"))
-        doors = tuple(Door(*(_int(a[k], where, k, name) for k in ("left", "top", "right", "bottom")))
-                      for name, a in ordered("door"))
-        blocks = ordered("block")
-        toys = tuple(Toy(_value(a["colour"], palette.colours, where, name, "colour"),
-                         _value(a["shape"], palette.shapes, where, name, "shape"),
-                         _int(a["x"], where, "x", name), _int(a["y"], where, "y", name)) for name, a in blocks)
-        (agent_name, a), = objects["agent"].items()
-        agent = Agent(_int(a["x"], where, "x", agent_name), _int(a["y"], where, "y", agent_name))
-        added = tuple(triple for cls, named in (("room", ordered("room")), ("door", ordered("door")),
-                                                ("block", blocks))
-                      for triple in _added_values(cls, named, palette, where))
-        state = State(Layout(rooms, doors, tuple((t.colour, t.shape) for t in toys), palette, added), agent, toys)
-        state.validate()
-    except WorldError as exc:
-        raise CorpusError(f"{where}: {exc}") from None
-    return state, tuple(name for name, _ in blocks)
+def _ordered(objects: dict[str, dict[str, dict[str, str]]], cls: str) -> list[tuple[str, dict[str, str]]]:
+    """A class's objects in the layout's order: room10 after room9, by the number a name ends with, then by
+    name. The layout names them so (room0, room1, ...): :func:`object_names` says which file name is which."""
+    return sorted(objects[cls].items(), key=lambda kv: (*_number_order(kv[0]), kv[0]))
+
+
+def object_names(line: str, where: str = "state") -> dict[str, str]:
+    """The file's name of each object of a BURLAP state line, by its name in the layout ``parse_bdm_state``
+    reads (``{"block2": "block3", ...}``: objects are renamed in order, ``block0, block1, block3`` becoming
+    ``block0, block1, block2``); raises CorpusError where ``parse_bdm_state`` would."""
+    objects = _read_objects(line, where)
+    # A .bdm class is its layout name's prefix (_NEEDED's keys are NAME_PREFIXES' prefixes).
+    return {f"{prefix}{i}": name for prefix, _ in NAME_PREFIXES
+            for i, (name, _) in enumerate(_ordered(objects, prefix))}
 
 
 def _added_values(cls: str, named: list[tuple[str, dict[str, str]]], palette: Palette,
@@ -195,20 +213,24 @@ def _value(value: str, values: tuple[str, ...], where: str, name: str, attribute
     return value
 
 
-def format_bdm_state(state: State, toy_names: tuple[str, ...] | None = None) -> str:
-    """A state as a BURLAP state string (what ``parse_bdm_state`` reads back)."""
+def format_bdm_state(state: State, toy_names: tuple[str, ...] | None = None,
+                     names: dict[str, str] | None = None) -> str:
+    """A state as a BURLAP state string (what ``parse_bdm_state`` reads back). Objects are written by the
+    layout's names, but the toys by ``toy_names`` (in block order) and any object by ``names`` (the layout's
+    name -> the file's, :func:`object_names`), so that a state read from a file is written as it named them."""
     lay = state.layout
-    names = toy_names or tuple(lay.toy_names)
+    names = dict(names or {}) | dict(zip(lay.toy_names, toy_names or ()))
+    file_name = lambda own: names.get(own, own)  # noqa: E731
 
     def more(name: str) -> str:  # the attributes the palette adds, after the fixed ones
         return "".join(f"{a}: {{{v}}} " for a, v in lay.added_values(name).items())
 
-    parts = [f"agent0 (agent): [x: {{{state.agent.x}}} y: {{{state.agent.y}}} ]"]
-    parts += [f"{n} (door): [top: {{{d.top}}} left: {{{d.left}}} bottom: {{{d.bottom}}} right: {{{d.right}}} {more(n)}]"
-              for n, d in zip(lay.door_names, lay.doors)]
-    parts += [f"{n} (block): [x: {{{t.x}}} y: {{{t.y}}} shape: {{{t.shape}}} colour: {{{t.colour}}} {more(own)}]"
-              for n, own, t in zip(names, lay.toy_names, state.toys)]
-    parts += [f"{n} (room): [top: {{{r.top}}} left: {{{r.left}}} bottom: {{{r.bottom}}} right: {{{r.right}}} "
+    parts = [f"{file_name('agent0')} (agent): [x: {{{state.agent.x}}} y: {{{state.agent.y}}} ]"]
+    parts += [f"{file_name(n)} (door): [top: {{{d.top}}} left: {{{d.left}}} bottom: {{{d.bottom}}} right: {{{d.right}}} "
+              f"{more(n)}]" for n, d in zip(lay.door_names, lay.doors)]
+    parts += [f"{file_name(n)} (block): [x: {{{t.x}}} y: {{{t.y}}} shape: {{{t.shape}}} colour: {{{t.colour}}} {more(n)}]"
+              for n, t in zip(lay.toy_names, state.toys)]
+    parts += [f"{file_name(n)} (room): [top: {{{r.top}}} left: {{{r.left}}} bottom: {{{r.bottom}}} right: {{{r.right}}} "
               f"colour: {{{r.colour}}} {more(n)}]" for n, r in zip(lay.room_names, lay.rooms)]
     return "{" + " , ".join(parts) + " , }"
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
-from groundlang.bdm import format_bdm_state, parse_bdm_state
+from groundlang.bdm import format_bdm_state, object_names, parse_bdm_state
 from groundlang.grammar.parser import command_fault
 from groundlang.logic.storage import as_path, read_limited, write_atomically
 from groundlang.model.world import Action, Layout, Palette, State, WorldError, get_palette, step
@@ -41,6 +41,8 @@ __all__ = [
     "read_initial_state",
     "parse_state",
     "format_state",
+    "format_state_like",
+    "file_names",
     "example_corpus_path",
     "file_prefix",
 ]
@@ -317,11 +319,24 @@ def read_state_file(path: str | Path, palette: str | Palette) -> State:
     return parse_state(lines[0], palette, where=f"{path}, line 1")
 
 
-def format_state_like(state: State, path: str | Path) -> str:
+def format_state_like(state: State, path: str | Path, names: dict[str, str] | None = None) -> str:
     """``state`` as a line of the format the one-line state file ``path`` was written in (a BURLAP
-    string, as :func:`read_state_file` read it, or a corpus state line)."""
+    string, as :func:`read_state_file` read it, with its objects by ``names``, or a corpus state line)."""
     lines = _read_lines(as_path(path, "format_state_like: path"))
-    return format_bdm_state(state) if lines and lines[0].lstrip().startswith("{") else format_state(state)
+    return format_bdm_state(state, names=names) if lines and lines[0].lstrip().startswith("{") else format_state(state)
+
+
+def file_names(path: str | Path) -> dict[str, str]:
+    """The names a one-line BURLAP state file gives its objects where they differ from the layout's (which
+    numbers each class from 0 in order: a file's ``block3`` may be ``block2``), by the layout's name; ``{}``
+    for a state in the corpus's format or a corpus file, whose objects are the layout's."""
+    path = as_path(path, "file_names: path")
+    if path.suffix not in (".state", ".bdm"):
+        return {}
+    lines = _read_lines(path)
+    if not lines or not lines[0].lstrip().startswith("{"):
+        return {}
+    return {own: name for own, name in object_names(lines[0], where=f"{path}, line 1").items() if own != name}
 
 
 def read_initial_state(path: str | Path, palette: str | Palette) -> State:

@@ -206,8 +206,8 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                 missing, kind = task, "skipped"
             else:
                 names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
-                goal = tuple(Atom(a.predicate, tuple(names.get(x, x) for x in a.args)) for a in result.goal)
-                row.update(goal=format_goal(goal), final_state=format_bdm_state(result.final_state, pair.toy_names),
+                row.update(goal=format_goal(result.goal, names),
+                           final_state=format_bdm_state(result.final_state, pair.toy_names),
                            confidence=float(result.confidence))
                 missing = task - lifted_facts(result.final_state, library)  # pair_tasks.satisfies, keeping what is unmet
                 kind = failure_kind(result.goal, task, missing, result.reached) if missing else None

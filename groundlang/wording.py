@@ -122,9 +122,10 @@ def goal_phrase(goal: Sequence[Atom], state: State, library: TaskLibrary) -> str
     return " and ".join(_atom_phrase(a, state, library) for a in goal)
 
 
-def labelled_goal(goal: Sequence[Atom], state: State, library: TaskLibrary) -> str:
-    """Words, then the ids: "the yellow star in the red room — toyInRoom(block0, room0)"."""
-    return f"{goal_phrase(goal, state, library)} {DASH} {format_goal(tuple(goal))}"
+def labelled_goal(goal: Sequence[Atom], state: State, library: TaskLibrary, names: dict[str, str] | None = None) -> str:
+    """Words, then the ids: "the yellow star in the red room — toyInRoom(block0, room0)" (``names``: the
+    state file's names of the layout's objects, ``corpus.file_names``)."""
+    return f"{goal_phrase(goal, state, library)} {DASH} {format_goal(tuple(goal), names)}"
 
 
 def choice_list(phrases: Sequence[str]) -> str:

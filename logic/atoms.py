@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["canonical_predicate", "Atom", "AtomError", "attribute_pf", "parse_atom", "parse_goal", "format_goal", "shown"]
+__all__ = ["canonical_predicate", "Atom", "AtomError", "attribute_pf", "parse_atom", "parse_goal", "format_goal", "renamed", "shown"]
 
 # The commands-to-tasks corpus calls toys blocks, in object and predicate names (blockInRoom,
 # agentTouchingBlock): its spelling of the class toy, wherever it is a word of a camelCase name.
@@ -87,9 +87,15 @@ def parse_goal(text: str) -> tuple[Atom, ...]:
     return tuple(atoms)
 
 
-def format_goal(atoms: tuple[Atom, ...] | list[Atom]) -> str:
-    """Write a conjunction the way the labels CSV does."""
-    return " ".join(str(a) for a in atoms)
+def format_goal(atoms: tuple[Atom, ...] | list[Atom], names: dict[str, str] | None = None) -> str:
+    """Write a conjunction the way the labels CSV does; ``names`` renames objects (a file's names for the
+    layout's, as :func:`renamed`)."""
+    return " ".join(str(a) for a in (renamed(atoms, names) if names else atoms))
+
+
+def renamed(atoms, names: dict[str, str]) -> tuple[Atom, ...]:
+    """The atoms with each object named by ``names`` where it has an entry (``block2`` -> ``block3``)."""
+    return tuple(Atom(a.predicate, tuple(names.get(x, x) for x in a.args)) for a in atoms)
 
 
 def attribute_pf(stem: str, value: str) -> str:

@@ -189,6 +189,15 @@ def is_burlap_state_file(path: str) -> bool:
 _BOM = b"\xef\xbb\xbf"  # a UTF-8 byte order mark, which some editors write first; the readers skip it
 
 
+def renumbering_note(names: dict[str, str]) -> str | None:
+    """A line saying which objects of a state file the layout renumbered (``corpus.file_names``), for
+    commands that list objects by the layout's names; None when it renamed none."""
+    if not names:
+        return None
+    return ("objects are numbered from 0 in each class here; in the file: "
+            + ", ".join(f"{own} is {name}" for own, name in names.items()))
+
+
 def require_palette(args, corpus: str) -> None:
     """One line when a ``*.txt`` corpus is read without ``--palette``, saying first what is wrong with
     ``corpus`` if anything: a path that does not exist, or a folder that holds no corpus file of either

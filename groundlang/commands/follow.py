@@ -61,26 +61,26 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _choices_json(result, state, library) -> list[dict]:
+def _choices_json(result, state, library, names=None) -> list[dict]:
     from groundlang.clarify import option_phrases
     from groundlang.logic.atoms import format_goal
 
     names = option_phrases(result.choices, state, library)
-    return [{"number": k, "words": name, "goal": format_goal(c.goal), "probability": c.probability}
+    return [{"number": k, "words": name, "goal": format_goal(c.goal, names), "probability": c.probability}
             for k, (name, c) in enumerate(zip(names, result.choices), start=1)]
 
 
-def _print_question(result, state, library) -> None:
+def _print_question(result, state, library, names=None) -> None:
     print(result.question)
-    for row in _choices_json(result, state, library):
+    for row in _choices_json(result, state, library, names):
         print(f"  {row['number']}) {row['words']}  ({row['probability']:.2f}; {row['goal']})")
 
 
-def _ask(learner, result, state, max_steps: int):
+def _ask(learner, result, state, max_steps: int, names=None):
     """Ask on the terminal until an answer names one choice; None at end of input or after ANSWER_TRIES."""
     from groundlang.clarify import AnswerError
 
-    _print_question(result, state, learner.library)
+    _print_question(result, state, learner.library, names)
     for _ in range(ANSWER_TRIES):
         print("answer> ", end="", flush=True)
         line = sys.stdin.readline(MAX_ANSWER_CHARS + 1)
@@ -122,7 +122,7 @@ def _refuse(result, args) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundlang.corpus import format_state_like, read_initial_state
+    from groundlang.corpus import file_names, format_state_like, read_initial_state
     from groundlang.inference.sweeps import plan_once
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
@@ -157,6 +157,7 @@ def run(args: argparse.Namespace) -> int:
         if palette.name in palette_names() and get_palette(palette.name) == palette:
             palette = get_palette(palette.name)
     state = read_initial_state(args.env, palette)
+    names = file_names(args.env)  # goals and states are shown by the file's names of its objects
     if args.lexicon:
         learner.add_words(args.lexicon)
     threshold = None if args.guess else args.min_confidence
@@ -171,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"command: {text if text.isprintable() else ascii(text)}")
     answered = None
     if result.abstained and args.ask and not args.json:
-        answered = _ask(learner, result, state, args.max_steps)
+        answered = _ask(learner, result, state, args.max_steps, names)
         if answered is None:
             print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
             return ASKED
@@ -183,21 +184,22 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.render import picture_title, save_picture
 
         save_picture(args.out, state, trajectory=result.states,
-                     title=picture_title(args.command_text, result.goal_words, format_goal(result.goal)))
+                     title=picture_title(args.command_text, result.goal_words, format_goal(result.goal, names)))
     if args.json:
         data = {
-            "interpretations": [{"goal": format_goal(g), "words": goal_phrase(g, state, learner.library),
+            "interpretations": [{"goal": format_goal(g, names), "words": goal_phrase(g, state, learner.library),
                                  "probability": p} for g, p in goals],
             "confidence": result.posterior.confidence,
             "margin": result.posterior.margin,
             "abstained": result.abstained,
         }
         if result.abstained:
-            data.update(question=result.question, choices=_choices_json(result, state, learner.library),
+            data.update(question=result.question, choices=_choices_json(result, state, learner.library, names),
                         unknown_words=list(result.unknown_words))
         else:
-            data.update(goal=format_goal(result.goal), goal_words=result.goal_words,
-                        actions=[a.word for a in result.actions], final_state=format_state_like(result.final_state, args.env),
+            data.update(goal=format_goal(result.goal, names), goal_words=result.goal_words,
+                        actions=[a.word for a in result.actions],
+                        final_state=format_state_like(result.final_state, args.env, names),
                         reached=result.reached, reason=result.reason)
         print(json_text(data))
         if result.abstained:
@@ -206,21 +208,21 @@ def run(args: argparse.Namespace) -> int:
         return 0 if result.reached else 1
     print("interpretations:")
     for goal, p in goals:
-        print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library)}")
+        print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library, names)}")
     print(f"confidence {result.posterior.confidence:.2f} (margin {result.posterior.margin:.2f} over the next "
           f"goal that differs)" + ("; acting on the answer" if answered is not None else ""))
     if result.abstained:
-        _print_question(result, state, learner.library)
+        _print_question(result, state, learner.library, names)
         _refuse(result, args)
         return ASKED
     print(f"plan ({len(result.actions)} step{'' if len(result.actions) == 1 else 's'}): {', '.join(a.word for a in result.actions) or '(none)'}")
-    print(f"goal {labelled_goal(result.goal, state, learner.library)}: "
+    print(f"goal {labelled_goal(result.goal, state, learner.library, names)}: "
           f"{'reached' if result.reached else 'NOT reached'} ({result.reason})")
     if args.out:
         print(f"picture written to {args.out}")
     if not result.reached:
         why = ("no state reachable from the start satisfies it, so no plan can carry it out"
                if result.reason == "unreachable" else f"the plan stopped ({result.reason}) before it held")
-        print(f"groundlang follow: goal {format_goal(result.goal)} not reached: {why}", file=sys.stderr)
+        print(f"groundlang follow: goal {format_goal(result.goal, names)} not reached: {why}", file=sys.stderr)
         return 1
     return 0

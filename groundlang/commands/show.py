@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import PALETTE_HELP, check_state_file, is_burlap_state_file, output_path
-from groundlang.corpus import read_instance, read_state_file
+from groundlang.commands import PALETTE_HELP, check_state_file, is_burlap_state_file, output_path, renumbering_note
+from groundlang.corpus import file_names, read_instance, read_state_file
 
 
 def register(subparsers) -> None:
@@ -34,6 +34,8 @@ def run(args: argparse.Namespace) -> int:
         states, title = [state], path.name
         print(f"state: {path}")
         print(ascii_state(state))
+        if note := renumbering_note(file_names(path)):
+            print(note)
     else:
         inst = read_instance(path, args.palette)
         states, state, title = list(inst.states), inst.initial_state, inst.command

@@ -10,8 +10,8 @@ from importlib.resources import files as resources
 
 from groundlang.bdm import DEFAULT_PALETTE
 from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, check_state_file, is_burlap_state_file, json_text,
-                                 positive_seconds)
-from groundlang.corpus import read_initial_state
+                                 renumbering_note, positive_seconds)
+from groundlang.corpus import file_names, read_initial_state
 
 
 def register(subparsers) -> None:
@@ -46,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"{args.file}: --palette is required for a state in the corpus's format "
                          "(e.g. --palette sokoban)")
     state = read_initial_state(args.file, args.palette or DEFAULT_PALETTE)
+    renumbered = file_names(args.file)  # the layout's name -> the file's, where they differ
     files = args.library or ([str(resources("groundlang.logic") / "domains" / "williams2018.lp")] if burlap else None)
     library = TaskLibrary.load(files, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
     candidates = candidate_tasks(state, library)
@@ -85,12 +86,15 @@ def run(args: argparse.Namespace) -> int:
                              for obj, by_class in described.items()},
             "described_by_relation": by_relation,
             "relations": {obj: [str(a) for a in atoms] for obj, atoms in relations.items()},
+            "file_names": renumbered,
         }
         print(json_text(out, indent=1))
         return 0
     print(f"lifted tasks ({len(library.tasks)}):")
     for t in library.tasks:
         print(f"  {t}")
+    if note := renumbering_note(renumbered):
+        print(note)
     print(f"groundings in the initial state of {args.file} ({len(candidates)}):")
     for g, constraints in candidates:
         print(f"  {g.task}: {g.goal_text}")

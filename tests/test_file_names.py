@@ -1,0 +1,85 @@
+"""A BURLAP state file's own names for its objects (``block3`` where the layout numbers it ``block1``): what
+``follow``, ``tasks`` and ``show`` print names the objects as the file does."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from groundlang.bdm import format_bdm_state, object_names, parse_bdm_state
+from groundlang.corpus import file_names
+
+FIXTURE = Path(__file__).parent / "fixtures" / "williams2018"
+# The fixture's one-line state with its objects named as a file may: the chair block3, the rooms room4..room6
+# (in the order of their numbers), the agent robot.
+RENAMED = ((FIXTURE / "one.state").read_text().strip().replace("block0 (block)", "block3 (block)")
+           .replace("room0 (room)", "room4 (room)").replace("room1 (room)", "room5 (room)")
+           .replace("room2 (room)", "room6 (room)").replace("agent0 (agent)", "robot (agent)"))
+
+
+def test_object_names_say_the_files_name_of_each_of_the_layouts_objects():
+    assert object_names(RENAMED) == {"agent0": "robot", "room0": "room4", "room1": "room5", "room2": "room6",
+                                     "door0": "door0", "door1": "door1", "block0": "block3"}
+
+
+def test_a_state_written_with_the_files_names_reads_back_as_the_same_state_and_names():
+    state, toys = parse_bdm_state(RENAMED)
+    written = format_bdm_state(state, names=object_names(RENAMED))
+    assert parse_bdm_state(written) == (state, toys) and object_names(written) == object_names(RENAMED)
+    # without names, the layout's
+    assert set(object_names(format_bdm_state(state)).values()) == {"agent0", "room0", "room1", "room2", "door0",
+                                                                  "door1", "block0"}
+
+
+def test_file_names_keeps_only_the_renamed_and_is_empty_for_the_corpus_format(tmp_path):
+    path = tmp_path / "renamed.bdm"
+    path.write_text(RENAMED + "\n")
+    assert file_names(path) == {"agent0": "robot", "room0": "room4", "room1": "room5", "room2": "room6",
+                                "block0": "block3"}
+    assert file_names(FIXTURE / "one.state") == {}
+    assert file_names(Path(__file__).parent / "fixtures" / "small.state") == {}
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "groundlang.cli", *args], capture_output=True, text=True, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def model(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("model") / "m"
+    run = _cli("train", str(FIXTURE / "small.bdm"), "-o", str(out))
+    assert run.returncode == 0, run.stderr
+    return out
+
+
+def test_follow_names_goals_and_the_final_state_as_the_file_does(tmp_path, model):
+    env = tmp_path / "renamed.bdm"
+    env.write_text(RENAMED + "\n")
+    run = _cli("follow", "--model", str(model), "--env", str(env), "go next to the chair", "--json")
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    assert data["goal"] == "agentNextToToy(robot, block3)"
+    named = {name for g in data["interpretations"] for name in re.findall(r"\w+(?=[,)])", g["goal"])}
+    assert named <= {"robot", "room4", "room5", "room6", "block3"}  # no name the file does not have
+    final, _ = parse_bdm_state(data["final_state"])
+    assert object_names(data["final_state"]) == object_names(RENAMED)
+    assert (final.agent.x, final.agent.y) != (2, 2)  # it moved, and the state is written in the file's names
+    text = _cli("follow", "--model", str(model), "--env", str(env), "go next to the chair")
+    assert "agentNextToToy(robot, block3): reached" in text.stdout and "block0" not in text.stdout
+
+
+def test_tasks_and_show_say_which_objects_they_renumbered(tmp_path):
+    env = tmp_path / "renamed.bdm"
+    env.write_text(RENAMED + "\n")
+    note = ("objects are numbered from 0 in each class here; in the file: agent0 is robot, room0 is room4, room1 is "
+            "room5, room2 is room6, block0 is block3")
+    for command in ("tasks", "show"):
+        run = _cli(command, str(env))
+        assert run.returncode == 0 and note in run.stdout.splitlines(), run.stdout
+    assert json.loads(_cli("tasks", str(env), "--json").stdout)["file_names"]["block0"] == "block3"
+    assert "numbered from 0" not in _cli("show", str(FIXTURE / "one.state")).stdout
