@@ -13,7 +13,7 @@ import clingo
 from .program import AspError, Program
 from .terms import pf_name, symbol_text, tuple_args
 
-__all__ = ["PFRoles", "Declarations", "declare", "declare_restricted_families", "read_pf_roles", "restriction_problem",
+__all__ = ["PFRoles", "Declarations", "declare", "declare_families", "read_pf_roles", "restriction_problem",
            "check_tasks_declared_once", "read_phrases"]
 
 _PLACE = re.compile(r"\{(\d+)\}")  # "{1}": a phrase's place for a PF's first argument
@@ -32,15 +32,20 @@ def read_phrases(atoms: Sequence[clingo.Symbol], declared: "Declarations", where
                 or not text.string.strip():
             raise AspError(f'{where}: {atom} is not phrase(PF, "words") with a PF and words in quotes')
         name = pf_name(term)
-        if not term.arguments and term not in declared:  # a family's member is declared with a palette's values
+        if term not in declared:  # a family's member (toyIs(wood)) was declared with its values: declare_families
+            spelled = next((t for t in declared if pf_name(t) == name), None)
+            if spelled is not None:  # agentIn(room) spells agentInRoom, a PF of its own, not a family's member
+                raise AspError(f"{where}: {atom}: no family declares {term}; the PF {name} is pf/3's {spelled}: "
+                               f"write phrase({spelled}, ...)")
             raise AspError(f"{where}: {atom}: no pf/3 declares a PF {name}")
         if name in out:
             raise AspError(f"{where}: PF {name} has two phrases, {out[name]!r} and {text.string!r}")
-        places = [int(p) for p in _PLACE.findall(text.string)]
-        arities = {len(sig) for _, sig in declared.get(term, ())}
+        # A place of more digits than any PF has arguments is out of range as it is: never converted.
+        places = [int(p) if len(p) < 4 else 1000 for p in _PLACE.findall(text.string)]
+        arities = {len(sig) for _, sig in declared[term]}
         arity = arities.pop() if len(arities) == 1 else None
         if places or (arity or 1) > 1:
-            n = arity or max(places)
+            n = arity or len(places)
             if sorted(places) != list(range(1, n + 1)):
                 raise AspError(f"{where}: {atom}: the words of a PF of {n} argument{'s' * (n > 1)} have the places "
                                f"{', '.join('{%d}' % k for k in range(1, n + 1))}, each once")
@@ -110,9 +115,10 @@ def declare(declared: Declarations, pf_atom: clingo.Symbol) -> None:
     declared.setdefault(name, []).append((symbol_text(cls_), tuple(symbol_text(s) for s in tuple_args(sig))))
 
 
-def declare_restricted_families(program: Program, restrictions: dict[str, list[tuple[str, clingo.Symbol]]],
-                                 declared: Declarations, time_limit: float | None) -> None:
-    """Add to ``declared`` the pf/3 atoms of PFs named by restrict/3 that only an environment declares.
+def declare_families(program: Program, named: Sequence[clingo.Symbol], declared: Declarations,
+                     time_limit: float | None) -> None:
+    """Add to ``declared`` the pf/3 atoms of the PFs ``named`` (by restrict/3 or phrase/2) that only an
+    environment declares.
 
     Property PFs are families over the environment's palette (``pf(colour, roomIs(C), (room,))
     :- palette_colour(C)``; a palette's added attribute ``material`` has ``palette_material/1``), so the
@@ -122,8 +128,8 @@ def declare_restricted_families(program: Program, restrictions: dict[str, list[t
     value is in a given environment's palette is that environment's business: :func:`ground_environment`
     refuses a restriction the environment cannot honour.
     """
-    missing = {p for rs in restrictions.values() for _, p in rs if p not in declared}
-    values = sorted({str(x) for p in missing if p.type is clingo.SymbolType.Function for x in p.arguments})
+    missing = {p for p in named if p not in declared and p.type is clingo.SymbolType.Function}
+    values = sorted({str(x) for p in missing for x in p.arguments})
     if not values:
         return
     attributes = sorted({"colour", "shape"} | {a for source in program.sources for a in _PALETTE_ATOM.findall(source.text)})
@@ -131,7 +137,7 @@ def declare_restricted_families(program: Program, restrictions: dict[str, list[t
     models = program.solve(probe, models=1, time_limit=time_limit)
     if not models:
         raise AspError(f"{program.user_names}: the task library has no answer set once the palette values its "
-                       f"restrict/3 PFs name ({', '.join(values)}) are added, so they cannot be checked")
+                       f"restrict/3 and phrase/2 PFs name ({', '.join(values)}) are added, so they cannot be checked")
     for a in models[0]:
         if a.name == "pf" and len(a.arguments) == 3 and a.arguments[1] in missing:
             declare(declared, a)

@@ -27,7 +27,7 @@ import clingo
 
 from .atoms import Atom, format_goal
 from .classes import domain_classes
-from .library_checks import (Declarations, PFRoles, check_tasks_declared_once, declare, declare_restricted_families,
+from .library_checks import (Declarations, PFRoles, check_tasks_declared_once, declare, declare_families,
                              read_pf_roles, read_phrases, restriction_problem)
 from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, package_source
 from .terms import natural_key, pf_name, symbol_text, tuple_args
@@ -206,8 +206,11 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
         if t not in restrictions:
             raise AspError(f"{program.user_names}: restrict({t}, ...) names no task({t})")
         restrictions[t].append((v, p))
-    declare_restricted_families(program, restrictions, declared, time_limit)
-    phrases = read_phrases(by_signature.get(("phrase", 2), []), declared, program.user_names)
+    phrased = by_signature.get(("phrase", 2), [])
+    # Members of families (toyIs(wood)) that restrictions and phrases name are declared with their values.
+    declare_families(program, [p for rs in restrictions.values() for _, p in rs] + [a.arguments[0] for a in phrased],
+                     declared, time_limit)
+    phrases = read_phrases(phrased, declared, program.user_names)
     tasks = []
     rank = {c: i for i, c in enumerate(CLASS_ORDER)}
     for n in names:

@@ -54,7 +54,15 @@ def get_language_model(name: str, **settings) -> LanguageModel:
         problem = _setting_problem(params[key], value)
         if problem:
             raise ValueError(f"language model {name}, setting {key}: {problem}")
+    # A whole number typed for a real-valued setting ("word_concentration=2") is that real: as an int it would
+    # make an integer tensor, which a Dirichlet cannot take.
+    settings = {key: float(value) if _real_valued(params[key]) and type(value) is int else value
+                for key, value in settings.items()}
     return LANGUAGE_MODELS[name](**settings)
+
+
+def _real_valued(param: inspect.Parameter) -> bool:
+    return isinstance(param.default, float) or "float" in str(param.annotation)
 
 
 def setting_value(text: str) -> object:
@@ -64,11 +72,25 @@ def setting_value(text: str) -> object:
     import json
 
     try:
-        return json.loads(text)
+        return json.loads(text, parse_int=_bounded_int)
     except RecursionError:
         raise ValueError(f"{text[:20]}...: nested too deeply to be a setting") from None
+    except _TooLong as exc:
+        raise ValueError(f"{text[:20]}...: a number of {exc.args[0]} digits; no setting takes one beyond a "
+                         f"float's range") from None
     except ValueError:
         return text
+
+
+class _TooLong(Exception):
+    """A whole number in a setting's JSON too long to be a float (its digit count)."""
+
+
+def _bounded_int(digits: str) -> int:
+    # float() of a whole number beyond 1e308 overflows, where the model would use it; refused as it is read.
+    if len(digits.lstrip("-")) > 308:
+        raise _TooLong(len(digits.lstrip("-")))
+    return int(digits)
 
 
 def setting_names(name: str) -> tuple[str, ...]:
@@ -93,7 +115,10 @@ def _setting_problem(param: inspect.Parameter, value) -> str | None:
     if "dict" in str(param.annotation):  # checked by the model itself, which knows the keys
         return None if isinstance(value, dict) else f"expected names with values, e.g. {{\"name\": 1.0}}, not {value!r}"
     if isinstance(default, (int, float)) or default is None:
-        ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+        try:
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+        except OverflowError:  # a whole number beyond a float's range (given in Python, not read from JSON)
+            return f"expected a number within a float's range, not one of {len(str(abs(value)))} digits"
         return None if ok else f"expected a number, not {value!r}"
     if isinstance(default, str):
         return None if isinstance(value, str) else f"expected a string, not {value!r}"

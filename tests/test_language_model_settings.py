@@ -104,3 +104,32 @@ def test_an_ablation_applies_each_setting_to_the_models_that_take_it():
         run_ablation(corpus, labels, language_models=("bow", "ibm2"), language_model_settings={"mention_phrases": "any"})
     with pytest.raises(ValueError, match="language model parse, setting argument_bonus: expected a number"):
         run_ablation(corpus, labels, language_models=("parse",), language_model_settings={"argument_bonus": "x"})
+
+
+@pytest.mark.parametrize("name", ["parse", "bow", "ibm2"])
+def test_a_whole_number_for_a_real_setting_is_that_real(name):
+    """``--lm-setting word_concentration=2`` reads as JSON's 2, an int: it made an integer tensor, which the
+    Dirichlet refused in a traceback."""
+    settings = language_model_settings(["word_concentration=2"])
+    assert settings == {"word_concentration": 2} and type(settings["word_concentration"]) is int
+    lm = get_language_model(name, **settings)
+    assert lm.word_concentration == 2.0 and type(lm.word_concentration) is float
+    if name == "parse":
+        lm = get_language_model(name, mention_concentration=1, preposition_concentration=2, argument_bonus=3)
+        assert type(lm.mention_concentration) is float and type(lm.preposition_concentration) is float
+
+
+def test_a_whole_number_for_a_real_setting_trains(tmp_path):
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "m"),
+                 "--lm-setting", "word_concentration=2", "--lm-setting", "mention_concentration=1"]) == 0
+
+
+@pytest.mark.parametrize("text", ["word_concentration=1" + "0" * 400,
+                                  'parser_weights={"nmods_coord": 1' + "0" * 400 + "}"])
+def test_a_number_beyond_a_floats_range_is_one_line(text, capsys):
+    assert main(["train", str(EXAMPLES), "--palette", "sokoban", "-o", "/tmp/never-written", "--lm-setting", text]) == 2
+    err = capsys.readouterr().err
+    assert "a number of 401 digits; no setting takes one beyond a float's range" in err and len(err.splitlines()) == 1
+    with pytest.raises(ValueError, match="within a float's range, not one of 401 digits"):
+        get_language_model("parse", argument_bonus=10**400)  # from Python, not JSON
+

@@ -62,6 +62,16 @@ def test_goals_and_objects_read_in_the_librarys_words(tmp_path):
     ('phrase(agentInCornerOfRoom, "{1} in {2} of {3}").', "the words of a PF of 2 arguments have the places"),
     ('phrase(toyIsShiny, "{2} shines").', "the words of a PF of 1 argument have the places {1}, each once"),
     ('phrase(toyIsShinny, "shiny").', "no pf/3 declares a PF toyIsShinny"),
+    # a family's member: its arguments are the family's, however many places the words give, and a place of
+    # any size is out of range as it is (once a place of 10^8 built a list of 10^8 numbers)
+    ('phrase(toyIs(red), "{1} {2} {3}").', "the words of a PF of 1 argument have the places {1}, each once"),
+    ('phrase(toyIs(red), "{100000000}").', "the words of a PF of 1 argument have the places {1}, each once"),
+    ('phrase(toyIs(red), "{' + "9" * 5000 + '}").', "the words of a PF of 1 argument have the places {1}"),
+    # a family term that spells a PF of its own (agentInRoom, of two arguments; no family agentIn): it crashed
+    # follow's wording before
+    ('phrase(agentIn(room), "{1} {2} {3}").', "no family declares agentIn(room); the PF agentInRoom is pf/3's "
+                                             "agentInRoom: write phrase(agentInRoom, ...)"),
+    ('phrase(toyShaped(wood), "wooden").', "no pf/3 declares a PF toyShapedWood"),  # no such family
 ])
 def test_a_phrase_that_cannot_be_read_is_refused_when_the_library_loads(tmp_path, text, message):
     with pytest.raises(AspError, match=message.replace("(", r"\(").replace(")", r"\)").replace("{", r"\{")
