@@ -85,8 +85,10 @@ _Z_PATH, _Z_TOY, _Z_AGENT, _Z_TOY_END, _Z_AGENT_END = 3, 5, 6, 8, 9
 
 
 def _mathtext(text: str) -> str:
-    """A glyph as a mathtext marker (``$★$``), its special characters escaped."""
-    return "$" + "".join("\\backslash " if c == "\\" else "\\" + c if c in "$_^{}%#&~" else c for c in text) + "$"
+    """A glyph as a mathtext marker (``$★$``), its special characters escaped (``^`` and ``~`` are accents
+    there, drawn over an empty group: alone, they wanted an argument and the glyph could not be drawn)."""
+    return "$" + "".join("\\backslash " if c == "\\" else "\\" + c + "{}" if c in "^~" else "\\" + c
+                         if c in "$_{}%#&" else c for c in text) + "$"
 
 
 def _legend(ax, state: State, moved: list[int], has_path: bool, cell: float) -> None:

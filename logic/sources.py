@@ -125,8 +125,8 @@ def file_source(path: str | Path) -> Source:
     """A user's ``.lp`` file; raises OSError when unreadable and AspError when not UTF-8."""
     path = Path(path)
     data = _read_regular(path)
-    try:
-        return Source(str(path), data.decode("utf-8"))
+    try:  # a leading byte-order mark (some Windows editors write one) is read past, as in every other input file
+        return Source(str(path), data.decode("utf-8").removeprefix("\ufeff"))
     except UnicodeDecodeError as exc:
         line = data[: exc.start].count(b"\n") + 1
         raise AspSyntaxError(f"{path}:{line}: not UTF-8 text (byte {exc.start})") from None

@@ -258,6 +258,15 @@ class Layout:
             problem = _door_problem(bounds, d)
             if problem:
                 raise WorldError(f"{where} {problem}")
+        # Two doors on one cell are one opening named twice: a command could name either, a plan not tell them
+        # apart. Refused as overlapping rooms are (against every later door at once).
+        doors = np.array([(d.left, d.right, d.bottom, d.top) for d in self.doors], dtype=np.int64).reshape(-1, 4)
+        for i in range(len(self.doors) - 1):
+            shared = ((np.maximum(doors[i, 0], doors[i + 1:, 0]) <= np.minimum(doors[i, 1], doors[i + 1:, 1]))
+                      & (np.maximum(doors[i, 2], doors[i + 1:, 2]) <= np.minimum(doors[i, 3], doors[i + 1:, 3])))
+            if shared.any():
+                raise WorldError(f"door{i} and door{i + 1 + int(np.argmax(shared))} open a wall cell both: one "
+                                 "door is enough there")
 
     def _validate_added_attributes(self) -> None:
         """Every object of a class the palette gives an attribute has one of its values, and no other

@@ -157,3 +157,18 @@ def test_a_property_pf_that_reads_where_things_stand_is_refused(tmp_path):
     viewpoint = _library(tmp_path, "viewpoint_class(bearing).\n" + rule, "mine2.lp")
     assert "toyEastOfAgent" in viewpoint.spatial_pfs
     pf_tables(state.layout, viewpoint.tabulation_program)  # read as a side of the agent, it is no property
+
+
+def test_a_library_and_a_palette_with_a_byte_order_mark_read_as_without(tmp_path):
+    """Corpus, word and state files read past a leading BOM; .lp files were refused at its character."""
+    task = 'task(go). var(go, "A", agent). var(go, "R", room). goal(go, agentInRoom, ("A", "R")).\n'
+    (tmp_path / "bom.lp").write_bytes(b"\xef\xbb\xbf" + task.encode())
+    assert TaskLibrary.load([str(tmp_path / "bom.lp")]).names == TaskLibrary.load([_write(tmp_path, task)]).names
+    (tmp_path / "palette.lp").write_bytes(b"\xef\xbb\xbf" + _SOKOBAN.read_bytes())
+    assert read_palette(str(tmp_path / "palette.lp"))[1] == read_palette(str(_SOKOBAN))[1]
+
+
+def _write(tmp_path, text: str) -> str:
+    path = tmp_path / "plain.lp"
+    path.write_text(text, encoding="utf-8")
+    return str(path)

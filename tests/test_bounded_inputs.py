@@ -156,7 +156,10 @@ def test_a_layout_of_more_objects_than_are_read_is_refused_before_they_are_check
     with pytest.raises(CorpusError, match=f"the layout has 5,002 rooms, doors and toys \\(2, 5,000, 0\\); at most "
                                           f"{MAX_LAYOUT_OBJECTS:,} are read"):
         read_state_file(path, "sokoban")
+    # as many as are read: six rooms side by side, 1000 cells tall, a door on each cell of their five walls
+    # (two doors on one cell are refused: one opening named twice)
     fine = tmp_path / "fine.state"
-    fine.write_text("room,5,0,4,4,0 room,10,4,4,8,0 " + " ".join(["door,4,2,4,2"] * (MAX_LAYOUT_OBJECTS - 2))
-                    + " agent,2,2\n")
-    assert len(read_state_file(fine, "sokoban").layout.doors) == MAX_LAYOUT_OBJECTS - 2
+    rooms = " ".join(f"room,5,{4 * k},1000,{4 * k + 4},0" for k in range(6))
+    doors = [f"door,{4 * k},{y},{4 * k},{y}" for k in range(1, 6) for y in range(1, 1000)][: MAX_LAYOUT_OBJECTS - 6]
+    fine.write_text(f"{rooms} {' '.join(doors)} agent,2,2\n")
+    assert len(read_state_file(fine, "sokoban").layout.doors) == MAX_LAYOUT_OBJECTS - 6

@@ -59,3 +59,15 @@ def test_an_empty_output_path_is_refused_not_taken_for_no_output(argv, capsys):
         main(argv)
     assert stopped.value.code == 2
     assert "an empty path; expected where to write" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["check", "domain", "evaluate", "parse", "tasks", "train"])
+def test_an_empty_library_path_is_refused_not_taken_for_the_current_folder(command, capsys):
+    from groundlang.cli import main
+
+    with pytest.raises(SystemExit) as stopped:
+        main([command, "x", "--library", ""])
+    assert stopped.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --library: an empty path; expected a .lp file or a library the package ships" in err
+    assert "Is a directory" not in err and len(err.splitlines()) == 1

@@ -48,6 +48,7 @@ MALFORMED = {
     # a gap between two rooms' walls stays solid; corners open no room
     "door_across_a_gap.txt": (3, ["door0 (4,2,6,2) has cells outside every room"]),
     "door_at_corners.txt": (3, ["door0 (4,0,5,0) is not in a wall between two rooms"]),
+    "doors_on_one_cell.txt": (3, ["door0 and door1 open a wall cell both: one door is enough there"]),
     "zero_size_room.txt": (3, ["room0 (0,4,1,0) has no interior", "RIGHT-LEFT >= 2"]),
     "object_in_wall.txt": (3, ["agent0 at (4,1) is inside a wall"]),
     "shared_cell.txt": (3, ["two objects share a cell"]),

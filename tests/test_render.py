@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
+from pathlib import Path
 import sys
 
 import numpy as np
@@ -210,3 +212,20 @@ def test_without_matplotlib_pictures_are_refused_in_one_line_and_the_rest_runs(t
     done = subprocess.run([sys.executable, "-c", hide, "--quiet", "tasks", str(example), "--palette", "sokoban"],
                           capture_output=True, text=True)
     assert done.returncode == 0 and "toyToRoom" in done.stdout, done.stderr
+
+
+@pytest.mark.parametrize("drawn", ["^", "~", "a^", "$%", "\\"])
+def test_a_palettes_glyph_of_mathtext_characters_is_drawn(tmp_path, drawn):
+    """``^`` and ``~`` are accents in mathtext, which wanted an argument: the picture failed with a parser's
+    message naming no palette."""
+    pytest.importorskip("matplotlib")
+    from groundlang.logic import palettes
+
+    source = (Path(str(palettes.__path__[0])) / "sokoban.lp").read_text()
+    mine = tmp_path / "glyphs.lp"
+    said = 'glyph(star, "%s")' % drawn.replace("\\", "\\\\")  # an ASP string: a backslash is written twice
+    mine.write_text(re.sub(r'glyph\(star, "[^"]*"\)', lambda _: said, source))
+    state = parse_state("room,5,0,5,5,0 block,12,0,1,1 agent,2,2", str(mine))
+    assert glyph("star", state.layout.palette) == drawn
+    out = save_picture(tmp_path / "g.png", state)
+    assert Path(out).read_bytes()[:8] == PNG_MAGIC

@@ -37,6 +37,14 @@ def output_path(text: str) -> str:
     return text
 
 
+def library_path(text: str) -> str:
+    """An argparse type: a task library (a .lp file, or a library the package ships by name); an empty one
+    is refused (it was taken for the current folder: "Is a directory")."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty path; expected a .lp file or a library the package ships by name")
+    return text
+
+
 def positive_int(text: str) -> int:
     """An argparse type: a whole number of 1 or more (workers, steps, counts)."""
     return _whole(text, 1, "a whole number of 1 or more")

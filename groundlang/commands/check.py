@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, library_given, require_palette
+from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, library_given, library_path, require_palette
 from groundlang.corpus import read_corpus
 
 
@@ -24,7 +24,7 @@ def register(subparsers) -> None:
     p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
     p.add_argument("--format", choices=("commands-to-tasks", "williams2018"),
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
-    p.add_argument("--library", metavar="LP", action="append",
+    p.add_argument("--library", metavar="LP", action="append", type=library_path,
                    help="task library .lp file (repeatable): for the tasks .bdm pairs show (default: "
                         "williams2018), or whose PFs --labels may use" + LIBRARY_NAMES)
     p.add_argument("--labels", metavar="CSV", help="gold labels (prefix,goal) to check against final states")

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, json_text, positive_seconds
+from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, json_text, library_path, positive_seconds
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("domain", help="print the domain's schema: classes, palette, PFs by class, tasks")
     p.add_argument("--palette", default="sokoban", help=PALETTE_HELP + " (default: sokoban)")
-    p.add_argument("--library", metavar="LP", action="append",
+    p.add_argument("--library", metavar="LP", action="append", type=library_path,
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp)" + LIBRARY_NAMES)
     p.add_argument("--allow-scripts", action="store_true",
                    help="let library files run #script blocks (only for files you trust)")

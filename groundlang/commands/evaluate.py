@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
-                                 add_language_model_settings, add_lexicon_option, fraction, inputs_read,
-                                 json_bytes, language_model_settings, library_given, open_fraction, output_path,
+                                 add_language_model_settings, add_lexicon_option, fraction, inputs_read, json_bytes,
+                                 language_model_settings, library_given, library_path, open_fraction, output_path,
                                  positive_int, require_palette)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
@@ -36,7 +36,7 @@ def register(subparsers) -> None:
                         "never reading the development split (a split to choose mechanisms on)")
     p.add_argument("--format", choices=["commands-to-tasks", "williams2018"],
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
-    p.add_argument("--library", metavar="LP", action="append",
+    p.add_argument("--library", metavar="LP", action="append", type=library_path,
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the package's "
                         "williams2018 domain); labels may use its PFs" + LIBRARY_NAMES)
     p.add_argument("--demonstrations", choices=["end-state", "shortest-plan"], default="end-state",

@@ -65,9 +65,9 @@ def _choices_json(result, state, library, names=None) -> list[dict]:
     from groundlang.clarify import option_phrases
     from groundlang.logic.atoms import format_goal
 
-    names = option_phrases(result.choices, state, library)
-    return [{"number": k, "words": name, "goal": format_goal(c.goal, names), "probability": c.probability}
-            for k, (name, c) in enumerate(zip(names, result.choices), start=1)]
+    phrases = option_phrases(result.choices, state, library)
+    return [{"number": k, "words": phrase, "goal": format_goal(c.goal, names), "probability": c.probability}
+            for k, (phrase, c) in enumerate(zip(phrases, result.choices), start=1)]
 
 
 def _print_question(result, state, library, names=None) -> None:

@@ -68,6 +68,10 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.model.parse_aligned import preposition_tasks
     from groundlang.wording import token_meanings
 
+    if args.words is not None:  # as the tokeniser reads a command: "RED" is red, and "" no word at all
+        args.words = [" ".join(w.lower().split()) for w in args.words]
+        if "" in args.words:
+            raise ValueError("--words: an empty word; give the words to show, e.g. --words red room")
     learner = Learner.load(args.model)
     prepositions = learned = preposition_tasks(learner.globals, learner.vocab, top=args.top)
     if args.words:  # a multiword preposition is one token: "next to" is next_to

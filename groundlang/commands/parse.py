@@ -14,7 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, json_text, library_given, positive_int
+from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, json_text, library_given, library_path, positive_int
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import ParseError, command_fault, parse
 from groundlang.logic.storage import read_limited
@@ -30,7 +30,7 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true", help="one JSON object per command")
     p.add_argument("--max-readings", type=positive_int, default=8, help="readings kept per command (default 8)")
     add_lexicon_option(p)
-    p.add_argument("--library", metavar="LP", action="append",
+    p.add_argument("--library", metavar="LP", action="append", type=library_path,
                    help="task library .lp file (repeatable): the words of its word file (mine.words beside "
                         "mine.lp) join the parser's, as a learner trained with it reads them" + LIBRARY_NAMES)
     p.add_argument("--palette", help="a palette (a name or a .lp file): its colour and shape names join the "

@@ -10,7 +10,7 @@ from importlib.resources import files as resources
 
 from groundlang.bdm import DEFAULT_PALETTE
 from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, check_state_file, is_burlap_state_file, json_text,
-                                 renumbering_note, positive_seconds)
+                                 library_path, positive_seconds, renumbering_note)
 from groundlang.corpus import file_names, read_initial_state
 
 
@@ -21,7 +21,7 @@ def register(subparsers) -> None:
     p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state file (either "
                    "format: a state in the corpus's format, or a BURLAP state line as Williams et al. write them)")
     p.add_argument("--palette", help=PALETTE_HELP + "; required but for a BURLAP state line (default williams2018)")
-    p.add_argument("--library", metavar="LP", action="append",
+    p.add_argument("--library", metavar="LP", action="append", type=library_path,
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp, or for a BURLAP "
                    "state line the williams2018 domain)" + LIBRARY_NAMES)
     p.add_argument("--allow-scripts", action="store_true",

@@ -9,7 +9,8 @@ from groundlang.bdm import bdm_files
 from groundlang.corpus import read_corpus
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
                                  add_language_model_settings, add_lexicon_option, cache_option, check_cache_outside,
-                                 language_model_settings, library_given, output_path, require_palette, seed)
+                                 language_model_settings, library_given, library_path, output_path, require_palette,
+                                 seed)
 
 
 def register(subparsers) -> None:
@@ -21,7 +22,7 @@ def register(subparsers) -> None:
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES), help="language model: bow, ibm2 or parse (default parse)")
     add_language_model_settings(p)
     add_lexicon_option(p)
-    p.add_argument("--library", metavar="LP", action="append", help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the "
+    p.add_argument("--library", metavar="LP", action="append", type=library_path, help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the "
                    "williams2018 domain)" + LIBRARY_NAMES)
     p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics, and .bdm pairs whose start state admits no task, instead of stopping")
     p.add_argument("--cache-dir", metavar="DIR", help="cache of behaviour likelihoods and .bdm pairs' end-state evidence "
