@@ -88,10 +88,13 @@ class Posterior:
 
     def table(self, top: int = 10) -> str:
         """A plain-text table of the most probable interpretations."""
-        lines = [f"{'prob':>7}  {'task':<22} {'goal':<40} constraints"]
-        for p, interp in self.ranked()[:top]:
-            constraint = " ∧ ".join(str(a) for a in interp.constraint.atoms) or "(none)"
-            lines.append(f"{p:7.4f}  {interp.lifted:<22} {format_goal(interp.goal):<40} {constraint}")
+        rows = [(p, interp.lifted, format_goal(interp.goal),
+                 " ∧ ".join(str(a) for a in interp.constraint.atoms) or "(none)") for p, interp in self.ranked()[:top]]
+        # columns as wide as their widest entry: a goal of two atoms is wider than any fixed width
+        task_w = max([22, *(len(r[1]) for r in rows)])
+        goal_w = max([40, *(len(r[2]) for r in rows)])
+        lines = [f"{'prob':>7}  {'task':<{task_w}} {'goal':<{goal_w}} constraints"]
+        lines += [f"{p:7.4f}  {task:<{task_w}} {goal:<{goal_w}} {constraint}" for p, task, goal, constraint in rows]
         return "\n".join(lines)
 
     def __repr__(self) -> str:

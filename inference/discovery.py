@@ -305,7 +305,7 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
         raise ValueError(f"{pfs.program.user_names}: declares tasks ({', '.join(pfs.names)}); discovery takes "
                          "PFs from it, not tasks")
     demos = _group(instances)
-    logger.info("discovery: %d instances, %d distinct demonstrations", len(instances), len(demos))
+    logger.debug("discovery: %d instances, %d distinct demonstrations", len(instances), len(demos))
     # Before any MLIRL work: a PF file that fails on an environment is reported at once.
     attributes = [_attributes(demo, pfs) for demo in demos]
     for demo in demos:

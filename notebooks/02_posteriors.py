@@ -10,12 +10,16 @@ QUICK = os.environ.get("GROUNDLANG_QUICK") == "1"  # CI: smaller work, same stor
 import matplotlib.pyplot as plt
 import numpy as np
 from pathlib import Path
+import groundlang
 from groundlang.animation import posterior_bar_chart
 from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
 from groundlang.learner import Learner
 from groundlang.render import draw_state
 
 examples = example_corpus_path()
+# The crowd corpus beside the repository (../shared/data), wherever the notebook is run from.
+CROWD = Path(os.environ.get("GROUNDLANG_CORPUS", Path(groundlang.__file__).resolve().parent.parent.parent
+                            / "shared" / "data" / "commands-to-tasks"))
 corpus = read_corpus(examples, "sokoban")
 novel = {n: read_state_file(examples / f"novel_{n}.state", "sokoban") for n in "abc"}
 learner = Learner(language_model="parse", cache_dir=False).fit(corpus.instances)
@@ -120,7 +124,7 @@ fig.tight_layout()
 # The commands-to-tasks corpus is not part of the repository; this cell uses it where it is, with the real, messy commands.
 
 # %%
-shared = Path(os.environ.get("GROUNDLANG_CORPUS", "../../shared/data/commands-to-tasks")) / "allTurkTrain"
+shared = CROWD / "allTurkTrain"
 if QUICK or not shared.is_dir():
     print("skipped:", "quick mode" if QUICK else f"{shared} not found")
 else:
@@ -142,7 +146,7 @@ from groundlang.confidence import format_calibration
 from groundlang.evaluation import evaluate
 from groundlang.labels import read_labels
 
-crowd_root = Path(os.environ.get("GROUNDLANG_CORPUS", "../../shared/data/commands-to-tasks"))
+crowd_root = CROWD
 if QUICK or not (crowd_root / "allTurkTrain").is_dir():
     runs = {"example corpus": (corpus, read_labels(examples / "labels.csv"))}
 else:

@@ -12,6 +12,7 @@ from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
 from groundlang.labels import goal_holds, label_for, read_labels
 from groundlang.learner import Learner, NotFittedError
+from groundlang.logic.atoms import format_goal
 from groundlang.model_io import ModelFormatError
 
 EXAMPLES = example_corpus_path()
@@ -62,6 +63,12 @@ def test_posterior_is_a_distribution_with_readings(learner, corpus):
     assert len(post.reading_probabilities) == len(post.readings) == 2
     assert post.reading_probabilities.sum() == pytest.approx(1.0, abs=1e-5)
     assert "toyToRoom" in post.table().splitlines()[1]
+    # every row's goal and constraints start in the header's columns, goals of two atoms (toyToRoomAgentToRoom's) too
+    header, *rows = post.table(len(post.interpretations)).splitlines()
+    goal_at, constraints_at = header.index("goal"), header.index("constraints")
+    assert [(row[goal_at:constraints_at].strip(), row[constraints_at:]) for row in rows] == [
+        (format_goal(i.goal), " ∧ ".join(map(str, i.constraint.atoms)) or "(none)") for _, i in post.ranked()]
+    assert any(len(i.goal) == 2 for _, i in post.ranked())
 
 
 def test_reading_probabilities_line_up_with_readings_when_readings_merge(learner, corpus):
