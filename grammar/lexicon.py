@@ -300,8 +300,7 @@ class Lexicon:
     def join_multiword(self, tokens: list[str]) -> list[str]:
         """Tokens with each multiword entry ("in front of") joined into one (``in_front_of``), longest
         first, except where its first word heads a noun phrase after a determiner, preposition,
-        adjective or number ("to left of star", "bottom left of orange room", "the west of the room" keep
-        "left" and "west" apart)."""
+        adjective or number ("to left of star", "bottom left of orange room" keep "left" apart)."""
         if not self._multiword:
             return tokens
         out: list[str] = []
@@ -309,7 +308,7 @@ class Lexicon:
         while i < len(tokens):
             end = i + 1
             # The exception depends on the first word alone, so it holds for every entry that starts here.
-            if not (out and self.listed(tokens[i]) & {"ADJ", "ADV", "NOUN"} and self.listed(out[-1]) & _NOUN_PHRASE_OPENERS):
+            if not (out and self.listed(tokens[i]) & {"ADJ", "NOUN"} and self.listed(out[-1]) & _NOUN_PHRASE_OPENERS):
                 node = self._multiword
                 for j in range(i, len(tokens)):
                     node = node.get(tokens[j])

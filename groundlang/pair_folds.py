@@ -45,7 +45,8 @@ class PairCrossValidation:
 
     def to_json(self) -> dict:
         data = self.pooled.to_json()
-        data["seconds"] = self.seconds
+        # what each fold trained on is under "folds": summed over folds, a command would count K - 1 times
+        data.update(train_commands=None, train_pairs=None, train_skipped=None, seconds=self.seconds)
         data["folds"] = [{key: value for key, value in fold.to_json().items() if key != "executions"}
                          | {"fold": k, "held_out_commands": len(self.held_out[k])}
                          for k, fold in enumerate(self.folds)]
@@ -90,25 +91,32 @@ def cross_validate_pairs(commands: list[Command], folds: int, library, workers: 
     held = fold_indices(commands, folds)
     for k, indices in enumerate(held):
         if not indices:
-            raise ValueError(f"fold {k} of {folds} holds out no command (no text falls in it): use fewer folds")
+            fewer = "use fewer folds" if folds > 2 else "the corpus has one text: nothing to hold out by text"
+            raise ValueError(f"fold {k} of {folds} holds out no command (no text falls in it): {fewer}")
         if len(indices) == len(commands):
             raise ValueError(f"fold {k} of {folds} holds out every command (one text): nothing to train on")
     started = time.perf_counter()
     context = {"commands": commands, "held": held, "library": library, "options": options,
                "min_confidence": min_confidence}
     workers = usable_workers(workers, folds)
+    results: list[PairEvaluation] = []
+
+    def take(result: PairEvaluation | str) -> None:
+        if isinstance(result, str):  # a fold's error, said at once with its fold: the others are not waited for
+            raise ValueError(f"fold {len(results)} of {folds}: {result}")
+        results.append(result)
+
     if workers <= 1:
         _CONTEXT.update(context)
         try:
-            results = [_fold(k) for k in range(folds)]
+            for k in range(folds):
+                take(_fold(k))
         finally:
             _CONTEXT.clear()
-    else:
+    else:  # leaving the pool on an error terminates the folds still running
         with multiprocessing.get_context("fork").Pool(workers, _init, ({**context, "parent": os.getpid()},)) as pool_:
-            results = pool_.map(_fold, range(folds), chunksize=1)
-    for k, result in enumerate(results):
-        if isinstance(result, str):  # a fold's error, said once with its fold
-            raise ValueError(f"fold {k} of {folds}: {result}")
+            for result in pool_.imap(_fold, range(folds), chunksize=1):
+                take(result)
     evaluations = [_renumbered(result, held[k], k) for k, result in enumerate(results)]
     return PairCrossValidation(evaluations, held, pool(evaluations, min_confidence), time.perf_counter() - started)
 

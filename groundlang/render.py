@@ -85,10 +85,14 @@ _Z_PATH, _Z_TOY, _Z_AGENT, _Z_TOY_END, _Z_AGENT_END = 3, 5, 6, 8, 9
 
 
 def _mathtext(text: str) -> str:
-    """A glyph as a mathtext marker (``$★$``), its special characters escaped (``^`` and ``~`` are accents
-    there, drawn over an empty group: alone, they wanted an argument and the glyph could not be drawn)."""
-    return "$" + "".join("\\backslash " if c == "\\" else "\\" + c + "{}" if c in "^~" else "\\" + c
-                         if c in "$_{}%#&" else c for c in text) + "$"
+    """A glyph as a mathtext marker (``$★$``), every printable ASCII character drawable: ``$ _ { } % #``
+    escaped, ``^`` and ``~`` (accents there) over an empty group, and ``"`` and a backquote, which mathtext
+    cannot draw in any spelling, as the typographic quotes they look like."""
+    return "$" + "".join(_MATHTEXT.get(c, c) for c in text) + "$"
+
+
+_MATHTEXT = {"\\": "\\backslash ", "^": "\\^{}", "~": "\\~{}", '"': "\u201d", "`": "\u2018",
+             **{c: "\\" + c for c in "$_{}%#"}}
 
 
 def _legend(ax, state: State, moved: list[int], has_path: bool, cell: float) -> None:

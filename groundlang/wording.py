@@ -21,7 +21,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Sequence
 
-from groundlang.logic.atoms import Atom, format_goal
+from groundlang.logic.atoms import Atom, format_goal, renamed_words
 from groundlang.logic.schema import Domain, PFDeclaration
 from groundlang.logic.tasks import LiftedTask, TaskLibrary
 from groundlang.model.interpretations import OTHER_ROLES, object_names
@@ -124,8 +124,8 @@ def goal_phrase(goal: Sequence[Atom], state: State, library: TaskLibrary) -> str
 
 def labelled_goal(goal: Sequence[Atom], state: State, library: TaskLibrary, names: dict[str, str] | None = None) -> str:
     """Words, then the ids: "the yellow star in the red room — toyInRoom(block0, room0)" (``names``: the
-    state file's names of the layout's objects, ``corpus.file_names``)."""
-    return f"{goal_phrase(goal, state, library)} {DASH} {format_goal(tuple(goal), names)}"
+    state file's names of the layout's objects, ``corpus.file_names``, in the words' ids too)."""
+    return renamed_words(f"{goal_phrase(goal, state, library)} {DASH} {format_goal(tuple(goal))}", names)
 
 
 def choice_list(phrases: Sequence[str]) -> str:

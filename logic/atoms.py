@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["canonical_predicate", "Atom", "AtomError", "attribute_pf", "parse_atom", "parse_goal", "format_goal", "renamed", "shown"]
+__all__ = ["canonical_predicate", "Atom", "AtomError", "attribute_pf", "parse_atom", "parse_goal", "format_goal", "renamed", "renamed_words", "shown"]
 
 # The commands-to-tasks corpus calls toys blocks, in object and predicate names (blockInRoom,
 # agentTouchingBlock): its spelling of the class toy, wherever it is a word of a camelCase name.
@@ -91,6 +91,16 @@ def format_goal(atoms: tuple[Atom, ...] | list[Atom], names: dict[str, str] | No
     """Write a conjunction the way the labels CSV does; ``names`` renames objects (a file's names for the
     layout's, as :func:`renamed`)."""
     return " ".join(str(a) for a in (renamed(atoms, names) if names else atoms))
+
+
+def renamed_words(text: str, names: dict[str, str] | None) -> str:
+    """``text`` with every whole-word object name ``names`` has replaced at once ("the green chair block1"
+    -> "the green chair block2"): in one pass, so that a name one object is given and another had is
+    never renamed twice."""
+    if not names:
+        return text
+    pattern = re.compile(r"(?<!\w)(" + "|".join(map(re.escape, sorted(names, key=len, reverse=True))) + r")(?!\w)")
+    return pattern.sub(lambda m: names[m.group(1)], text)
 
 
 def renamed(atoms, names: dict[str, str]) -> tuple[Atom, ...]:

@@ -83,3 +83,26 @@ def test_tasks_and_show_say_which_objects_they_renumbered(tmp_path):
         assert run.returncode == 0 and note in run.stdout.splitlines(), run.stdout
     assert json.loads(_cli("tasks", str(env), "--json").stdout)["file_names"]["block0"] == "block3"
     assert "numbered from 0" not in _cli("show", str(FIXTURE / "one.state")).stdout
+
+
+def test_two_chairs_told_apart_by_id_are_named_and_answered_by_the_files_names(tmp_path, model):
+    """Where two objects read alike the words carry their ids: those too are the file's, and an answer naming
+    one by the file's name acts on that one (the file's block1 is the layout's block0, its block2 block1)."""
+    chairs = (FIXTURE / "one.state").read_text().strip().replace(
+        "block0 (block): [x: {2} y: {6} shape: {chair} colour: {green} ]",
+        "block1 (block): [x: {2} y: {6} shape: {chair} colour: {green} ] , "
+        "block2 (block): [x: {2} y: {7} shape: {chair} colour: {green} ]")
+    env = tmp_path / "chairs.bdm"
+    env.write_text(chairs + "\n")
+    asked = _cli("follow", "--model", str(model), "--env", str(env), "go next to the chair", "--json")
+    data = json.loads(asked.stdout)
+    assert "the green chair block1 or the green chair block2" in data["question"]
+    assert {(c["words"], c["goal"]) for c in data["choices"]} == {
+        ("the green chair block1", "agentNextToToy(agent0, block1)"),
+        ("the green chair block2", "agentNextToToy(agent0, block2)")}
+    for answer, goal in (("the green chair block2", "block2"), ("the green chair block1", "block1")):
+        run = subprocess.run([sys.executable, "-m", "groundlang.cli", "follow", "--model", str(model), "--env",
+                              str(env), "go next to the chair", "--ask"], input=answer + "\n", capture_output=True,
+                             text=True, timeout=600)
+        assert run.returncode == 0, run.stderr
+        assert f"goal the agent next to the green chair {goal} — agentNextToToy(agent0, {goal}): reached" in run.stdout

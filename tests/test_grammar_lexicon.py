@@ -202,3 +202,15 @@ def test_a_colour_compound_is_cut_only_where_a_hue_ends():
     assert words.split_compound_colour(hue + "x") == (hue + "x",)
     assert words.split_compound_colour("bluegreen") == ("blue", "green")
     assert words.split_compound_colour("redo") == ("redo",) and words.split_compound_colour("tangerine") == ("tangerine",)
+
+
+def test_compass_prepositions_join_and_adverbs_before_a_preposition_do_not_split_it():
+    """"one spot east of the red chair" says a side as "left of" does; the exception that keeps "left" apart
+    after a determiner looks at adjectives and nouns only, so "in front of" and "out of" after a preposition
+    or an adjective stay whole ("in" and "out" are adverbs too)."""
+    lexicon = Lexicon.english()
+    assert lexicon.join_multiword("move to one spot west of the red chair".split())[4] == "west_of"
+    assert "east_of" in lexicon.join_multiword("go one spot east of the chair".split())
+    assert lexicon.join_multiword("go to in front of the chair".split())[2] == "in_front_of"
+    assert lexicon.join_multiword("push star straight out of exit".split())[3] == "out_of"
+    assert lexicon.join_multiword("go to the left of the room".split())[1] == "to_the_left_of"

@@ -127,3 +127,20 @@ def test_folds_are_refused_for_a_text_corpus():
     run = _cli("evaluate", "--corpus", "groundlang/examples", "--palette", "sokoban", "--labels", "x.csv",
                "--folds", "5")
     assert run.returncode == 2 and "--folds: for a .bdm corpus" in run.stderr and "Traceback" not in run.stderr
+
+
+def test_a_folds_error_stops_the_run_at_that_fold(monkeypatch):
+    """A fold's error was said only once every fold had been trained."""
+    import groundlang.pair_folds as pair_folds
+    from groundlang.pair_folds import cross_validate_pairs
+
+    calls = []
+
+    def failing(train, test, library, **options):
+        calls.append(len(test))
+        raise ValueError("no usable training pair (every pair was skipped)")
+
+    monkeypatch.setattr(pair_folds, "evaluate_pairs", failing)
+    with pytest.raises(ValueError, match=r"^fold 0 of 5: no usable training pair"):
+        cross_validate_pairs(_many(), 5, library=None)
+    assert len(calls) == 1

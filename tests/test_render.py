@@ -229,3 +229,14 @@ def test_a_palettes_glyph_of_mathtext_characters_is_drawn(tmp_path, drawn):
     assert glyph("star", state.layout.palette) == drawn
     out = save_picture(tmp_path / "g.png", state)
     assert Path(out).read_bytes()[:8] == PNG_MAGIC
+
+
+def test_every_printable_ascii_glyph_is_drawable_mathtext():
+    pytest.importorskip("matplotlib")
+    from matplotlib.mathtext import MathTextParser
+
+    from groundlang.render import _mathtext
+
+    parser = MathTextParser("agg")
+    for code in range(33, 127):
+        parser.parse(_mathtext(chr(code)))  # raises for a glyph mathtext cannot draw

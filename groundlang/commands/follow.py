@@ -63,15 +63,18 @@ def register(subparsers) -> None:
 
 def _choices_json(result, state, library, names=None) -> list[dict]:
     from groundlang.clarify import option_phrases
-    from groundlang.logic.atoms import format_goal
+    from groundlang.logic.atoms import format_goal, renamed_words
 
     phrases = option_phrases(result.choices, state, library)
-    return [{"number": k, "words": phrase, "goal": format_goal(c.goal, names), "probability": c.probability}
+    return [{"number": k, "words": renamed_words(phrase, names), "goal": format_goal(c.goal, names),
+             "probability": c.probability}
             for k, (phrase, c) in enumerate(zip(phrases, result.choices), start=1)]
 
 
 def _print_question(result, state, library, names=None) -> None:
-    print(result.question)
+    from groundlang.logic.atoms import renamed_words
+
+    print(renamed_words(result.question, names))
     for row in _choices_json(result, state, library, names):
         print(f"  {row['number']}) {row['words']}  ({row['probability']:.2f}; {row['goal']})")
 
@@ -79,6 +82,7 @@ def _print_question(result, state, library, names=None) -> None:
 def _ask(learner, result, state, max_steps: int, names=None):
     """Ask on the terminal until an answer names one choice; None at end of input or after ANSWER_TRIES."""
     from groundlang.clarify import AnswerError
+    from groundlang.logic.atoms import renamed_words
 
     _print_question(result, state, learner.library, names)
     for _ in range(ANSWER_TRIES):
@@ -94,8 +98,9 @@ def _ask(learner, result, state, max_steps: int, names=None):
             continue
         if not sys.stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read
             print(line.strip())
-        try:
-            return learner.clarify(result, line, max_steps=max_steps)
+        try:  # the choices were shown with the file's names: the answer is read with the layout's
+            return learner.clarify(result, renamed_words(line, {v: k for k, v in (names or {}).items()}),
+                                   max_steps=max_steps)
         except AnswerError as exc:
             print(f"  {exc}")
     return None
@@ -125,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import file_names, format_state_like, read_initial_state
     from groundlang.inference.sweeps import plan_once
     from groundlang.learner import Learner
-    from groundlang.logic.atoms import format_goal
+    from groundlang.logic.atoms import format_goal, renamed_words
     from groundlang.logic.palette_files import palette_names
     from groundlang.model.interpretations import NoTaskError
     from groundlang.model.palette import Palette, get_palette
@@ -184,20 +189,22 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.render import picture_title, save_picture
 
         save_picture(args.out, state, trajectory=result.states,
-                     title=picture_title(args.command_text, result.goal_words, format_goal(result.goal, names)))
+                     title=picture_title(args.command_text, renamed_words(result.goal_words, names),
+                                         format_goal(result.goal, names)))
     if args.json:
         data = {
-            "interpretations": [{"goal": format_goal(g, names), "words": goal_phrase(g, state, learner.library),
+            "interpretations": [{"goal": format_goal(g, names),
+                                 "words": renamed_words(goal_phrase(g, state, learner.library), names),
                                  "probability": p} for g, p in goals],
             "confidence": result.posterior.confidence,
             "margin": result.posterior.margin,
             "abstained": result.abstained,
         }
         if result.abstained:
-            data.update(question=result.question, choices=_choices_json(result, state, learner.library, names),
+            data.update(question=renamed_words(result.question, names), choices=_choices_json(result, state, learner.library, names),
                         unknown_words=list(result.unknown_words))
         else:
-            data.update(goal=format_goal(result.goal, names), goal_words=result.goal_words,
+            data.update(goal=format_goal(result.goal, names), goal_words=renamed_words(result.goal_words, names),
                         actions=[a.word for a in result.actions],
                         final_state=format_state_like(result.final_state, args.env, names),
                         reached=result.reached, reason=result.reason)
