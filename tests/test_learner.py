@@ -197,10 +197,11 @@ def test_cli_train_follow_lexicon(tmp_path, capsys):
     assert main(["--quiet", "lexicon", str(model), "--words", "red", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["red"][0][0] == "roomIsRed"
     # a word asked as a command would say it: "RED" is red, as follow reads it
-    assert main(["--quiet", "lexicon", str(model), "--words", "RED", "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["red"][0][0] == "roomIsRed"
+    assert main(["--quiet", "lexicon", str(model), "--words", "RED", "room.", "--json"]) == 0
+    shown = json.loads(capsys.readouterr().out)
+    assert set(shown) == {"red", "room"} and shown["red"][0][0] == "roomIsRed"
     assert main(["--quiet", "lexicon", str(model), "--words", " "]) == 2
-    assert "--words: an empty word" in capsys.readouterr().err
+    assert "--words ' ': no word in it" in capsys.readouterr().err
     # what a preposition says of the lifted task: P(L | preposition), every task of the library once
     assert main(["--quiet", "lexicon", str(model), "--prepositions", "--json", "--words", "to", "into"]) == 0
     said = json.loads(capsys.readouterr().out)

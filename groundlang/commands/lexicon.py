@@ -68,11 +68,17 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.model.parse_aligned import preposition_tasks
     from groundlang.wording import token_meanings
 
-    if args.words is not None:  # as the tokeniser reads a command: "RED" is red, and "" no word at all
-        args.words = [" ".join(w.lower().split()) for w in args.words]
-        if "" in args.words:
-            raise ValueError("--words: an empty word; give the words to show, e.g. --words red room")
     learner = Learner.load(args.model)
+    if args.words is not None:  # read as a command is: "RED" is red, "chair." chair; "next to" stays spaced, as
+        from groundlang.grammar.parser import tokenise  # a preposition's row sends it to the preposition table
+
+        asked_words = []
+        for w in args.words:
+            tokens = [t.replace("_", " ") for t in tokenise(w, learner.word_lexicon) if any(c.isalnum() for c in t)]
+            if not tokens:
+                raise ValueError(f"--words {w!r}: no word in it; give the words to show, e.g. --words red room")
+            asked_words += tokens
+        args.words = list(dict.fromkeys(asked_words))
     prepositions = learned = preposition_tasks(learner.globals, learner.vocab, top=args.top)
     if args.words:  # a multiword preposition is one token: "next to" is next_to
         asked = {"_".join(w.split()) for w in args.words}
