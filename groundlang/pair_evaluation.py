@@ -27,7 +27,7 @@ from groundlang.model.statespace import StateSpaceError
 from groundlang.pair_corpus import training_instances
 from groundlang.pair_tasks import REACHABILITY_MAX_STATES, command_task, lifted_facts
 
-__all__ = ["PairEvaluation", "evaluate_pairs", "failure_kind", "FAILURE_KINDS", "PUBLISHED_F1"]
+__all__ = ["PairEvaluation", "evaluate_pairs", "calibration_of_rows", "failure_kind", "FAILURE_KINDS", "PUBLISHED_F1"]
 
 log = logging.getLogger(__name__)
 
@@ -184,12 +184,9 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     per_task: dict[str, list[int]] = defaultdict(lambda: [0, 0])
     failures: dict[str, dict[str, int]] = defaultdict(dict)  # kind -> the relations left unmet -> count
     correct = n = commands_correct = scored = no_task = unseen_n = unseen_correct = skipped = unscored = 0
-    confident: list[tuple[float, bool]] = []  # (confidence, correct) per scored execution
-    command_confident: list[tuple[float, bool]] = []  # the same per scored command, its least confident layout
     for index, (command, task) in enumerate(zip(test, tasks)):
         unseen = command.text.strip().lower() not in seen
         all_right = True
-        least = 1.0  # confidence of the command's least confident layout (0 for a skipped one)
         followed = 0  # executions of the command that could be scored
         for k, pair in enumerate(command.pairs):
             row = {"index": index, "pair": k, "command": command.text}
@@ -220,27 +217,23 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                     failures[kind][unmet] = failures[kind].get(unmet, 0) + 1
                 n += 1
                 correct += hit
-                confident.append((row["confidence"], hit))
                 per_task[_task_kind(task)][0] += hit
                 per_task[_task_kind(task)][1] += 1
                 if unseen:
                     unseen_n += 1
                     unseen_correct += hit
             all_right &= hit
-            least = min(least, row["confidence"])
             followed += 1
             rows.append(row)
         if task and followed:
             scored += 1
             commands_correct += all_right
-            command_confident.append((least, all_right))
         elif not task:
             no_task += 1
         # (A task shown, yet no start state admits one: its executions are counted as not scored.)
     finished = time.perf_counter()
 
-    def report(pairs: list[tuple[float, bool]]) -> dict:
-        return calibration_report(*zip(*pairs), threshold=min_confidence) if pairs else {}
+    calibration, command_calibration = calibration_of_rows(rows, min_confidence)
 
     return PairEvaluation(
         train_commands=len(train), train_pairs=sum(len(getattr(i, "pairs", (i,))) for i in made.instances),
@@ -251,5 +244,21 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         per_task={k: tuple(v) for k, v in per_task.items()}, failures=dict(failures),
         seconds_training=trained - started, seconds_following=finished - trained,
         demonstrations=demonstrations, layouts=layouts, no_task_executions=unscored, executions=rows,
-        calibration=report(confident), command_calibration=report(command_confident),
+        calibration=calibration, command_calibration=command_calibration,
     )
+
+
+def calibration_of_rows(rows: list[dict], min_confidence: float) -> tuple[dict, dict]:
+    """The confidence reports of scored execution rows (those with ``correct``): per execution, and per
+    command (rows of one ``index``) with its least confident layout, right only when every layout is (acting
+    on a command means acting in every layout it comes with; a skipped layout has confidence 0)."""
+    scored = [row for row in rows if "correct" in row]
+    commands: dict[int, list[dict]] = defaultdict(list)
+    for row in scored:
+        commands[row["index"]].append(row)
+
+    def report(pairs: list[tuple[float, bool]]) -> dict:
+        return calibration_report(*zip(*pairs), threshold=min_confidence) if pairs else {}
+
+    return (report([(row["confidence"], row["correct"]) for row in scored]),
+            report([(min(r["confidence"] for r in of), all(r["correct"] for r in of)) for of in commands.values()]))

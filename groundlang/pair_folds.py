@@ -18,11 +18,10 @@ from collections import defaultdict
 from dataclasses import dataclass, replace
 
 from groundlang.bdm import Command
-from groundlang.confidence import calibration_report
 from groundlang.folds import prepare_worker, usable_workers
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE
 from groundlang.pair_corpus import fold_of_text
-from groundlang.pair_evaluation import PairEvaluation, evaluate_pairs
+from groundlang.pair_evaluation import PairEvaluation, calibration_of_rows, evaluate_pairs
 
 __all__ = ["PairCrossValidation", "cross_validate_pairs", "pool", "MAX_FOLDS"]
 
@@ -150,8 +149,7 @@ def _renumbered(result: PairEvaluation, held: list[int], fold: int) -> PairEvalu
 
 def pool(parts: list[PairEvaluation], min_confidence: float = DEFAULT_MIN_CONFIDENCE) -> PairEvaluation:
     """The folds' executions as one evaluation: counts summed, rows in corpus order, the confidence
-    reports computed again over every scored row (per command: its least confident layout, as
-    ``evaluate_pairs`` does)."""
+    reports computed again over every scored row (``calibration_of_rows``, as ``evaluate_pairs`` does)."""
     def summed(name: str) -> int:
         return sum(getattr(part, name) for part in parts)
 
@@ -168,15 +166,7 @@ def pool(parts: list[PairEvaluation], min_confidence: float = DEFAULT_MIN_CONFID
         for why, n in part.train_skipped.items():
             train_skipped[why] += n
     rows = sorted((row for part in parts for row in part.executions), key=lambda row: (row["index"], row["pair"]))
-    scored = [row for row in rows if "correct" in row]
-    commands: dict[int, list[dict]] = defaultdict(list)
-    for row in scored:
-        commands[row["index"]].append(row)
-    per_command = [(min(r["confidence"] for r in of), all(r["correct"] for r in of)) for of in commands.values()]
-
-    def report(pairs: list[tuple[float, bool]]) -> dict:
-        return calibration_report(*zip(*pairs), threshold=min_confidence) if pairs else {}
-
+    calibration, command_calibration = calibration_of_rows(rows, min_confidence)
     return PairEvaluation(
         train_commands=summed("train_commands"), train_pairs=summed("train_pairs"), train_skipped=dict(train_skipped),
         test_commands=summed("test_commands"), scored_commands=summed("scored_commands"),
@@ -187,5 +177,5 @@ def pool(parts: list[PairEvaluation], min_confidence: float = DEFAULT_MIN_CONFID
         failures=dict(failures), seconds_training=sum(p.seconds_training for p in parts),
         seconds_following=sum(p.seconds_following for p in parts), demonstrations=parts[0].demonstrations,
         layouts=parts[0].layouts, no_task_executions=summed("no_task_executions"), executions=rows,
-        calibration=report([(r["confidence"], r["correct"]) for r in scored]), command_calibration=report(per_command),
+        calibration=calibration, command_calibration=command_calibration,
     )
