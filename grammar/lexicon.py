@@ -9,7 +9,7 @@ an adverb, an adjective and a noun); the grammar decides which one a reading use
 
 Word file format (documented at the top of ``english.words``): ``CATEGORY: word word ...`` lines,
 ``#`` comments, blank lines skipped, ``_`` joining the words of a multiword entry (``in_front_of``),
-``form=lemma`` pairs under ``IRREGULAR``.
+``form=lemma`` pairs under ``IRREGULAR``, ``form=word`` pairs under ``SYNONYM``.
 
 ``SemanticLexicon`` is the paper's semantic model (LWFG's Phi_i constraints): words mapped to domain
 propositional functions with probabilities, learned later by the joint model and handed to ``parse``.
@@ -40,8 +40,10 @@ _TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SO
 # VERB_HAVING marks verb lemmas (listed under VERB) whose relative clause about a noun phrase reads as
 # "with" ("the room that has the chair"); it tags nothing itself.
 FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB")) + (
-    "VERB", "IRREGULAR", *_TAGGING, "VERB_HAVING",
+    "VERB", "IRREGULAR", "SYNONYM", *_TAGGING, "VERB_HAVING",
 )
+# Categories whose entries pair two words, ``form=word``, and what the pair means (for error messages).
+_PAIRED = {"IRREGULAR": "form=lemma (e.g. went=go)", "SYNONYM": "form=word (e.g. east=right)"}
 # A multiword entry's first word that may head or modify a noun phrase ("left" of "left of") does,
 # rather than open the preposition, after a word of these categories: "the left of the room",
 # "to left of star", "bottom left of orange room".
@@ -76,13 +78,19 @@ def _check(category: str, words: Iterable[str], where: str) -> tuple[str, ...]:
     for word in words:
         if not isinstance(word, str) or not _entry(word):
             raise LexiconError(f"{where}: {category} has an empty or non-text word {word!r}")
-        if category == "IRREGULAR":
+        if category in _PAIRED:
             form, sep, lemma = word.partition("=")
             if not sep or not _entry(form) or not _entry(lemma) or "=" in lemma:
-                raise LexiconError(f"{where}: IRREGULAR entry {word!r} is not form=lemma (e.g. went=go)")
+                raise LexiconError(f"{where}: {category} entry {word!r} is not {_PAIRED[category]}")
+            if category == "SYNONYM" and not _WORD.fullmatch(_entry(form)):
+                # read before multiword entries are joined, a form is one token
+                raise LexiconError(f"{where}: SYNONYM entry {word!r}: the form {form!r} must be one word")
+            if category == "SYNONYM" and not all(_WORD.fullmatch(part) for part in _entry(lemma).split("_")):
+                raise LexiconError(f"{where}: SYNONYM entry {word!r}: {lemma!r} is not letters, digits or apostrophes "
+                                   "(the tokeniser splits at other characters)")
             out.append(f"{_entry(form)}={_entry(lemma)}")
         elif "=" in word:
-            raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR pairs form=lemma)")
+            raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR and SYNONYM pair words)")
         elif not all(_WORD.fullmatch(part) for part in _entry(word).split("_")):
             # the tokeniser splits at any other character, so such an entry would never be read
             raise LexiconError(f"{where}: {category} word {word!r} is not a word the tokeniser reads (letters, "
@@ -175,6 +183,13 @@ class Lexicon:
         for lemma in sorted(words["VERB"]):
             self.verb_forms.update(_inflections(lemma))
         self.verb_forms.update(pair.split("=", 1) for pair in self.entries.get("IRREGULAR", ()))
+        # Each form the word it is read as, in tokens (a multiword word's parts, joined afterwards).
+        self.synonyms: dict[str, tuple[str, ...]] = {}
+        for pair in self.entries.get("SYNONYM", ()):
+            form, word = pair.split("=", 1)
+            if self.synonyms.setdefault(form, tuple(word.split("_"))) != tuple(word.split("_")):
+                raise LexiconError(f"SYNONYM {form!r} is given two words: {'_'.join(self.synonyms[form])} and "
+                                   f"{word}")
         table: dict[str, set[str]] = {}
         for category in FILE_CATEGORIES:
             tag = _TAGGING.get(category, category)
@@ -226,7 +241,11 @@ class Lexicon:
         line for a malformed file, OSError for one that cannot be read."""
         lexicon = self
         for path in paths:
-            lexicon = lexicon.extend(read_word_file(path))
+            words = read_word_file(path)
+            try:
+                lexicon = lexicon.extend(words)
+            except LexiconError as exc:  # what this file says against the words before it
+                raise LexiconError(f"{path}: {exc}") from None
         return lexicon
 
     def extend(self, words_by_category: Mapping[str, Iterable[str]]) -> "Lexicon":
@@ -296,6 +315,14 @@ class Lexicon:
                 if word[:cut] in self.hues and word[cut:] in self.hues:
                     return word[:cut], word[cut:]
         return (word,)
+
+    def read_synonyms(self, tokens: list[str]) -> list[str]:
+        """Tokens with each ``SYNONYM`` form replaced by the word it is read as (``east`` -> ``right``; a
+        multiword word by its words, which :meth:`join_multiword` joins), once: a word read as another is
+        not read again."""
+        if not self.synonyms:
+            return tokens
+        return [part for token in tokens for part in self.synonyms.get(token, (token,))]
 
     def join_multiword(self, tokens: list[str]) -> list[str]:
         """Tokens with each multiword entry ("in front of") joined into one (``in_front_of``), longest

@@ -96,8 +96,8 @@ Word = tuple[str, frozenset[str]]
 
 def tokenise(command: str, word_lexicon: Lexicon | None = None) -> list[str]:
     """Lowercase tokens: words (hyphenated words and solid colour compounds like "bluegreen" split,
-    clitics like 're split off, multiword entries such as "left of" joined into ``left_of``) and
-    punctuation. ``word_lexicon``: the words known (default: English, :meth:`Lexicon.english`)."""
+    clitics like 're split off, a word file's synonyms read as the word they stand for, multiword entries
+    such as "left of" joined into ``left_of``) and punctuation. ``word_lexicon``: the words known (default: English, :meth:`Lexicon.english`)."""
     words = word_lexicon or Lexicon.english()
     text = _without_control(command).lower().replace("\u2019", "'").replace("\u2018", "'")
     text = re.sub(r"(?<=\w)-(?=\w)", " ", text)
@@ -110,7 +110,7 @@ def tokenise(command: str, word_lexicon: Lexicon | None = None) -> list[str]:
             out.append(".")
         else:
             out.extend(words.split_compound_colour(tok))
-    return words.join_multiword(out)
+    return words.join_multiword(words.read_synonyms(out))
 
 
 def tag(tokens: list[str], word_lexicon: Lexicon | None = None) -> list[frozenset[str]]:

@@ -26,7 +26,8 @@ def _entities(command: str, lexicon: Lexicon) -> list[tuple]:
 def test_the_english_file_loads_with_every_category_the_parser_reads():
     english = Lexicon.english()
     entries = read_word_file(GRAMMAR / "english.words")
-    assert set(entries) == set(FILE_CATEGORIES) - {"HUE"}  # hues are the domain's colour names
+    # hues are the domain's colour names; synonyms a domain's (its layouts' "east" is "right")
+    assert set(entries) == set(FILE_CATEGORIES) - {"HUE", "SYNONYM"}
     assert sum(map(len, entries.values())) == 512  # entries of the file (a word may sit in several categories)
     assert english.having_verbs == {"have", "contain", "hold", "include"} <= set(english.entries["VERB"])
     assert english.having_preposition == "with"
@@ -121,7 +122,7 @@ def test_a_users_word_file_adds_a_noun_and_a_multiword_preposition(tmp_path):
     ("# fine\n\nNOUNS: mug\n", 3, "unknown category 'NOUNS'"),
     ("NOUN:\n", 1, "no words after NOUN:"),
     ("IRREGULAR: went\n", 1, "IRREGULAR entry 'went' is not form=lemma"),
-    ("VERB: go=went\n", 1, "only IRREGULAR pairs form=lemma"),
+    ("VERB: go=went\n", 1, "only IRREGULAR and SYNONYM pair words"),
     # an entry the tokeniser would split at a sign can never be read; a word, a clitic or one sign can
     ("NOUN: mug o'clock 're &\nNOUN: !!!\n", 2, "NOUN word '!!!' is not a word the tokeniser reads"),
     ("NOUN: a_b c-d e.f\n", 1, "NOUN word 'e.f' is not a word the tokeniser reads"),
@@ -214,3 +215,53 @@ def test_compass_prepositions_join_and_adverbs_before_a_preposition_do_not_split
     assert lexicon.join_multiword("go to in front of the chair".split())[2] == "in_front_of"
     assert lexicon.join_multiword("push star straight out of exit".split())[3] == "out_of"
     assert lexicon.join_multiword("go to the left of the room".split())[1] == "to_the_left_of"
+
+
+WILLIAMS_WORDS = LOGIC / "domains" / "williams2018.words"
+
+
+def test_a_synonym_is_read_as_its_word_before_multiword_entries_are_joined():
+    """The Williams domain is drawn north up: "east" is read as "right", so "one spot east of the chair"
+    is "right of" it and "the west side of" is "the left side of"; English alone keeps the compass words."""
+    williams = CLEANUP.with_files(WILLIAMS_WORDS)
+    assert williams.synonyms == {"east": ("right",), "west": ("left",)}
+    assert tokenise("move to one spot east of the red chair", williams)[4] == "right_of"
+    assert tokenise("go to the West side of the chair", williams)[1] == "to_the_left_side_of"
+    assert tokenise("move to the chair in the northeast room", williams)[-2] == "northeast"
+    assert tokenise("move to one spot east of the red chair", CLEANUP)[4] == "east_of"
+    lf = parse("move to one spot west of the red chair", word_lexicon=williams)
+    assert any("left_of(spot1, chair1)" in str(r.logical_form) for r in lf)
+
+
+def test_a_users_synonym_may_stand_for_a_multiword_entry_and_is_read_once(tmp_path):
+    words = tmp_path / "near.words"
+    words.write_text("SYNONYM: beside=next_to alongside=beside\n", encoding="utf-8")
+    lexicon = CLEANUP.with_files(words)
+    assert tokenise("stand beside the box", lexicon) == ["stand", "next_to", "the", "box"]
+    # a word read as another is not read again: "alongside" is "beside", not "next to"
+    assert tokenise("stand alongside the box", lexicon) == ["stand", "beside", "the", "box"]
+    assert lexicon != CLEANUP  # so the parse cache, keyed by the lexicon, does not serve the old readings
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("SYNONYM: east\n", "SYNONYM entry 'east' is not form=word"),
+    ("SYNONYM: north_east=up\n", "the form 'north_east' must be one word"),
+    ("SYNONYM: east=a.b\n", "'a.b' is not letters, digits or apostrophes"),
+    ("NOUN: east=right\n", "only IRREGULAR and SYNONYM pair words"),
+])
+def test_a_malformed_synonym_is_one_line_naming_file_and_line(tmp_path, text, expected):
+    path = tmp_path / "bad.words"
+    path.write_text("NOUN: mug\n" + text, encoding="utf-8")
+    with pytest.raises(LexiconError) as caught:
+        Lexicon.from_files(path)
+    assert str(caught.value).startswith(f"{path}:2: ") and expected in str(caught.value)
+
+
+def test_one_form_given_two_words_by_two_files_is_refused(tmp_path):
+    first, second = tmp_path / "a.words", tmp_path / "b.words"
+    first.write_text("SYNONYM: east=right\n", encoding="utf-8")
+    second.write_text("SYNONYM: east=left\n", encoding="utf-8")
+    with pytest.raises(LexiconError) as caught:
+        CLEANUP.with_files(first, second)
+    assert str(caught.value) == f"{second}: SYNONYM 'east' is given two words: left and right"
+    assert CLEANUP.with_files(first, first).synonyms == {"east": ("right",)}  # the same pair twice is one
