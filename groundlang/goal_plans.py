@@ -63,7 +63,7 @@ def plan_for_states(space: StateSpace, mask: np.ndarray, settings: TaskSettings,
 
 
 def expected_success_states(goals, masks: GoalMasks, step_cost: float, habits: EndHabits | None = None,
-                            moved_toys: bool = False, made_true: bool = False
+                            moved_toys: bool = False, made_true: bool = False, bound: bool = False
                             ) -> tuple[np.ndarray, tuple[Atom, ...]] | None:
     """Where to end so that the final state most probably satisfies what was meant: the reachable states
     ``s`` of most ``sum_g P(g | words) [s satisfies g] - step_cost * steps(s)``, over the posterior's goals
@@ -72,12 +72,13 @@ def expected_success_states(goals, masks: GoalMasks, step_cost: float, habits: E
     said to be acted on). The goal acted on alone is the special case of a posterior sure of it; where
     two goals can hold at once ("next to the chair", "right of the chair"), ending where both hold wins
     the mass of both. ``step_cost``: how much probability of success one more step is worth (0: none; a
-    step then only breaks ties). None where ``space`` is not enumerated from the start (a relevance
-    abstraction or a sample of placements): its states' distances are not the world's; and None where
+    step then only breaks ties). None where ``space`` is not enumerated breadth-first from the start (a
+    sample of placements): its states' distances are unknown (in a relevance abstraction they are those
+    of plans that leave its scenery where it stands, the plans following makes there); and None where
     no goal holds in a reachable state, or none where the cost leaves the agent: acting on the most
     probable goal then says what cannot be done. With ``habits``, each goal's term is weighed, state by
     state, by what demonstrations of such goals also left true (:mod:`groundlang.inference.end_habits`), and
-    with ``moved_toys`` by how often they moved a toy; ``made_true``: see ``EndHabits.weights``."""
+    with ``moved_toys`` by how often they moved a toy; ``made_true``, ``bound``: see ``EndHabits.weights``."""
     space = masks.space
     if getattr(space, "level_sizes", None) is None:
         return None
@@ -87,7 +88,7 @@ def expected_success_states(goals, masks: GoalMasks, step_cost: float, habits: E
     score = np.zeros(space.num_states)
     weights = ([None] * len(kept) if habits is None else
                habits.weights([goal for goal, _ in kept], masks, within=dist >= 0, moved_toys=moved_toys,
-                              made_true=made_true))
+                              made_true=made_true, bound=bound))
     for (goal, p), weight in zip(kept, weights):
         score += p * masks.mask(goal) * (1.0 if weight is None else weight)
     if not (score[dist >= 0] > 0).any():
@@ -135,16 +136,16 @@ class WorldPlans:
         return self._masks
 
     def act(self, state: State, goal: tuple[Atom, ...], max_steps: int,
-            ending: np.ndarray | None = None) -> tuple[list, list, bool, str]:
-        """Plan for ``goal``, or to end in a state of ``ending`` (``[S]`` bool over ``self.space(state)``), and
-        act: ``(states, actions, reached, reason)`` as :func:`plan_for_goal`."""
+            ending: np.ndarray | None = None, over: tuple[Atom, ...] | None = None) -> tuple[list, list, bool, str]:
+        """Plan for ``goal``, or to end in a state of ``ending`` (``[S]`` bool over ``self.space(state, over)``),
+        and act: ``(states, actions, reached, reason)`` as :func:`plan_for_goal`."""
         # The plan is the target's alone; an ending is keyed by its digest, not its [S] bytes (megabytes).
         target = goal if ending is None else hashlib.blake2b(np.packbits(ending).tobytes(), digest_size=16).digest()
-        key = (state, target, max_steps)
+        key = (state, target, max_steps, over if ending is not None and not exact_fits(state) else None)
         if key not in self.plans:
             if len(self.plans) >= _PLANS_KEPT:
                 self.plans.pop(next(iter(self.plans)))
             self.plans[key] = (plan_for_goal(self.space(state, goal), state, goal, self.library, self.settings,
                                              max_steps) if ending is None else
-                               plan_for_states(self.space(state), ending, self.settings, max_steps))
+                               plan_for_states(self.space(state, over), ending, self.settings, max_steps))
         return self.plans[key]

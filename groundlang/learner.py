@@ -271,7 +271,7 @@ class Learner:
         ending = self.ending(post, state)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
             _, masks, goals, target, goal = ending
-            return self._act(command, state, post, goal, max_steps, target, (goals, masks))
+            return self._act(command, state, post, goal, max_steps, target, (goals, masks, post.best_goal))
         return self._act(command, state, post, post.best_goal, max_steps)
 
     def ending(self, post: Posterior, state: State):
@@ -281,10 +281,14 @@ class Learner:
         habits with ``end_habits``); None where it plans for ``post.best_goal`` alone."""
         if not self.lm.expected_success:
             return None
-        space = self._world.space(state)
+        # Where the world fits, the space goals are compared in; else the most probable goal's relevance
+        # abstraction, where its plan is made: the sample of placements goals are compared in tells them
+        # apart but not how far its states are, and the abstraction's distances are a plan's.
+        space = self._world.space(state, post.best_goal)
         masks, goals = self._world.goal_masks(space), post.goals()
         found = expected_success_states(goals, masks, self.lm.step_cost, self.habits if self.lm.end_habits else None,
-                                        moved_toys=self.lm.moved_toys, made_true=self.lm.habits_made_true)
+                                        moved_toys=self.lm.moved_toys, made_true=self.lm.habits_made_true,
+                                        bound=self.lm.bound_habits)
         return None if found is None else (space, masks, goals, *found)
 
     def clarify(self, result: FollowResult, answer: str | int, max_steps: int = 200) -> FollowResult:
@@ -321,12 +325,13 @@ class Learner:
     def _act(self, command: str, state: State, post: Posterior, goal: tuple[Atom, ...], max_steps: int,
              ending=None, goal_masks=None) -> FollowResult:
         """Plan for ``goal``, or to end in a state of ``ending`` (:meth:`WorldPlans.act`; ``goal_masks``: the
-        posterior's goals and where they hold over its space)."""
-        states, actions, reached, reason = self._world.act(state, goal, max_steps, ending)
+        posterior's goals, where they hold over the space of the ending, and the goal whose space it is)."""
+        over = None if goal_masks is None else goal_masks[2]
+        states, actions, reached, reason = self._world.act(state, goal, max_steps, ending, over)
         if ending is not None and reached:
             # Every state of ``ending`` is worth the same and the plan may end in any of them, not only
             # where ``goal`` holds: the goal said to be acted on is the one that holds where it ends.
-            goals, masks = goal_masks
+            goals, masks, _ = goal_masks
             goal = goal_holding_at(goals, masks, masks.space.index_of(states[-1])) or goal
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library))

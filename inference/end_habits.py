@@ -25,10 +25,17 @@ object but the one commands speak to) ends elsewhere than it started counts the 
 ``q(MOVED | L(g))`` (those where none did by 1): sent to a room, a follower does not push a chair along to
 stand beside it there, where the demonstrators of such goals left the chairs where they were. Where every
 state of the goal has a toy moved (a toy's goal), moving is the goal's own business and weighs nothing.
+
+What a demonstrator leaves true is often bound to what the goal names: having pushed a chair into a
+room, she stands in that room, not in any. Two new facts of a pair that share an object count a *bound
+habit* among its new ones (:func:`bound_name`: ``agentInRoom[1]=toyInRoom[1]``), and with ``bound`` a goal's
+states where a relation's fact holds bound to the goal's objects as demonstrations showed are worth more
+than those where only another fact of it holds (:meth:`EndHabits._bound_share`).
 """
 
 from __future__ import annotations
 
+import re
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -70,7 +77,31 @@ def _new_relations(pairs: Sequence[tuple[State, State]], library) -> list[frozen
     names = np.array([canonical_predicate(a.predicate) for a in atoms])
     holds = atoms_hold_along(layout, np.stack([s.positions for pair in pairs for s in pair]), atoms, tables)
     new = holds[1::2] & ~holds[0::2]
-    return [frozenset(names[row].tolist() + ([MOVED] if m else [])) for row, m in zip(new, moved)]
+    return [frozenset(names[row].tolist() + _bound([atoms[i] for i in np.flatnonzero(row)]) + ([MOVED] if m else []))
+            for row, m in zip(new, moved)]
+
+
+def bound_name(relation: str, position: int, other: str, other_position: int) -> str:
+    """The name of a bound habit: a new fact of ``relation`` whose argument ``position`` (from 0) is the
+    argument ``other_position`` of a new fact of ``other`` (``agentInRoom[1]=toyInRoom[1]``: the agent
+    ends in the room a toy was pushed into)."""
+    return f"{relation}[{position}]={other}[{other_position}]"
+
+
+_BOUND = re.compile(r"^(\w+)\[(\d+)\]=(\w+)\[(\d+)\]$")
+
+
+def _bound(new_facts: Sequence[Atom]) -> list[str]:
+    """The bound habits (:func:`bound_name`) two of a pair's new facts of different relations show."""
+    out = set()
+    for fact in new_facts:
+        for other in new_facts:
+            relation, other_relation = canonical_predicate(fact.predicate), canonical_predicate(other.predicate)
+            if relation == other_relation:
+                continue
+            out.update(bound_name(relation, i, other_relation, j)
+                       for i, a in enumerate(fact.args) for j, b in enumerate(other.args) if a == b)
+    return sorted(out)
 
 
 def demonstrated_pairs(instances) -> list[tuple[State, State]]:
@@ -136,7 +167,19 @@ class EndHabits:
 
     @cached_property
     def relations(self) -> frozenset[str]:
-        return frozenset().union(*(shown for shown, _ in self.shown)) if self.shown else frozenset()
+        """The relations demonstrations left new (and :data:`MOVED`), not their bound habits."""
+        shown = frozenset().union(*(shown for shown, _ in self.shown)) if self.shown else frozenset()
+        return frozenset(name for name in shown if not _BOUND.match(name))
+
+    @cached_property
+    def bound(self) -> dict[str, tuple[tuple[str, int, str, int], ...]]:
+        """Per relation, its bound habits demonstrations showed: ``(name, position, other, other_position)``."""
+        out: dict[str, list] = {}
+        for shown, _ in self.shown:
+            for name in shown:
+                if (m := _BOUND.match(name)) is not None:
+                    out.setdefault(m[1], set()).add((name, int(m[2]), m[3], int(m[4])))
+        return {relation: tuple(sorted(found)) for relation, found in out.items()}
 
     def table(self) -> dict[str, dict[str, float]]:
         """``q(R | {L})`` for every two relations demonstrations showed: ``{L: {R: rate}}``, to read what
@@ -144,8 +187,14 @@ class EndHabits:
         return {given: {r: self.rate(r, frozenset([given])) for r in sorted(self.relations - {given})}
                 for given in sorted(self.relations)}
 
+    def bound_table(self) -> dict[str, float]:
+        """``q(b | {L})`` for every bound habit ``b`` demonstrations showed, ``L`` the relation it binds to
+        (``{"agentInRoom[1]=toyInRoom[1]": 0.9, ...}``), to read what was learned."""
+        return {name: self.rate(name, frozenset([other]))
+                for found in self.bound.values() for name, _, other, _ in found}
+
     def weights(self, goals: Iterable[tuple[Atom, ...]], masks, within: np.ndarray,
-                moved_toys: bool = False, made_true: bool = False) -> list[np.ndarray | None]:
+                moved_toys: bool = False, made_true: bool = False, bound: bool = False) -> list[np.ndarray | None]:
         """Per goal, ``[S]``: each state's weight for it over ``masks.space`` (a :class:`GoalMasks`), the
         product over the relations demonstrations showed that can hold with it in a state of ``within``
         (``[S]`` bool, those the agent can reach); None where it is 1 everywhere. A relation that cannot
@@ -153,7 +202,9 @@ class EndHabits:
         nothing: habits say where to end among a goal's states, not which goal to prefer. With
         ``moved_toys``, :data:`MOVED` weighs the goal's states where a toy moved (module docstring). With
         ``made_true``, a relation weighs the states where some fact of it holds that did not in the space's
-        initial state (as :func:`new_relations` counted the demonstrations), not every state where one holds."""
+        initial state (as :func:`new_relations` counted the demonstrations), not every state where one holds.
+        With ``bound``, a relation's states where its fact is bound to the goal's objects as demonstrations
+        showed (:meth:`_bound_share`) are worth more than those where only another of its facts holds."""
         holds: dict[str, np.ndarray] = {}
         # Weighed whether or not a demonstration moved a toy: that none ever did is the strongest evidence.
         moving = _moved(masks.space) if moved_toys and self.demonstrations else None
@@ -176,9 +227,39 @@ class EndHabits:
                 if not (holds[relation] & company).any():
                     continue
                 factor = (1.0 - q) + q * holds[relation]
+                if bound and (share := self._bound_share(relation, goal, given, q, masks, company, made_true,
+                                                         holds[relation])):
+                    factor = factor - share[0] * holds[relation] + share[0] * share[1]
                 weight = factor if weight is None else weight * factor
             out.append(weight)
         return out
+
+    def _bound_share(self, relation: str, goal: tuple[Atom, ...], given: frozenset[str], q: float, masks,
+                     company: np.ndarray, made_true: bool, plain: np.ndarray) -> tuple[float, np.ndarray] | None:
+        """``(q_b, [S] bool)``: of the demonstrations of such goals that left a new fact of ``relation``
+        (share ``q``), the share ``q_b`` whose fact was bound to a fact of the goal's relations as it is in
+        the states returned (``agentInRoom[1]=toyInRoom[1]``: the agent in the room the goal pushes the
+        toy into), the habit of largest share that can hold with the goal and tells some of its states
+        apart from the relation's own (``plain``, where some fact of it holds: a binding to the one agent
+        every fact names says nothing more); None where none does.
+
+        A demonstration showing a bound fact showed a fact of the relation, so the truth asks for a fact
+        of it with probability ``q``, for the bound one with ``q_b`` (at most ``q``): a state where the
+        bound fact holds is worth 1, one where only another fact of it holds ``1 - q_b``, one where none
+        does ``1 - q`` (the relation's factor ``1 - q + (q - q_b) [R] + q_b [bound]``)."""
+        best = None
+        for name, position, other, other_position in self.bound.get(relation, ()):
+            if other not in given:
+                continue
+            q_b = min(q, self.rate(name, given))
+            objects = {a.args[other_position] for a in goal
+                       if canonical_predicate(a.predicate) == other and other_position < len(a.args)}
+            if q_b <= 0.0 or not objects or (best is not None and q_b <= best[0]):
+                continue
+            where = _holds(relation, masks, made_true, position=position, objects=objects)
+            if (where & company).any() and ((where ^ plain) & company).any():
+                best = (q_b, where)
+        return best
 
     def to_json(self) -> list:
         return [[sorted(shown), n] for shown, n in self.shown]
@@ -206,10 +287,11 @@ def _moved(space) -> np.ndarray:
     return (space.positions[:, 1:] != start[None]).any(axis=(1, 2))
 
 
-def _holds(relation: str, masks, made_true: bool = False) -> np.ndarray:
+def _holds(relation: str, masks, made_true: bool = False, position: int = 0, objects=None) -> np.ndarray:
     """``[S]`` bool over ``masks.space``: where some fact of ``relation`` holds (``made_true``: one that does
-    not hold in the initial state, index 0)."""
-    atoms = [(a,) for a in masks.tables.grids if canonical_predicate(a.predicate) == relation]
+    not hold in the initial state, index 0; ``objects``: one whose argument ``position`` is one of them)."""
+    atoms = [(a,) for a in masks.tables.grids if canonical_predicate(a.predicate) == relation
+             and (objects is None or (position < len(a.args) and a.args[position] in objects))]
     masks.prepare(atoms)
     found = [masks.mask(atom) for atom in atoms]
     if made_true:

@@ -47,7 +47,9 @@ logger = logging.getLogger(__name__)
 
 # Bump when the meaning of a stored number changes (the end-state likelihood, the spaces it is computed in).
 # Bump too when end_habits.new_relations, whose results entries keep, changes what it finds.
-EVIDENCE_VERSION = 3  # 2: the relations new at the pair's end (``new``); 3: and whether a toy moved (end_habits.MOVED)
+# 2: the relations new at the pair's end (``new``); 3: and whether a toy moved (end_habits.MOVED); 4: and
+# the bound habits its new facts show (end_habits.bound_name)
+EVIDENCE_VERSION = 4
 # An entry holds a few numbers per grounded task (tens of bytes each); far more is not an entry.
 MAX_ENTRY_BYTES = 4 * 1024 * 1024
 # Pieces of evidence kept in memory per EvidenceCache (a few KB each), the most recently used.

@@ -37,7 +37,8 @@ class LanguageModel:
 
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False,
                  achievable_goals: bool = True, expected_success: bool = True, step_cost: float = 0.005,
-                 end_habits: bool = True, moved_toys: bool = False, habits_made_true: bool = False):
+                 end_habits: bool = True, moved_toys: bool = False, habits_made_true: bool = False,
+                 bound_habits: bool = True):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
         "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
         ``name_share``, and its learned words otherwise: the names a domain's author gives are words
@@ -53,7 +54,9 @@ class LanguageModel:
         (:mod:`groundlang.inference.end_habits`); with ``moved_toys`` as well, by how often they moved a
         toy (a state where one moved weighs that rate). ``habits_made_true``: a relation weighs a state
         where the plan made one of its facts true (one that did not hold at the start), as demonstrations
-        were counted, not wherever one of its facts holds."""
+        were counted, not wherever one of its facts holds. ``bound_habits``: a relation's fact weighs more
+        where it is bound to the goal's objects as demonstrations showed (the agent in the room the toy
+        was pushed into; ``EndHabits.weights``)."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
@@ -68,13 +71,14 @@ class LanguageModel:
         self.end_habits = end_habits
         self.moved_toys = moved_toys
         self.habits_made_true = habits_made_true
+        self.bound_habits = bound_habits
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
                 "schema_names": self.schema_names, "achievable_goals": self.achievable_goals,
                 "expected_success": self.expected_success, "step_cost": self.step_cost,
                 "end_habits": self.end_habits, "moved_toys": self.moved_toys,
-                "habits_made_true": self.habits_made_true}
+                "habits_made_true": self.habits_made_true, "bound_habits": self.bound_habits}
 
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""

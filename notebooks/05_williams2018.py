@@ -134,6 +134,14 @@ for given in relations:
     print(f"{given:18s}", "  ".join(f"{table[given].get(r, float('nan')):15.2f}" for r in relations))
 
 # %% [markdown]
+# Habits bound to the goal's objects (`bound_habits`): `R[i]=L[j]` counts pairs where a new fact of `R` has as its argument `i` the argument `j` of a new fact of `L`. `agentInRoom[1]=toyInRoom[1]` near 1 says that demonstrators who pushed a toy into a room stood in that room at the end; following prefers those states over ones where the agent is in some other room.
+
+# %%
+bound = learner.habits.bound_table()
+for name, rate in sorted(bound.items(), key=lambda kv: -kv[1])[:12]:
+    print(f"{name:40s} {rate:.2f}")
+
+# %% [markdown]
 # ## One command in two of its layouts
 #
 # The most common text with "left of" among the training commands, read in its first two layouts. `Learner.posterior` is the posterior from the words alone (the pairs are not consulted); beside it, what the command's three pairs show (`pair_tasks.pair_task`, the corpus README's rule: the lifted facts that hold in every end state and not in every start state).

@@ -42,14 +42,52 @@ def _mask(masks: GoalMasks, goal: str) -> np.ndarray:
     return masks.mask(parse_goal(goal))
 
 
+def _unbound(relations) -> set[str]:
+    return {r for r in relations if "[" not in r}
+
+
 def test_a_demonstration_shows_the_relations_that_newly_hold_at_its_end():
     assert new_relations(START, _state((6, 5)), LIBRARY) == {"agentInRoom"}
     # below the chair: next to it, neither left nor right of it
-    assert new_relations(START, _state((6, 6)), LIBRARY) == {"agentInRoom", "agentNextToToy"}
-    assert new_relations(START, _state((5, 7)), LIBRARY) == {"agentInRoom", "agentNextToToy", "agentLeftOfToy"}
+    assert _unbound(new_relations(START, _state((6, 6)), LIBRARY)) == {"agentInRoom", "agentNextToToy"}
+    left = new_relations(START, _state((5, 7)), LIBRARY)
+    assert _unbound(left) == {"agentInRoom", "agentNextToToy", "agentLeftOfToy"}
+    # two new facts naming one object: the toy the agent is left of is the toy it is next to
+    assert {"agentLeftOfToy[1]=agentNextToToy[1]", "agentNextToToy[1]=agentLeftOfToy[1]"} <= left
     assert new_relations(START, START, LIBRARY) == frozenset()
     # a relation that already held is not new: the agent stays in the green room
     assert new_relations(START, _state((1, 6)), LIBRARY) == frozenset()
+
+
+def test_with_bound_habits_the_agent_ends_in_the_room_the_toy_was_pushed_into():
+    """Demonstrators who pushed a chair into a room stood in that room at the end. From the doorway below the
+    blue room, pushing the chair into it, the follower may step back into the red room or push on into the
+    blue one: the relation's habit ("in some room") weighs both alike, the bound habit only the blue room."""
+    start = _state((6, 2), chair=(6, 3))
+    pushed = _state((6, 5), chair=(6, 6))
+    shown = new_relations(start, pushed, LIBRARY)
+    assert {"toyInRoom", "agentInRoom", "agentInRoom[1]=toyInRoom[1]", "toyInRoom[1]=agentInRoom[1]"} <= shown
+    habits = EndHabits.learn([(start, pushed)] * 3, LIBRARY)
+    assert habits.relations == {"toyInRoom", "agentInRoom", MOVED}  # bound ones apart (next to it all along)
+    assert ("agentInRoom[1]=toyInRoom[1]", 1, "toyInRoom", 1) in habits.bound["agentInRoom"]
+    # q(b | {L}) = (3 + (3 + 1/2) / 4) / (3 + 1): every one of three demonstrations, shrunk
+    assert habits.bound_table()["agentInRoom[1]=toyInRoom[1]"] == pytest.approx((3 + 3.5 / 4) / 4)
+    space = planning_space(start, None, LIBRARY)
+    masks = GoalMasks(space, LIBRARY)
+    goal = parse_goal("toyInRoom(block0, room2)")
+    in_blue, in_red = _mask(masks, "agentInRoom(agent0, room2)"), _mask(masks, "agentInRoom(agent0, room0)")
+    plain, _ = expected_success_states([(goal, 1.0)], masks, 0.005, habits)
+    assert (plain & in_red).any()  # as good as the blue room by the relation's habit, and nearer
+    bound, said = expected_success_states([(goal, 1.0)], masks, 0.005, habits, bound=True)
+    assert said == goal and bound.any() and (bound <= in_blue & _mask(masks, "toyInRoom(block0, room2)")).all()
+    dist = distances(space)
+    (weight,) = habits.weights([goal], masks, dist >= 0, bound=True)
+    (unbound,) = habits.weights([goal], masks, dist >= 0)
+    goal_states = _mask(masks, "toyInRoom(block0, room2)") & (dist >= 0)
+    # in the blue room: worth as much as without the binding; in the red room: less, by the bound share
+    assert np.allclose(weight[goal_states & in_blue], unbound[goal_states & in_blue])
+    assert (weight[goal_states & in_red] < unbound[goal_states & in_red]).all()
+    assert weight.max() <= 1.0 and weight.min() > 0.0
 
 
 def test_the_rate_is_counted_and_shrunk_towards_the_relations_own_rate():
@@ -63,8 +101,8 @@ def test_the_rate_is_counted_and_shrunk_towards_the_relations_own_rate():
     assert habits.rate("agentNextToToy", frozenset({"toyInRoom"})) == pytest.approx(1.5 / 5)
     assert EndHabits(()).rate("agentInRoom", frozenset()) == 0.0
     more = habits.plus([(START, _state((5, 7)))], LIBRARY)
-    assert more.demonstrations == 5 and dict(more.shown)[frozenset({"agentInRoom", "agentNextToToy",
-                                                                    "agentLeftOfToy"})] == 1
+    assert more.demonstrations == 5 and more.rate("agentLeftOfToy", frozenset({"agentNextToToy"})) == pytest.approx(
+        (1 + 1.5 / 6) / (2 + 1))
 
 
 def test_following_ends_where_the_goals_usual_company_holds_too():
@@ -171,24 +209,28 @@ def test_learned_in_training_saved_with_the_model_and_switched_off_by_a_setting(
     assert off.lm.settings()["end_habits"] is False and off.habits == learner.habits  # learned, not used
 
 
-def test_habits_made_true_reaches_where_following_ends_and_is_saved(williams_commands, trained, tmp_path,
-                                                                   monkeypatch):
+@pytest.mark.parametrize("setting, argument, default", [("habits_made_true", "made_true", False),
+                                                       ("bound_habits", "bound", True)])
+def test_a_habits_setting_reaches_where_following_ends_and_is_saved(williams_commands, trained, tmp_path,
+                                                                    monkeypatch, setting, argument, default):
     import groundlang.learner as learner_module
 
     instances, _, _ = trained
-    on = Learner(get_language_model("parse", habits_made_true=True), library=LIBRARY, cache_dir=False).fit(instances)
+    assert get_language_model("parse").settings()[setting] is default
+    on = Learner(get_language_model("parse", **{setting: not default}), library=LIBRARY,
+                 cache_dir=False).fit(instances)
     seen = []
     real = learner_module.expected_success_states
 
     def spy(*args, **kwargs):
-        seen.append(kwargs.get("made_true"))
+        seen.append(kwargs.get(argument))
         return real(*args, **kwargs)
 
     monkeypatch.setattr(learner_module, "expected_success_states", spy)
     command = williams_commands[0]
     on.follow(command.text, command.pairs[0].start)
-    assert seen == [True]
-    assert Learner.load(on.save(tmp_path / "model")).lm.habits_made_true is True
+    assert seen == [not default]
+    assert getattr(Learner.load(on.save(tmp_path / "model")).lm, setting) is (not default)
 
 
 @pytest.mark.parametrize("value, expected", [

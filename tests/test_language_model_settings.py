@@ -23,7 +23,7 @@ def test_settings_make_the_model_they_name():
                                                                         "schema_names": False, "achievable_goals": True,
                                                                         "expected_success": True, "step_cost": 0.005,
                                                                         "end_habits": True, "moved_toys": False,
-                                                                        "habits_made_true": False}
+                                                                        "habits_made_true": False, "bound_habits": True}
 
 
 @pytest.mark.parametrize("name, settings, message", [
