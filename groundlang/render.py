@@ -7,6 +7,7 @@ pyplot), so importing this module costs nothing and needs no display.
 from __future__ import annotations
 
 import io
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -95,14 +96,21 @@ _MATHTEXT = {"\\": "\\backslash ", "^": "\\^{}", "~": "\\~{}", '"': "\u201d", "`
              **{c: "\\" + c for c in "$_{}%#"}}
 
 
-def _legend(ax, state: State, moved: list[int], has_path: bool, cell: float) -> None:
+def _named(names: Mapping[str, str] | None):
+    """An object's name as shown: the file's (``names``, by the layout's name, ``corpus.file_names``) where it
+    gives one, else the layout's."""
+    return (lambda name: name) if not names else (lambda name: names.get(name, name))
+
+
+def _legend(ax, state: State, moved: list[int], has_path: bool, cell: float,
+            names: Mapping[str, str] | None = None) -> None:
     """A legend below the map: the agent and each toy by id and in words, what start, end and paths look
     like, and each room's id and colour (two rooms of one colour are told apart by the ids drawn in them)."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    lay, palette = state.layout, state.layout.palette
-    agent = lay.movable_names[0]
+    lay, palette, shown = state.layout, state.layout.palette, _named(names)
+    agent = shown(lay.movable_names[0])
     size = 9
     handles = [Line2D([], [], marker="o", ls="none", ms=size, mfc="white", mec="black",
                       label=f"{agent}{' at the start' if has_path else ''}")]
@@ -114,27 +122,30 @@ def _legend(ax, state: State, moved: list[int], has_path: bool, cell: float) -> 
         colour, mark = _rgb(toy.colour, palette), _mathtext(glyph(toy.shape, palette))
         start = " at the start" if k in moved else ""
         handles.append(Line2D([], [], marker=mark, ls="none", ms=size * 1.2, color=colour, mec="black", mew=0.3,
-                              label=f"{name} ({toy.colour} {toy.shape}{_added(lay, name)}){start}"))
+                              label=f"{shown(name)} ({toy.colour} {toy.shape}{_added(lay, name)}){start}"))
         if k in moved:
-            handles += [Line2D([], [], ls="--", lw=2, color=colour, label=f"{name}'s path"),
+            handles += [Line2D([], [], ls="--", lw=2, color=colour, label=f"{shown(name)}'s path"),
                         Line2D([], [], marker=mark, ls="none", ms=size * 1.2 * END_SCALE, color=colour,
-                               mec="black", mew=0.3, label=f"{name} at the end (small, upper right)")]
+                               mec="black", mew=0.3, label=f"{shown(name)} at the end (small, upper right)")]
     handles += [Patch(facecolor=0.45 * _rgb(r.colour, palette) + 0.55, edgecolor="black", lw=0.5,
-                      label=f"{name} ({r.colour}{_added(lay, name)})") for name, r in zip(lay.room_names, lay.rooms)]
+                      label=f"{shown(name)} ({r.colour}{_added(lay, name)})")
+                for name, r in zip(lay.room_names, lay.rooms)]
     handles += [Patch(facecolor=_DOOR, edgecolor="black", lw=0.5, label="door"),
                 Patch(facecolor=_WALL, edgecolor="black", lw=0.5, label="wall")]
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.04 if cell >= 0.3 else -0.02),
               ncol=3 if lay.width >= 9 else 2, fontsize=7, frameon=False, handlelength=2.2)
 
 
-def draw_state(state: State, ax=None, trajectory=None, title: str | None = None, legend: bool = True):
+def draw_state(state: State, ax=None, trajectory=None, title: str | None = None, legend: bool = True,
+               names: Mapping[str, str] | None = None):
     """Draw a state (and optionally a trajectory as paths) on a matplotlib Axes; returns the Axes.
 
     ``trajectory``: sequence of States or positions ``[T, 1 + num_toys, 2]``. The state's own positions
     are the start; where the trajectory ends is drawn on top, smaller and off the cell's centre, so no
     marker hides another. ``legend``: a key below the map (the agent, toys and rooms by id and in words,
     the start, end and path markers); animation frames and gym observations leave it out.
-    Without ``ax`` a new Agg figure is made (no pyplot, no display needed).
+    Without ``ax`` a new Agg figure is made (no pyplot, no display needed). ``names``: the objects' names
+    as a file gives them, by the layout's (``corpus.file_names``), for the ids drawn and the legend.
     """
     import matplotlib.patheffects as pe
     from matplotlib.figure import Figure
@@ -153,7 +164,7 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None,
     )
     # Each room's id in its upper-left corner: titles and printed goals name rooms by id.
     for name, r in zip(lay.room_names, lay.rooms):
-        ax.text(r.left + 0.55, r.top - 0.55, name, ha="left", va="top", fontsize=max(4.0, 12 * cell),
+        ax.text(r.left + 0.55, r.top - 0.55, _named(names)(name), ha="left", va="top", fontsize=max(4.0, 12 * cell),
                 color=(0.15, 0.15, 0.15), alpha=0.75, zorder=2)
     outline = [pe.withStroke(linewidth=2.5, foreground="black")]
     pos = trajectory_positions(trajectory)
@@ -191,7 +202,7 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None,
     if title:
         ax.set_title(title, fontsize=9, wrap=True)
     if legend:
-        _legend(ax, state, moved, len(pos) > 1, cell)
+        _legend(ax, state, moved, len(pos) > 1, cell, names)
     return ax
 
 
@@ -226,8 +237,10 @@ def check_picture_destination(path: str | Path, option: str = "--out") -> Path:
     return check_destination(path, option)
 
 
-def save_picture(path: str | Path, state: State, trajectory=None, title: str | None = None) -> Path:
-    """Draw a state (and trajectory) and write the image atomically; format from the suffix (png, svg, pdf)."""
+def save_picture(path: str | Path, state: State, trajectory=None, title: str | None = None,
+                 names: Mapping[str, str] | None = None) -> Path:
+    """Draw a state (and trajectory) and write the image atomically; format from the suffix (png, svg, pdf);
+    ``names`` as :func:`draw_state`'s."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -238,7 +251,7 @@ def save_picture(path: str | Path, state: State, trajectory=None, title: str | N
     fig = Figure(figsize=(cell * lay.width + 1.5, cell * lay.height + 1.5))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
-    draw_state(state, ax=ax, trajectory=trajectory, title=title)
+    draw_state(state, ax=ax, trajectory=trajectory, title=title, names=names)
     from groundlang.logic.storage import atomic_path
 
     # Drawn in memory first: the PNG writer seeks, which a FIFO given as --out cannot.
@@ -258,11 +271,13 @@ def _toy_symbols(state: State) -> list[str]:
     return [str(i % 10) for i in range(len(state.toys))]
 
 
-def ascii_state(state: State) -> str:
+def ascii_state(state: State, names: Mapping[str, str] | None = None) -> str:
     """A text picture, north up: ``#`` wall, ``+`` door, room floors by colour initial, ``A`` agent, toys.
 
-    Ends with a legend naming every symbol's object (room0, block0, ...).
+    Ends with a legend naming every symbol's object (room0, block0, ...; ``names``: as a file names them,
+    by the layout's names, ``corpus.file_names``).
     """
+    shown = _named(names)
     lay = state.layout
     grid = np.full((lay.width, lay.height), " ", dtype="<U1")
     grid[lay.wall] = "#"
@@ -274,10 +289,10 @@ def ascii_state(state: State) -> str:
         grid[toy.x, toy.y] = sym
     grid[state.agent.x, state.agent.y] = "A"
     rows = ["".join(grid[:, y]).rstrip() for y in range(lay.height - 1, -1, -1)]
-    legend = ["legend: # wall, + door, A agent0"]
-    legend += [f"  {s} {name} ({t.colour} {t.shape}{_added(lay, name)})"
+    legend = [f"legend: # wall, + door, A {shown(lay.movable_names[0])}"]
+    legend += [f"  {s} {shown(name)} ({t.colour} {t.shape}{_added(lay, name)})"
                for s, name, t in zip(symbols, lay.toy_names, state.toys)]
-    legend += [f"  {r.colour[:1].lower()} {name} ({r.colour}{_added(lay, name)})"
+    legend += [f"  {r.colour[:1].lower()} {shown(name)} ({r.colour}{_added(lay, name)})"
                for name, r in zip(lay.room_names, lay.rooms)]
     return "\n".join(rows + legend)
 

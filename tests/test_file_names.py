@@ -73,16 +73,32 @@ def test_follow_names_goals_and_the_final_state_as_the_file_does(tmp_path, model
     assert "agentNextToToy(robot, block3): reached" in text.stdout and "block0" not in text.stdout
 
 
-def test_tasks_and_show_say_which_objects_they_renumbered(tmp_path):
+def test_tasks_say_which_objects_they_renumbered_and_show_draws_the_files_names(tmp_path):
     env = tmp_path / "renamed.bdm"
     env.write_text(RENAMED + "\n")
     note = ("objects are numbered from 0 in each class here; in the file: agent0 is robot, room0 is room4, room1 is "
             "room5, room2 is room6, block0 is block3")
-    for command in ("tasks", "show"):
-        run = _cli(command, str(env))
-        assert run.returncode == 0 and note in run.stdout.splitlines(), run.stdout
+    run = _cli("tasks", str(env))
+    assert run.returncode == 0 and note in run.stdout.splitlines(), run.stdout
     assert json.loads(_cli("tasks", str(env), "--json").stdout)["file_names"]["block0"] == "block3"
+    shown = _cli("show", str(env))
+    assert shown.returncode == 0 and "legend: # wall, + door, A robot" in shown.stdout, shown.stdout
+    legend = shown.stdout.split("legend:")[1]
+    assert "block3 (" in legend and "room4 (" in legend and "block0" not in legend and "room0" not in legend
     assert "numbered from 0" not in _cli("show", str(FIXTURE / "one.state")).stdout
+
+
+def test_a_picture_of_a_burlap_state_names_its_objects_as_the_file_does(tmp_path):
+    pytest.importorskip("matplotlib")
+    from groundlang.corpus import file_names, read_state_file
+    from groundlang.render import draw_state
+
+    env = tmp_path / "renamed.bdm"
+    env.write_text(RENAMED + "\n")
+    ax = draw_state(read_state_file(env, "williams2018"), names=file_names(env))
+    drawn = {t.get_text() for t in ax.texts} | {t.get_text() for t in ax.get_legend().get_texts()}
+    assert {"room4", "room5", "room6"} <= drawn and any(t.startswith("block3 (") for t in drawn)
+    assert not any(t.startswith(("block0", "room0", "agent0")) for t in drawn)
 
 
 def test_two_chairs_told_apart_by_id_are_named_and_answered_by_the_files_names(tmp_path, model):

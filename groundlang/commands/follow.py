@@ -190,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
 
         save_picture(args.out, state, trajectory=result.states,
                      title=picture_title(args.command_text, renamed_words(result.goal_words, names),
-                                         format_goal(result.goal, names)))
+                                         format_goal(result.goal, names)), names=names)
     if args.json:
         data = {
             "interpretations": [{"goal": format_goal(g, names),

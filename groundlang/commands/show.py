@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import PALETTE_HELP, check_state_file, is_burlap_state_file, output_path, renumbering_note
+from groundlang.commands import PALETTE_HELP, check_state_file, is_burlap_state_file, output_path
 from groundlang.corpus import file_names, read_instance, read_state_file
 
 
@@ -29,13 +29,13 @@ def run(args: argparse.Namespace) -> int:
     burlap = is_burlap_state_file(args.file)
     if args.palette is None and not burlap:
         raise ValueError(f"{args.file}: --palette is required for a file in the corpus's format (e.g. --palette sokoban)")
+    names = {}
     if path.suffix in (".state", ".bdm"):
         state = read_state_file(path, args.palette or DEFAULT_PALETTE)
         states, title = [state], path.name
+        names = file_names(path)  # a BURLAP file's own names (block3, not the layout's block2), drawn as given
         print(f"state: {path}")
-        print(ascii_state(state))
-        if note := renumbering_note(file_names(path)):
-            print(note)
+        print(ascii_state(state, names))
     else:
         inst = read_instance(path, args.palette)
         states, state, title = list(inst.states), inst.initial_state, inst.command
@@ -47,6 +47,6 @@ def run(args: argparse.Namespace) -> int:
             print("final state:")
             print(ascii_state(inst.final_state))
     if args.out:
-        out = save_picture(args.out, state, trajectory=states if len(states) > 1 else None, title=title)
+        out = save_picture(args.out, state, trajectory=states if len(states) > 1 else None, title=title, names=names)
         print(f"wrote {out}")
     return 0
