@@ -52,6 +52,8 @@ _NOUN_PHRASE_OPENERS = frozenset({"DET", "PREP", "TO", "ADJ", "NUM"})
 _END = None
 _CATEGORY_LINE = re.compile(r"^([A-Za-z_]+)\s*:(.*)$")
 _HYPHEN = re.compile(r"(?<=\w)-(?=\w)")
+# A word a synonym's form may be: what the tokeniser leaves whole (no clitic split off, no sign alone).
+_SYNONYM_FORM = re.compile(r"[^\W_]+(?:n't)?")
 
 
 class LexiconError(ValueError):
@@ -82,9 +84,11 @@ def _check(category: str, words: Iterable[str], where: str) -> tuple[str, ...]:
             form, sep, lemma = word.partition("=")
             if not sep or not _entry(form) or not _entry(lemma) or "=" in lemma:
                 raise LexiconError(f"{where}: {category} entry {word!r} is not {_PAIRED[category]}")
-            if category == "SYNONYM" and not _WORD.fullmatch(_entry(form)):
-                # read before multiword entries are joined, a form is one token
-                raise LexiconError(f"{where}: SYNONYM entry {word!r}: the form {form!r} must be one word")
+            if category == "SYNONYM" and not (_WORD.fullmatch(_entry(form)) and _SYNONYM_FORM.fullmatch(_entry(form))):
+                # Read where the tokeniser has split clitics ("it's": it 's) and signs off, a form is one word of
+                # letters and digits, or one ending in n't, which stays whole.
+                raise LexiconError(f"{where}: SYNONYM entry {word!r}: the form {form!r} must be one word "
+                                   "(letters and digits, or a negation such as don't)")
             if category == "SYNONYM" and not all(_WORD.fullmatch(part) for part in _entry(lemma).split("_")):
                 raise LexiconError(f"{where}: SYNONYM entry {word!r}: {lemma!r} is not letters, digits or apostrophes "
                                    "(the tokeniser splits at other characters)")
@@ -183,13 +187,6 @@ class Lexicon:
         for lemma in sorted(words["VERB"]):
             self.verb_forms.update(_inflections(lemma))
         self.verb_forms.update(pair.split("=", 1) for pair in self.entries.get("IRREGULAR", ()))
-        # Each form the word it is read as, in tokens (a multiword word's parts, joined afterwards).
-        self.synonyms: dict[str, tuple[str, ...]] = {}
-        for pair in self.entries.get("SYNONYM", ()):
-            form, word = pair.split("=", 1)
-            if self.synonyms.setdefault(form, tuple(word.split("_"))) != tuple(word.split("_")):
-                raise LexiconError(f"SYNONYM {form!r} is given two words: {'_'.join(self.synonyms[form])} and "
-                                   f"{word}")
         table: dict[str, set[str]] = {}
         for category in FILE_CATEGORIES:
             tag = _TAGGING.get(category, category)
@@ -207,6 +204,18 @@ class Lexicon:
         # word's length (every cut of a word as long as the longest hue, each a slice of that length, was
         # quadratic: a word file's 80,000-letter hue took seconds a word).
         self._hue_lengths = tuple(sorted({len(h) for h in self.hues if len(h) >= 3}))
+        # Each form the word it is read as, in tokens: a multiword word's parts, joined afterwards, and a
+        # colour compound written solid split as the tokeniser splits one ("teal=bluegreen": blue green).
+        self.synonyms: dict[str, tuple[str, ...]] = {}
+        for pair in self.entries.get("SYNONYM", ()):
+            form, word = pair.split("=", 1)
+            if self.split_compound_colour(form) != (form,):
+                raise LexiconError(f"SYNONYM {form!r}: the tokeniser reads {form!r} as the hues "
+                                   f"{' '.join(self.split_compound_colour(form))}, so the form is never read")
+            parts = tuple(p for part in word.split("_") for p in self.split_compound_colour(part))
+            if self.synonyms.setdefault(form, parts) != parts:
+                raise LexiconError(f"SYNONYM {form!r} is given two words: {'_'.join(self.synonyms[form])} and "
+                                   f"{word}")
         self.negating_prepositions = words["PREP_NEGATING"]
         self.source_and_comitative_prepositions = words["PREP_SOURCE"]
         self.having_verbs = words["VERB_HAVING"]

@@ -96,8 +96,9 @@ Word = tuple[str, frozenset[str]]
 
 def tokenise(command: str, word_lexicon: Lexicon | None = None) -> list[str]:
     """Lowercase tokens: words (hyphenated words and solid colour compounds like "bluegreen" split,
-    clitics like 're split off, a word file's synonyms read as the word they stand for, multiword entries
-    such as "left of" joined into ``left_of``) and punctuation. ``word_lexicon``: the words known (default: English, :meth:`Lexicon.english`)."""
+    clitics like 're split off, a word file's synonyms read as the word they stand for, multiword
+    entries such as "left of" joined into ``left_of``) and punctuation. ``word_lexicon``: the words known
+    (default: English, :meth:`Lexicon.english`)."""
     words = word_lexicon or Lexicon.english()
     text = _without_control(command).lower().replace("\u2019", "'").replace("\u2018", "'")
     text = re.sub(r"(?<=\w)-(?=\w)", " ", text)

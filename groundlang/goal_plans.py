@@ -30,6 +30,8 @@ __all__ = ["planning_space", "plan_for_goal", "plan_for_states", "expected_succe
 _SPACES_KEPT = 16
 # A plan holds up to max_steps states; a follower that reads commands for hours keeps the latest this many.
 _PLANS_KEPT = 256
+# Goal masks kept, for the last spaces read (WorldPlans.goal_masks).
+_MASKS_KEPT = 2
 
 
 def planning_space(state: State, goal: tuple[Atom, ...] | None, library: TaskLibrary) -> StateSpace:
@@ -108,7 +110,7 @@ def goal_holding_at(goals, masks: GoalMasks, index: int) -> tuple[Atom, ...] | N
 
 class WorldPlans:
     """What following keeps of the world between commands: the last few state spaces, where goals hold
-    over the last one read (following reads again the columns its posterior computed: every goal's
+    over the last two read (following reads again the columns its posterior computed: every goal's
     atoms over every state, the costly part), and the plans made, by target. Nothing here depends on
     the words, so a plan serves every command that ends in the same states."""
 
@@ -117,7 +119,7 @@ class WorldPlans:
         self.settings = settings
         self.plans: dict = {}
         self.spaces: dict = {}
-        self._masks: GoalMasks | None = None
+        self._masks: list[GoalMasks] = []
 
     def space(self, state: State, goal: tuple[Atom, ...] | None = None) -> StateSpace:
         """The state space to plan for ``goal`` in, or to compare goals in (``goal`` None); see
@@ -131,14 +133,20 @@ class WorldPlans:
 
     def goal_masks(self, space: StateSpace) -> GoalMasks:
         """Where goals hold over ``space``, kept for the last space."""
-        if self._masks is None or self._masks.space is not space:
-            self._masks = GoalMasks(space, self.library)
-        return self._masks
+        found = next((m for m in self._masks if m.space is space), None)
+        if found is None:
+            # Two kept: where the world is too large, goals are compared over a sample of placements and where
+            # to end is chosen over the best goal's abstraction, and each is read again by the next command.
+            found = GoalMasks(space, self.library)
+            self._masks = [found, *self._masks][:_MASKS_KEPT]
+        return found
 
     def act(self, state: State, goal: tuple[Atom, ...], max_steps: int,
             ending: np.ndarray | None = None, over: tuple[Atom, ...] | None = None) -> tuple[list, list, bool, str]:
         """Plan for ``goal``, or to end in a state of ``ending`` (``[S]`` bool over ``self.space(state, over)``),
         and act: ``(states, actions, reached, reason)`` as :func:`plan_for_goal`."""
+        if ending is not None and over is None and not exact_fits(state):
+            raise ValueError("an ending in a layout too large to enumerate is over a goal's abstraction: give over")
         # The plan is the target's alone; an ending is keyed by its digest, not its [S] bytes (megabytes).
         target = goal if ending is None else hashlib.blake2b(np.packbits(ending).tobytes(), digest_size=16).digest()
         key = (state, target, max_steps, over if ending is not None and not exact_fits(state) else None)

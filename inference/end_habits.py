@@ -55,8 +55,13 @@ __all__ = ["EndHabits", "MOVED", "new_relations", "demonstrated_pairs", "known_n
 MOVED = "(a toy moved)"
 
 # A saved model's table is untrusted: bounds on what a crafted file can make the loader build.
-MAX_RELATION_SETS = 10_000
+MAX_RELATION_SETS = 100_000
 MAX_DEMONSTRATIONS = 10**12
+# Following computes a rate per name, each a pass over the sets: a crafted table of many names makes each
+# command slow, where a domain has tens of relations and a few hundred bound habits.
+MAX_NAMES = 2_000
+# A relation's name as a PF is named (an identifier), MOVED, or a bound habit of two of them (bound_name).
+_NAME = re.compile(r"^(?:\w{1,128}|\(a toy moved\)|\w{1,128}\[\d{1,2}\]=\w{1,128}\[\d{1,2}\])$")
 
 
 def new_relations(start: State, end: State, library) -> frozenset[str]:
@@ -154,8 +159,15 @@ class EndHabits:
     def demonstrations(self) -> int:
         return sum(n for _, n in self.shown)
 
+    @cached_property
+    def _counts(self) -> dict[frozenset[str], int]:
+        return {}
+
     def _count(self, relations: frozenset[str]) -> int:
-        return sum(n for shown, n in self.shown if relations <= shown)
+        # Kept: following asks the same few counts for every goal of every command.
+        if (n := self._counts.get(relations)) is None:
+            n = self._counts[relations] = sum(n for shown, n in self.shown if relations <= shown)
+        return n
 
     def rate(self, relation: str, given: frozenset[str]) -> float:
         """``q(relation | given)``: how often a demonstration whose new relations include ``given`` has a
@@ -174,7 +186,7 @@ class EndHabits:
     @cached_property
     def bound(self) -> dict[str, tuple[tuple[str, int, str, int], ...]]:
         """Per relation, its bound habits demonstrations showed: ``(name, position, other, other_position)``."""
-        out: dict[str, list] = {}
+        out: dict[str, set] = {}
         for shown, _ in self.shown:
             for name in shown:
                 if (m := _BOUND.match(name)) is not None:
@@ -275,9 +287,15 @@ class EndHabits:
                     or not all(isinstance(r, str) and r for r in entry[0]) or isinstance(entry[1], bool)
                     or not isinstance(entry[1], int) or not 0 < entry[1] <= MAX_DEMONSTRATIONS):
                 raise ValueError(f"end_habits: {entry!r} is not [relations, count] (names, a positive count)")
+            if bad := next((r for r in entry[0] if not _NAME.match(r)), None):
+                raise ValueError(f"end_habits: {bad[:80]!r} is not a relation's name, {MOVED!r} or a bound habit "
+                                 "such as agentInRoom[1]=toyInRoom[1]")
             shown.append((frozenset(entry[0]), entry[1]))
         if len({s for s, _ in shown}) != len(shown):
             raise ValueError("end_habits names a set of relations twice")
+        if len(names := frozenset().union(*(s for s, _ in shown))) > MAX_NAMES:
+            raise ValueError(f"end_habits names {len(names)} relations and bound habits, more than the {MAX_NAMES} "
+                             "allowed")
         return cls(tuple(shown))
 
 

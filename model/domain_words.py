@@ -38,6 +38,7 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
     if isinstance(sources, (str, Path, Mapping)):
         sources = [sources]
     merged: dict[str, dict[str, None]] = {}
+    read_as: dict[str, tuple[str, str]] = {}  # a synonym's form -> (its word, where it was given)
     for source in sources:
         if isinstance(source, (str, Path)):
             words = read_word_file(source)
@@ -46,6 +47,12 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
         else:
             raise LexiconError(f"a lexicon is a word file's path or a mapping of categories to words, "
                                f"not {type(source).__name__}")
+        where = str(source) if isinstance(source, (str, Path)) else "a word mapping"
+        for pair in words.get("SYNONYM", ()):  # merged below, a second word for a form would name no source
+            form, word = pair.split("=", 1)
+            first = read_as.setdefault(form, (word, where))
+            if first[0] != word:
+                raise LexiconError(f"{where}: SYNONYM {form!r} is read as {word}, and as {first[0]} in {first[1]}")
         for category, entries in words.items():
             merged.setdefault(category, {}).update(dict.fromkeys(entries))  # in order, once each
     return {category: list(entries) for category, entries in merged.items()}

@@ -239,6 +239,11 @@ def test_a_habits_setting_reaches_where_following_ends_and_is_saved(williams_com
     ([[["agentInRoom"], 0]], "is not \\[relations, count\\]"),
     ([[["agentInRoom"], True]], "is not \\[relations, count\\]"),
     ([[["agentInRoom"], 1], [["agentInRoom"], 2]], "names a set of relations twice"),
+    # a bound habit's position is read as a number when following: thousands of digits are refused on loading
+    ([[["agentInRoom[" + "9" * 5000 + "]=toyInRoom[1]"], 3]], "is not a relation's name"),
+    ([[["agent in room"], 3]], "is not a relation's name"),
+    # each name costs a pass over the sets per goal followed: a table of very many names is refused
+    ([[[f"r{i}" for i in range(2001)], 1]], "names 2001 relations and bound habits, more than the 2000"),
 ])
 def test_a_damaged_table_in_a_saved_model_is_refused(trained, tmp_path, value, expected):
     directory = tmp_path / "model"

@@ -265,3 +265,35 @@ def test_one_form_given_two_words_by_two_files_is_refused(tmp_path):
         CLEANUP.with_files(first, second)
     assert str(caught.value) == f"{second}: SYNONYM 'east' is given two words: left and right"
     assert CLEANUP.with_files(first, first).synonyms == {"east": ("right",)}  # the same pair twice is one
+
+
+@pytest.mark.parametrize("form", ["it's", ",", "&"])
+def test_a_synonym_form_the_tokeniser_splits_or_reads_as_a_sign_is_refused(tmp_path, form):
+    """The tokeniser splits "it's" into it 's and reads a sign alone as punctuation: such a form would never
+    be read as its word (a comma read as "and" would join clauses the parser keeps apart)."""
+    path = tmp_path / "bad.words"
+    path.write_text(f"SYNONYM: {form}=and\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match="must be one word"):
+        Lexicon.from_files(path)
+    path.write_text("SYNONYM: don't=not\n", encoding="utf-8")  # kept whole by the tokeniser: read
+    assert tokenise("don't go", Lexicon.from_files(path))[0] == "not"
+
+
+def test_a_synonym_between_colour_compounds_reads_as_the_tokeniser_splits_one(tmp_path):
+    path = tmp_path / "colours.words"
+    path.write_text("HUE: teal\nSYNONYM: aqua=bluegreen\n", encoding="utf-8")
+    assert tokenise("the aqua room", CLEANUP.with_files(path)) == ["the", "blue", "green", "room"]
+    # "bluegreen" is split before synonyms are read, so as a form it would never be
+    path.write_text("SYNONYM: bluegreen=teal\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match=f"^{path}: SYNONYM 'bluegreen': the tokeniser reads 'bluegreen' as the hues"):
+        CLEANUP.with_files(path)
+
+
+def test_files_that_read_one_form_as_two_words_are_named_when_a_learner_merges_them(tmp_path):
+    first, second = tmp_path / "a.words", tmp_path / "b.words"
+    first.write_text("SYNONYM: east=right\n", encoding="utf-8")
+    second.write_text("SYNONYM: east=left\n", encoding="utf-8")
+    with pytest.raises(LexiconError) as caught:
+        extra_words([first, second])
+    assert str(caught.value) == f"{second}: SYNONYM 'east' is read as left, and as right in {first}"
+    assert extra_words([first, first])["SYNONYM"] == ["east=right"]
