@@ -13,7 +13,8 @@ import gymnasium
 import numpy as np
 
 from groundlang.gym_env import CHANNELS, CleanupAction
-from groundlang.model.world import State
+from groundlang.model.relevance import pushes_scenery
+from groundlang.model.world import Action, State
 
 __all__ = ["CommandPolicy", "policy", "observation_positions"]
 
@@ -143,7 +144,12 @@ class CommandPolicy:
         s = self.state_index(observation)
         if s < 0 or self.mask[s]:
             return CleanupAction.TERMINATE
-        return CleanupAction(int(np.argmax(self.log_policy[s])))
+        action = int(np.argmax(self.log_policy[s]))
+        # A move into a toy a relevance abstraction holds still pushes it in the world, out of the planned space:
+        # the policy ends before it, where follow's plan ends ("scenery").
+        if action < len(Action) and pushes_scenery(self.space, np.array([s]), np.array([action]))[0]:
+            return CleanupAction.TERMINATE
+        return CleanupAction(action)
 
 
 def policy(learner, command: str, state) -> CommandPolicy:

@@ -215,6 +215,25 @@ def test_the_gym_env_plays_a_learned_policy_in_a_layout_of_a_billion_states(sixt
     assert len(followed.actions) - len(actions) <= 2
 
 
+def test_the_gym_policy_ends_before_a_move_that_would_push_scenery(sixteen):
+    """A policy planned in a relevance abstraction: where its best move would push a toy the abstraction holds
+    still, the world would leave the planned space; it terminates there, as follow's plan stops ("scenery")."""
+    pytest.importorskip("gymnasium")
+    from groundlang.gym_env import CleanupAction
+    from groundlang.gym_policy import CommandPolicy
+
+    space = abstract_space(sixteen, (0,))
+    states = np.arange(space.num_states)
+    pushing = {a: pushes_scenery(space, states, np.full(space.num_states, int(a))) for a in Action}
+    a = next(a for a in Action if pushing[a].any())
+    s, free = int(np.flatnonzero(pushing[a])[0]), int(np.flatnonzero(~pushing[a])[0])
+    log_policy = np.full((space.num_states, len(CleanupAction)), -5.0)
+    log_policy[:, int(a)] = 0.0  # the same move everywhere: a push at s, an ordinary move at free
+    act = CommandPolicy((), None, space, log_policy, np.zeros(space.num_states, dtype=bool))
+    assert act(space.state_at(s)) == CleanupAction.TERMINATE
+    assert act(space.state_at(free)) == CleanupAction(int(a))
+
+
 @pytest.mark.slow
 def test_follow_reaches_the_goal_in_a_32x32_layout_with_five_toys(learner):
     state = read_state_file(LARGE / "thirtytwo.state", "sokoban")
