@@ -129,6 +129,7 @@ def read_word_file(path: str | Path) -> dict[str, tuple[str, ...]]:
         raise LexiconError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); a word file is "
                            "text with `CATEGORY: word word ...` lines") from None
     entries: dict[str, list[str]] = {}
+    read_as: dict[str, tuple[str, int]] = {}  # a synonym's form -> its word and the line giving it
     # Split where an editor ends a line (LF, CRLF, CR), not at the other separators str.splitlines knows
     # (U+2028, form feed, NEL): a comment may hold one, and every line number after it would shift.
     for number, line in enumerate(re.split(r"\r\n|\r|\n", text), 1):
@@ -142,7 +143,13 @@ def read_word_file(path: str | Path) -> dict[str, tuple[str, ...]]:
         category, words = match.group(1), match.group(2).split()
         if not words:
             raise LexiconError(f"{where}: no words after {category}:")
-        entries.setdefault(category, []).extend(_check(category, words, where))
+        checked = _check(category, words, where)
+        for form, word in (pair.split("=", 1) for pair in checked if category == "SYNONYM"):
+            first = read_as.setdefault(form, (word, number))
+            if first[0] != word:
+                raise LexiconError(f"{where}: SYNONYM {form!r} is read as {word} here and as {first[0]} on line "
+                                   f"{first[1]}")
+        entries.setdefault(category, []).extend(checked)
     return {category: tuple(words) for category, words in entries.items()}
 
 
@@ -204,15 +211,11 @@ class Lexicon:
         # word's length (every cut of a word as long as the longest hue, each a slice of that length, was
         # quadratic: a word file's 80,000-letter hue took seconds a word).
         self._hue_lengths = tuple(sorted({len(h) for h in self.hues if len(h) >= 3}))
-        # Each form the word it is read as, in tokens: a multiword word's parts, joined afterwards, and a
-        # colour compound written solid split as the tokeniser splits one ("teal=bluegreen": blue green).
+        # Each form the word it is read as, in tokens (a multiword word's parts, joined afterwards).
         self.synonyms: dict[str, tuple[str, ...]] = {}
         for pair in self.entries.get("SYNONYM", ()):
             form, word = pair.split("=", 1)
-            if self.split_compound_colour(form) != (form,):
-                raise LexiconError(f"SYNONYM {form!r}: the tokeniser reads {form!r} as the hues "
-                                   f"{' '.join(self.split_compound_colour(form))}, so the form is never read")
-            parts = tuple(p for part in word.split("_") for p in self.split_compound_colour(part))
+            parts = tuple(word.split("_"))
             if self.synonyms.setdefault(form, parts) != parts:
                 raise LexiconError(f"SYNONYM {form!r} is given two words: {'_'.join(self.synonyms[form])} and "
                                    f"{word}")
@@ -325,13 +328,11 @@ class Lexicon:
                     return word[:cut], word[cut:]
         return (word,)
 
-    def read_synonyms(self, tokens: list[str]) -> list[str]:
-        """Tokens with each ``SYNONYM`` form replaced by the word it is read as (``east`` -> ``right``; a
-        multiword word by its words, which :meth:`join_multiword` joins), once: a word read as another is
-        not read again."""
-        if not self.synonyms:
-            return tokens
-        return [part for token in tokens for part in self.synonyms.get(token, (token,))]
+    def read_as(self, token: str) -> tuple[str, ...]:
+        """The words a token is read as: a ``SYNONYM`` form's word (``east`` -> ``right``; a multiword word as
+        its words, which :meth:`join_multiword` joins), once (a word read as another is not read again);
+        any other token itself."""
+        return self.synonyms.get(token, (token,))
 
     def join_multiword(self, tokens: list[str]) -> list[str]:
         """Tokens with each multiword entry ("in front of") joined into one (``in_front_of``), longest

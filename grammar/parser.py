@@ -106,12 +106,12 @@ def tokenise(command: str, word_lexicon: Lexicon | None = None) -> list[str]:
     for tok in _TOKEN.findall(text):
         m = _CLITIC.match(tok)
         if m and not tok.endswith("n't"):
-            out.extend(m.groups())
+            out.extend(piece for part in m.groups() for piece in words.read_as(part))
         elif re.fullmatch(r"\.{2,}", tok):
             out.append(".")
-        else:
-            out.extend(words.split_compound_colour(tok))
-    return words.join_multiword(words.read_synonyms(out))
+        else:  # a synonym's form is read before a colour compound is split: "bluegreen=teal" is read
+            out.extend(piece for part in words.read_as(tok) for piece in words.split_compound_colour(part))
+    return words.join_multiword(out)
 
 
 def tag(tokens: list[str], word_lexicon: Lexicon | None = None) -> list[frozenset[str]]:

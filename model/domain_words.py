@@ -47,7 +47,7 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
         else:
             raise LexiconError(f"a lexicon is a word file's path or a mapping of categories to words, "
                                f"not {type(source).__name__}")
-        where = str(source) if isinstance(source, (str, Path)) else "a word mapping"
+        where = str(source) if isinstance(source, (str, Path)) else "words given as data (a trained model's own)"
         for pair in words.get("SYNONYM", ()):  # merged below, a second word for a form would name no source
             form, word = pair.split("=", 1)
             first = read_as.setdefault(form, (word, where))

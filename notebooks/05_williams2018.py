@@ -134,12 +134,17 @@ for given in relations:
     print(f"{given:18s}", "  ".join(f"{table[given].get(r, float('nan')):15.2f}" for r in relations))
 
 # %% [markdown]
-# Habits bound to the goal's objects (`bound_habits`): `R[i]=L[j]` counts pairs where a new fact of `R` has as its argument `i` the argument `j` of a new fact of `L`. `agentInRoom[1]=toyInRoom[1]` near 1 says that demonstrators who pushed a toy into a room stood in that room at the end; following prefers those states over ones where the agent is in some other room.
+# Habits bound to the goal's objects (`bound_habits`): `R[i]=L[j]` counts pairs where a new fact of `R` has as its argument `i` the argument `j` of a new fact of `L`. Its rate `q_b` is at most `q(R | L)`, the rate of any new fact of `R`; what it says is their ratio, the share of those facts bound so. `agentInRoom[1]=toyInRoom[1]`: of the pairs that pushed a block into a room and left the agent in a room it was not in, the share where that room is the block's. Following weighs a state where only another fact of `R` holds by `1 - q_b` instead of 1. A binding through the one agent (`agentInRoom[0]=agentNextToToy[0]`) holds wherever both relations do; following skips such bindings, and they are left out here.
 
 # %%
 bound = learner.habits.bound_table()
-for name, rate in sorted(bound.items(), key=lambda kv: -kv[1])[:12]:
-    print(f"{name:40s} {rate:.2f}")
+print(f"{'bound habit':40s} {'q_b':>6s} {'q(R|L)':>7s} {'share':>6s}")
+for name in sorted(bound):
+    relation, _, other = name.partition("=")
+    if relation.endswith("[0]") and other.endswith("[0]") and relation.startswith("agent") and other.startswith("agent"):
+        continue  # bound through the agent: says nothing beyond the two relations
+    q = learner.habits.rate(relation.split("[")[0], frozenset([other.split("[")[0]]))
+    print(f"{name:40s} {bound[name]:6.3f} {q:7.3f} {bound[name] / q:6.2f}")
 
 # %% [markdown]
 # ## One command in two of its layouts
