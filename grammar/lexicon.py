@@ -52,6 +52,9 @@ _NOUN_PHRASE_OPENERS = frozenset({"DET", "PREP", "TO", "ADJ", "NUM"})
 _END = None
 _CATEGORY_LINE = re.compile(r"^([A-Za-z_]+)\s*:(.*)$")
 _HYPHEN = re.compile(r"(?<=\w)-(?=\w)")
+# A synonym's word replaces one word of a command: a multiword entry's few words, not a text.
+MAX_SYNONYM_PARTS = 8
+_LETTER = re.compile(r"[^\W_]")
 # A word a synonym's form may be: what the tokeniser leaves whole (no clitic split off, no sign alone).
 _SYNONYM_FORM = re.compile(r"[^\W_]+(?:n't)?")
 
@@ -89,7 +92,13 @@ def _check(category: str, words: Iterable[str], where: str) -> tuple[str, ...]:
                 # letters and digits, or one ending in n't, which stays whole.
                 raise LexiconError(f"{where}: SYNONYM entry {word!r}: the form {form!r} must be one word "
                                    "(letters and digits, or a negation such as don't)")
-            if category == "SYNONYM" and not all(_WORD.fullmatch(part) for part in _entry(lemma).split("_")):
+            parts = _entry(lemma).split("_")
+            if category == "SYNONYM" and (len(parts) > MAX_SYNONYM_PARTS or not any(_LETTER.search(p) for p in parts)):
+                # a word read in place of one: a few words, one of them a word (not only signs, which
+                # would leave a command nothing to read)
+                raise LexiconError(f"{where}: SYNONYM entry {word!r}: the word must be at most "
+                                   f"{MAX_SYNONYM_PARTS} words, with a letter or digit")
+            if category == "SYNONYM" and not all(_WORD.fullmatch(part) for part in parts):
                 raise LexiconError(f"{where}: SYNONYM entry {word!r}: {lemma!r} is not letters, digits or apostrophes "
                                    "(the tokeniser splits at other characters)")
             out.append(f"{_entry(form)}={_entry(lemma)}")

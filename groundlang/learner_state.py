@@ -98,7 +98,7 @@ def learner_state(learner) -> dict:
         "planning": learner.settings.as_dict(),
         "training": {"steps": learner.steps, "lr": learner.lr, "seed": learner.seed,
                      "em_acceleration": learner.em_acceleration},
-        "end_habits": None if learner.habits is None else learner.habits.to_json(),
+        "end_habits": None if learner.habits is None else _readable(learner.habits),
         "globals": learner.globals,
     }
 
@@ -181,3 +181,14 @@ def _check_added(p: dict) -> None:
         if twice := sorted(seen & set(vs)):  # as a palette file may not: the PFs of the two would be one
             raise ValueError(f"palette {p['name']!r}: {twice[0]} is a value of {attribute} and of another attribute")
         seen |= set(vs)
+
+
+def _readable(habits) -> list:
+    """The habit table as saved, refused (ValueError, one line) where the loader would refuse it: a save that
+    succeeds leaves a model that loads (a library's relations past the table's bounds are said here)."""
+    value = habits.to_json()
+    try:
+        type(habits).from_json(value)
+    except ValueError as exc:
+        raise ValueError(f"cannot save the end habits: {exc}") from None
+    return value

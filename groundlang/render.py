@@ -99,7 +99,12 @@ _MATHTEXT = {"\\": "\\backslash ", "^": "\\^{}", "~": "\\~{}", '"': "\u201d", "`
 def _named(names: Mapping[str, str] | None):
     """An object's name as shown: the file's (``names``, by the layout's name, ``corpus.file_names``) where it
     gives one, else the layout's."""
-    return (lambda name: name) if not names else (lambda name: names.get(name, name))
+    return (lambda name: name) if not names else (lambda name: _short(names.get(name, name)))
+
+
+def _short(name: str, most: int = 40) -> str:
+    """A name as drawn: a file may name an object with 60,000 letters, which would widen the picture to match."""
+    return name if len(name) <= most else name[: most - 1] + "\u2026"
 
 
 def _legend(ax, state: State, moved: list[int], has_path: bool, cell: float,

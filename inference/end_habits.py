@@ -61,7 +61,7 @@ MAX_DEMONSTRATIONS = 10**12
 # command slow, where a domain has tens of relations and a few hundred bound habits.
 MAX_NAMES = 2_000
 # A relation's name as a PF is named (an identifier), MOVED, or a bound habit of two of them (bound_name).
-_NAME = re.compile(r"^(?:\w{1,128}|\(a toy moved\)|\w{1,128}\[\d{1,2}\]=\w{1,128}\[\d{1,2}\])$")
+_NAME = re.compile(r"(?:\w{1,1000}|\(a toy moved\)|\w{1,1000}\[\d{1,2}\]=\w{1,1000}\[\d{1,2}\])\Z")
 
 
 def new_relations(start: State, end: State, library) -> frozenset[str]:
@@ -93,7 +93,7 @@ def bound_name(relation: str, position: int, other: str, other_position: int) ->
     return f"{relation}[{position}]={other}[{other_position}]"
 
 
-_BOUND = re.compile(r"^(\w+)\[(\d+)\]=(\w+)\[(\d+)\]$")
+_BOUND = re.compile(r"(\w+)\[(\d+)\]=(\w+)\[(\d+)\]\Z")
 
 
 def _bound(new_facts: Sequence[Atom]) -> list[str]:
@@ -153,6 +153,8 @@ class EndHabits:
         for same in by_layout.values():
             for pair, relations in zip(same, _new_relations(same, library)):
                 counts[relations] += distinct[pair]
+        # Clamped where a saved table is bounded: what this saves, from_json reads back.
+        counts = Counter({k: min(n, MAX_DEMONSTRATIONS) for k, n in counts.items()})
         return EndHabits(tuple(sorted(counts.items(), key=lambda kv: (sorted(kv[0]), kv[1]))))
 
     @cached_property

@@ -244,6 +244,7 @@ def test_a_habits_setting_reaches_where_following_ends_and_is_saved(williams_com
     ([[["agent in room"], 3]], "is not a relation's name"),
     # each name costs a pass over the sets per goal followed: a table of very many names is refused
     ([[[f"r{i}" for i in range(2001)], 1]], "names 2001 relations and bound habits, more than the 2000"),
+    ([[["agentInRoom\n", "toyInRoom"], 5]], "is not a relation's name"),  # $ would match before the newline
 ])
 def test_a_damaged_table_in_a_saved_model_is_refused(trained, tmp_path, value, expected):
     directory = tmp_path / "model"
@@ -253,3 +254,25 @@ def test_a_damaged_table_in_a_saved_model_is_refused(trained, tmp_path, value, e
     (directory / "model.json").write_text(json.dumps(signed(meta)))
     with pytest.raises(ModelFormatError, match=expected):
         Learner.load(directory)
+
+
+def test_a_table_the_loader_would_refuse_is_not_saved_and_counts_stay_within_its_bounds(trained, tmp_path):
+    """What a save writes, the loader reads back: counts are clamped where the table is bounded, a relation of
+    a 134-letter name (a library may name one so) is read, and a table the loader would refuse is refused at
+    the save, in one line, leaving the saved model as it was."""
+    from groundlang.inference.end_habits import MAX_DEMONSTRATIONS
+
+    _, learner, directory = trained
+    big = EndHabits(((frozenset({"agentInRoom"}), MAX_DEMONSTRATIONS),)).plus([(START, _state((6, 5)))], LIBRARY)
+    assert dict(big.shown)[frozenset({"agentInRoom"})] == MAX_DEMONSTRATIONS
+    long_name = "agentIsIn" + "X" * 125
+    assert EndHabits.from_json([[[long_name], 3]]).relations == {long_name}
+    before = (directory / "model.json").read_bytes()
+    saved = learner.habits
+    try:
+        learner.habits = EndHabits(((frozenset(f"r{i}" for i in range(2001)), 1),))
+        with pytest.raises(ValueError, match="^cannot save the end habits: end_habits names 2001"):
+            learner.save(directory)
+    finally:
+        learner.habits = saved
+    assert (directory / "model.json").read_bytes() == before

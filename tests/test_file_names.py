@@ -122,3 +122,17 @@ def test_two_chairs_told_apart_by_id_are_named_and_answered_by_the_files_names(t
                              text=True, timeout=600)
         assert run.returncode == 0, run.stderr
         assert f"goal the agent next to the green chair {goal} — agentNextToToy(agent0, {goal}): reached" in run.stdout
+
+
+def test_a_very_long_name_is_drawn_shortened(tmp_path):
+    """A file may name an object with 60,000 letters; drawn whole, the legend widened the picture to match
+    (420,331 pixels). The text output keeps the name whole."""
+    pytest.importorskip("matplotlib")
+    from groundlang.corpus import file_names, read_state_file
+    from groundlang.render import draw_state
+
+    env = tmp_path / "long.bdm"
+    env.write_text(RENAMED.replace("block3", "b" * 60_000) + "\n")
+    ax = draw_state(read_state_file(env, "williams2018"), names=file_names(env))
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(t.startswith("b" * 39 + "\u2026 (") for t in labels) and max(map(len, labels)) < 100

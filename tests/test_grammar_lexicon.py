@@ -249,6 +249,9 @@ def test_a_users_synonym_may_stand_for_a_multiword_entry_and_is_read_once(tmp_pa
     ("SYNONYM: east=a.b\n", "'a.b' is not letters, digits or apostrophes"),
     ("NOUN: east=right\n", "only IRREGULAR and SYNONYM pair words"),
     ("SYNONYM: east=right east=left\n", "SYNONYM 'east' is read as left here and as right on line 2"),
+    # a word read in place of one is a few words: a million would multiply a command's tokens without bound
+    ("SYNONYM: x=" + "_".join(["red"] * 9) + "\n", "the word must be at most 8 words"),
+    ("SYNONYM: go=.\n", "with a letter or digit"),  # only a sign: the command would have nothing to read
 ])
 def test_a_malformed_synonym_is_one_line_naming_file_and_line(tmp_path, text, expected):
     path = tmp_path / "bad.words"

@@ -603,3 +603,15 @@ def test_a_shipped_library_is_named_as_a_palette_is(tmp_path, monkeypatch):
         TaskLibrary.load(["taskz"])
     assert caught.value.filename == "taskz"
     assert caught.value.strerror == "no such file, nor a library the package ships (tasks, williams2018)"
+
+
+def test_a_rule_with_a_long_name_is_told_from_a_ground_fact_at_once():
+    """Every lowercase letter of a name could start another identifier inside the ground-fact pattern, and a
+    rule (no fact) of a 20-letter name was tried split every way (48 s; 134 letters: never). Possessive
+    quantifiers try one split."""
+    from groundlang.logic.sources import _GROUND_FACT
+
+    name = "agent" + "x" * 200
+    assert _GROUND_FACT.fullmatch(f"{name}(A) :- agent(A).") is None
+    assert _GROUND_FACT.fullmatch(f"{name}(a, 3, \"s\").") is not None
+    assert _GROUND_FACT.fullmatch("value(colour, 0, red).") is not None
