@@ -219,7 +219,7 @@ class EndHabits:
         initial state (as :func:`new_relations` counted the demonstrations), not every state where one holds.
         With ``bound``, a relation's states where its fact is bound to the goal's objects as demonstrations
         showed (:meth:`_bound_share`) are worth more than those where only another of its facts holds."""
-        holds: dict[str, np.ndarray] = {}
+        holds: dict = {}  # [S] masks by relation, and by (relation, position, objects) for bound habits
         # Weighed whether or not a demonstration moved a toy: that none ever did is the strongest evidence.
         moving = _moved(masks.space) if moved_toys and self.demonstrations else None
         out = []
@@ -242,20 +242,21 @@ class EndHabits:
                     continue
                 factor = (1.0 - q) + q * holds[relation]
                 if bound and (share := self._bound_share(relation, goal, given, q, masks, company, made_true,
-                                                         holds[relation])):
+                                                         holds)):
                     factor = factor - share[0] * holds[relation] + share[0] * share[1]
                 weight = factor if weight is None else weight * factor
             out.append(weight)
         return out
 
     def _bound_share(self, relation: str, goal: tuple[Atom, ...], given: frozenset[str], q: float, masks,
-                     company: np.ndarray, made_true: bool, plain: np.ndarray) -> tuple[float, np.ndarray] | None:
+                     company: np.ndarray, made_true: bool, holds: dict) -> tuple[float, np.ndarray] | None:
         """``(q_b, [S] bool)``: of the demonstrations of such goals that left a new fact of ``relation``
         (share ``q``), the share ``q_b`` whose fact was bound to a fact of the goal's relations as it is in
         the states returned (``agentInRoom[1]=toyInRoom[1]``: the agent in the room the goal pushes the
         toy into), the habit of largest share that can hold with the goal and tells some of its states
-        apart from the relation's own (``plain``, where some fact of it holds: a binding to the one agent
-        every fact names says nothing more); None where none does.
+        apart from the relation's own (``holds[relation]``, where some fact of it holds: a binding to the one
+        agent every fact names says nothing more); None where none does. ``holds``: masks read so far, by
+        relation and by binding, shared by the posterior's goals (many name the same objects).
 
         A demonstration showing a bound fact showed a fact of the relation, so the truth asks for a fact
         of it with probability ``q``, for the bound one with ``q_b`` (at most ``q``): a state where the
@@ -270,8 +271,11 @@ class EndHabits:
                        if canonical_predicate(a.predicate) == other and other_position < len(a.args)}
             if q_b <= 0.0 or not objects or (best is not None and q_b <= best[0]):
                 continue
-            where = _holds(relation, masks, made_true, position=position, objects=objects)
-            if (where & company).any() and ((where ^ plain) & company).any():
+            key = (relation, position, frozenset(objects))
+            if key not in holds:
+                holds[key] = _holds(relation, masks, made_true, position=position, objects=objects)
+            where = holds[key]
+            if (where & company).any() and ((where ^ holds[relation]) & company).any():
                 best = (q_b, where)
         return best
 
