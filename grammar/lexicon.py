@@ -7,9 +7,8 @@ adjectives sit in a word file beside its ``.lp`` files, and a caller may add wor
 categories are guessed from its suffix and position. A word may carry several categories ("left" is
 an adverb, an adjective and a noun); the grammar decides which one a reading uses.
 
-Word file format (documented at the top of ``english.words``): ``CATEGORY: word word ...`` lines,
-``#`` comments, blank lines skipped, ``_`` joining the words of a multiword entry (``in_front_of``),
-``form=lemma`` pairs under ``IRREGULAR``, ``form=word`` pairs under ``SYNONYM``.
+The word file format is read and checked in ``grammar/word_files.py`` (documented at the top of
+``english.words``).
 
 ``SemanticLexicon`` is the paper's semantic model (LWFG's Phi_i constraints): words mapped to domain
 propositional functions with probabilities, learned later by the joint model and handed to ``parse``.
@@ -19,147 +18,21 @@ from __future__ import annotations
 
 import functools
 import math
-import os
-import re
-import stat
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
+from .word_files import CATEGORIES, FILE_CATEGORIES, TAGGING, LexiconError, SynonymForms, check_words, read_word_file
+
 __all__ = ["CATEGORIES", "FILE_CATEGORIES", "Lexicon", "LexiconError", "SemanticLexicon", "read_word_file"]
 
-# Lexical categories (the grammar's terminals are sets of these).
-CATEGORIES = (
-    "ADJ", "ADV", "AUX", "COLOR", "COMMA", "CONJ", "DET", "GER", "MEASURE",
-    "NEG", "NOUN", "NUM", "PREP", "PRON", "REL", "SUB", "TO", "VERB",
-)
-# Categories of a word file that tag their words with a lexical category and give them a role the
-# parser or the model reads (see english.words); VERB lists lemmas, IRREGULAR form=lemma pairs.
-_TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP", "PREP_HAVING": "PREP"}
-# VERB_HAVING marks verb lemmas (listed under VERB) whose relative clause about a noun phrase reads as
-# "with" ("the room that has the chair"); it tags nothing itself.
-FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB")) + (
-    "VERB", "IRREGULAR", "SYNONYM", *_TAGGING, "VERB_HAVING",
-)
-# Categories whose entries pair two words, ``form=word``, and what the pair means (for error messages).
-_PAIRED = {"IRREGULAR": "form=lemma (e.g. went=go)", "SYNONYM": "form=word (e.g. east=right)"}
 # A multiword entry's first word that may head or modify a noun phrase ("left" of "left of") does,
 # rather than open the preposition, after a word of these categories: "the left of the room",
 # "to left of star", "bottom left of orange room".
 _NOUN_PHRASE_OPENERS = frozenset({"DET", "PREP", "TO", "ADJ", "NUM"})
 # Marks, in the trie of multiword entries, a node where an entry ends: not a string, so no word collides.
 _END = None
-_CATEGORY_LINE = re.compile(r"^([A-Za-z_]+)\s*:(.*)$")
-_HYPHEN = re.compile(r"(?<=\w)-(?=\w)")
-# A synonym's word replaces one word of a command: a multiword entry's few words, not a text.
-MAX_SYNONYM_PARTS = 8
-_LETTER = re.compile(r"[^\W_]")
-# A word a synonym's form may be: what the tokeniser leaves whole (no clitic split off, no sign alone).
-_SYNONYM_FORM = re.compile(r"[^\W_]+(?:n't)?")
-
-
-class LexiconError(ValueError):
-    """A word file or word list that does not follow the format; the message names file and line."""
-
-
-# one token as grammar.parser's tokeniser reads it: a word (a clitic such as 're too), or one sign ("&")
-_WORD = re.compile(r"'?[^\W_]+(?:'[^\W_]+)*|[^\w\s]")
-
-
-def _entry(word: str) -> str:
-    """A word as the tokeniser produces it: lowercase, and the words of a multiword entry (written
-    with ``_``, spaces or hyphens, which the tokeniser splits at) joined with ``_``."""
-    return "_".join(_HYPHEN.sub(" ", word.strip().lower()).replace("_", " ").split())
-
-
-def _check(category: str, words: Iterable[str], where: str) -> tuple[str, ...]:
-    if category not in FILE_CATEGORIES:
-        raise LexiconError(f"{where}: unknown category {category!r}; a word file knows "
-                           f"{', '.join(FILE_CATEGORIES)}")
-    if isinstance(words, str):
-        raise LexiconError(f"{where}: the words of {category} must be a list of words, not one string")
-    out = []
-    for word in words:
-        if not isinstance(word, str) or not _entry(word):
-            raise LexiconError(f"{where}: {category} has an empty or non-text word {word!r}")
-        if category in _PAIRED:
-            form, sep, lemma = word.partition("=")
-            if not sep or not _entry(form) or not _entry(lemma) or "=" in lemma:
-                raise LexiconError(f"{where}: {category} entry {word!r} is not {_PAIRED[category]}")
-            if category == "SYNONYM" and not (_WORD.fullmatch(_entry(form)) and _SYNONYM_FORM.fullmatch(_entry(form))):
-                # Read where the tokeniser has split clitics ("it's": it 's) and signs off, a form is one word of
-                # letters and digits, or one ending in n't, which stays whole.
-                raise LexiconError(f"{where}: SYNONYM entry {word!r}: the form {form!r} must be one word "
-                                   "(letters and digits, or a negation such as don't)")
-            parts = _entry(lemma).split("_")
-            if category == "SYNONYM" and (len(parts) > MAX_SYNONYM_PARTS or not any(_LETTER.search(p) for p in parts)):
-                # a word read in place of one: a few words, one of them a word (not only signs, which
-                # would leave a command nothing to read)
-                raise LexiconError(f"{where}: SYNONYM entry {word!r}: the word must be at most "
-                                   f"{MAX_SYNONYM_PARTS} words, with a letter or digit")
-            if category == "SYNONYM" and not all(_WORD.fullmatch(part) for part in parts):
-                raise LexiconError(f"{where}: SYNONYM entry {word!r}: {lemma!r} is not letters, digits or apostrophes "
-                                   "(the tokeniser splits at other characters)")
-            out.append(f"{_entry(form)}={_entry(lemma)}")
-        elif "=" in word:
-            raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR and SYNONYM pair words)")
-        elif not all(_WORD.fullmatch(part) for part in _entry(word).split("_")):
-            # the tokeniser splits at any other character, so such an entry would never be read
-            raise LexiconError(f"{where}: {category} word {word!r} is not a word the tokeniser reads (letters, "
-                               "digits and apostrophes, or one sign such as &; '_', '-' or a space join the words of "
-                               "a multiword entry)")
-        else:
-            out.append(_entry(word))
-    return tuple(out)
-
-
-# A word file lists a domain's words: a few KB. A wrong path (a log, /dev/zero) must not be read whole.
-MAX_WORD_FILE_BYTES = 4 * 2**20
-
-
-def read_word_file(path: str | Path) -> dict[str, tuple[str, ...]]:
-    """Words by category from a word file (format: see the module docstring).
-
-    Raises LexiconError naming the file and line of the first malformed line, OSError if unreadable.
-    """
-    path = Path(path)
-    # logic.storage.read_limited's twin (grammar imports no other layer): opened non-blocking, so that a
-    # FIFO cannot hang the open; its kind is read from the open file; no more than the limit is read.
-    with open(path, "rb", opener=lambda p, flags: os.open(p, flags | getattr(os, "O_NONBLOCK", 0))) as handle:
-        if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
-            raise LexiconError(f"{path}: not a regular file (a FIFO or device); expected a word file")
-        data = handle.read(MAX_WORD_FILE_BYTES + 1)
-    if len(data) > MAX_WORD_FILE_BYTES:
-        raise LexiconError(f"{path}: a word file of more than {MAX_WORD_FILE_BYTES:,} bytes, the most allowed")
-    try:
-        text = data.decode("utf-8").removeprefix("\ufeff")  # a byte order mark some editors write first
-    except UnicodeDecodeError as exc:
-        raise LexiconError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); a word file is "
-                           "text with `CATEGORY: word word ...` lines") from None
-    entries: dict[str, list[str]] = {}
-    read_as: dict[str, tuple[str, int]] = {}  # a synonym's form -> its word and the line giving it
-    # Split where an editor ends a line (LF, CRLF, CR), not at the other separators str.splitlines knows
-    # (U+2028, form feed, NEL): a comment may hold one, and every line number after it would shift.
-    for number, line in enumerate(re.split(r"\r\n|\r|\n", text), 1):
-        content = line.split("#", 1)[0].strip()
-        if not content:
-            continue
-        where = f"{path}:{number}"
-        match = _CATEGORY_LINE.match(content)
-        if match is None:
-            raise LexiconError(f"{where}: expected `CATEGORY: word word ...`, got {content[:60]!r}")
-        category, words = match.group(1), match.group(2).split()
-        if not words:
-            raise LexiconError(f"{where}: no words after {category}:")
-        checked = _check(category, words, where)
-        for form, word in (pair.split("=", 1) for pair in checked if category == "SYNONYM"):
-            first = read_as.setdefault(form, (word, number))
-            if first[0] != word:
-                raise LexiconError(f"{where}: SYNONYM {form!r} is read as {word} here and as {first[0]} on line "
-                                   f"{first[1]}")
-        entries.setdefault(category, []).extend(checked)
-    return {category: tuple(words) for category, words in entries.items()}
 
 
 def _inflections(lemma: str) -> dict[str, str]:
@@ -192,9 +65,12 @@ class Lexicon:
     """
 
     def __init__(self, entries: Mapping[str, Iterable[str]] | None = None):
-        merged: dict[str, set[str]] = {}
+        merged: dict[str, dict[str, None]] = {}  # in the order given, once each: a conflict cites the first
         for category, words in (entries or {}).items():
-            merged.setdefault(category, set()).update(_check(category, words, "word list"))
+            merged.setdefault(category, {}).update(dict.fromkeys(check_words(category, words, "word list")))
+        said = SynonymForms()
+        for pair in merged.get("SYNONYM", ()):
+            said.add(pair, None, "in the words before")
         self.entries: dict[str, tuple[str, ...]] = {
             c: tuple(sorted(merged[c])) for c in FILE_CATEGORIES if merged.get(c)}
         words = {c: frozenset(self.entries.get(c, ())) for c in FILE_CATEGORIES}
@@ -205,7 +81,7 @@ class Lexicon:
         self.verb_forms.update(pair.split("=", 1) for pair in self.entries.get("IRREGULAR", ()))
         table: dict[str, set[str]] = {}
         for category in FILE_CATEGORIES:
-            tag = _TAGGING.get(category, category)
+            tag = TAGGING.get(category, category)
             if tag in CATEGORIES and category != "VERB":
                 for word in words[category]:
                     table.setdefault(word, set()).add(tag)
@@ -224,10 +100,7 @@ class Lexicon:
         self.synonyms: dict[str, tuple[str, ...]] = {}
         for pair in self.entries.get("SYNONYM", ()):
             form, word = pair.split("=", 1)
-            parts = tuple(word.split("_"))
-            if self.synonyms.setdefault(form, parts) != parts:
-                raise LexiconError(f"SYNONYM {form!r} is given two words: {'_'.join(self.synonyms[form])} and "
-                                   f"{word}")
+            self.synonyms[form] = tuple(word.split("_"))
         self.negating_prepositions = words["PREP_NEGATING"]
         self.source_and_comitative_prepositions = words["PREP_SOURCE"]
         self.having_verbs = words["VERB_HAVING"]
@@ -281,7 +154,7 @@ class Lexicon:
             raise LexiconError(f"words to add must map a category to its words, not {type(words_by_category).__name__}")
         merged = {c: list(ws) for c, ws in self.entries.items()}
         for category, words in words_by_category.items():
-            merged.setdefault(category, []).extend(_check(category, words, "word list"))
+            merged.setdefault(category, []).extend(check_words(category, words, "word list"))
         return Lexicon(merged)
 
     def __eq__(self, other: object) -> bool:

@@ -14,6 +14,7 @@ from importlib.resources import files
 from pathlib import Path
 
 from groundlang.grammar.lexicon import Lexicon, LexiconError, read_word_file
+from groundlang.grammar.word_files import SynonymForms
 
 __all__ = ["DOMAIN_WORD_FILE", "WordSource", "domain_lexicon", "extra_words"]
 
@@ -38,7 +39,7 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
     if isinstance(sources, (str, Path, Mapping)):
         sources = [sources]
     merged: dict[str, dict[str, None]] = {}
-    read_as: dict[str, tuple[str, str]] = {}  # a synonym's form -> (its word, where it was given)
+    said = SynonymForms()  # merged below, a form's second word would name no source
     for source in sources:
         if isinstance(source, (str, Path)):
             words = read_word_file(source)
@@ -48,11 +49,8 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
             raise LexiconError(f"a lexicon is a word file's path or a mapping of categories to words, "
                                f"not {type(source).__name__}")
         where = str(source) if isinstance(source, (str, Path)) else "words given as data (a trained model's own)"
-        for pair in words.get("SYNONYM", ()):  # merged below, a second word for a form would name no source
-            form, word = pair.split("=", 1)
-            first = read_as.setdefault(form, (word, where))
-            if first[0] != word:
-                raise LexiconError(f"{where}: SYNONYM {form!r} is read as {word}, and as {first[0]} in {first[1]}")
+        for pair in words.get("SYNONYM", ()):
+            said.add(pair, where, f"in {where}")
         for category, entries in words.items():
             merged.setdefault(category, {}).update(dict.fromkeys(entries))  # in order, once each
     return {category: list(entries) for category, entries in merged.items()}

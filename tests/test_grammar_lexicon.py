@@ -267,7 +267,7 @@ def test_one_form_given_two_words_by_two_files_is_refused(tmp_path):
     second.write_text("SYNONYM: east=left\n", encoding="utf-8")
     with pytest.raises(LexiconError) as caught:
         CLEANUP.with_files(first, second)
-    assert str(caught.value) == f"{second}: SYNONYM 'east' is given two words: left and right"
+    assert str(caught.value) == f"{second}: SYNONYM 'east' is read as left here and as right in the words before"
     assert CLEANUP.with_files(first, first).synonyms == {"east": ("right",)}  # the same pair twice is one
 
 
@@ -299,5 +299,12 @@ def test_files_that_read_one_form_as_two_words_are_named_when_a_learner_merges_t
     second.write_text("SYNONYM: east=left\n", encoding="utf-8")
     with pytest.raises(LexiconError) as caught:
         extra_words([first, second])
-    assert str(caught.value) == f"{second}: SYNONYM 'east' is read as left, and as right in {first}"
+    assert str(caught.value) == f"{second}: SYNONYM 'east' is read as left here and as right in {first}"
     assert extra_words([first, first])["SYNONYM"] == ["east=right"]
+
+
+def test_words_given_as_data_that_read_one_form_as_two_words_are_refused_citing_the_first():
+    with pytest.raises(LexiconError) as caught:
+        Lexicon({"SYNONYM": ["east=right", "west=left", "east=left"]})
+    assert str(caught.value) == "SYNONYM 'east' is read as left here and as right in the words before"
+    assert Lexicon({"SYNONYM": ["east=right", "east=right"]}).synonyms == {"east": ("right",)}

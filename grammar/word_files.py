@@ -1,0 +1,162 @@
+"""Word files: the format a domain's words are written in, read and checked (see ``english.words``).
+
+``CATEGORY: word word ...`` lines, ``#`` comments, blank lines skipped, ``_`` joining the words of a
+multiword entry (``in_front_of``), ``form=lemma`` pairs under ``IRREGULAR``, ``form=word`` pairs under
+``SYNONYM``. :func:`read_word_file` reads one file, naming file and line of the first malformed line;
+:func:`check_words` checks and normalises one category's words however they came (a file, a mapping);
+``grammar.lexicon.Lexicon`` builds the parser's lexicon from them.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import stat
+from collections.abc import Iterable
+from pathlib import Path
+
+__all__ = [
+    "CATEGORIES", "FILE_CATEGORIES", "LexiconError", "MAX_SYNONYM_PARTS", "MAX_WORD_FILE_BYTES", "SynonymForms",
+    "TAGGING", "check_words", "entry", "read_word_file",
+]
+
+# Lexical categories (the grammar's terminals are sets of these).
+CATEGORIES = (
+    "ADJ", "ADV", "AUX", "COLOR", "COMMA", "CONJ", "DET", "GER", "MEASURE",
+    "NEG", "NOUN", "NUM", "PREP", "PRON", "REL", "SUB", "TO", "VERB",
+)
+# Categories of a word file that tag their words with a lexical category and give them a role the
+# parser or the model reads (see english.words); VERB lists lemmas, IRREGULAR form=lemma pairs.
+TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP", "PREP_HAVING": "PREP"}
+# VERB_HAVING marks verb lemmas (listed under VERB) whose relative clause about a noun phrase reads as
+# "with" ("the room that has the chair"); it tags nothing itself.
+FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB")) + (
+    "VERB", "IRREGULAR", "SYNONYM", *TAGGING, "VERB_HAVING",
+)
+# Categories whose entries pair two words, ``form=word``, and what the pair means (for error messages).
+_PAIRED = {"IRREGULAR": "form=lemma (e.g. went=go)", "SYNONYM": "form=word (e.g. east=right)"}
+_CATEGORY_LINE = re.compile(r"^([A-Za-z_]+)\s*:(.*)$")
+_HYPHEN = re.compile(r"(?<=\w)-(?=\w)")
+# A synonym's word replaces one word of a command: a multiword entry's few words, not a text.
+MAX_SYNONYM_PARTS = 8
+_LETTER = re.compile(r"[^\W_]")
+# A word a synonym's form may be: what the tokeniser leaves whole (no clitic split off, no sign alone).
+_SYNONYM_FORM = re.compile(r"[^\W_]+(?:n't)?")
+
+
+class LexiconError(ValueError):
+    """A word file or word list that does not follow the format; the message names file and line."""
+
+
+# one token as grammar.parser's tokeniser reads it: a word (a clitic such as 're too), or one sign ("&")
+_WORD = re.compile(r"'?[^\W_]+(?:'[^\W_]+)*|[^\w\s]")
+
+
+def entry(word: str) -> str:
+    """A word as the tokeniser produces it: lowercase, and the words of a multiword entry (written
+    with ``_``, spaces or hyphens, which the tokeniser splits at) joined with ``_``."""
+    return "_".join(_HYPHEN.sub(" ", word.strip().lower()).replace("_", " ").split())
+
+
+def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, ...]:
+    if category not in FILE_CATEGORIES:
+        raise LexiconError(f"{where}: unknown category {category!r}; a word file knows "
+                           f"{', '.join(FILE_CATEGORIES)}")
+    if isinstance(words, str):
+        raise LexiconError(f"{where}: the words of {category} must be a list of words, not one string")
+    out = []
+    for word in words:
+        if not isinstance(word, str) or not entry(word):
+            raise LexiconError(f"{where}: {category} has an empty or non-text word {word!r}")
+        if category in _PAIRED:
+            form, sep, lemma = word.partition("=")
+            if not sep or not entry(form) or not entry(lemma) or "=" in lemma:
+                raise LexiconError(f"{where}: {category} entry {word!r} is not {_PAIRED[category]}")
+            if category == "SYNONYM" and not (_WORD.fullmatch(entry(form)) and _SYNONYM_FORM.fullmatch(entry(form))):
+                # Read where the tokeniser has split clitics ("it's": it 's) and signs off, a form is one word of
+                # letters and digits, or one ending in n't, which stays whole.
+                raise LexiconError(f"{where}: SYNONYM entry {word!r}: the form {form!r} must be one word "
+                                   "(letters and digits, or a negation such as don't)")
+            parts = entry(lemma).split("_")
+            if category == "SYNONYM" and (len(parts) > MAX_SYNONYM_PARTS or not any(_LETTER.search(p) for p in parts)):
+                # a word read in place of one: a few words, one of them a word (not only signs, which
+                # would leave a command nothing to read)
+                raise LexiconError(f"{where}: SYNONYM entry {word!r}: the word must be at most "
+                                   f"{MAX_SYNONYM_PARTS} words, with a letter or digit")
+            if category == "SYNONYM" and not all(_WORD.fullmatch(part) for part in parts):
+                raise LexiconError(f"{where}: SYNONYM entry {word!r}: {lemma!r} is not letters, digits or apostrophes "
+                                   "(the tokeniser splits at other characters)")
+            out.append(f"{entry(form)}={entry(lemma)}")
+        elif "=" in word:
+            raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR and SYNONYM pair words)")
+        elif not all(_WORD.fullmatch(part) for part in entry(word).split("_")):
+            # the tokeniser splits at any other character, so such an entry would never be read
+            raise LexiconError(f"{where}: {category} word {word!r} is not a word the tokeniser reads (letters, "
+                               "digits and apostrophes, or one sign such as &; '_', '-' or a space join the words of "
+                               "a multiword entry)")
+        else:
+            out.append(entry(word))
+    return tuple(out)
+
+
+class SynonymForms:
+    """The word each ``SYNONYM`` form is read as, and where that was said: a form given a second word is
+    refused, naming both places (one check for a file's lines, a model's word files and words given as
+    data, each naming what it can)."""
+
+    def __init__(self) -> None:
+        self._said: dict[str, tuple[str, str]] = {}
+
+    def add(self, pair: str, where: str | None, cited: str) -> None:
+        """Record ``form=word``, said at ``where`` (the error's prefix; None for none), cited later as
+        ``cited`` ("on line 3", "in words.txt"). Raises LexiconError if the form was given another word."""
+        form, word = pair.split("=", 1)
+        first, first_cited = self._said.setdefault(form, (word, cited))
+        if first != word:
+            prefix = f"{where}: " if where else ""
+            raise LexiconError(f"{prefix}SYNONYM {form!r} is read as {word} here and as {first} {first_cited}")
+
+
+# A word file lists a domain's words: a few KB. A wrong path (a log, /dev/zero) must not be read whole.
+MAX_WORD_FILE_BYTES = 4 * 2**20
+
+
+def read_word_file(path: str | Path) -> dict[str, tuple[str, ...]]:
+    """Words by category from a word file (format: see the module docstring).
+
+    Raises LexiconError naming the file and line of the first malformed line, OSError if unreadable.
+    """
+    path = Path(path)
+    # logic.storage.read_limited's twin (grammar imports no other layer): opened non-blocking, so that a
+    # FIFO cannot hang the open; its kind is read from the open file; no more than the limit is read.
+    with open(path, "rb", opener=lambda p, flags: os.open(p, flags | getattr(os, "O_NONBLOCK", 0))) as handle:
+        if not stat.S_ISREG(os.fstat(handle.fileno()).st_mode):
+            raise LexiconError(f"{path}: not a regular file (a FIFO or device); expected a word file")
+        data = handle.read(MAX_WORD_FILE_BYTES + 1)
+    if len(data) > MAX_WORD_FILE_BYTES:
+        raise LexiconError(f"{path}: a word file of more than {MAX_WORD_FILE_BYTES:,} bytes, the most allowed")
+    try:
+        text = data.decode("utf-8").removeprefix("\ufeff")  # a byte order mark some editors write first
+    except UnicodeDecodeError as exc:
+        raise LexiconError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); a word file is "
+                           "text with `CATEGORY: word word ...` lines") from None
+    entries: dict[str, list[str]] = {}
+    synonyms = SynonymForms()
+    # Split where an editor ends a line (LF, CRLF, CR), not at the other separators str.splitlines knows
+    # (U+2028, form feed, NEL): a comment may hold one, and every line number after it would shift.
+    for number, line in enumerate(re.split(r"\r\n|\r|\n", text), 1):
+        content = line.split("#", 1)[0].strip()
+        if not content:
+            continue
+        where = f"{path}:{number}"
+        match = _CATEGORY_LINE.match(content)
+        if match is None:
+            raise LexiconError(f"{where}: expected `CATEGORY: word word ...`, got {content[:60]!r}")
+        category, words = match.group(1), match.group(2).split()
+        if not words:
+            raise LexiconError(f"{where}: no words after {category}:")
+        checked = check_words(category, words, where)
+        for pair in checked if category == "SYNONYM" else ():
+            synonyms.add(pair, where, f"on line {number}")
+        entries.setdefault(category, []).extend(checked)
+    return {category: tuple(words) for category, words in entries.items()}
