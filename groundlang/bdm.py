@@ -135,8 +135,17 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
         state = State(Layout(rooms, doors, tuple((t.colour, t.shape) for t in toys), palette, added), agent, toys)
         state.validate()
     except WorldError as exc:
-        raise CorpusError(f"{where}: {exc}") from None
+        raise CorpusError(f"{where}: {_by_file_names(str(exc), objects)}") from None
     return state, tuple(name for name, _ in blocks)
+
+
+def _by_file_names(message: str, objects: dict[str, dict[str, dict[str, str]]]) -> str:
+    """A world's message about its objects, with each layout id (``room2``: the layout's third room) as the
+    file calls that object (``room3`` where the file's rooms are room0, room1, room3), so the line the
+    message names can be found in the file."""
+    names = {f"{cls}{i}": name for cls in ("room", "door", "block") for i, (name, _) in enumerate(_ordered(objects, cls))}
+    names.update(("agent0", name) for name in objects["agent"])
+    return re.sub(r"\b(?:agent|room|door|block)\d+\b", lambda m: names.get(m.group(0), m.group(0)), message)
 
 
 def _read_objects(line: str, where: str) -> dict[str, dict[str, dict[str, str]]]:

@@ -260,6 +260,19 @@ def test_objects_are_ordered_by_the_number_in_their_name_however_long():
     assert [r.left for r in state.layout.rooms] == [8, 0, 4]
 
 
+def test_a_world_error_names_objects_as_the_file_does():
+    """The layout numbers a file's room0, room1, room3 as its rooms 0 to 2; an error about the third names room3,
+    the object a user can find in the line, and a block the file calls block7 is block7 in the message."""
+    room = "{name} (room): [top: {{4}} left: {{{left}}} bottom: {{0}} right: {{{right}}} colour: {{red}} ]"
+    rooms = [room.format(name=n, left=l, right=r) for n, l, r in (("room0", 0, 4), ("room1", 4, 8), ("room3", 6, 12))]
+    with pytest.raises(CorpusError, match=r"^here: room1 and room3 overlap$"):
+        parse_bdm_state("{agent0 (agent): [x: {1} y: {1} ] , " + " , ".join(rooms) + " , }", where="here")
+    block = "block7 (block): [x: {4} y: {0} shape: {chair} colour: {red} ]"
+    with pytest.raises(CorpusError, match=r"^here: block7 at \(4,0\) is inside a wall or outside every room$"):
+        parse_bdm_state("{me (agent): [x: {1} y: {1} ] , " + " , ".join(rooms[:2]) + " , " + block + " , }",
+                        where="here")
+
+
 def test_a_bdm_file_of_commands_where_one_state_is_wanted_is_said_to_be_one():
     small = Path(__file__).parent / "fixtures" / "williams2018" / "small.bdm"
     with pytest.raises(CorpusError, match=r"small\.bdm: a \.bdm file of commands \(line 1 is not a state line\); "
