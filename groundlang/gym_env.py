@@ -20,6 +20,11 @@ edge, as the pictures of :mod:`groundlang.render` show them):
     3 agent         1 where the agent stands
     4 toy colour    1 + palette colour index of the toy on the cell, 0 where none
     5 toy shape     1 + palette shape index of the toy on the cell, 0 where none
+    6, ...          one per attribute the palette adds (``attribute(toy, material)``), named
+                    ``CLASS_ATTRIBUTE`` (``toy_material``) in the palette's order: 1 + the index of
+                    the value of the room (on its cells), door or toy there, 0 elsewhere
+
+``env.channels`` names them (:func:`channels`): a palette of colours and shapes alone has the six.
 """
 
 from __future__ import annotations
@@ -43,6 +48,7 @@ __all__ = [
     "CleanupAction",
     "CleanupEnv",
     "CHANNELS",
+    "channels",
     "COMMAND_CHARSET",
     "MAX_COMMAND_LENGTH",
     "CommandPolicy",  # these three live in groundlang.gym_policy, read from here as before
@@ -93,11 +99,40 @@ def _example_pool() -> tuple[tuple[State, str, tuple[Atom, ...] | None], ...]:
     return tuple((inst.initial_state, inst.command, label_for(inst, labels)) for inst in corpus)
 
 
+def channels(palette) -> tuple[str, ...]:
+    """The names of an observation grid's channels for states of ``palette``: :data:`CHANNELS`, then one per
+    attribute the palette adds (``toy_material``), so that toys (rooms, doors) the words tell apart by one
+    are told apart in the grid too."""
+    return CHANNELS + tuple(f"{cls}_{attribute}" for cls, attribute in palette.added)
+
+
+def _added_planes(state: State, shape: tuple[int, int], classes: tuple[str, ...]) -> np.ndarray:
+    """The channels of the palette's added attributes ``[H, W, len(added)]``, filled for objects of
+    ``classes`` (the rooms and doors stay put, the toys move)."""
+    lay, (H, W) = state.layout, shape
+    grid = np.zeros((H, W, len(lay.palette.added)), dtype=np.uint8)
+    for k, (cls, attribute) in enumerate(lay.palette.added):
+        if cls not in classes:
+            continue
+        values = lay.palette.values_of(attribute)
+        if cls == "room":
+            for name, r in zip(lay.room_names, lay.rooms):
+                grid[H - r.top: H - r.bottom - 1, r.left + 1: r.right, k] = values.index(lay.added_values(name)[attribute]) + 1
+        elif cls == "door":
+            for name, d in zip(lay.door_names, lay.doors):
+                grid[H - 1 - d.top: H - d.bottom, d.left: d.right + 1, k] = values.index(lay.added_values(name)[attribute]) + 1
+        else:
+            for name, toy in zip(lay.toy_names, state.toys):
+                grid[H - 1 - toy.y, toy.x, k] = values.index(lay.added_values(name)[attribute]) + 1
+    return grid
+
+
 def _static_grid(state: State, shape: tuple[int, int]) -> np.ndarray:
-    """Channels 0-2 ``[H, W, 3]`` (north up) of a layout, padded to ``shape`` = (H, W)."""
+    """The channels of a layout that stay put ``[H, W, 6 + added]`` (north up), padded to ``shape`` =
+    (H, W): 0-2 and the rooms' and doors' added attributes; the rest is 0, filled by :func:`_dynamic_grid`."""
     lay = state.layout
     H, W = shape
-    grid = np.zeros((H, W, 3), dtype=np.uint8)
+    grid = np.zeros((H, W, len(channels(lay.palette))), dtype=np.uint8)
     wall, walkable = lay.wall, lay.walkable  # [width, height]
     door = wall & walkable
     h = lay.height
@@ -108,24 +143,28 @@ def _static_grid(state: State, shape: tuple[int, int]) -> np.ndarray:
         value = lay.palette.colour_index(r.colour) + 1
         # Rows H-1-y for y in bottom+1..top-1.
         grid[H - r.top: H - r.bottom - 1, r.left + 1: r.right, 2] = value
+    grid[:, :, len(CHANNELS):] = _added_planes(state, shape, ("room", "door"))
     return grid
 
 
-def _dynamic_grid(state: State, shape: tuple[int, int]) -> np.ndarray:
-    """Channels 3-5 ``[H, W, 3]`` (agent, toy colour, toy shape)."""
-    H, W = shape
-    grid = np.zeros((H, W, 3), dtype=np.uint8)
+def _observed_grid(static: np.ndarray, state: State) -> np.ndarray:
+    """The observation of ``state``: the layout's ``static`` channels with the agent and the toys on them."""
+    grid = static.copy()
+    H = grid.shape[0]
     pal = state.layout.palette
-    grid[H - 1 - state.agent.y, state.agent.x, 0] = 1
+    grid[H - 1 - state.agent.y, state.agent.x, 3] = 1
     for toy in state.toys:
-        grid[H - 1 - toy.y, toy.x, 1] = pal.colour_index(toy.colour) + 1
-        grid[H - 1 - toy.y, toy.x, 2] = pal.shape_index(toy.shape) + 1
+        grid[H - 1 - toy.y, toy.x, 4] = pal.colour_index(toy.colour) + 1
+        grid[H - 1 - toy.y, toy.x, 5] = pal.shape_index(toy.shape) + 1
+    if pal.added:
+        grid[:, :, len(CHANNELS):] |= _added_planes(state, grid.shape[:2], ("toy",))
     return grid
 
 
 def _largest_value(palette) -> int:
-    """The largest value a grid cell of this palette holds: a colour or shape index + 1 (0 is none)."""
-    return max(len(palette.colours), len(palette.shapes)) + 1
+    """The largest value a grid cell of this palette holds: the index + 1 of a colour, shape or added
+    attribute's value (0 is none)."""
+    return max(len(values) for _, values in palette.all_values) + 1
 
 
 class CleanupEnv(gymnasium.Env):
@@ -164,9 +203,10 @@ class CleanupEnv(gymnasium.Env):
         self.grid_shape = (max(l.height for l in layouts), max(l.width for l in layouts))
         # Colour and shape indices + 1 must fit uint8.
         top = max(_largest_value(l.palette) for l in layouts)
+        self.channels = channels(layouts[0].palette)  # the example corpus's layouts share one palette
         self.action_space = spaces.Discrete(len(CleanupAction))
         self.observation_space = spaces.Dict({
-            "grid": spaces.Box(0, top, shape=(*self.grid_shape, len(CHANNELS)), dtype=np.uint8),
+            "grid": spaces.Box(0, top, shape=(*self.grid_shape, len(self.channels)), dtype=np.uint8),
             "command": spaces.Text(MAX_COMMAND_LENGTH, min_length=0, charset=COMMAND_CHARSET),
         })
         self.state: State | None = None
@@ -194,8 +234,7 @@ class CleanupEnv(gymnasium.Env):
         return self.goal is not None and goal_holds(self.goal, self.state)
 
     def _observation(self) -> dict[str, Any]:
-        grid = np.concatenate([self._static, _dynamic_grid(self.state, self.grid_shape)], axis=-1)
-        return {"grid": grid, "command": self.command}
+        return {"grid": _observed_grid(self._static, self.state), "command": self.command}
 
     def _info(self) -> dict[str, Any]:
         return {"goal_holds": self._holds(), "state": self.state, "goal": self.goal, "steps": self.steps}
@@ -228,6 +267,9 @@ class CleanupEnv(gymnasium.Env):
             raise ValueError(f"state of size {state.layout.height}x{state.layout.width} does not fit the "
                              f"observation grid {self.grid_shape[0]}x{self.grid_shape[1]} of this env")
         palette = state.layout.palette
+        if channels(palette) != self.channels:
+            raise ValueError(f"state of palette {palette.name}: its grid's channels ({', '.join(channels(palette))}) "
+                             f"are not this env's ({', '.join(self.channels)}); make the env with a state of that palette")
         if _largest_value(palette) > self.observation_space["grid"].high.max():
             raise ValueError(f"state of palette {palette.name}: its {len(palette.colours)} colours and "
                              f"{len(palette.shapes)} shapes do not fit the observation space of this env; "

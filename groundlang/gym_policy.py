@@ -12,14 +12,14 @@ from math import factorial
 import gymnasium
 import numpy as np
 
-from groundlang.gym_env import CHANNELS, CleanupAction
+from groundlang.gym_env import CHANNELS, CleanupAction, channels
 from groundlang.model.relevance import pushes_scenery
 from groundlang.model.world import Action, State
 
 __all__ = ["CommandPolicy", "policy", "observation_positions"]
 
 
-# Toys alike in colour and shape are told apart by where they were a step before; only those that cannot be
+# Toys alike in all the grid shows of them (colour, shape, added attributes) are told apart by where they were a step before; only those that cannot be
 # (after a reset to another state) are matched in every order, which grows as k! and is refused beyond this.
 MAX_ASSIGNMENTS = 5040
 
@@ -27,8 +27,9 @@ MAX_ASSIGNMENTS = 5040
 def observation_positions(grid: np.ndarray, layout, previous: np.ndarray | None = None) -> np.ndarray | None:
     """Agent and toy positions ``[1 + k, 2]`` (x, y) read from an observation grid.
 
-    Toys are matched to the layout's toys by colour and shape; toys alike in
-    both are interchangeable: each keeps its cell in ``previous`` (positions
+    Toys are matched to the layout's toys by colour, shape and the values of
+    the attributes the palette adds to toys; toys alike in all of them are
+    interchangeable: each keeps its cell in ``previous`` (positions
     a step before) where a toy of its kind is still there, and the rest are
     assigned in every order by :func:`_position_candidates`. Returns None
     when the grid does not show the layout's agent and toys.
@@ -39,19 +40,27 @@ def observation_positions(grid: np.ndarray, layout, previous: np.ndarray | None 
 
 def _position_candidates(grid: np.ndarray, layout, previous: np.ndarray | None = None) -> list[np.ndarray]:
     grid = np.asarray(grid)
+    if grid.ndim != 3 or grid.shape[2] != len(channels(layout.palette)):
+        return []  # not a grid of this layout's palette
     H = grid.shape[0]
     rows, cols = np.nonzero(grid[:, :, 3])
     if len(rows) != 1:
         return []
     agent = (int(cols[0]), H - 1 - int(rows[0]))
     pal = layout.palette
-    cells: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    # a toy's kind: its colour, shape and the values of the attributes the palette adds to toys, as indices
+    shown = [4, 5] + [len(CHANNELS) + k for k, (cls, _) in enumerate(pal.added) if cls == "toy"]
+    cells: dict[tuple[int, ...], list[tuple[int, int]]] = {}
     for r, c in zip(*np.nonzero(grid[:, :, 4])):
-        key = (int(grid[r, c, 4]) - 1, int(grid[r, c, 5]) - 1)
+        key = tuple(int(grid[r, c, k]) - 1 for k in shown)
         cells.setdefault(key, []).append((int(c), H - 1 - int(r)))
-    wanted: dict[tuple[int, int], list[int]] = {}
-    for i, (colour, shape) in enumerate(layout.toy_attributes):
-        wanted.setdefault((pal.colour_index(colour), pal.shape_index(shape)), []).append(i)
+    wanted: dict[tuple[int, ...], list[int]] = {}
+    toy_attributes = [a for cls, a in pal.added if cls == "toy"]
+    for i, (name, (colour, shape)) in enumerate(zip(layout.toy_names, layout.toy_attributes)):
+        values = layout.added_values(name)
+        key = (pal.colour_index(colour), pal.shape_index(shape),
+               *(pal.values_of(a).index(values[a]) for a in toy_attributes))
+        wanted.setdefault(key, []).append(i)
     if {k: len(v) for k, v in wanted.items()} != {k: len(v) for k, v in cells.items()}:
         return []
     base = np.zeros((1 + len(layout.toy_attributes), 2), dtype=np.int64)
@@ -68,13 +77,12 @@ def _position_candidates(grid: np.ndarray, layout, previous: np.ndarray | None =
             else:
                 unmatched.append(t)
         if len(unmatched) > 1:
-            _check_interchangeable(layout, unmatched)
             open_groups.append((unmatched, free))
             assignments *= factorial(len(unmatched))
         elif unmatched:
             base[1 + unmatched[0]] = free[0]
     if assignments > MAX_ASSIGNMENTS:
-        raise ValueError(f"the observation shows toys alike in colour and shape that cannot be told apart in "
+        raise ValueError(f"the observation shows toys alike in all it shows of them that cannot be told apart in "
                          f"{assignments:,} ways (at most {MAX_ASSIGNMENTS:,} are tried); step from the state the "
                          "policy was made for, or make the policy for this state")
     out = [base]
@@ -87,18 +95,6 @@ def _position_candidates(grid: np.ndarray, layout, previous: np.ndarray | None =
                 extended.append(new)
         out = extended
     return out
-
-
-def _check_interchangeable(layout, toys: list[int]) -> None:
-    """ValueError where toys the observation shows alike (in colour and shape) differ in an attribute the
-    palette adds, which it does not show: matched in any order, one could be taken for the other."""
-    names = [layout.toy_names[t] for t in toys]
-    first = layout.added_values(names[0])
-    differ = sorted({a for n in names for a, v in layout.added_values(n).items() if v != first.get(a)})
-    if differ:
-        raise ValueError(f"the observation shows {' and '.join(names)} alike in colour and shape, and they differ in "
-                         f"{', '.join(differ)}, which it does not show; pass the env's state (env.unwrapped.state) "
-                         "to the policy instead of its observation, or step from the state the policy was made for")
 
 
 class CommandPolicy:
@@ -126,9 +122,10 @@ class CommandPolicy:
             return int(self.space.indices_of(grid.positions[None])[0])
         grid = np.asarray(grid) if isinstance(grid, np.ndarray) else None
         lay = self.space.layout
-        if grid is None or grid.ndim != 3 or grid.shape[2] != len(CHANNELS) or grid.shape[0] < lay.height \
+        depth = len(channels(lay.palette))
+        if grid is None or grid.ndim != 3 or grid.shape[2] != depth or grid.shape[0] < lay.height \
                 or grid.shape[1] < lay.width:
-            raise ValueError(f"observation must be an env's (a dict whose 'grid' is [H, W, {len(CHANNELS)}], at "
+            raise ValueError(f"observation must be an env's (a dict whose 'grid' is [H, W, {depth}], at "
                              f"least {lay.height}x{lay.width} here) or a State, got {type(observation).__name__}")
         candidates = _position_candidates(grid, lay, self.previous)
         if not candidates:

@@ -11,6 +11,7 @@ from gymnasium.utils.env_checker import check_env  # noqa: E402
 
 from groundlang.corpus import example_corpus_path, parse_state, read_state_file  # noqa: E402
 from groundlang.gym_env import (  # noqa: E402
+    CHANNELS,
     ENV_ID,
     CleanupAction,
     CleanupEnv,
@@ -242,22 +243,57 @@ def test_toys_alike_are_told_apart_by_where_they_were(state):
     assert (observation_positions(grid, many.layout, previous=many.positions) == moved).all()
 
 
-def test_toys_told_apart_only_by_an_attribute_the_observation_omits_are_not_guessed():
-    """Two red chairs, one wooden and one metal (an attribute the palette adds): the grid shows them alike, so
-    with nothing to tell them apart by they are not matched in an arbitrary order."""
+def test_an_attribute_the_palette_adds_has_a_channel_and_tells_toys_apart():
+    """Two red chairs, one wooden and one metal (an attribute the palette adds): the grid has a channel of
+    materials, so the chairs are matched to the layout's by it, with no previous positions to go by, and a
+    state of a palette without it is refused by the env."""
     from pathlib import Path
 
     from groundlang.bdm import parse_bdm_state
+    from groundlang.gym_env import channels
 
     palette = str(Path(__file__).parent / "fixtures" / "materials" / "materials.lp")
-    chairs, _ = parse_bdm_state(
-        "{agent0 (agent): [x: {2} y: {2} ] , door0 (door): [top: {3} left: {4} bottom: {3} right: {4} ] , "
-        "block0 (block): [x: {6} y: {2} shape: {chair} colour: {red} material: {wood} ] , "
-        "block1 (block): [x: {2} y: {5} shape: {chair} colour: {red} material: {metal} ] , "
-        "room0 (room): [top: {7} left: {0} bottom: {0} right: {4} colour: {red} ] , "
-        "room1 (room): [top: {7} left: {4} bottom: {0} right: {8} colour: {green} ] , }", palette)
-    grid = CleanupEnv(chairs, command="go next to the metal chair").reset(seed=0)[0]["grid"]
-    with pytest.raises(ValueError, match="block0 and block1 alike in colour and shape, and they differ in "
-                                         r"material, which it does not show; pass the env's state"):
-        observation_positions(grid, chairs.layout)
-    assert (observation_positions(grid, chairs.layout, previous=chairs.positions) == chairs.positions).all()
+    line = ("{agent0 (agent): [x: {2} y: {2} ] , door0 (door): [top: {3} left: {4} bottom: {3} right: {4} ] , "
+            "block0 (block): [x: {6} y: {2} shape: {chair} colour: {red} material: {wood} ] , "
+            "block1 (block): [x: {2} y: {5} shape: {chair} colour: {red} material: {metal} ] , "
+            "room0 (room): [top: {7} left: {0} bottom: {0} right: {4} colour: {red} ] , "
+            "room1 (room): [top: {7} left: {4} bottom: {0} right: {8} colour: {green} ] , }")
+    chairs, _ = parse_bdm_state(line, palette)
+    env = CleanupEnv(chairs, command="go next to the metal chair")
+    assert env.channels == channels(chairs.layout.palette) == CHANNELS + ("toy_material",)
+    grid = env.reset(seed=0)[0]["grid"]
+    assert grid.shape == (8, 9, 7) and env.observation_space["grid"].contains(grid)
+    # wood is value 0, metal 1: each chair's cell holds its index + 1, every other cell 0
+    assert {(int(c), 7 - int(r)): int(grid[r, c, 6]) for r, c in zip(*np.nonzero(grid[:, :, 6]))} == \
+        {(6, 2): 1, (2, 5): 2}
+    assert (observation_positions(grid, chairs.layout) == chairs.positions).all()
+    swapped = chairs.with_positions(chairs.positions[[0, 2, 1]])  # the metal chair where the wooden one was
+    assert (observation_positions(CleanupEnv(swapped).reset(seed=0)[0]["grid"], chairs.layout,
+                                  previous=chairs.positions) == swapped.positions).all()
+    for _ in range(3):  # north twice, then push the metal chair from (2, 5) to (2, 6)
+        after = env.step(int(CleanupAction.NORTH))[0]["grid"]
+    assert (int(after[7 - 6, 2, 6]), int(after[7 - 5, 2, 6]), int(after[7 - 5, 2, 3])) == (2, 0, 1)
+    plain, _ = parse_bdm_state(line.replace(" material: {wood}", "").replace(" material: {metal}", ""),
+                               "williams2018")
+    with pytest.raises(ValueError, match="its grid's channels .* are not this env's"):
+        env.reset(options={"state": plain})
+
+
+def test_a_room_and_a_door_attribute_fill_the_room_cells_and_the_door_cell(tmp_path):
+    from groundlang.bdm import parse_bdm_state
+
+    palette = tmp_path / "floors.lp"
+    palette.write_text("value(colour, 0, red). value(colour, 1, green). value(shape, 0, chair).\n"
+                       "value(floor, 0, wood). value(floor, 1, tile). value(lock, 0, open). value(lock, 1, shut).\n"
+                       "attribute(room, floor). attribute(door, lock).\n", encoding="utf-8")
+    state, _ = parse_bdm_state(
+        "{agent0 (agent): [x: {2} y: {2} ] , door0 (door): [top: {3} left: {4} bottom: {3} right: {4} lock: {shut} ] , "
+        "room0 (room): [top: {7} left: {0} bottom: {0} right: {4} colour: {red} floor: {tile} ] , "
+        "room1 (room): [top: {7} left: {4} bottom: {0} right: {8} colour: {green} floor: {wood} ] , }", str(palette))
+    env = CleanupEnv(state)
+    grid = env.reset(seed=0)[0]["grid"]
+    assert env.channels[6:] == ("door_lock", "room_floor")
+    lock, floor = grid[:, :, 6], grid[:, :, 7]
+    assert list(zip(*np.nonzero(lock))) == [(7 - 3, 4)] and lock[7 - 3, 4] == 2
+    assert (floor[1:7, 1:4] == 2).all() and (floor[1:7, 5:8] == 1).all()
+    assert (floor[[0, 7], :] == 0).all() and (floor[:, [0, 4, 8]] == 0).all()
