@@ -71,3 +71,16 @@ def test_an_empty_library_path_is_refused_not_taken_for_the_current_folder(comma
     err = capsys.readouterr().err
     assert "argument --library: an empty path; expected a .lp file or a library the package ships" in err
     assert "Is a directory" not in err and len(err.splitlines()) == 1
+
+
+def test_python_dash_m_groundlang_is_the_command():
+    """``python -m groundlang`` runs the command where the venv's scripts are not on the path: its exit code and
+    its one-line error included."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "groundlang", "check", "tests/fixtures/williams2018/small.bdm"],
+                          capture_output=True, text=True, cwd=str(__import__("pathlib").Path(__file__).parent.parent))
+    assert done.returncode == 0 and "commands: 2 (2 distinct texts)" in done.stdout, done.stdout + done.stderr
+    bad = subprocess.run([sys.executable, "-m", "groundlang", "check", "no/such/corpus"], capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "no/such/corpus" in bad.stderr
