@@ -1,6 +1,9 @@
 # The two commands of the README's quick start, plus what they need.
-# Both create .venv on first use; torch is pinned to the CPU wheel first so
-# that nothing pulls a CUDA build.
+# Both create .venv on first use; torch 2.13.0 is installed first, so that nothing else pulls another build.
+# Which wheel pip takes is pip's configuration's: a CPU wheel where it offers one (a find-links folder, as on
+# the project's machine); on plain PyPI under Linux that is the CUDA build. TORCH_INDEX names an index to take
+# torch from instead: make TORCH_INDEX=https://download.pytorch.org/whl/cpu
+TORCH_INDEX ?=
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -11,7 +14,7 @@ STAMP := $(VENV)/.installed
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet "torch==2.13.0"
+	$(BIN)/python -m pip install --quiet "torch==2.13.0" $(if $(TORCH_INDEX),--index-url $(TORCH_INDEX))
 	$(BIN)/python -m pip install --quiet -e ".[test,progress,plot,gym,notebooks,ray]"
 	touch $(STAMP)
 

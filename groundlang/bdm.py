@@ -80,18 +80,23 @@ def is_bdm(path: str | Path) -> bool:
     return Path(path).suffix.lower() == ".bdm"
 
 
-def bdm_files(path: str | Path) -> list[Path]:
-    """``path`` itself if it is a ``.bdm`` file, the ``.bdm`` files of a folder (sorted), else none."""
+def bdm_files(path: str | Path, any_name: bool = False) -> list[Path]:
+    """``path`` itself if it is a ``.bdm`` file, the ``.bdm`` files of a folder (sorted), else none.
+
+    ``any_name`` (the format said, ``--format williams2018``): a file is read as one whatever its name, and
+    a folder without ``.bdm`` files gives its ``.txt`` files (a copy saved under another extension)."""
     path = Path(path)
     if path.is_dir():
         entries = list(path.iterdir())
         found = sorted(p for p in entries if is_bdm(p))
+        if any_name and not found:
+            return sorted(p for p in entries if p.suffix.lower() == ".txt" and p.is_file())
         if found and any(p.suffix == ".txt" for p in entries):
             # Which kind the folder is would otherwise be decided by the .bdm files, the rest left unread.
             raise CorpusError(f"{path}: holds both .bdm files and corpus files (*.txt); a folder is one corpus "
                               "of one format, so move one kind out")
         return found
-    return [path] if is_bdm(path) else []
+    return [path] if is_bdm(path) or (any_name and path.is_file()) else []
 
 
 def _int(text: str, where: str, attribute: str, name: str) -> int:

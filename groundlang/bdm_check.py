@@ -19,7 +19,7 @@ from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.pair_tasks import command_task, reachable, text_agreement
 
-__all__ = ["check_bdm", "default_library"]
+__all__ = ["check_bdm", "default_library", "is_corpus_library"]
 
 
 def default_library(files_given=None) -> TaskLibrary:
@@ -30,10 +30,17 @@ def default_library(files_given=None) -> TaskLibrary:
     return TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
 
 
+def is_corpus_library(library: TaskLibrary) -> bool:
+    """Whether ``library`` is the corpus's own (the same programs as :func:`default_library`'s, however
+    named): only then is a run on its tasks set beside the published figure."""
+    return [s.text for s in library.program.sources] == [s.text for s in default_library().program.sources]
+
+
 def check_bdm(args: argparse.Namespace) -> int:
-    paths = bdm_files(args.directory)
+    paths = bdm_files(args.directory, any_name=getattr(args, "format", None) == "williams2018")
     if not paths:
-        raise ValueError(f"{args.directory}: no .bdm file there")
+        raise ValueError(f"{args.directory}: no .bdm file there (with --format williams2018 also a file of any "
+                         "name or a folder of .txt files)")
     palette = args.palette or DEFAULT_PALETTE
     library = default_library(args.library)
     commands = [c for path in paths for c in read_bdm(path, palette)]

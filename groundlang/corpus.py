@@ -341,6 +341,9 @@ def file_names(path: str | Path) -> dict[str, str]:
 
 def read_initial_state(path: str | Path, palette: str | Palette) -> State:
     """The initial state of a corpus file, or the state of a one-line ``.state`` file."""
+    if as_path(path, "read_initial_state: path").is_dir():  # the OS says only "Is a directory"
+        raise CorpusError(f"{path}: a folder, not a regular file; expected a state file (.state, a one-line .bdm) "
+                          "or a corpus file")
     if as_path(path, "read_initial_state: path").suffix in (".state", ".bdm"):
         return read_state_file(path, palette)
     return read_instance(path, palette).initial_state

@@ -100,11 +100,14 @@ class PairCorpus:
         return len(self.commands)
 
 
-def read_pair_corpus(path: str | Path, palette=DEFAULT_PALETTE) -> PairCorpus:
-    """Every command of a ``.bdm`` file, or of the ``.bdm`` files of a folder (sorted by name)."""
-    paths = bdm_files(as_path(path, "read_pair_corpus: path"))
+def read_pair_corpus(path: str | Path, palette=DEFAULT_PALETTE, any_name: bool = False) -> PairCorpus:
+    """Every command of a ``.bdm`` file, or of the ``.bdm`` files of a folder (sorted by name); with
+    ``any_name`` (the format said), a file of any name, or a folder's ``.txt`` files where it has no
+    ``.bdm`` file (:func:`groundlang.bdm.bdm_files`)."""
+    paths = bdm_files(as_path(path, "read_pair_corpus: path"), any_name)
     if not paths:
-        raise CorpusError(f"{path}: no .bdm file there (a .bdm file or a folder of them)")
+        raise CorpusError(f"{path}: no .bdm file there (a .bdm file or a folder of them"
+                          f"{'; with --format williams2018 also a file of any name or a folder of .txt files' if any_name else ''})")
     return PairCorpus(paths, [c for p in paths for c in read_bdm(p, palette)])
 
 

@@ -241,8 +241,9 @@ def behaviour_likelihood_table(
         logger.warning("behaviour cache: %d corrupt entr%s recomputed (first: %s: %s)",
                        len(damaged), "y" if len(damaged) == 1 else "ies", first, why)
     solves = sum(len(by_goal) for by_goal in todo.values())
-    logger.info("behaviour likelihoods: %d cached, %d to compute with %d solves in %d state spaces",
-                hits, sum(len(v) for by_goal in todo.values() for v in by_goal.values()), solves, len(todo))
+    logger.info("behaviour likelihoods: %d cached, %d to compute with %d solves in %d state spaces (each solve "
+                "one cache entry)", hits, sum(len(v) for by_goal in todo.values() for v in by_goal.values()), solves,
+                len(todo))
     bar = None
     if progress and solves:
         from tqdm import tqdm

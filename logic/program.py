@@ -122,7 +122,7 @@ def _run_with_limit(work, time_limit: float | None, what: str) -> None:
     if thread.is_alive():
         raise AspTimeout(
             f"{what} did not finish within {time_limit:g} s; the program grounds too many atoms: infinitely "
-            "many (a rule without a bound), or a large layout's many (raise time_limit if it is just large)"
+            "many (a rule without a bound), or a large layout's many (raise the time limit, --time-limit or time_limit=, if it is just large)"
         )
     if "error" in box:
         raise box["error"]

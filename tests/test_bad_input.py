@@ -443,6 +443,9 @@ ROWS.append(Row("input/a task library that does not exist", (*_TASKS, "{tmp}/nop
                 pieces=("groundlang tasks: error: {tmp}/nope.lp: No such file or directory",)))
 ROWS.append(Row("input/a folder where a state file is expected", ("tasks", str(FIXTURES), "--palette", "sokoban"),
                 pieces=(f"groundlang tasks: error: {FIXTURES}: a folder, not a regular file; expected a state file",)))
+ROWS.append(Row("input/a folder where follow's --env state is expected",
+                ("follow", "--model", "{model}", "go to the red room", "--env", str(FIXTURES)),
+                pieces=(f"groundlang follow: error: {FIXTURES}: a folder, not a regular file; expected a state file",)))
 # Without --palette too: what is wrong with the path comes before asking for a palette it would not need.
 ROWS.append(Row("input/a folder named like a state file, no palette", ("show", "{tmp}"),
                 pieces=("groundlang show: error: {tmp}: a folder, not a regular file",)))

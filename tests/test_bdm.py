@@ -323,3 +323,32 @@ def test_covers_asks_each_relation_with_a_description_in_common():
     assert covers(frozenset({red, beside}), frozenset({red}))  # doing more still does it
     assert not covers(frozenset({red}), frozenset({red, beside}))  # a relation it does not do
     assert not covers(frozenset({red}), frozenset({large}))  # the same relation, nothing said alike
+
+
+def test_format_williams2018_reads_a_file_of_any_name_and_a_folder_of_txt_files(tmp_path):
+    """`--format williams2018` says the format, so the file is read whatever its name (a copy saved as .txt),
+    and a folder without .bdm files gives its .txt files; without the flag only .bdm names are read so."""
+    from groundlang.bdm import bdm_files
+    from groundlang.pair_corpus import read_pair_corpus
+
+    copy = tmp_path / "copy" / "small.txt"
+    copy.parent.mkdir()
+    copy.write_bytes((FIXTURE / "small.bdm").read_bytes())
+    assert bdm_files(copy) == [] and bdm_files(copy, any_name=True) == [copy]
+    assert bdm_files(copy.parent) == [] and bdm_files(copy.parent, any_name=True) == [copy]
+    assert [c.text for c in read_pair_corpus(copy.parent, any_name=True).commands] == \
+        ["go to the largest room", "go next to the chair"]
+    with pytest.raises(CorpusError, match="no .bdm file there"):
+        read_pair_corpus(copy)
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(copy), "--format", "williams2018"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and "commands: 2 (2 distinct texts)" in done.stdout, done.stderr
+
+
+def test_the_published_figure_goes_with_the_corpus_library_only():
+    from groundlang.bdm_check import default_library, is_corpus_library
+    from groundlang.logic.tasks import TaskLibrary
+
+    assert is_corpus_library(default_library()) and is_corpus_library(TaskLibrary.load(["williams2018"]))
+    materials = Path(__file__).parent / "fixtures" / "materials" / "materials_pfs.lp"
+    assert not is_corpus_library(TaskLibrary.load(["williams2018", str(materials)]))

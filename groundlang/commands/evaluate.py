@@ -164,13 +164,14 @@ def run_pairs(args: argparse.Namespace) -> int:
     palette = args.palette or DEFAULT_PALETTE
     words = extra_words(args.lexicon)
     library = default_library(args.library)
-    train = read_pair_corpus(args.corpus, palette).commands
+    any_name = args.format == "williams2018"  # said: a file is read whatever its name
+    train = read_pair_corpus(args.corpus, palette, any_name).commands
     if args.tuning and args.holdout is None:
         raise ValueError("--tuning splits the training side of --holdout F; pass --holdout too (not --test or --folds)")
     if args.folds is not None:
         return _run_folds(args, train, library, _learner_options(args, words))
     if args.test:
-        test = read_pair_corpus(args.test, palette).commands
+        test = read_pair_corpus(args.test, palette, any_name).commands
     else:
         split = "the tuning split" if args.tuning else "the held-out split"
         train, test = held_out_by_text(train, args.holdout, tuning=args.tuning)
@@ -185,7 +186,7 @@ def run_pairs(args: argparse.Namespace) -> int:
                             layouts=args.layouts,
                             skip_inconsistent=args.skip_inconsistent, learner_options=_learner_options(args, words),
                             progress=args.progress, min_confidence=args.min_confidence)
-    _report(args, result)
+    _report(args, result, library)
     return 0
 
 
@@ -207,13 +208,16 @@ def _run_folds(args: argparse.Namespace, commands: list, library, options: dict)
                                   min_confidence=args.min_confidence, demonstrations=args.demonstrations,
                                   layouts=args.layouts, skip_inconsistent=args.skip_inconsistent,
                                   learner_options=options)
-    _report(args, result)
+    _report(args, result, library)
     return 0
 
 
-def _report(args: argparse.Namespace, result) -> None:
+def _report(args: argparse.Namespace, result, library) -> None:
+    from groundlang.bdm_check import is_corpus_library
     from groundlang.logic.storage import write_atomically
 
+    for scored in (getattr(result, "pooled", result), *getattr(result, "folds", ())):
+        scored.published = is_corpus_library(library)  # another library's tasks are not the published figure's
     print(result.summary())
     if args.json:
         write_atomically(Path(args.json), json_bytes(result.to_json()))
