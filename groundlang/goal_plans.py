@@ -65,8 +65,8 @@ def plan_for_states(space: StateSpace, mask: np.ndarray, settings: TaskSettings,
 
 
 def expected_success_states(goals, masks: GoalMasks, step_cost: float, habits: EndHabits | None = None,
-                            moved_toys: bool = False, made_true: bool = False, bound: bool = False
-                            ) -> tuple[np.ndarray, tuple[Atom, ...]] | None:
+                            moved_toys: bool = False, made_true: bool = False, bound: bool = False,
+                            habit_prior: str = "absent") -> tuple[np.ndarray, tuple[Atom, ...]] | None:
     """Where to end so that the final state most probably satisfies what was meant: the reachable states
     ``s`` of most ``sum_g P(g | words) [s satisfies g] - step_cost * steps(s)``, over the posterior's goals
     ``goals`` (``Posterior.goals()``) as ``masks`` says where they hold over its space (shared with the
@@ -80,7 +80,8 @@ def expected_success_states(goals, masks: GoalMasks, step_cost: float, habits: E
     no goal holds in a reachable state, or none where the cost leaves the agent: acting on the most
     probable goal then says what cannot be done. With ``habits``, each goal's term is weighed, state by
     state, by what demonstrations of such goals also left true (:mod:`groundlang.inference.end_habits`), and
-    with ``moved_toys`` by how often they moved a toy; ``made_true``, ``bound``: see ``EndHabits.weights``."""
+    with ``moved_toys`` by how often they moved a toy; ``made_true``, ``bound``, ``habit_prior`` (its ``prior``):
+    see ``EndHabits.weights``."""
     space = masks.space
     if getattr(space, "level_sizes", None) is None:
         return None
@@ -90,7 +91,7 @@ def expected_success_states(goals, masks: GoalMasks, step_cost: float, habits: E
     score = np.zeros(space.num_states)
     weights = ([None] * len(kept) if habits is None else
                habits.weights([goal for goal, _ in kept], masks, within=dist >= 0, moved_toys=moved_toys,
-                              made_true=made_true, bound=bound))
+                              made_true=made_true, bound=bound, prior=habit_prior))
     for (goal, p), weight in zip(kept, weights):
         score += p * masks.mask(goal) * (1.0 if weight is None else weight)
     if not (score[dist >= 0] > 0).any():

@@ -288,7 +288,7 @@ class Learner:
         masks, goals = self._world.goal_masks(space), post.goals()
         found = expected_success_states(goals, masks, self.lm.step_cost, self.habits if self.lm.end_habits else None,
                                         moved_toys=self.lm.moved_toys, made_true=self.lm.habits_made_true,
-                                        bound=self.lm.bound_habits)
+                                        bound=self.lm.bound_habits, habit_prior=self.lm.habit_prior)
         return None if found is None else (space, masks, goals, *found)
 
     def clarify(self, result: FollowResult, answer: str | int, max_steps: int = 200) -> FollowResult:

@@ -136,6 +136,11 @@ def write_model(state: dict, directory: str | Path) -> Path:
         "globals_file": tensor_name,
         "globals_sha256": digest,
     })
+    meta_bytes = json.dumps(meta, indent=1).encode("utf-8")
+    if len(meta_bytes) > MAX_JSON_BYTES:  # what the loader would refuse is not written over a model it reads
+        raise ValueError(f"{directory}: not written: its model.json would be {len(meta_bytes):,} bytes, more than "
+                         f"the {MAX_JSON_BYTES:,} a model is read with (the words of --lexicon files and the "
+                         "programs of --library files are saved in it); the model there, if any, is unchanged")
     # Interrupts are held back so that the clean-up after the commit is not skipped; a kill -9 may still
     # land anywhere, and leaves the old model or the new one, plus files the next save removes.
     directory.mkdir(parents=True, exist_ok=True)  # to be locked
@@ -144,7 +149,6 @@ def write_model(state: dict, directory: str | Path) -> Path:
         # The folder is synced after each rename: after a power cut, model.json must not name tensors whose
         # rename was lost, nor the old tensors be gone while the old model.json is back.
         _sync_folder(directory)
-        meta_bytes = json.dumps(meta, indent=1).encode("utf-8")
         storage.write_atomically(directory / MODEL_JSON, meta_bytes, follow=False)  # the commit
         _sync_folder(directory)
         _remove_leftovers(directory, keep=tensor_name)

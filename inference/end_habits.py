@@ -45,6 +45,7 @@ import numpy as np
 
 from groundlang.inference.shared_meaning import instance_pairs
 from groundlang.logic.atoms import Atom, canonical_predicate
+from groundlang.model.language_model_base import HABIT_PRIORS
 from groundlang.model.features import atoms_hold_along
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.world import State
@@ -171,13 +172,19 @@ class EndHabits:
             n = self._counts[relations] = sum(n for shown, n in self.shown if relations <= shown)
         return n
 
-    def rate(self, relation: str, given: frozenset[str]) -> float:
+    def rate(self, relation: str, given: frozenset[str], prior: str = "absent") -> float:
         """``q(relation | given)``: how often a demonstration whose new relations include ``given`` has a
-        new fact of ``relation`` too (module docstring); 0 where no demonstration was seen."""
+        new fact of ``relation`` too (module docstring), shrunk by one pseudo-demonstration: with ``prior``
+        ``"absent"`` one that did not show it (``n(L, R) / (n(L) + 1)``: a habit is what demonstrations of
+        such goals were seen to do, never certain), with ``"overall"`` one at the relation's rate over all
+        demonstrations (``(n(L, R) + p(R)) / (n(L) + 1)``, ``p(R) = (n(R) + 1/2) / (N + 1)``: a habit no
+        demonstration of the goal showed still has the relation's own rate). 0 where no demonstration was seen."""
+        if prior not in HABIT_PRIORS:
+            raise ValueError(f"habit prior {prior!r}: expected one of {', '.join(HABIT_PRIORS)}")
         if not self.demonstrations:
             return 0.0
-        prior = (self._count(frozenset([relation])) + 0.5) / (self.demonstrations + 1)
-        return (self._count(given | {relation}) + prior) / (self._count(given) + 1)
+        mean = (self._count(frozenset([relation])) + 0.5) / (self.demonstrations + 1) if prior == "overall" else 0.0
+        return (self._count(given | {relation}) + mean) / (self._count(given) + 1)
 
     @cached_property
     def relations(self) -> frozenset[str]:
@@ -195,20 +202,22 @@ class EndHabits:
                     out.setdefault(m[1], set()).add((name, int(m[2]), m[3], int(m[4])))
         return {relation: tuple(sorted(found)) for relation, found in out.items()}
 
-    def table(self) -> dict[str, dict[str, float]]:
+    def table(self, prior: str = "absent") -> dict[str, dict[str, float]]:
         """``q(R | {L})`` for every two relations demonstrations showed: ``{L: {R: rate}}``, to read what
-        was learned."""
-        return {given: {r: self.rate(r, frozenset([given])) for r in sorted(self.relations - {given})}
+        was learned (``prior``: see :meth:`rate`; following weighs habits with the language model's
+        ``habit_prior``, ``"absent"`` by default)."""
+        return {given: {r: self.rate(r, frozenset([given]), prior) for r in sorted(self.relations - {given})}
                 for given in sorted(self.relations)}
 
-    def bound_table(self) -> dict[str, float]:
+    def bound_table(self, prior: str = "absent") -> dict[str, float]:
         """``q(b | {L})`` for every bound habit ``b`` demonstrations showed, ``L`` the relation it binds to
         (``{"agentInRoom[1]=toyInRoom[1]": 0.9, ...}``), to read what was learned."""
-        return {name: self.rate(name, frozenset([other]))
+        return {name: self.rate(name, frozenset([other]), prior)
                 for found in self.bound.values() for name, _, other, _ in found}
 
     def weights(self, goals: Iterable[tuple[Atom, ...]], masks, within: np.ndarray,
-                moved_toys: bool = False, made_true: bool = False, bound: bool = False) -> list[np.ndarray | None]:
+                moved_toys: bool = False, made_true: bool = False, bound: bool = False,
+                prior: str = "absent") -> list[np.ndarray | None]:
         """Per goal, ``[S]``: each state's weight for it over ``masks.space`` (a :class:`GoalMasks`), the
         product over the relations demonstrations showed that can hold with it in a state of ``within``
         (``[S]`` bool, those the agent can reach); None where it is 1 everywhere. A relation that cannot
@@ -218,7 +227,9 @@ class EndHabits:
         ``made_true``, a relation weighs the states where some fact of it holds that did not in the space's
         initial state (as :func:`new_relations` counted the demonstrations), not every state where one holds.
         With ``bound``, a relation's states where its fact is bound to the goal's objects as demonstrations
-        showed (:meth:`_bound_share`) are worth more than those where only another of its facts holds."""
+        showed (:meth:`_bound_share`) are worth more than those where only another of its facts holds.
+        ``prior``: what each relation's and bound habit's share is shrunk towards (:meth:`rate`). Moving a
+        toy keeps ``"overall"``: that none ever did says "rarely", not "never"."""
         holds: dict = {}  # [S] masks by relation, and by (relation, position, objects) for bound habits
         # Weighed whether or not a demonstration moved a toy: that none ever did is the strongest evidence.
         moving = _moved(masks.space) if moved_toys and self.demonstrations else None
@@ -229,11 +240,11 @@ class EndHabits:
             weight, company = None, region
             # Where no state of the goal leaves every toy in place, moving one is the goal's own business.
             if moving is not None and (still := region & ~moving).any():
-                weight = 1.0 - (1.0 - self.rate(MOVED, given)) * moving
+                weight = 1.0 - (1.0 - self.rate(MOVED, given, prior="overall")) * moving
                 # Demonstrators who left the toys alone left true only what could hold without moving one.
                 company = still
             for relation in sorted(self.relations - given - {MOVED}):
-                q = self.rate(relation, given)
+                q = self.rate(relation, given, prior)
                 if q <= 0.0:
                     continue
                 if relation not in holds:
@@ -242,14 +253,15 @@ class EndHabits:
                     continue
                 factor = (1.0 - q) + q * holds[relation]
                 if bound and (share := self._bound_share(relation, goal, given, q, masks, company, made_true,
-                                                         holds)):
+                                                         holds, prior)):
                     factor = factor - share[0] * holds[relation] + share[0] * share[1]
                 weight = factor if weight is None else weight * factor
             out.append(weight)
         return out
 
     def _bound_share(self, relation: str, goal: tuple[Atom, ...], given: frozenset[str], q: float, masks,
-                     company: np.ndarray, made_true: bool, holds: dict) -> tuple[float, np.ndarray] | None:
+                     company: np.ndarray, made_true: bool, holds: dict,
+                     prior: str = "absent") -> tuple[float, np.ndarray] | None:
         """``(q_b, [S] bool)``: of the demonstrations of such goals that left a new fact of ``relation``
         (share ``q``), the share ``q_b`` whose fact was bound to a fact of the goal's relations as it is in
         the states returned (``agentInRoom[1]=toyInRoom[1]``: the agent in the room the goal pushes the
@@ -266,7 +278,7 @@ class EndHabits:
         for name, position, other, other_position in self.bound.get(relation, ()):
             if other not in given:
                 continue
-            q_b = min(q, self.rate(name, given))
+            q_b = min(q, self.rate(name, given, prior))
             objects = {a.args[other_position] for a in goal
                        if canonical_predicate(a.predicate) == other and other_position < len(a.args)}
             if q_b <= 0.0 or not objects or (best is not None and q_b <= best[0]):

@@ -11,6 +11,10 @@ import torch
 from groundlang.model.encoding import Batch, Encoder, Observation, token_exclusions
 from groundlang.model.phrase_keys import PhraseKeys
 
+# What an end habit's share is shrunk towards by one pseudo-demonstration (inference.end_habits EndHabits.rate):
+# one that did not show it, or one at the relation's rate over all demonstrations.
+HABIT_PRIORS = ("absent", "overall")
+
 __all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
            "token_words", "word_meanings"]
 
@@ -38,7 +42,7 @@ class LanguageModel:
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False,
                  achievable_goals: bool = True, expected_success: bool = True, step_cost: float = 0.005,
                  end_habits: bool = True, moved_toys: bool = False, habits_made_true: bool = False,
-                 bound_habits: bool = True):
+                 bound_habits: bool = True, habit_prior: str = "absent"):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
         "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
         ``name_share``, and its learned words otherwise: the names a domain's author gives are words
@@ -56,7 +60,10 @@ class LanguageModel:
         where the plan made one of its facts true (one that did not hold at the start), as demonstrations
         were counted, not wherever one of its facts holds. ``bound_habits``: a relation's fact weighs more
         where it is bound to the goal's objects as demonstrations showed (the agent in the room the toy
-        was pushed into; ``EndHabits.weights``)."""
+        was pushed into; ``EndHabits.weights``). ``habit_prior``: what a habit's share is shrunk towards
+        by one pseudo-demonstration: ``"absent"``, one that did not show it (a habit is what demonstrations of
+        such goals were seen to do), ``"overall"``, one at the relation's rate over all demonstrations
+        (``EndHabits.rate``)."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
@@ -72,13 +79,18 @@ class LanguageModel:
         self.moved_toys = moved_toys
         self.habits_made_true = habits_made_true
         self.bound_habits = bound_habits
+        if habit_prior not in HABIT_PRIORS:
+            raise ValueError(f"language model {self.name}: habit_prior must be one of {', '.join(HABIT_PRIORS)}, "
+                             f"not {habit_prior!r:.40}")
+        self.habit_prior = habit_prior
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
                 "schema_names": self.schema_names, "achievable_goals": self.achievable_goals,
                 "expected_success": self.expected_success, "step_cost": self.step_cost,
                 "end_habits": self.end_habits, "moved_toys": self.moved_toys,
-                "habits_made_true": self.habits_made_true, "bound_habits": self.bound_habits}
+                "habits_made_true": self.habits_made_true, "bound_habits": self.bound_habits,
+                "habit_prior": self.habit_prior}
 
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""

@@ -70,8 +70,9 @@ def test_with_bound_habits_the_agent_ends_in_the_room_the_toy_was_pushed_into():
     habits = EndHabits.learn([(start, pushed)] * 3, LIBRARY)
     assert habits.relations == {"toyInRoom", "agentInRoom", MOVED}  # bound ones apart (next to it all along)
     assert ("agentInRoom[1]=toyInRoom[1]", 1, "toyInRoom", 1) in habits.bound["agentInRoom"]
-    # q(b | {L}) = (3 + (3 + 1/2) / 4) / (3 + 1): every one of three demonstrations, shrunk
-    assert habits.bound_table()["agentInRoom[1]=toyInRoom[1]"] == pytest.approx((3 + 3.5 / 4) / 4)
+    # q(b | {L}) = 3 / (3 + 1): every one of three demonstrations, shrunk by one that did not show it
+    assert habits.bound_table()["agentInRoom[1]=toyInRoom[1]"] == pytest.approx(3 / 4)
+    assert habits.bound_table("overall")["agentInRoom[1]=toyInRoom[1]"] == pytest.approx((3 + 3.5 / 4) / 4)
     space = planning_space(start, None, LIBRARY)
     masks = GoalMasks(space, LIBRARY)
     goal = parse_goal("toyInRoom(block0, room2)")
@@ -90,19 +91,51 @@ def test_with_bound_habits_the_agent_ends_in_the_room_the_toy_was_pushed_into():
     assert weight.max() <= 1.0 and weight.min() > 0.0
 
 
-def test_the_rate_is_counted_and_shrunk_towards_the_relations_own_rate():
+def test_the_rate_is_counted_and_shrunk_by_one_demonstration_that_did_not_show_it():
     habits = EndHabits(((frozenset({"agentInRoom"}), 3), (frozenset({"agentInRoom", "agentNextToToy"}), 1)))
     assert habits.demonstrations == 4
-    # q(R | L) = (n(L, R) + p(R)) / (n(L) + 1), p(R) = (n(R) + 1/2) / (N + 1)
-    assert habits.rate("agentNextToToy", frozenset({"agentInRoom"})) == pytest.approx((1 + 1.5 / 5) / (4 + 1))
+    # q(R | L) = n(L, R) / (n(L) + 1)
+    assert habits.rate("agentNextToToy", frozenset({"agentInRoom"})) == pytest.approx(1 / (4 + 1))
     # every demonstration that went next to a toy changed rooms, yet one more might not: below 1
-    assert habits.rate("agentInRoom", frozenset({"agentNextToToy"})) == pytest.approx((1 + 4.5 / 5) / (1 + 1))
-    # a goal no demonstration showed gets the relation's own rate
-    assert habits.rate("agentNextToToy", frozenset({"toyInRoom"})) == pytest.approx(1.5 / 5)
+    assert habits.rate("agentInRoom", frozenset({"agentNextToToy"})) == pytest.approx(1 / (1 + 1))
+    # a goal no demonstration showed has no habit: none was seen
+    assert habits.rate("agentNextToToy", frozenset({"toyInRoom"})) == 0.0
     assert EndHabits(()).rate("agentInRoom", frozenset()) == 0.0
     more = habits.plus([(START, _state((5, 7)))], LIBRARY)
     assert more.demonstrations == 5 and more.rate("agentLeftOfToy", frozenset({"agentNextToToy"})) == pytest.approx(
-        (1 + 1.5 / 6) / (2 + 1))
+        1 / (2 + 1))
+    with pytest.raises(ValueError, match="habit prior 'none': expected one of absent, overall"):
+        habits.rate("agentInRoom", frozenset(), "none")
+
+
+def test_with_the_overall_prior_the_rate_is_shrunk_towards_the_relations_own_rate():
+    habits = EndHabits(((frozenset({"agentInRoom"}), 3), (frozenset({"agentInRoom", "agentNextToToy"}), 1)))
+    # q(R | L) = (n(L, R) + p(R)) / (n(L) + 1), p(R) = (n(R) + 1/2) / (N + 1)
+    assert habits.rate("agentNextToToy", frozenset({"agentInRoom"}), "overall") == pytest.approx((1 + 1.5 / 5) / (4 + 1))
+    assert habits.rate("agentInRoom", frozenset({"agentNextToToy"}), "overall") == pytest.approx((1 + 4.5 / 5) / (1 + 1))
+    # a goal no demonstration showed gets the relation's own rate
+    assert habits.rate("agentNextToToy", frozenset({"toyInRoom"}), "overall") == pytest.approx(1.5 / 5)
+
+
+def test_a_habit_no_demonstration_of_the_goal_showed_is_not_worth_a_step():
+    """The example corpus: twelve demonstrations pushed the star into a room, none ended with the agent in a
+    room it had not started in. Having pushed the star into the red room from its doorway, the agent stays
+    there; shrunk towards the agent's overall rate of changing rooms (a half: the other twelve were sent to
+    a room), that habit was worth 0.5 / 13 of the goal, a step back into the blue room (0.005)."""
+    star = frozenset({"toyInRoom", MOVED})
+    habits = EndHabits(((star, 12), (frozenset({"agentInRoom"}), 12)))
+    assert habits.rate("agentInRoom", star) == 0.0
+    assert habits.rate("agentInRoom", star, "overall") == pytest.approx((12.5 / 25) / 13)
+    # where it ends: in the doorway, having pushed the chair into the blue room; "overall" took a step more
+    pushed = _state((6, 4), chair=(6, 5))
+    space = planning_space(pushed, None, LIBRARY)
+    masks, dist = GoalMasks(space, LIBRARY), distances(space)
+    goal = parse_goal("toyInRoom(block0, room2)")
+    absent, _ = expected_success_states([(goal, 1.0)], masks, 0.005, habits)
+    overall, _ = expected_success_states([(goal, 1.0)], masks, 0.005, habits, habit_prior="overall")
+    assert set(dist[absent]) == {0}
+    assert set(dist[overall]) == {1} and (overall <= _mask(masks, "agentInRoom(agent0, room0)")
+                                          | _mask(masks, "agentInRoom(agent0, room2)")).all()
 
 
 def test_following_ends_where_the_goals_usual_company_holds_too():

@@ -23,7 +23,8 @@ def test_settings_make_the_model_they_name():
                                                                         "schema_names": False, "achievable_goals": True,
                                                                         "expected_success": True, "step_cost": 0.005,
                                                                         "end_habits": True, "moved_toys": False,
-                                                                        "habits_made_true": False, "bound_habits": True}
+                                                                        "habits_made_true": False, "bound_habits": True,
+                                                                        "habit_prior": "absent"}
 
 
 @pytest.mark.parametrize("name, settings, message", [
@@ -35,6 +36,8 @@ def test_settings_make_the_model_they_name():
     ("parse", {"mention_phrases": 3}, "setting mention_phrases: expected a string, not 3"),
     ("parse", {"mention_phrases": "all"}, "language model parse: mention_phrases must be 'referring' or 'any', "
                                           "not 'all'"),
+    ("parse", {"habit_prior": "none"}, "language model parse: habit_prior must be one of absent, overall, not 'none'"),
+    ("bow", {"habit_prior": 1}, "setting habit_prior: expected a string, not 1"),
     ("parse", {"word_concentration": -1}, "language model parse: word_concentration must be > 0 (a Dirichlet "
                                           "concentration), at most 1e+30 and at least 1e-30, not -1"),
     # Values the model's float32 tensors would round to 0 or to infinity (a torch error deep in training).

@@ -26,7 +26,6 @@ import torch
 from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
 from groundlang.learner import Learner
-from groundlang.logic import storage
 from groundlang.model_io import ModelFormatError, signed
 
 EXAMPLES = example_corpus_path()
@@ -482,3 +481,22 @@ def test_a_model_with_tensors_that_are_not_finite_is_never_written(tmp_path):
     with pytest.raises(ValueError, match="not written: the learned phi holds values that are not finite"):
         learner.save(target)
     assert {p.name: p.read_bytes() for p in target.iterdir()} == before
+
+
+def test_a_model_whose_model_json_the_loader_would_refuse_is_never_written(tmp_path, monkeypatch):
+    """Word files of at most 4 MB each, given many times, made a model.json over the loader's bound: it was
+    written over a good model and could not be read. Refused at the save in one line, the model kept."""
+    from groundlang import model_io
+
+    instances = read_corpus(example_corpus_path(), "sokoban").instances
+    target = Learner(language_model="bow").fit(instances[:4]).save(tmp_path / "model")
+    before = {p.name: p.read_bytes() for p in target.iterdir()}
+    larger = Learner(language_model="bow", lexicon={"NOUN": [f"mug{i}" for i in range(200)]}).fit(instances[:4])
+    monkeypatch.setattr(model_io, "MAX_JSON_BYTES", len(before["model.json"]))  # the model there is read
+    with pytest.raises(ValueError, match=r"not written: its model.json would be [\d,]+ bytes, more than the "
+                                         rf"{len(before['model.json']):,} a model is read with"):
+        larger.save(target)
+    assert {p.name: p.read_bytes() for p in target.iterdir()} == before
+    monkeypatch.setattr(model_io, "MAX_JSON_BYTES", 32 * 2**20)
+    larger.save(target)  # within the bound: written, and read back
+    assert Learner.load(target).lm.name == "bow"
