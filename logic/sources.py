@@ -222,6 +222,12 @@ def _parsed(name: str, text: str, allow_scripts: bool) -> tuple:
         text = one_line(" ".join(messages)) or "syntax error"
         raise AspSyntaxError(text.replace("<string>", source.name)) from None
     for stm in statements:
+        if stm.ast_type == ast.ASTType.Minimize:
+            # Optimisation keeps only the best answer sets, and every program here is read for all of them
+            # (a library's groundings, a PF's table): its groundings would silently go missing.
+            raise AspSyntaxError(f"{source.name}:{stm.location.begin.line}: an optimisation statement (#minimize, "
+                                 "#maximize or a weak constraint :~) is not allowed: groundlang reads every answer "
+                                 "set of a program, and optimisation keeps only the best")
         if stm.ast_type == ast.ASTType.Script and not allow_scripts:
             raise AspScriptRefused(
                 f"{source.name}:{stm.location.begin.line}: #script blocks are refused; "

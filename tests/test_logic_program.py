@@ -89,6 +89,17 @@ def test_script_word_in_a_comment_or_string_is_fine():
     assert shown(program) == {'name("#include")'}
 
 
+@pytest.mark.parametrize("statement", ["#minimize { 1 : a }.", "#maximize { 1 : a }.", ":~ a. [1@1]"])
+def test_an_optimisation_statement_is_refused_naming_its_line(statement):
+    """Every answer set of a program is read (a library's groundings, a PF's table); optimisation would keep the
+    best alone, and groundings would go missing with no word said."""
+    from groundlang.logic.sources import AspSyntaxError
+
+    with pytest.raises(AspSyntaxError, match=r"^opt\.lp:3: an optimisation statement \(#minimize, #maximize or a "
+                                             r"weak constraint :~\) is not allowed"):
+        Program((Source("opt.lp", f"a.\n{{b}}.\n{statement}\n"),))
+
+
 def test_include_is_refused(tmp_path):
     with pytest.raises(AspScriptRefused, match=r"^inc\.lp:2: #include is not allowed"):
         Program((Source("inc.lp", 'a.\n#include "other.lp".\n'),))
