@@ -120,13 +120,17 @@ class Vocabulary:
         self._spelling: dict[str, int] = {}  # unknown word -> index it is read as
         if self.words[:1] != [UNK] or self.tokens[:1] != [NULL]:
             raise ValueError("a vocabulary starts with <unk> among words and NULL among tokens")
+        # The indices the model reads by number: no role (0), an unseen preposition (0), the direct object (1).
+        if self.roles[:1] != [NO_ROLE] or self.preps[:2] != [OTHER_PREP, DIRECT_OBJECT]:
+            raise ValueError(f"a vocabulary starts with {NO_ROLE} among roles and {OTHER_PREP}, {DIRECT_OBJECT} "
+                             "among prepositions")
         # Each list is an index: an entry twice, or one that is not text, would give two rows one name.
         for what, items, index in (("words", self.words, self._word_index), ("tokens", self.tokens, self._token_index),
                                    ("roles", self.roles, self._role_index), ("preps", self.preps, self._prep_index),
                                    ("tasks", self.tasks, self._task_index)):
-            strange = next((x for x in items if not isinstance(x, str)), None)
-            if strange is not None:
-                raise ValueError(f"a vocabulary's {what} are text; found {strange!r}")
+            strange = [x for x in items if not isinstance(x, str)][:1]  # a list: None is one to find
+            if strange:
+                raise ValueError(f"a vocabulary's {what} are text; found {strange[0]!r:.40}")
             if len(index) != len(items):
                 twice = next(x for k, x in enumerate(items) if index[x] != k)
                 raise ValueError(f"a vocabulary's {what} name each entry once; {twice!r} is there twice")

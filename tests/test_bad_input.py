@@ -133,6 +133,11 @@ MODEL_DIRS: dict[str, tuple[Callable[[Path], None], list[str]]] = {
         2, m["vocabulary"]["words"][1])), ["model files are incomplete or corrupt", "words name each entry once"]),
     "vocabulary with a number for a token": (lambda d: _edit_meta(d, lambda m: m["vocabulary"]["tokens"].append(7)),
                                              ["model files are incomplete or corrupt", "tokens are text; found 7"]),
+    "vocabulary with null for a word": (lambda d: _edit_meta(d, lambda m: m["vocabulary"]["words"].__setitem__(2, None)),
+                                        ["model files are incomplete or corrupt", "words are text; found None"]),
+    "vocabulary without prepositions": (lambda d: _edit_meta(d, lambda m: m["vocabulary"].__setitem__("preps", [])),
+                                        ["model files are incomplete or corrupt", "a vocabulary starts with none among "
+                                         "roles and <other>, <dobj> among prepositions"]),
     "vocabulary whose task roles name another task": (
         lambda d: _edit_meta(d, lambda m: m["vocabulary"]["task_roles"].__setitem__("flyToMoon", ["none"])),
         ["model files are incomplete or corrupt", "task_roles name 'flyToMoon', which is not one of its tasks"]),
