@@ -36,6 +36,14 @@ Candidates = list[tuple[float, tuple]]
 
 _EMPTY: Candidates = [(0.0, ())]
 
+# The symbol nodes a sentence's forest may have scored. Every sentence of both shared corpora needs at most
+# about 200; 40 words each in several classes ("then" forty times) give thousands, and minutes of merging.
+MAX_FOREST_NODES = 2_000
+
+
+class ForestTooLarge(Exception):
+    """The forest has more symbol nodes than :data:`MAX_FOREST_NODES`: the sentence is read in chunks."""
+
 
 def log_weights(weights: Mapping[str, float]) -> dict[str, float]:
     """Log of each rule weight. Raises ValueError for a weight that is not positive and finite."""
@@ -100,6 +108,8 @@ class ForestKBest:
         key = id(node)
         found = self.memo.get(key)
         if found is None:
+            if len(self.memo) >= MAX_FOREST_NODES:
+                raise ForestTooLarge(len(self.memo))
             found = self._symbol(node)
             self.memo[key] = found
         return found

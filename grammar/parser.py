@@ -34,7 +34,7 @@ from .composition import compose, instantiate
 from .lexicon import Lexicon, SemanticLexicon
 from .logical_form import LogicalForm, Reading
 from .earley import install as install_fast_earley
-from .kbest import ForestKBest, RuleSymbolNode, log_weights
+from .kbest import MAX_FOREST_NODES, ForestKBest, ForestTooLarge, RuleSymbolNode, log_weights
 from .phrases import DEFAULT_WEIGHTS, top_k
 
 logger = logging.getLogger(__name__)
@@ -230,6 +230,9 @@ def _parse_sentence(sentence: list[Word], logw: Mapping[str, float],
                 cands = ForestKBest(logw, beam, words, _earley()[1]).best(root)
             except RecursionError:
                 logger.debug("forest too deep for %r", " ".join(w for w, _ in sentence))
+                cands = []
+            except ForestTooLarge:  # read in chunks, as a sentence over MAX_SENTENCE_TOKENS is
+                logger.debug("forest of more than %d nodes for %r", MAX_FOREST_NODES, " ".join(w for w, _ in sentence))
                 cands = []
             cands = [(w, v) for w, v in cands if v]
             if cands:

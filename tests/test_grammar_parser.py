@@ -375,3 +375,19 @@ def test_a_command_without_a_word_is_refused_and_control_characters_are_spaces()
     # a NUL or a terminal's escape is no token (it would become a word of the vocabulary), and no word is cut
     assert parser.tokenise("go\x00 to the\x07 red\x1b[31m room\r") == ["go", "to", "the", "red", "[", "31m", "room"]
     assert parser.parse("go\x00to the red room")[0].logical_form.words == parser.parse("go to the red room")[0].logical_form.words
+
+
+def test_a_sentence_whose_forest_is_too_large_to_score_is_read_in_chunks(monkeypatch):
+    """Forty words each of several classes ("then" is a conjunction and an adverb) give a forest of thousands
+    of nodes, whose k-best merging took seconds a sentence, minutes a command; past MAX_FOREST_NODES it is
+    read in chunks, as a sentence over MAX_SENTENCE_TOKENS words is. Every sentence of both shared corpora
+    needs about a tenth of the bound, and one that fits is still parsed whole."""
+    from groundlang.grammar import kbest
+
+    many = " ".join(["then"] * 40)
+    (reading,) = parse(many)
+    assert reading.logical_form.fallback
+    lf = parse("go to the red room and push the star into the blue room")[0].logical_form
+    assert not lf.fallback and lf.verbs == ("go", "push")
+    monkeypatch.setattr(kbest, "MAX_FOREST_NODES", 5)  # the same sentence, past a bound it needs more than
+    assert parse("go to the red room and push the star into the blue room")[0].logical_form.fallback
