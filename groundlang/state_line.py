@@ -147,13 +147,8 @@ def parse_state(line: str, palette: str | Palette, where: str = "state", shared_
 
 
 def shared_cell(state: State) -> str | None:
-    """Which two objects share a cell, or None."""
-    seen: dict[tuple[int, int], str] = {}
-    for name, (x, y) in zip(["agent0"] + state.layout.toy_names, state.positions.tolist()):
-        if (x, y) in seen:
-            return f"{seen[(x, y)]} and {name} share the cell ({x},{y})"
-        seen[(x, y)] = name
-    return None
+    """Which two objects share a cell, or None (:meth:`State.shared_cell`)."""
+    return state.shared_cell()
 
 
 def _validate_positions(state: State) -> None:

@@ -353,9 +353,18 @@ class State:
         for name, (x, y) in zip(["agent0"] + self.layout.toy_names, self.positions):
             if not (0 <= x < w and 0 <= y < h) or not walk[x, y]:
                 raise WorldError(f"{name} at ({x},{y}) is inside a wall or outside every room")
-        cells = [tuple(p) for p in self.positions]
-        if len(set(cells)) != len(cells):
-            raise WorldError("two objects share a cell")
+        shared = self.shared_cell()
+        if shared is not None:
+            raise WorldError(shared)
+
+    def shared_cell(self) -> str | None:
+        """Which two objects share a cell ("agent0 and block1 share the cell (3,4)"), or None."""
+        seen: dict[tuple[int, int], str] = {}
+        for name, (x, y) in zip(["agent0"] + self.layout.toy_names, self.positions.tolist()):
+            if (x, y) in seen:
+                return f"{seen[(x, y)]} and {name} share the cell ({x},{y})"
+            seen[(x, y)] = name
+        return None
 
 
 def step(state: State, action: Action) -> State:

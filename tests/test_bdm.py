@@ -352,3 +352,10 @@ def test_the_published_figure_goes_with_the_corpus_library_only():
     assert is_corpus_library(default_library()) and is_corpus_library(TaskLibrary.load(["williams2018"]))
     materials = Path(__file__).parent / "fixtures" / "materials" / "materials_pfs.lp"
     assert not is_corpus_library(TaskLibrary.load(["williams2018", str(materials)]))
+
+
+def test_objects_sharing_a_cell_are_named_as_the_line_names_them():
+    room = "room0 (room): [top: {4} left: {0} bottom: {0} right: {4} colour: {red} ]"
+    block = "block3 (block): [x: {1} y: {1} shape: {chair} colour: {red} ]"
+    with pytest.raises(CorpusError, match=r"^here: me and block3 share the cell \(1,1\)$"):
+        parse_bdm_state("{me (agent): [x: {1} y: {1} ] , " + room + " , " + block + " , }", where="here")

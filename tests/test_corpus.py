@@ -51,7 +51,7 @@ MALFORMED = {
     "doors_on_one_cell.txt": (3, ["door0 and door1 open a wall cell both: one door is enough there"]),
     "zero_size_room.txt": (3, ["room0 (0,4,1,0) has no interior", "RIGHT-LEFT >= 2"]),
     "object_in_wall.txt": (3, ["agent0 at (4,1) is inside a wall"]),
-    "shared_cell.txt": (3, ["two objects share a cell"]),
+    "shared_cell.txt": (3, ["agent0 and block0 share the cell (2,2)"]),
     "unknown_action.txt": (2, ["action 2 is 'nort'", "expected one of north, south, east, west"]),
     "empty_action.txt": (2, ["action 2 is empty"]),
     "non_utf8.txt": (1, ["byte 0xe9 at offset 11 is not UTF-8", "expected a UTF-8 text file"]),

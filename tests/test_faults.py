@@ -218,7 +218,7 @@ def test_cli_skips_and_counts_pile_ups_with_skip_inconsistent(tmp_path, capsys):
 
 def test_a_pile_up_in_the_first_state_stays_an_error(tmp_path):
     folder = _pile_up(tmp_path, 3)
-    with pytest.raises(CorpusError, match=r"star2red_0.txt, line 3: two objects share a cell") as caught:
+    with pytest.raises(CorpusError, match=r"star2red_0.txt, line 3: agent0 and block0 share the cell") as caught:
         read_corpus(folder, "sokoban", skip_inconsistent=True)
     assert not isinstance(caught.value, InconsistentDemonstration)
 
