@@ -80,7 +80,9 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, 
                 if not text.string.strip():  # drawn as a mathtext "$ $": matplotlib's error named no palette
                     raise PaletteError(f"{source.name}: {sym}: the text is empty; write one or more characters "
                                        "(or leave the fact out: a glyph defaults to the value's first letter)")
-                drawing[sym.name][str(value)] = text.string
+                if drawing[sym.name].setdefault(str(value), text.string) != text.string:
+                    raise PaletteError(f'{source.name}: {sym.name}({value}, ...) is given twice, '
+                                       f'"{drawing[sym.name][str(value)]}" and "{text.string}"; keep one')
                 continue
             attribute, index, value = sym.arguments
             if (attribute.type is not clingo.SymbolType.Function or attribute.arguments
@@ -88,6 +90,9 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, 
                     or value.type is not clingo.SymbolType.Function or value.arguments):
                 raise PaletteError(f"{source.name}: {sym} is not value(Attribute, Index, Name) with a name, "
                                    "a whole number and a lowerCamelCase constant")
+            if index.number < 0:
+                raise PaletteError(f"{source.name}: {sym}: an index is 0 or more (the files number values 0, 1, "
+                                   "2, ...)")
             by_index = found.setdefault(attribute.name, {})
             if index.number in by_index and by_index[index.number] != value.name:
                 raise PaletteError(f"{source.name}: {attribute.name} index {index.number} is both "

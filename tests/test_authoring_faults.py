@@ -77,6 +77,18 @@ def test_an_empty_glyph_is_refused_where_the_palette_is_read(tmp_path, glyph):
         read_palette(str(palette))
 
 
+def test_a_glyph_given_twice_is_refused_and_a_negative_index_is_named(tmp_path):
+    """One of two glyphs had won silently; an index of -1 was reported as a gap at the end of the indices."""
+    palette = tmp_path / "twice.lp"
+    palette.write_text(_SOKOBAN.read_text() + 'glyph(star, "S").\n')  # the file gives star a glyph already
+    with pytest.raises(PaletteError, match=r'twice.lp: glyph\(star, \.\.\.\) is given twice, "[^"]+" and "[^"]+"; '
+                                           r"keep one"):
+        read_palette(str(palette))
+    palette.write_text(_SOKOBAN.read_text() + "value(colour, -1, pink).\n")
+    with pytest.raises(PaletteError, match=r"twice.lp: value\(colour,-1,pink\): an index is 0 or more"):
+        read_palette(str(palette))
+
+
 def test_a_goal_over_a_viewpoint_pf_is_refused_at_load(tmp_path):
     """A side seen from the agent is no goal (tabulate.lp tabulates goal classes only): it had loaded, and
     every follow then said no reachable state satisfies it."""
