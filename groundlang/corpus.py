@@ -185,6 +185,9 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
     (a recorded state differs from the replay); OSError when the file cannot be read.
     """
     path = as_path(path, "read_instance: path")
+    if path.suffix.lower() == ".bdm":  # read as actions, its state line would be named "action 1"
+        raise CorpusError(f"{path}: a .bdm file holds (start, end) pairs, no moves; expected a commands-to-tasks "
+                          "file (command, actions, states)")
     palette = get_palette(palette)
     lines = _read_lines(path)
     if not lines:

@@ -448,6 +448,9 @@ ROWS.append(Row("input/a task library that does not exist", (*_TASKS, "{tmp}/nop
                 pieces=("groundlang tasks: error: {tmp}/nope.lp: No such file or directory",)))
 ROWS.append(Row("input/a folder where a state file is expected", ("tasks", str(FIXTURES), "--palette", "sokoban"),
                 pieces=(f"groundlang tasks: error: {FIXTURES}: a folder, not a regular file; expected a state file",)))
+ROWS.append(Row("input/irl given a .bdm file of pairs", ("irl", str(FIXTURES / "williams2018" / "small.bdm"), "--palette",
+                                                        "williams2018"),
+                pieces=("small.bdm: a .bdm file holds (start, end) pairs, no moves; expected a commands-to-tasks file",)))
 ROWS.append(Row("input/a folder where follow's --env state is expected",
                 ("follow", "--model", "{model}", "go to the red room", "--env", str(FIXTURES)),
                 pieces=(f"groundlang follow: error: {FIXTURES}: a folder, not a regular file; expected a state file",)))
