@@ -20,7 +20,7 @@ from groundlang.interrupt import cache_entry_count, close_progress_bars, termina
 
 # Order is the order of ``groundlang --help``.
 COMMANDS = ["demo", "check", "show", "parse", "domain", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate", "ablate"]
-# Commands that fill the behaviour-likelihood cache (reported after an interruption).
+# Commands that fill the cache (behaviour likelihoods, evidence, readings; reported after an interruption).
 CACHING_COMMANDS = {"train", "evaluate", "discover", "ablate"}
 
 

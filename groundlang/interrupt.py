@@ -12,7 +12,7 @@ an interruption can only lose the piece of work in progress. Four helpers:
 - :func:`close_progress_bars` ends the progress bars a run left open;
 - :func:`what_was_kept` describes, after an interruption, the outputs named
   by a command's arguments (model directory, result file, picture) and the
-  behaviour-likelihood cache entries written since the command started.
+  cache entries (behaviour likelihoods, end-state evidence, readings) written since the command started.
 """
 
 from __future__ import annotations
@@ -99,17 +99,20 @@ def _describe_output(path: Path, what: str, started: float) -> str:
     return f"the {what} in {path} was complete before the interruption"
 
 
+# The cache's folders of entries: behaviour likelihoods, end-state evidence of (start, end) pairs, readings.
+CACHE_FOLDERS = ("behaviour", "evidence", "parses")
+
+
 def cache_entry_count(args) -> int:
-    """Whole behaviour-likelihood cache entries now in the cache a command uses (0 without one)."""
+    """Whole cache entries now in the cache a command uses (0 without one), of every kind it keeps."""
     if getattr(args, "no_cache", False) is True:
         return 0
     from groundlang.inference.likelihoods import cache_directory
 
-    folder = cache_directory(getattr(args, "cache_dir", None)) / "behaviour"
-    if not folder.is_dir():
-        return 0
+    root = cache_directory(getattr(args, "cache_dir", None))
     # Temporary files start with "."; only renamed, whole entries count.
-    return sum(1 for p in folder.glob("*/*.json") if not p.name.startswith("."))
+    return sum(1 for name in CACHE_FOLDERS if (root / name).is_dir()
+               for p in (root / name).glob("*/*.json") if not p.name.startswith("."))
 
 
 # (argument name, what it holds); a command's arguments name its outputs.
@@ -147,5 +150,6 @@ def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: 
         count = cache_entry_count(args) - cache_entries_before
         if count > 0:  # fewer than at the start: the cache was cleared meanwhile, and no count says what is new
             entries = "entry is" if count == 1 else "entries are"
-            parts.append(f"{count} new behaviour-likelihood cache {entries} kept in {root} (a rerun resumes from them)")
+            parts.append(f"{count} new cache {entries} kept in {root} (behaviour likelihoods, end-state evidence "
+                         "and readings; a rerun resumes from them)")
     return "; ".join(parts) or "no output files were due"

@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
 import signal
 import subprocess
 import sys
@@ -139,7 +138,8 @@ def test_what_was_kept_describes_each_output(tmp_path):
     assert what_was_kept(Args, start, uses_cache=True) == (
         f"{tmp_path / 'model'} left as it was (the previous complete model); "
         f"nothing written to {tmp_path / 'result.json'}; "
-        f"1 new behaviour-likelihood cache entry is kept in {tmp_path / 'cache'} (a rerun resumes from them)"
+        f"1 new cache entry is kept in {tmp_path / 'cache'} (behaviour likelihoods, end-state evidence and readings; "
+        "a rerun resumes from them)"
     )
     # interrupted before the entries at the start were counted: none is claimed as new
     assert "cache" not in what_was_kept(Args, start, uses_cache=True, cache_entries_before=None)
@@ -167,11 +167,14 @@ def test_what_follow_learn_kept_names_its_model_and_no_negative_count(tmp_path):
 
 
 # ----------------------------------------------------------------- real processes
-def _cache_entries(cache: Path) -> list[Path]:
+def _cache_entries(cache: Path, kinds: tuple[str, ...] = ("behaviour",)) -> list[Path]:
     """Whole entries only: temporary files (".tmp-...") are not entries yet."""
-    if not (cache / "behaviour").is_dir():
-        return []
-    return sorted(p for p in (cache / "behaviour").glob("*/*.json") if not p.name.startswith("."))
+    return sorted(p for kind in kinds if (cache / kind).is_dir()
+                  for p in (cache / kind).glob("*/*.json") if not p.name.startswith("."))
+
+
+# Every kind of entry the interruption line counts: behaviour likelihoods, end-state evidence, readings.
+ALL_KINDS = ("behaviour", "evidence", "parses")
 
 
 def _assert_whole_entries(cache: Path) -> None:
@@ -224,8 +227,9 @@ def test_train_interrupted_keeps_nothing_then_resumes_and_protects_the_previous_
     assert "Traceback" not in err
     kept = len(_cache_entries(cache))
     assert _last_line(err).startswith(f"groundlang train: interrupted; nothing written to {model}; "
-                                      f"{kept} new behaviour-likelihood cache ")
-    assert _last_line(err).endswith(f"kept in {cache} (a rerun resumes from them)")
+                                      f"{len(_cache_entries(cache, ALL_KINDS))} new cache ")
+    assert _last_line(err).endswith(f"kept in {cache} (behaviour likelihoods, end-state evidence and readings; a rerun "
+                                    "resumes from them)")
     assert not model.exists()
     _assert_whole_entries(cache)
 
@@ -265,11 +269,12 @@ def test_evaluate_interrupted_writes_no_result_and_keeps_cache(tmp_path):
     code, out, err = _interrupt_when(_start(argv, cache), lambda: bool(_cache_entries(cache)), signal.SIGTERM)
     assert code == 130, err
     assert "Traceback" not in err
-    kept = len(_cache_entries(cache))
+    kept = len(_cache_entries(cache, ALL_KINDS))
     entries = "entry is" if kept == 1 else "entries are"
     assert _last_line(err) == (
         f"groundlang evaluate: interrupted; nothing written to {result}; "
-        f"{kept} new behaviour-likelihood cache {entries} kept in {cache} (a rerun resumes from them)"
+        f"{kept} new cache {entries} kept in {cache} (behaviour likelihoods, end-state evidence and readings; a rerun "
+        "resumes from them)"
     )
     assert not result.exists()
     assert [p for p in tmp_path.iterdir() if p.name.startswith(".")] == []
