@@ -83,6 +83,10 @@ def _spatial(obj: str, state: State, library: TaskLibrary) -> str:
         if words and words[-1] in _CLASSES:  # the other object of a spatial PF is named by its class
             words[-1:] = ["the", words[-1]]
         sides.append(" ".join(words))
+    # "east of the agent and south of the agent" reads as "east and south of the agent"
+    split = [side.partition(" of ") for side in sides]
+    if len(sides) > 1 and all(of for _, of, _ in split) and len({rest for _, _, rest in split}) == 1:
+        return f"{' and '.join(way for way, _, _ in split)} of {split[0][2]}"
     return " and ".join(sides)
 
 
