@@ -232,7 +232,7 @@ class Program:
                 errors = [m for m in messages if "error" in m] or messages
                 raise AspGroundingError(one_line(" ".join(errors)) or "grounding failed") from None
 
-        _run_with_limit(ground, time_limit, f"grounding {self.names}")
+        _run_with_limit(ground, time_limit, f"grounding {self.user_names}")
         return ctl
 
     def solve(
@@ -252,7 +252,7 @@ class Program:
             if not handle.wait(time_limit):
                 handle.cancel()
                 raise AspTimeout(
-                    f"solving {self.names} did not finish within {time_limit:g} s"
+                    f"solving {self.user_names} did not finish within {time_limit:g} s"
                 )
             handle.get()
         return found
