@@ -148,8 +148,7 @@ def _by_file_names(message: str, objects: dict[str, dict[str, dict[str, str]]]) 
     """A world's message about its objects, with each layout id (``room2``: the layout's third room) as the
     file calls that object (``room3`` where the file's rooms are room0, room1, room3), so the line the
     message names can be found in the file."""
-    names = {f"{cls}{i}": name for cls in ("room", "door", "block") for i, (name, _) in enumerate(_ordered(objects, cls))}
-    names.update(("agent0", name) for name in objects["agent"])
+    names = _file_names(objects)
     return re.sub(r"\b(?:agent|room|door|block)\d+\b", lambda m: names.get(m.group(0), m.group(0)), message)
 
 
@@ -199,7 +198,10 @@ def object_names(line: str, where: str = "state") -> dict[str, str]:
     """The file's name of each object of a BURLAP state line, by its name in the layout ``parse_bdm_state``
     reads (``{"block2": "block3", ...}``: objects are renamed in order, ``block0, block1, block3`` becoming
     ``block0, block1, block2``); raises CorpusError where ``parse_bdm_state`` would."""
-    objects = _read_objects(line, where)
+    return _file_names(_read_objects(line, where))
+
+
+def _file_names(objects: dict[str, dict[str, dict[str, str]]]) -> dict[str, str]:
     # A .bdm class is its layout name's prefix (_NEEDED's keys are NAME_PREFIXES' prefixes).
     return {f"{prefix}{i}": name for prefix, _ in NAME_PREFIXES
             for i, (name, _) in enumerate(_ordered(objects, prefix))}

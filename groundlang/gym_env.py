@@ -129,7 +129,7 @@ def _added_planes(state: State, shape: tuple[int, int], classes: tuple[str, ...]
 
 def _static_grid(state: State, shape: tuple[int, int]) -> np.ndarray:
     """The channels of a layout that stay put ``[H, W, 6 + added]`` (north up), padded to ``shape`` =
-    (H, W): 0-2 and the rooms' and doors' added attributes; the rest is 0, filled by :func:`_dynamic_grid`."""
+    (H, W): 0-2 and the rooms' and doors' added attributes; the rest is 0, filled by :func:`_observed_grid`."""
     lay = state.layout
     H, W = shape
     grid = np.zeros((H, W, len(channels(lay.palette))), dtype=np.uint8)
@@ -271,9 +271,9 @@ class CleanupEnv(gymnasium.Env):
             raise ValueError(f"state of palette {palette.name}: its grid's channels ({', '.join(channels(palette))}) "
                              f"are not this env's ({', '.join(self.channels)}); make the env with a state of that palette")
         if _largest_value(palette) > self.observation_space["grid"].high.max():
-            raise ValueError(f"state of palette {palette.name}: its {len(palette.colours)} colours and "
-                             f"{len(palette.shapes)} shapes do not fit the observation space of this env; "
-                             "make the env with a state of that palette")
+            most, values = max(palette.all_values, key=lambda item: len(item[1]))
+            raise ValueError(f"state of palette {palette.name}: its {len(values)} values of {most} do not fit the "
+                             "observation space of this env; make the env with a state of that palette")
         self.state, self.command, self.goal, self.steps, self._over = state, command, goal, 0, False
         self._static = _static_grid(state, self.grid_shape)
         return self._observation(), self._info()

@@ -99,15 +99,11 @@ def _describe_output(path: Path, what: str, started: float) -> str:
     return f"the {what} in {path} was complete before the interruption"
 
 
-# The cache's folders of entries: behaviour likelihoods, end-state evidence of (start, end) pairs, readings.
-CACHE_FOLDERS = ("behaviour", "evidence", "parses")
-
-
 def cache_entry_count(args) -> int:
     """Whole cache entries now in the cache a command uses (0 without one), of every kind it keeps."""
     if getattr(args, "no_cache", False) is True:
         return 0
-    from groundlang.inference.likelihoods import cache_directory
+    from groundlang.inference.likelihoods import CACHE_FOLDERS, cache_directory
 
     root = cache_directory(getattr(args, "cache_dir", None))
     # Temporary files start with "."; only renamed, whole entries count.

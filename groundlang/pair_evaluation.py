@@ -18,6 +18,7 @@ from collections import defaultdict
 from dataclasses import asdict, dataclass, field
 
 from groundlang.bdm import Command, format_bdm_state
+from groundlang.bdm_check import is_corpus_library
 from groundlang.confidence import calibration_report, format_calibration
 from groundlang.evaluation import wilson_interval
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
@@ -75,8 +76,8 @@ class PairEvaluation:
     # confident of its executions (acting on a command means acting in every layout it comes with).
     calibration: dict = field(default_factory=dict)
     command_calibration: dict = field(default_factory=dict)
-    # Whether the tasks scored are the corpus's own (the Williams library): only then is the published
-    # figure set beside the run's (a domain author's library scores other tasks).
+    # Whether the tasks scored are the corpus's own (the Williams library, ``is_corpus_library``): only then is
+    # the published figure set beside the run's (a domain author's library scores other tasks).
     published: bool = True
 
     @property
@@ -248,7 +249,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         per_task={k: tuple(v) for k, v in per_task.items()}, failures=dict(failures),
         seconds_training=trained - started, seconds_following=finished - trained,
         demonstrations=demonstrations, layouts=layouts, no_task_executions=unscored, executions=rows,
-        calibration=calibration, command_calibration=command_calibration,
+        calibration=calibration, command_calibration=command_calibration, published=is_corpus_library(library),
     )
 
 

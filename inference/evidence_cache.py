@@ -35,7 +35,7 @@ from collections import OrderedDict
 from groundlang.inference.end_habits import new_relations
 from groundlang.inference.end_states import EndStateNoise
 from groundlang.inference.cache_entries import EntryFolder
-from groundlang.inference.likelihoods import layout_description
+from groundlang.inference.likelihoods import EVIDENCE_FOLDER, layout_description
 from groundlang.inference.shared_meaning import LayoutEvidence, evidence_space
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
@@ -137,7 +137,7 @@ class EvidenceCache:
 
     def __init__(self, library: TaskLibrary, noise: EndStateNoise, cache_dir: str | os.PathLike | None | bool = None):
         self.library, self.noise = library, noise
-        self.entries = EntryFolder(cache_dir, "evidence", "recomputed", logger)
+        self.entries = EntryFolder(cache_dir, EVIDENCE_FOLDER, "recomputed", logger)
         self.digest = library_digest(library)
         self._memory: OrderedDict[str, LayoutEvidence] = OrderedDict()
 

@@ -54,8 +54,13 @@ from groundlang.inference.planning import (TaskSettings, as_transitions, demonst
 from groundlang.logic.atoms import Atom, parse_atom
 from groundlang.logic.storage import FileRefused, check_folder, read_limited, write_atomically
 
-__all__ = ["CACHE_VERSION", "DamagedEntry", "behaviour_likelihood_table", "cache_directory", "entry_key", "layout_description",
+__all__ = ["CACHE_FOLDERS", "CACHE_VERSION", "DamagedEntry", "behaviour_likelihood_table", "cache_directory", "entry_key", "layout_description",
            "pad_table", "read_entry_json"]
+
+# The cache folder's subfolders of entries: behaviour likelihoods (here), end-state evidence of (start, end)
+# pairs (inference.evidence_cache) and readings of training commands (inference.parse_cache).
+BEHAVIOUR_FOLDER, EVIDENCE_FOLDER, PARSES_FOLDER = "behaviour", "evidence", "parses"
+CACHE_FOLDERS = (BEHAVIOUR_FOLDER, EVIDENCE_FOLDER, PARSES_FOLDER)
 
 logger = logging.getLogger(__name__)
 
@@ -117,7 +122,7 @@ def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], setti
 
 
 def _entry_path(root: Path, key: str) -> Path:
-    return root / "behaviour" / key[:2] / f"{key}.json"
+    return root / BEHAVIOUR_FOLDER / key[:2] / f"{key}.json"
 
 
 def _checksum(key: str, value_text: str) -> str:

@@ -38,6 +38,7 @@ from groundlang.grammar.lexicon import Lexicon
 from groundlang.grammar.logical_form import Clause, Entity, LogicalForm, Reading, Relation
 from groundlang.grammar.parser import parse, tokenise
 from groundlang.inference.cache_entries import EntryFolder
+from groundlang.inference.likelihoods import PARSES_FOLDER
 
 __all__ = ["PARSE_CACHE_VERSION", "ParseCache", "parse_key", "parser_digest"]
 
@@ -130,7 +131,7 @@ class ParseCache:
     ``computed`` (parsed) and ``damaged`` entries; :meth:`report` logs them once."""
 
     def __init__(self, cache_dir: str | os.PathLike | None | bool = None):
-        self.entries = EntryFolder(cache_dir, "parses", "reparsed", logger)
+        self.entries = EntryFolder(cache_dir, PARSES_FOLDER, "reparsed", logger)
 
     hits = property(lambda self: self.entries.hits)
     computed = property(lambda self: self.entries.computed)

@@ -44,7 +44,10 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
         if isinstance(source, (str, Path)):
             words = read_word_file(source)
         elif isinstance(source, Mapping):
-            words = Lexicon().extend(source).entries  # checked and normalised as a file's would be
+            try:
+                words = Lexicon().extend(source).entries  # checked and normalised as a file's would be
+            except LexiconError as exc:  # a form given two words within the mapping: named as such
+                raise LexiconError(f"words given as data: {exc}") from None
         else:
             raise LexiconError(f"a lexicon is a word file's path or a mapping of categories to words, "
                                f"not {type(source).__name__}")

@@ -112,6 +112,12 @@ class Vocabulary:
     lexicon: Lexicon = field(default_factory=domain_lexicon, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        # Each list is an index of text: anything else (a list from an edited file) is not hashed first.
+        for what, items in (("words", self.words), ("tokens", self.tokens), ("roles", self.roles),
+                            ("preps", self.preps), ("tasks", self.tasks)):
+            strange = [x for x in items if not isinstance(x, str)][:1]  # a list: None is one to find
+            if strange:
+                raise ValueError(f"a vocabulary's {what} are text; found {strange[0]!r:.40}")
         self._word_index = {w: i for i, w in enumerate(self.words)}
         self._token_index = {t: i for i, t in enumerate(self.tokens)}
         self._role_index = {r: i for i, r in enumerate(self.roles)}
@@ -124,13 +130,10 @@ class Vocabulary:
         if self.roles[:1] != [NO_ROLE] or self.preps[:2] != [OTHER_PREP, DIRECT_OBJECT]:
             raise ValueError(f"a vocabulary starts with {NO_ROLE} among roles and {OTHER_PREP}, {DIRECT_OBJECT} "
                              "among prepositions")
-        # Each list is an index: an entry twice, or one that is not text, would give two rows one name.
+        # Each list is an index: an entry twice would give two rows one name.
         for what, items, index in (("words", self.words, self._word_index), ("tokens", self.tokens, self._token_index),
                                    ("roles", self.roles, self._role_index), ("preps", self.preps, self._prep_index),
                                    ("tasks", self.tasks, self._task_index)):
-            strange = [x for x in items if not isinstance(x, str)][:1]  # a list: None is one to find
-            if strange:
-                raise ValueError(f"a vocabulary's {what} are text; found {strange[0]!r:.40}")
             if len(index) != len(items):
                 twice = next(x for k, x in enumerate(items) if index[x] != k)
                 raise ValueError(f"a vocabulary's {what} name each entry once; {twice!r} is there twice")

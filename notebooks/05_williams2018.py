@@ -127,7 +127,7 @@ ax.set_title("P(lifted task | preposition)"); fig.tight_layout()
 # A demonstrator stops where the goal holds, and often where more holds too. Training counts, per (start, end) pair, the relations of which some fact holds at its end and not at its start; `Learner.habits.table()` gives `q(R | L)`, how often a pair whose new facts include relation `L` also shows `R` (`inference/end_habits.py`). Following weighs each goal's states by them, where they can hold with the goal (`end_habits`, README, Williams section).
 
 # %%
-table = learner.habits.table()
+table = learner.habits.table(learner.lm.habit_prior)  # shrunk as following shrinks them
 relations = sorted(table)
 print(f"{'goal relation L':18s}", "  ".join(f"{r:>15s}" for r in relations))
 for given in relations:
@@ -137,13 +137,13 @@ for given in relations:
 # Habits bound to the goal's objects (`bound_habits`): `R[i]=L[j]` counts pairs where a new fact of `R` has as its argument `i` the argument `j` of a new fact of `L`. Its rate `q_b` is at most `q(R | L)`, the rate of any new fact of `R`; what it says is their ratio, the share of those facts bound so. `agentInRoom[1]=toyInRoom[1]`: of the pairs that pushed a block into a room and left the agent in a room it was not in, the share where that room is the block's. Following weighs a state where only another fact of `R` holds by `1 - q_b` instead of 1. A binding through the one agent (`agentInRoom[0]=agentNextToToy[0]`) holds wherever both relations do; following skips such bindings, and they are left out here.
 
 # %%
-bound = learner.habits.bound_table()
+bound = learner.habits.bound_table(learner.lm.habit_prior)
 print(f"{'bound habit':40s} {'q_b':>6s} {'q(R|L)':>7s} {'share':>6s}")
 for name in sorted(bound):
     relation, _, other = name.partition("=")
     if relation.endswith("[0]") and other.endswith("[0]") and relation.startswith("agent") and other.startswith("agent"):
         continue  # bound through the agent: says nothing beyond the two relations
-    q = learner.habits.rate(relation.split("[")[0], frozenset([other.split("[")[0]]))
+    q = learner.habits.rate(relation.split("[")[0], frozenset([other.split("[")[0]]), learner.lm.habit_prior)
     print(f"{name:40s} {bound[name]:6.3f} {q:7.3f} {bound[name] / q:6.2f}")
 
 # %% [markdown]

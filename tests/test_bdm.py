@@ -343,6 +343,11 @@ def test_format_williams2018_reads_a_file_of_any_name_and_a_folder_of_txt_files(
     done = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(copy), "--format", "williams2018"],
                           capture_output=True, text=True)
     assert done.returncode == 0 and "commands: 2 (2 distinct texts)" in done.stdout, done.stderr
+    from groundlang.cli import main
+
+    assert main(["--quiet", "train", str(copy), "--format", "williams2018", "-o", str(tmp_path / "model"),
+                 "--no-cache"]) == 0
+    assert (tmp_path / "model" / "model.json").is_file()
 
 
 def test_the_published_figure_goes_with_the_corpus_library_only():

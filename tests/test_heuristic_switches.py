@@ -113,6 +113,17 @@ def test_a_model_saved_before_the_switches_loads_with_the_defaults(examples):
     assert loaded.lm.phrase_keys() == PhraseKeys()
 
 
+def test_a_model_saved_before_habit_prior_weighs_its_habits_as_it_did(examples):
+    """Such a model shrank its habits towards a relation's overall rate; loaded, it follows as it did, while a
+    model saved with the setting keeps its own (the default, absent, for one trained now)."""
+    learner = Learner("parse", steps=5).fit(examples[:4])
+    state = learner.state_dict()
+    assert state["language_model_settings"]["habit_prior"] == "absent"
+    assert Learner.from_state_dict(state).lm.habit_prior == "absent"
+    del state["language_model_settings"]["habit_prior"]
+    assert Learner.from_state_dict(state).lm.habit_prior == "overall"
+
+
 @pytest.mark.parametrize("name", SWITCHES)
 def test_train_accepts_each_switch_off_and_refuses_a_wrong_value_in_one_line(name, tmp_path, capsys):
     model = tmp_path / "model"

@@ -141,6 +141,12 @@ def test_what_was_kept_describes_each_output(tmp_path):
         f"1 new cache entry is kept in {tmp_path / 'cache'} (behaviour likelihoods, end-state evidence and readings; "
         "a rerun resumes from them)"
     )
+    for kind in ("evidence", "parses"):  # a .bdm corpus's evidence and the readings of commands count too
+        (tmp_path / "cache" / kind / "cd").mkdir(parents=True)
+        (tmp_path / "cache" / kind / "cd" / "cdef.json").write_text("{}")
+    assert what_was_kept(Args, start, uses_cache=True).endswith(
+        f"3 new cache entries are kept in {tmp_path / 'cache'} (behaviour likelihoods, end-state evidence and "
+        "readings; a rerun resumes from them)")
     # interrupted before the entries at the start were counted: none is claimed as new
     assert "cache" not in what_was_kept(Args, start, uses_cache=True, cache_entries_before=None)
 
@@ -174,7 +180,7 @@ def _cache_entries(cache: Path, kinds: tuple[str, ...] = ("behaviour",)) -> list
 
 
 # Every kind of entry the interruption line counts: behaviour likelihoods, end-state evidence, readings.
-ALL_KINDS = ("behaviour", "evidence", "parses")
+from groundlang.inference.likelihoods import CACHE_FOLDERS as ALL_KINDS  # noqa: E402
 
 
 def _assert_whole_entries(cache: Path) -> None:

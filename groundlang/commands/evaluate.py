@@ -186,7 +186,7 @@ def run_pairs(args: argparse.Namespace) -> int:
                             layouts=args.layouts,
                             skip_inconsistent=args.skip_inconsistent, learner_options=_learner_options(args, words),
                             progress=args.progress, min_confidence=args.min_confidence)
-    _report(args, result, library)
+    _report(args, result)
     return 0
 
 
@@ -208,16 +208,13 @@ def _run_folds(args: argparse.Namespace, commands: list, library, options: dict)
                                   min_confidence=args.min_confidence, demonstrations=args.demonstrations,
                                   layouts=args.layouts, skip_inconsistent=args.skip_inconsistent,
                                   learner_options=options)
-    _report(args, result, library)
+    _report(args, result)
     return 0
 
 
-def _report(args: argparse.Namespace, result, library) -> None:
-    from groundlang.bdm_check import is_corpus_library
+def _report(args: argparse.Namespace, result) -> None:
     from groundlang.logic.storage import write_atomically
 
-    for scored in (getattr(result, "pooled", result), *getattr(result, "folds", ())):
-        scored.published = is_corpus_library(library)  # another library's tasks are not the published figure's
     print(result.summary())
     if args.json:
         write_atomically(Path(args.json), json_bytes(result.to_json()))

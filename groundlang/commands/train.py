@@ -24,6 +24,8 @@ def register(subparsers) -> None:
     add_lexicon_option(p)
     p.add_argument("--library", metavar="LP", action="append", type=library_path, help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the "
                    "williams2018 domain)" + LIBRARY_NAMES)
+    p.add_argument("--format", choices=("commands-to-tasks", "williams2018"),
+                   help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
     p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics, and .bdm pairs whose start state admits no task, instead of stopping")
     p.add_argument("--cache-dir", metavar="DIR", help="cache of behaviour likelihoods and .bdm pairs' end-state evidence "
                    "(default $GROUNDLANG_CACHE or ./.groundlang-cache)")
@@ -46,7 +48,8 @@ def run(args: argparse.Namespace) -> int:
     lm = get_language_model(args.language_model, **language_model_settings(args.lm_settings))  # and a setting
     cache_option(args)
     started = time.perf_counter()
-    instances, library = _pairs(args) if bdm_files(args.corpus) else (None, None)
+    pairs = args.format == "williams2018" or (args.format is None and bdm_files(args.corpus))
+    instances, library = _pairs(args) if pairs else (None, None)
     if instances is None:
         require_palette(args, args.corpus)
         corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
@@ -75,7 +78,7 @@ def _pairs(args: argparse.Namespace):
     from groundlang.pair_corpus import read_pair_corpus, training_instances
 
     library = default_library(args.library)
-    commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE).commands
+    commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE, args.format == "williams2018").commands
     made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent, cache_dir=cache_option(args))
     skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
     print(f"{len(commands)} commands, {sum(len(i.pairs) for i in made.instances)} pairs used"
