@@ -119,7 +119,7 @@ def learner_from_state(cls, state: dict, where: str):
     settings = {"habit_prior": "overall", **state["language_model_settings"]}
     learner = cls(
         get_language_model(state["language_model"], **settings),
-        library=TaskLibrary.from_text(state["task_library"], f"{where}:task_library"),
+        library=TaskLibrary.from_saved_text(state["task_library"], f"{where}:task_library"),
         steps=state["training"]["steps"], lr=state["training"]["lr"], seed=state["training"]["seed"],
         settings=TaskSettings(**state["planning"]), lexicon=[state["lexicon"]],
         # models saved before the setting existed were fitted by plain EM

@@ -313,6 +313,18 @@ class TaskLibrary:
         return cls((Source(source_name, text),), allow_scripts=allow_scripts, time_limit=time_limit)
 
     @classmethod
+    def from_saved_text(cls, text: str, source_name: str, time_limit: float | None = DEFAULT_TIME_LIMIT
+                        ) -> "TaskLibrary":
+        """A saved model's library (:meth:`source_text`): the library the package ships when it is one word for
+        word, solved in this process as the package's files are; else its text, a user's program, solved in a
+        child process (``Program.isolated``: each solve a process, a second or more a layout)."""
+        for relative in _sources.library_names().values():
+            shipped = package_source(relative)
+            if text == _saved_text((shipped,)):
+                return cls((shipped,), time_limit=time_limit)
+        return cls.from_text(text, source_name, time_limit=time_limit)
+
+    @classmethod
     def from_tasks(cls, tasks: Iterable[LiftedTask], source_name: str = "<tasks>") -> "TaskLibrary":
         """A library of given lifted tasks (e.g. discovered ones), via their ASP text."""
         return cls.from_text("".join(format_lifted_task(t) for t in tasks), source_name)
@@ -335,7 +347,7 @@ class TaskLibrary:
     def source_text(self) -> str:
         """The library's own ASP text, every source in order with its rules and comments
         (PFs a user defined beside the tasks included): what a saved model keeps."""
-        return "".join(f"% from {s.name}\n{s.text.rstrip()}\n" for s in self.sources)
+        return _saved_text(self.sources)
 
     def to_lp(self) -> str:
         """The library as ASP facts (normalised; comments and rules of the sources are not kept)."""
@@ -343,3 +355,8 @@ class TaskLibrary:
 
     def __repr__(self) -> str:
         return f"TaskLibrary({', '.join(self.names)} from {', '.join(s.name for s in self.sources)})"
+
+
+def _saved_text(sources: Sequence[Source]) -> str:
+    """Sources as a saved model keeps them (:meth:`TaskLibrary.source_text`)."""
+    return "".join(f"% from {s.name}\n{s.text.rstrip()}\n" for s in sources)

@@ -615,3 +615,16 @@ def test_a_rule_with_a_long_name_is_told_from_a_ground_fact_at_once():
     assert _GROUND_FACT.fullmatch(f"{name}(A) :- agent(A).") is None
     assert _GROUND_FACT.fullmatch(f"{name}(a, 3, \"s\").") is not None
     assert _GROUND_FACT.fullmatch("value(colour, 0, red).") is not None
+
+
+@pytest.mark.parametrize("name", ["tasks", "williams2018"])
+def test_a_saved_library_that_is_a_shipped_one_word_for_word_is_solved_in_this_process(name):
+    """A saved model keeps its library's text; the shipped library's text is the package's program again, solved
+    in this process (a user's program is solved in a child process, a second or more a new layout). Any other
+    text, an edit of a comment included, stays a user's."""
+    shipped = TaskLibrary.load([name]) if name != "tasks" else TaskLibrary.load()
+    text = shipped.source_text()
+    again = TaskLibrary.from_saved_text(text, "model.json:task_library")
+    assert not again.program.isolated and again.source_text() == text and again.names == shipped.names
+    edited = TaskLibrary.from_saved_text(text + "% an edit\n", "model.json:task_library")
+    assert edited.program.isolated and edited.names == shipped.names
