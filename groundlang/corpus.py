@@ -21,11 +21,11 @@ from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
-from groundlang.bdm import format_bdm_state, object_names, parse_bdm_state
+from groundlang.bdm import format_bdm_state, is_bdm, object_names, parse_bdm_state
 from groundlang.grammar.parser import command_fault
 from groundlang.logic.storage import as_path, read_limited, write_atomically
 from groundlang.model.world import Action, Layout, Palette, State, WorldError, get_palette, step
-from groundlang.state_line import (MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, format_state, parse_state, shared_cell,
+from groundlang.state_line import (MAX_COORDINATE, MAX_FILE_BYTES, CorpusError, format_state, parse_state,
                                    shown, text_lines, utf8_text)
 
 __all__ = [
@@ -185,7 +185,7 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
     (a recorded state differs from the replay); OSError when the file cannot be read.
     """
     path = as_path(path, "read_instance: path")
-    if path.suffix.lower() == ".bdm":  # read as actions, its state line would be named "action 1"
+    if is_bdm(path):  # read as actions, its state line would be named "action 1"
         raise CorpusError(f"{path}: a .bdm file holds (start, end) pairs, no moves; expected a commands-to-tasks "
                           "file (command, actions, states)")
     palette = get_palette(palette)
@@ -234,7 +234,7 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
     for i, action in enumerate(actions):
         replayed = step(states[i], action)
         if (replayed.positions != states[i + 1].positions).any():
-            shared = shared_cell(states[i + 1])
+            shared = states[i + 1].shared_cell()
             raise InconsistentDemonstration(
                 f"{path}, line {i + 4}: step {i + 1} ({action.word}) from line {i + 3} gives "
                 f"{_describe(replayed)}; the file has {_describe(states[i + 1])}"

@@ -106,24 +106,25 @@ def channels(palette) -> tuple[str, ...]:
     return CHANNELS + tuple(f"{cls}_{attribute}" for cls, attribute in palette.added)
 
 
+def _interior(room, H: int) -> tuple[slice, slice]:
+    """A room's interior cells in a grid of ``H`` rows, north up: rows H-1-y for y in bottom+1..top-1."""
+    return slice(H - room.top, H - room.bottom - 1), slice(room.left + 1, room.right)
+
+
 def _added_planes(state: State, shape: tuple[int, int], classes: tuple[str, ...]) -> np.ndarray:
     """The channels of the palette's added attributes ``[H, W, len(added)]``, filled for objects of
     ``classes`` (the rooms and doors stay put, the toys move)."""
     lay, (H, W) = state.layout, shape
+    cells = {"room": [(name, _interior(r, H)) for name, r in zip(lay.room_names, lay.rooms)],
+             "door": [(name, (slice(H - 1 - d.top, H - d.bottom), slice(d.left, d.right + 1)))
+                      for name, d in zip(lay.door_names, lay.doors)],
+             "toy": [(name, (H - 1 - t.y, t.x)) for name, t in zip(lay.toy_names, state.toys)]}
     grid = np.zeros((H, W, len(lay.palette.added)), dtype=np.uint8)
     for k, (cls, attribute) in enumerate(lay.palette.added):
-        if cls not in classes:
-            continue
-        values = lay.palette.values_of(attribute)
-        if cls == "room":
-            for name, r in zip(lay.room_names, lay.rooms):
-                grid[H - r.top: H - r.bottom - 1, r.left + 1: r.right, k] = values.index(lay.added_values(name)[attribute]) + 1
-        elif cls == "door":
-            for name, d in zip(lay.door_names, lay.doors):
-                grid[H - 1 - d.top: H - d.bottom, d.left: d.right + 1, k] = values.index(lay.added_values(name)[attribute]) + 1
-        else:
-            for name, toy in zip(lay.toy_names, state.toys):
-                grid[H - 1 - toy.y, toy.x, k] = values.index(lay.added_values(name)[attribute]) + 1
+        if cls in classes:
+            values = lay.palette.values_of(attribute)
+            for name, (rows, cols) in cells[cls]:
+                grid[rows, cols, k] = values.index(lay.added_values(name)[attribute]) + 1
     return grid
 
 
@@ -141,8 +142,7 @@ def _static_grid(state: State, shape: tuple[int, int]) -> np.ndarray:
     grid[H - h:, : lay.width, 1] = door.T[::-1]
     for r in lay.rooms:
         value = lay.palette.colour_index(r.colour) + 1
-        # Rows H-1-y for y in bottom+1..top-1.
-        grid[H - r.top: H - r.bottom - 1, r.left + 1: r.right, 2] = value
+        grid[(*_interior(r, H), 2)] = value
     grid[:, :, len(CHANNELS):] = _added_planes(state, shape, ("room", "door"))
     return grid
 

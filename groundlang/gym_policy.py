@@ -19,8 +19,9 @@ from groundlang.model.world import Action, State
 __all__ = ["CommandPolicy", "policy", "observation_positions"]
 
 
-# Toys alike in all the grid shows of them (colour, shape, added attributes) are told apart by where they were a step before; only those that cannot be
-# (after a reset to another state) are matched in every order, which grows as k! and is refused beyond this.
+# Toys alike in all the grid shows of them (colour, shape, added attributes) are told apart by where they were a
+# step before; only those that cannot be (after a reset to another state) are matched in every order, which grows
+# as k! and is refused beyond this.
 MAX_ASSIGNMENTS = 5040
 
 

@@ -15,7 +15,7 @@ import re
 from groundlang.logic.atoms import shown
 from groundlang.model.world import Agent, Door, Layout, Palette, Room, State, Toy, WorldError, get_palette
 
-__all__ = ["CorpusError", "MAX_COORDINATE", "MAX_FILE_BYTES", "coordinate", "parse_state", "format_state", "shared_cell",
+__all__ = ["CorpusError", "MAX_COORDINATE", "MAX_FILE_BYTES", "coordinate", "parse_state", "format_state",
            "shown", "text_lines"]
 
 # Coordinates beyond this are refused: a layout's grids are allocated densely,
@@ -137,7 +137,7 @@ def parse_state(line: str, palette: str | Palette, where: str = "state", shared_
     layout = Layout(tuple(rooms), tuple(doors), tuple((t.colour, t.shape) for t in toys), palette)
     state = State(layout, agents[0], tuple(toys))
     try:
-        if shared_cells_ok and shared_cell(state):
+        if shared_cells_ok and state.shared_cell():
             _validate_positions(state)
         else:
             state.validate()
@@ -145,10 +145,6 @@ def parse_state(line: str, palette: str | Palette, where: str = "state", shared_
         raise CorpusError(f"{where}: {exc}") from None
     return state
 
-
-def shared_cell(state: State) -> str | None:
-    """Which two objects share a cell, or None (:meth:`State.shared_cell`)."""
-    return state.shared_cell()
 
 
 def _validate_positions(state: State) -> None:
