@@ -19,7 +19,7 @@ its declaration ``pf(colour, roomIs(red), (room,))``).
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 from groundlang.logic.atoms import Atom, format_goal, renamed_words
 from groundlang.logic.schema import Domain, PFDeclaration
@@ -144,9 +144,17 @@ def _a(noun: str) -> str:
     return ("an " if noun[:1] in "aeiou" else "a ") + noun
 
 
-def _pf_meaning(d: PFDeclaration, classes: Sequence[str]) -> str:
+def _pf_meaning(d: PFDeclaration, classes: Sequence[str], said: str | None = None) -> str:
     """``roomIsRed`` -> "a room's colour is red"; ``agentInRoom`` -> "an agent in a room";
-    ``doorWestOfAgent`` -> "a door west of the agent"."""
+    ``doorWestOfAgent`` -> "a door west of the agent". Where the library says how the PF reads (``said``,
+    its phrase/2), that is used: "{1} in a corner of {2}" -> "an agent in a corner of a room"; "large" for a
+    PF of one toy -> "a large toy" (a palette may store a size as a colour: the phrase says what it is)."""
+    if said is not None:
+        if _PLACE.search(said):
+            return _PLACE.sub(lambda m: _a(d.signature[int(m.group(1)) - 1])
+                              if 0 < int(m.group(1)) <= len(d.signature) else m.group(0), said)
+        if len(d.signature) == 1:
+            return _a(f"{said} {d.signature[0]}")
     value = _value(d.term)
     if value is not None and len(d.signature) == 1:
         # A member of a family declared over values (roomIs(C)): the PF class names what the value is of.
@@ -179,10 +187,13 @@ def _task_meaning(task: LiftedTask) -> str:
     return "a task ending with " + " and ".join(atoms) + (f", where {' and '.join(where)}" if where else "")
 
 
-def token_meanings(tokens: Iterable[str], schemas: Iterable[Domain]) -> dict[str, str]:
+def token_meanings(tokens: Iterable[str], schemas: Iterable[Domain],
+                   phrases: Mapping[str, str] | None = None) -> dict[str, str]:
     """What each of ``tokens`` (the model's semantic tokens, as ``Learner.lexicon`` names them) means,
     read from the domain's schemas: ``{"roomIsRed": "a room's colour is red", "CLASS:room": "names a
-    room", ...}``. A token no schema declares is left out rather than guessed at."""
+    room", ...}``, or from ``phrases`` (a library's phrase/2, ``TaskLibrary.phrases``) where it says how a
+    PF reads. A token no schema declares is left out rather than guessed at."""
+    phrases = phrases or {}
     pfs: dict[str, PFDeclaration] = {}
     tasks: dict[str, LiftedTask] = {}
     classes: list[str] = []
@@ -199,5 +210,5 @@ def token_meanings(tokens: Iterable[str], schemas: Iterable[Domain]) -> dict[str
         elif token in tasks:
             out[token] = _task_meaning(tasks[token])
         elif token in pfs:
-            out[token] = _pf_meaning(pfs[token], classes)
+            out[token] = _pf_meaning(pfs[token], classes, phrases.get(token))
     return out

@@ -87,7 +87,7 @@ for word in WORDS:
     meanings = lexicon.get(word)
     print(f"{word:9s}", ", ".join(f"{t} {p:.2f}" for t, p in meanings) if meanings else "(not a word of the vocabulary)")
 schema = domain_schema(library, "williams2018")
-explained = token_meanings((t for w in WORDS for t, _ in lexicon.get(w, [])), [schema])
+explained = token_meanings((t for w in WORDS for t, _ in lexicon.get(w, [])), [schema], library.phrases)
 print("\nwhat the meanings are:")
 for token, text in explained.items():
     print(f"  {token:26s} {text}")

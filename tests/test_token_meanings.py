@@ -37,3 +37,27 @@ def test_a_user_domain_is_explained_from_its_own_files():
     assert meanings["toyIsChair"] == "a toy's shape is chair"
     # declared both as a PF and as a task: a word names it as the task
     assert meanings["agentLeftOfToy"] == "a task ending with agent A left of toy T"
+
+
+def test_a_library_phrase_says_what_a_palette_value_is():
+    """The Williams palette stores a box's size in its colour field; the domain's phrase/2 says "large" is
+    read as a size, so the lexicon does not explain toyIsLarge as a colour."""
+    from groundlang.bdm_check import default_library as williams_library
+
+    library = williams_library()
+    schema = domain_schema(library, "williams2018")
+    meanings = token_meanings(["toyIsLarge", "toyIsSmall", "toyIsRed"], [schema], library.phrases)
+    assert meanings == {"toyIsLarge": "a large toy", "toyIsSmall": "a small toy",
+                        "toyIsRed": "a toy's colour is red"}
+    # without the phrases the schema alone speaks
+    assert token_meanings(["toyIsLarge"], [schema])["toyIsLarge"] == "a toy's colour is large"
+
+
+def test_a_phrase_with_places_reads_each_place_as_its_class():
+    from groundlang.logic.schema import PFDeclaration
+    from groundlang.wording import _pf_meaning
+
+    corner = next(d for d in domain_schema().pfs.values() if len(d.signature) == 2)
+    said = _pf_meaning(corner, [], "{1} in a corner of {2}")
+    assert said == f"{'an' if corner.signature[0][0] in 'aeiou' else 'a'} {corner.signature[0]} in a corner of " \
+                   f"{'an' if corner.signature[1][0] in 'aeiou' else 'a'} {corner.signature[1]}"

@@ -109,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
         print()
         _print_prepositions(prepositions, learner)
     # Each name once, in the order the table first shows it: the table stays compact and scannable.
-    explained = token_meanings((t for meanings in lexicon.values() for t, _ in meanings), _schemas(learner))
+    explained = token_meanings((t for meanings in lexicon.values() for t, _ in meanings), _schemas(learner),
+                                learner.library.phrases)
     if explained:
         width = max(len(t) for t in explained)
         print("\nwhat the meanings are:")
