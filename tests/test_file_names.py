@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import logging
 import re
 import subprocess
 import sys
@@ -71,6 +72,32 @@ def test_follow_names_goals_and_the_final_state_as_the_file_does(tmp_path, model
     assert (final.agent.x, final.agent.y) != (2, 2)  # it moved, and the state is written in the file's names
     text = _cli("follow", "--model", str(model), "--env", str(env), "go next to the chair")
     assert "agentNextToToy(robot, block3): reached" in text.stdout and "block0" not in text.stdout
+
+
+def test_what_planning_logs_names_objects_as_the_file_does(tmp_path, model):
+    """In a 16x16 layout planning logs the abstraction it plans in ("moving agent0, block5"): the layout
+    numbers the blocks from 0, and the log names the one it moves as the file does, as the goal beside it."""
+    line = (Path(__file__).parent / "fixtures" / "large" / "sixteen.bdm").read_text().splitlines()[1]
+    env = tmp_path / "sixteen.bdm"  # the corpus fixture's first start state as a one-line state file, its box block5
+    env.write_text(line.replace("block1 (block)", "block5 (block)") + "\n")
+    assert file_names(env) == {"block1": "block3", "block2": "block5"}
+    run = _cli("follow", "--model", str(model), "--env", str(env), "--guess", "go next to the large box")
+    assert run.returncode == 0, run.stderr
+    (said,) = [t for t in run.stderr.splitlines() if t.startswith("state space: relevance abstraction")]
+    moving = re.search(r"moving agent0((?:, block\d)*), \d toy\(s\) as walls", said).group(1)
+    goal = re.search(r"^goal .*\((agent0, (block\d))\)", run.stdout, re.MULTILINE)
+    assert goal.group(2) == "block5" and moving == ", block5"
+
+
+def test_log_lines_are_renamed_only_within_the_context_and_by_whole_names(caplog):
+    from groundlang.commands import logged_by_file_names
+
+    log = logging.getLogger("groundlang.test")
+    with caplog.at_level(logging.INFO, logger="groundlang"):
+        with logged_by_file_names({"block2": "block3", "agent0": "robot"}):
+            log.info("moving %s, %s; %s", "agent0", "block2", "block20")
+        log.info("moving agent0, block2")
+    assert [r.getMessage() for r in caplog.records] == ["moving robot, block3; block20", "moving agent0, block2"]
 
 
 def test_tasks_say_which_objects_they_renumbered_and_show_draws_the_files_names(tmp_path):

@@ -6,9 +6,12 @@ match the library's.
 """
 
 import argparse
+import contextlib
 import json
+import logging
 import math
 import os
+import re
 import stat
 from pathlib import Path
 
@@ -204,6 +207,35 @@ def renumbering_note(names: dict[str, str]) -> str | None:
         return None
     return ("objects are numbered from 0 in each class here; in the file: "
             + ", ".join(f"{own} is {name}" for own, name in names.items()))
+
+
+class _FileNames(logging.Filter):
+    """Writes a log line's object names as the state file gives them (``corpus.file_names``): the planner
+    below logs the layout's (block2), the command's output the file's (block3)."""
+
+    def __init__(self, names: dict[str, str]):
+        super().__init__()
+        self.names = names
+        self.pattern = re.compile(r"\b(" + "|".join(map(re.escape, sorted(names, key=len, reverse=True))) + r")\b")
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        record.msg, record.args = self.pattern.sub(lambda m: self.names[m.group(1)], record.getMessage()), None
+        return True
+
+
+@contextlib.contextmanager
+def logged_by_file_names(names: dict[str, str]):
+    """Within it, the lines logged name objects by ``names`` (the layout's name -> the file's); nothing
+    changes where the file renamed none."""
+    handlers = logging.getLogger().handlers if names else []
+    renamer = _FileNames(names) if names else None
+    for handler in handlers:
+        handler.addFilter(renamer)
+    try:
+        yield
+    finally:
+        for handler in handlers:
+            handler.removeFilter(renamer)
 
 
 def require_palette(args, corpus: str) -> None:

@@ -12,7 +12,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import PALETTE_HELP, add_lexicon_option, fraction, json_text, output_path, positive_int
+from groundlang.commands import (PALETTE_HELP, add_lexicon_option, fraction, json_text, logged_by_file_names, output_path,
+                                 positive_int)
 
 # Exit code of a command that asked instead of acting (documented in the README).
 ASKED = 3
@@ -99,8 +100,9 @@ def _ask(learner, result, state, max_steps: int, names=None):
         if not sys.stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read
             print(line.strip())
         try:  # the choices were shown with the file's names: the answer is read with the layout's
-            return learner.clarify(result, renamed_words(line, {v: k for k, v in (names or {}).items()}),
-                                   max_steps=max_steps)
+            with logged_by_file_names(names or {}):
+                return learner.clarify(result, renamed_words(line, {v: k for k, v in (names or {}).items()}),
+                                       max_steps=max_steps)
         except AnswerError as exc:
             print(f"  {exc}")
     return None
@@ -167,7 +169,8 @@ def run(args: argparse.Namespace) -> int:
         learner.add_words(args.lexicon)
     threshold = None if args.guess else args.min_confidence
     try:
-        result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
+        with logged_by_file_names(names):
+            result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
     except NoTaskError as exc:  # the state is at fault, not the command or the model: name its file
         raise NoTaskError(f"{args.env}: {exc}") from None
     if not args.json:
