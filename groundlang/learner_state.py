@@ -14,7 +14,7 @@ from groundlang.inference.end_habits import EndHabits
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.logic.terms import ASP_CONSTANT
-from groundlang.model.palette import added_attribute_problem
+from groundlang.model.palette import Palette, added_attribute_problem
 from groundlang.model.language_models import get_language_model
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
@@ -45,8 +45,8 @@ def check_state(palettes: list[dict] | None, method: str, command: str, state: S
         raise TypeError(f"{method}: state must be a State (read_state_file, read_initial_state), "
                         f"got {type(state).__name__}")
     palette = state.layout.palette
-    seen = palette.record()
-    if palettes is not None and seen not in palettes:
+    # by meaning: a palette drawn otherwise (glyph/2, rgb/2) reads the same words
+    if palettes is not None and palette not in [Palette.from_record(p) for p in palettes]:
         trained = ", ".join(p["name"] for p in palettes)
         same_name = (" of the same name but other values"
                      if any(p["name"] == palette.name for p in palettes) else "")
@@ -151,7 +151,20 @@ def _checked_palettes(palettes) -> list[dict]:
             _check_names(p["name"], field, p[field])
         if "added" in p or "added_values" in p:
             _check_added(p)
+        if "drawing" in p:
+            _check_drawing(p)
     return palettes
+
+
+def _check_drawing(p: dict) -> None:
+    """A palette record's drawing hints, as ``Palette.record`` writes them: ``drawing`` {"glyph": {shape:
+    text}, "rgb": {colour: name}}, every key and value a string."""
+    drawing = p["drawing"]
+    if (not isinstance(drawing, dict) or set(drawing) - {"glyph", "rgb"}
+            or not all(isinstance(d, dict) and all(isinstance(k, str) and isinstance(v, str) for k, v in d.items())
+                       for d in drawing.values())):
+        raise ValueError(f"palette {p['name']!r}: drawing must be {{\"glyph\": {{shape: text}}, \"rgb\": "
+                         "{colour: name}}, every key and value a string")
 
 
 def _check_names(palette: str, field: str, values) -> None:

@@ -52,19 +52,24 @@ class Palette:
         return (("colour", self.colours), ("shape", self.shapes)) + self.added_values
 
     def record(self) -> dict:
-        """What a saved model keeps of the palette (its values; the drawing hints are not meaning).
-        The added attributes only where there are some, so a palette of colours and shapes alone is
-        recorded as before they could be added."""
+        """What a saved model keeps of the palette: its values, and its drawing hints under ``drawing``
+        (not meaning: two records that differ only there are one palette, :meth:`from_record` compares
+        equal). The added attributes and the hints only where there are some, so a palette of colours and
+        shapes alone is recorded as before they could be added."""
         out = {"name": self.name, "colours": list(self.colours), "shapes": list(self.shapes)}
         if self.added:
             out["added"] = [list(pair) for pair in self.added]
             out["added_values"] = {a: list(vs) for a, vs in self.added_values}
+        if self.glyphs or self.rgb:  # a model's own palette file is drawn as it was, with no --palette
+            out["drawing"] = {"glyph": dict(self.glyphs), "rgb": dict(self.rgb)}
         return out
 
     @classmethod
     def from_record(cls, record: dict) -> "Palette":
-        """The palette :meth:`record` wrote (no drawing hints)."""
+        """The palette :meth:`record` wrote (a record of a model saved before the drawing hints: none)."""
+        drawing = record.get("drawing", {})
         return cls(record["name"], tuple(record["colours"]), tuple(record["shapes"]),
+                   tuple(sorted(drawing.get("glyph", {}).items())), tuple(sorted(drawing.get("rgb", {}).items())),
                    added=tuple(tuple(pair) for pair in record.get("added", ())),
                    added_values=tuple((a, tuple(vs)) for a, vs in record.get("added_values", {}).items()))
 

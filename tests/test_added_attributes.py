@@ -35,8 +35,14 @@ def test_a_palette_reads_the_attributes_it_adds_and_their_values():
     assert palette.attributes_of("room") == () and palette.values_of("material") == ("wood", "metal")
     assert [a for a, _ in palette.all_values] == ["colour", "shape", "material"]
     assert Palette.from_record(json.loads(json.dumps(palette.record()))) == palette
-    # a palette adding nothing is recorded as before attributes could be added (older models compare equal)
-    assert set(get_palette("williams2018").record()) == {"name", "colours", "shapes"}
+    # a palette adding nothing is recorded as before attributes could be added (older models compare equal),
+    # with its drawing hints beside the values
+    record = get_palette("williams2018").record()
+    assert set(record) == {"name", "colours", "shapes", "drawing"}
+    assert record["drawing"]["glyph"]["box"] == "\u25a1" and record["drawing"]["rgb"]["large"] == "saddlebrown"
+    old = {k: v for k, v in record.items() if k != "drawing"}  # a model saved before the hints were kept
+    assert Palette.from_record(old) == Palette.from_record(record) == get_palette("williams2018")
+    assert Palette.from_record(old).glyphs == () and Palette.from_record(record).glyphs == get_palette("williams2018").glyphs
 
 
 def test_a_bdm_state_gives_each_toy_its_material_under_the_layouts_name(tmp_path):

@@ -359,7 +359,10 @@ def test_a_model_records_its_palette_and_refuses_a_state_of_another(learners, tm
     assert recorded == [{"name": "sokoban", "colours": ["black", "blue", "cyan", "darkGray", "gray", "green",
                                                         "lightGray", "magenta", "orange", "pink", "red", "white",
                                                         "yellow"],
-                         "shapes": ["star", "moon", "circle", "smiley", "square"]}]
+                         "shapes": ["star", "moon", "circle", "smiley", "square"],
+                         "drawing": {"glyph": {"circle": "\u25cf", "moon": "\u263e", "smiley": "\u263a",
+                                               "square": "\u25a0", "star": "\u2605"},
+                                     "rgb": {"darkGray": "dimgray", "lightGray": "lightgray"}}}]
     other = tmp_path / "other.state"
     other.write_text("room,0,0,6,4,0 room,3,4,6,8,0 door,4,3,4,3 block,1,0,1,1 agent,6,2\n")
     state = read_state_file(other, "sokoban2")
@@ -418,12 +421,19 @@ def test_a_model_of_a_users_palette_follows_without_its_file(tmp_path, capsys):
     assert code == 0, capsys.readouterr().err
     out = json.loads(capsys.readouterr().out)
     assert out["reached"] is True and out["interpretations"][0]["goal"].startswith("agentInRoom(")
+    # and draws as the file said (its glyph/2 and rgb/2 are kept in the model, not only its values)
+    from groundlang.learner import Learner
+
+    (record,) = Learner.load(tmp_path / "m").palettes
+    assert record["drawing"]["glyph"]["star"] == "\u2605" and record["drawing"]["rgb"]
 
 
 def test_a_model_whose_palette_record_cannot_be_a_palette_is_refused_at_load(learners, tmp_path, capsys):
-    model = learners[0].save(tmp_path / "m")
-    for colours, piece in (([], "at least one"), (["red", "red"], "distinct"), (["Red"], "'Red' is not one")):
-        _edit_palette(model, colours=colours)
+    for k, (entry, piece) in enumerate( (({"colours": []}, "at least one"), ({"colours": ["red", "red"]}, "distinct"),
+                         ({"colours": ["Red"]}, "'Red' is not one"), ({"drawing": {"glyph": {"star": 5}}}, "drawing"),
+                         ({"drawing": []}, "drawing"))):
+        model = learners[0].save(tmp_path / f"m{k}")
+        _edit_palette(model, **entry)
         code = main(["follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model", str(model)])
         err = capsys.readouterr().err
         assert code == 2 and len(err.splitlines()) == 1 and f"{model}" in err and piece in err, err
