@@ -318,3 +318,20 @@ def test_lexicon_says_where_a_word_unknown_alone_was_learned(tmp_path, capsys):
     out = capsys.readouterr().out
     assert re.search(r"^next +\(unknown word alone; learned within next_to\)$", out, re.M), out
     assert re.search(r"^zzz +\(unknown word\)$", out, re.M), out
+
+
+def test_lexicon_says_which_word_a_synonym_is_read_as(tmp_path, capsys):
+    """A word file's synonym is read as its word: asked for "crimson", the table's row says "crimson = red"
+    and the JSON is keyed as asked, with red's meanings."""
+    words = tmp_path / "colours.words"
+    words.write_text("SYNONYM: crimson=red\n")
+    model = tmp_path / "model"
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "--lexicon", str(words), "-o",
+                 str(model)]) == 0
+    capsys.readouterr()
+    assert main(["--quiet", "lexicon", str(model), "--words", "Crimson", "red", "--top", "1"]) == 0
+    rows = capsys.readouterr().out.splitlines()
+    assert rows[1].split() == ["crimson", "=", "red", "roomIsRed", rows[1].split()[-1]] and len(rows) == 5
+    assert main(["--quiet", "lexicon", str(model), "--words", "crimson", "--json"]) == 0
+    shown = json.loads(capsys.readouterr().out)
+    assert list(shown) == ["crimson"] and shown["crimson"][0][0] == "roomIsRed"

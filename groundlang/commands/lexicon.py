@@ -69,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.wording import token_meanings
 
     learner = Learner.load(args.model)
+    said_as: dict[str, str] = {}  # a word asked for -> the synonym it was asked by
     if args.words is not None:  # read as a command is: "RED" is red, "chair." chair; "next to" stays spaced, as
         from groundlang.grammar.parser import tokenise  # a preposition's row sends it to the preposition table
 
@@ -78,6 +79,10 @@ def run(args: argparse.Namespace) -> int:
             if not tokens:
                 raise ValueError(f"--words {w!r}: no word in it; give the words to show, e.g. --words red room")
             asked_words += tokens
+            # a word file's synonym is read as its word ("crimson" as red): the row says so
+            form = " ".join(w.lower().split())
+            if form in learner.word_lexicon.synonyms and len(tokens) == 1:
+                said_as[tokens[0]] = form
         args.words = list(dict.fromkeys(asked_words))
     prepositions = learned = preposition_tasks(learner.globals, learner.vocab, top=args.top)
     if args.words:  # a multiword preposition is one token: "next to" is next_to
@@ -92,8 +97,8 @@ def run(args: argparse.Namespace) -> int:
     lexicon = learner.lexicon(top=args.top)
     if args.words:
         lexicon = {w: lexicon.get(w, []) for w in args.words}
-    if args.json:
-        print(json_text({w: [[t, p] for t, p in m] for w, m in lexicon.items()}))
+    if args.json:  # keyed as asked: {"crimson": ...} for a synonym of red
+        print(json_text({said_as.get(w, w): [[t, p] for t, p in m] for w, m in lexicon.items()}))
         return 0
     print(f"{WORD_HEADING:<16} {MEANINGS_HEADING}")
     for word, meanings in lexicon.items():
@@ -104,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
                 or ("(a preposition: see the table below)" if preposition
                     else f"(unknown word alone; learned within {', '.join(within[:3])})" if within
                     else "(unknown word)"))
-        print(f"{word:<16} {text}")
+        label = f"{said_as[word]} = {word}" if word in said_as else word  # "crimson = red": read as red
+        print(f"{label:<16} {text}")
     if prepositions:  # relations are learned there, not as a preposition word's tokens above
         print()
         _print_prepositions(prepositions, learner)
