@@ -169,12 +169,18 @@ def _pf_meaning(d: PFDeclaration, classes: Sequence[str], said: str | None = Non
     return " ".join(out) if used == len(d.signature) else str(d)
 
 
-def _task_meaning(task: LiftedTask) -> str:
+def _task_meaning(task: LiftedTask, phrases: Mapping[str, str]) -> str:
     """``agentToRoom`` -> "a task ending with agent A in room R"; variables named as the task declares them
-    (a task of two rooms has two variables, which may be bound to one room)."""
+    (a task of two rooms has two variables, which may be bound to one room). A goal PF the library says
+    how to read (its phrase/2 with places, "{1} north of {2}") is read so: "agent A north of toy T"."""
     cls = {v.name: v.cls for v in task.variables}
     atoms = []
     for predicate, args in task.goal:
+        said = phrases.get(predicate)
+        if said is not None and _PLACE.search(said):
+            atoms.append(_PLACE.sub(lambda m: f"{cls.get(args[int(m.group(1)) - 1], '')} {args[int(m.group(1)) - 1]}"
+                                    .strip() if 0 < int(m.group(1)) <= len(args) else m.group(0), said))
+            continue
         out, used = [], 0
         for word in _camel_words(predicate):
             if used < len(args) and word == cls.get(args[used]):
@@ -208,7 +214,7 @@ def token_meanings(tokens: Iterable[str], schemas: Iterable[Domain],
         if token in known:
             out[token] = known[token]
         elif token in tasks:
-            out[token] = _task_meaning(tasks[token])
+            out[token] = _task_meaning(tasks[token], phrases)
         elif token in pfs:
             out[token] = _pf_meaning(pfs[token], classes, phrases.get(token))
     return out

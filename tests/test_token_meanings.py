@@ -54,10 +54,17 @@ def test_a_library_phrase_says_what_a_palette_value_is():
 
 
 def test_a_phrase_with_places_reads_each_place_as_its_class():
-    from groundlang.logic.schema import PFDeclaration
     from groundlang.wording import _pf_meaning
 
     corner = next(d for d in domain_schema().pfs.values() if len(d.signature) == 2)
     said = _pf_meaning(corner, [], "{1} in a corner of {2}")
     assert said == f"{'an' if corner.signature[0][0] in 'aeiou' else 'a'} {corner.signature[0]} in a corner of " \
                    f"{'an' if corner.signature[1][0] in 'aeiou' else 'a'} {corner.signature[1]}"
+
+
+def test_a_task_whose_goal_pf_has_a_phrase_is_read_by_it():
+    """A library's phrase/2 for a goal PF reads the task's goal too (its variables in the places)."""
+    schema = domain_schema(default_library(), "williams2018")
+    said = {"agentLeftOfToy": "{1} to the west of {2}"}
+    assert token_meanings(["agentLeftOfToy"], [schema], said)["agentLeftOfToy"] == \
+        "a task ending with agent A to the west of toy T"
