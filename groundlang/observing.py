@@ -9,7 +9,8 @@ from groundlang.inference.parse_cache import ParseCache
 from groundlang.inference.shared_meaning import end_state_behaviour
 from groundlang.model.encoding import Observation
 from groundlang.model.interpretations import NoTaskError, without_unbroken_held_parts
-from groundlang.model.pf_tables import library_pf_tables
+from groundlang.model.pf_tables import TabulationError, library_pf_tables, program_digest
+from groundlang.model.tasks import check_position_pfs
 from groundlang.training_vocabulary import unlisted_schema_words
 
 __all__ = ["observations"]
@@ -25,6 +26,7 @@ def observations(learner, instances: Sequence, progress: bool = False) -> list[O
     words = unlisted_schema_words(learner.library, palettes, learner.word_lexicon)
     if any(words.values()):
         learner.add_words(words)
+    _check_users_position_pfs(learner.library, instances)
     shown = [getattr(inst, "actions", None) is not None for inst in instances]
     interps = []
     for inst in instances:
@@ -68,6 +70,27 @@ def observations(learner, instances: Sequence, progress: bool = False) -> list[O
         )
     parses.report()
     return out
+
+
+def _check_users_position_pfs(library, instances: Sequence) -> None:
+    """A library's goal PF that reads where another object is would be learned from tables that say
+    otherwise than its groundings (``model.tasks.check_position_pfs``, as ``tasks`` checks it): refused
+    at the first start state of each layout, naming its file and line. The package's own PFs are not
+    checked (their tests do), nor a layout too large to tabulate (training says so where it needs it)."""
+    if program_digest(library.tabulation_program) is None:
+        return
+    first = {}
+    for inst in instances:
+        first.setdefault(inst.initial_state.layout, inst)
+    for layout, inst in first.items():
+        try:
+            tables = library_pf_tables(layout, library)
+        except TabulationError:
+            continue
+        try:
+            check_position_pfs(inst.initial_state, library, tables)
+        except TabulationError as exc:
+            raise TabulationError(f"{_where(inst)}: {exc}") from None
 
 
 def _where(inst) -> str:

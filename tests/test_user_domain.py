@@ -224,7 +224,7 @@ def test_a_word_file_beside_a_library_that_is_not_a_file_is_refused_not_passed_o
     assert capsys.readouterr().err == f"groundlang parse: error: {tmp_path / 'mine.words'}: Is a directory\n"
 
 
-def test_a_position_pf_that_reads_another_objects_position_is_refused_by_tasks(tmp_path, capsys):
+def test_a_position_pf_that_reads_another_objects_position_is_refused_by_tasks_and_train(tmp_path, capsys):
     """Tabulated with every other object standing everywhere, such a PF held wherever the cell east of the
     agent is walkable, while the state's own grounding said it did not: `tasks` listed it both ways."""
     from groundlang.cli import main
@@ -240,5 +240,14 @@ def test_a_position_pf_that_reads_another_objects_position_is_refused_by_tasks(t
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "agentNearToy(agent0, block0) does not hold in the state, but its table" in err
     assert "a position PF may read the positions (at/3) of its own arguments only" in err
+    # train refuses it too, naming the file of the first state in whose layout the table and grounding disagree
+    # (it trained silently on tables that said otherwise than the groundings)
+    corpus = example_corpus_path()
+    assert main(["train", str(corpus), "--palette", "sokoban", "--library", "tasks", "--library", str(near), "-o",
+                 str(tmp_path / "m")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "groundlang train: error: " in err and ".txt" in err
+    assert "a position PF may read the positions (at/3) of its own arguments only" in err
+    assert not (tmp_path / "m").exists()
     near.write_text(near.read_text().replace("toy(T2), at(T2, X+1, Y)", "at(T, X+1, Y)"), encoding="utf-8")
     assert main(["tasks", str(state), "--palette", "sokoban", "--library", "tasks", "--library", str(near)]) == 0
