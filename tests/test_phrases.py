@@ -51,7 +51,8 @@ def test_goals_and_objects_read_in_the_librarys_words(tmp_path):
     assert object_phrase("block2", state, said) == "the red chair east of where you stand"
     assert object_phrase("block2", state, unsaid) == "the red chair east of the agent"
     assert said.phrases == {"agentInCornerOfRoom": "{1} in a corner of {2}", "toyIsShiny": "shiny",
-                            "toyEastOfAgent": "east of where you stand"}
+                            "toyEastOfAgent": "east of where you stand",
+                            "toyIsLarge": "large", "toyIsSmall": "small"}  # the Williams domain's own
 
 
 @pytest.mark.parametrize("text, message", [
