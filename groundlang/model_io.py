@@ -113,9 +113,12 @@ def signed(meta: dict) -> dict:
     return {**meta, CONTENT_HASH: _content_digest(meta)}
 
 
-def write_model(state: dict, directory: str | Path) -> Path:
+def write_model(state: dict, directory: str | Path, replacing: str | None = None) -> tuple[Path, str]:
     """Write a learner's ``state_dict()`` to ``directory`` (created if needed; see
-    :func:`check_model_destination`); returns the directory."""
+    :func:`check_model_destination`); returns the directory and the written model's content hash.
+    ``replacing``: the content hash of the model the learner was read from there; when the folder now holds
+    another (a run saved over it meanwhile), nothing is written (ValueError), so that an update of the
+    older model does not silently replace the newer."""
     directory = check_model_destination(directory)
     arrays = {k: v.detach().cpu().numpy() for k, v in state["globals"].items()}
     # The loader refuses a tensor that is not finite: such a model is never written, so that a fit or an
@@ -145,6 +148,10 @@ def write_model(state: dict, directory: str | Path) -> Path:
     # land anywhere, and leaves the old model or the new one, plus files the next save removes.
     directory.mkdir(parents=True, exist_ok=True)  # to be locked
     with folder_lock(directory, exclusive=True), deferred_interrupts():
+        if replacing is not None and (now := _content_hash_there(directory)) not in (None, replacing):
+            raise ValueError(f"{directory}: not written: the model there changed after this one was read from it "
+                             f"(another run saved over it, content {now[:12]}); it is left as it is: load it again, "
+                             "or save to another folder")
         storage.write_atomically(directory / tensor_name, tensors, follow=False)
         # The folder is synced after each rename: after a power cut, model.json must not name tensors whose
         # rename was lost, nor the old tensors be gone while the old model.json is back.
@@ -152,7 +159,16 @@ def write_model(state: dict, directory: str | Path) -> Path:
         storage.write_atomically(directory / MODEL_JSON, meta_bytes, follow=False)  # the commit
         _sync_folder(directory)
         _remove_leftovers(directory, keep=tensor_name)
-    return directory
+    return directory, meta[CONTENT_HASH]
+
+
+def _content_hash_there(directory: Path) -> str | None:
+    """The content hash the model.json in ``directory`` records; None where there is none to read (no
+    model, or one this version cannot read: check_model_destination has said whether it may be replaced)."""
+    try:
+        return _read_json(directory, any_version=True).get(CONTENT_HASH)
+    except (ModelFormatError, OSError):
+        return None
 
 
 @contextlib.contextmanager
@@ -241,6 +257,8 @@ def _read_model(directory: Path, from_state_dict: Callable[[dict], T]) -> T:
         fields = {k: v for k, v in meta.items()
                   if k not in ("format", "version", "globals_file", "globals_sha256", CONTENT_HASH)}
         learner = from_state_dict(fields, where=f"{directory / MODEL_JSON}")
+        # where it was read from, and which model that was: a save back there replaces it only if it is still there
+        learner.read_from = (directory.resolve(), meta[CONTENT_HASH])
         tensor_name = meta["globals_file"]
         if not isinstance(tensor_name, str) or not _TENSOR_FILE.fullmatch(tensor_name):
             raise ValueError(f"globals_file is {tensor_name!r}; expected globals-<16 hex digits>.npz")

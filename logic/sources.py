@@ -91,7 +91,7 @@ def library_source(path: str | Path) -> Source:
     own = Path(str(files("groundlang.logic"))).resolve()
     try:
         relative = Path(path).resolve().relative_to(own)
-    except (ValueError, OSError):
+    except (ValueError, OSError, RuntimeError):  # RuntimeError: a symlink loop (Python 3.11's resolve); read, it says so
         return file_source(path)
     return package_source(relative.as_posix()) if Path(path).is_file() else file_source(path)
 

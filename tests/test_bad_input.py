@@ -849,3 +849,14 @@ def test_a_state_file_that_is_a_symbolic_link_loop_is_said_to_loop(command, tmp_
     loop.symlink_to(loop)
     assert main(["--quiet", command, str(loop)]) == 2
     assert capsys.readouterr().err == f"groundlang {command}: error: {loop}: Too many levels of symbolic links\n"
+
+
+@pytest.mark.parametrize("command", [["domain"], ["tasks", str(example_corpus_path() / "novel_a.state"),
+                                                   "--palette", "sokoban"]])
+def test_a_library_that_is_a_symbolic_link_loop_is_said_to_loop(command, tmp_path, capsys):
+    """Path.resolve raises RuntimeError for a loop (Python 3.11), which the library reader took for a bug."""
+    first, second = tmp_path / "a.lp", tmp_path / "b.lp"
+    first.symlink_to(second)
+    second.symlink_to(first)
+    assert main(["--quiet", *command, "--library", str(first)]) == 2
+    assert capsys.readouterr().err == f"groundlang {command[0]}: error: {first}: Too many levels of symbolic links\n"

@@ -54,6 +54,42 @@ def _same_globals(a, b) -> bool:
 
 
 # ----------------------------------------------------------------- all-or-nothing saving
+def test_a_model_saved_over_since_it_was_loaded_is_not_replaced_by_the_loaded_one(learners, tmp_path, capsys,
+                                                                                   monkeypatch):
+    """`follow --ask --learn` loads a model, waits for the answer, then saves: a model another run saved
+    there meanwhile was silently replaced by an update of the older one. Now the save is refused in one
+    line and the newer model stays."""
+    old, new = learners
+    folder = old.save(tmp_path / "m")
+    loaded = Learner.load(folder)
+    loaded.save(folder)  # its own folder, unchanged since: saved over, as before
+    loaded.save(folder)  # and again (it remembers what it wrote there)
+    Learner.load(folder).save(tmp_path / "elsewhere")
+    new.save(folder)  # another run saves a newer model there
+    newer = (folder / "model.json").read_bytes()
+    with pytest.raises(ValueError, match=r"m: not written: the model there changed after this one was read from it"):
+        loaded.save(folder)
+    assert (folder / "model.json").read_bytes() == newer and _same_globals(Learner.load(folder), new)
+    assert loaded.save(tmp_path / "other") == tmp_path / "other"  # elsewhere it may go
+    # from the CLI: the answer is not learned, the newer model is kept, one line says why
+    import groundlang.commands.follow as follow_command
+
+    model = old.save(tmp_path / "cli")
+    real_ask = follow_command._ask
+
+    def answer_after_another_save(*args, **kwargs):
+        new.save(model)  # another run, while the question waits on the terminal
+        return real_ask(*args, **kwargs)
+
+    monkeypatch.setattr(follow_command, "_ask", answer_after_another_save)
+    monkeypatch.setattr(sys, "stdin", io.StringIO("1\n"))
+    code = main(["--quiet", "follow", "take the star to the red room", "--env", str(EXAMPLES / "novel_a.state"),
+                 "--model", str(model), "--ask", "--learn", "--min-confidence", "0.9999"])
+    err = capsys.readouterr().err
+    assert code == 2 and "the model there changed after this one was read from it" in err and len(err.splitlines()) == 1
+    assert _same_globals(Learner.load(model), new)
+
+
 @pytest.mark.parametrize("failing_write", [1, 2, 3])  # fsyncs: 1 the tensors, 2 the folder, 3 model.json
 def test_a_full_disk_keeps_the_previous_model_and_names_the_file(learners, tmp_path, monkeypatch, failing_write):
     old, new = learners
