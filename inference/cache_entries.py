@@ -12,13 +12,12 @@ bounded: counts and the first damaged entry, not a list of them.
 
 from __future__ import annotations
 
-import errno
 import json
 import logging
 import os
 from pathlib import Path
 
-from groundlang.inference.likelihoods import DamagedEntry, cache_directory, read_entry_json
+from groundlang.inference.likelihoods import DamagedEntry, cache_directory, only_the_entry_lost, read_entry_json
 from groundlang.logic.storage import write_atomically
 
 __all__ = ["EntryFolder"]
@@ -78,8 +77,8 @@ class EntryFolder:
             write_atomically(self.path(key), json.dumps({"key": key, **entry}, separators=(",", ":")),
                              durable=False, follow=False)
         except OSError as exc:
-            if exc.errno in (errno.EISDIR, errno.ENOTDIR) and self.root.is_dir():
-                return  # this entry's own path is taken by a folder (counted as damaged when read): only it is lost
+            if only_the_entry_lost(exc, self.path(key), self.root / self.kind):
+                return  # counted as damaged when read: only it is lost
             self.logger.warning("%s cache %s cannot be written (%s: %s); going on without writing to it", self.kind,
                                 self.root, exc.filename or self.root, exc.strerror or exc)
             self._writable = False

@@ -125,6 +125,19 @@ def _entry_path(root: Path, key: str) -> Path:
     return root / BEHAVIOUR_FOLDER / key[:2] / f"{key}.json"
 
 
+def only_the_entry_lost(exc: OSError, path: Path, kind_folder: Path) -> bool:
+    """Whether a failed write of the entry ``path`` loses that entry (and its two-letter folder's) alone:
+    something else stands at its path or at its folder's (a folder, a file), or that folder alone cannot be
+    written. Not when the kind's folder (``behaviour``, ``evidence``) is not a writable folder, nor for any
+    other error (a full disk, a read-only cache): then nothing more can be written this run."""
+    if not kind_folder.is_dir():
+        return False
+    if exc.errno in (errno.EISDIR, errno.ENOTDIR, errno.EEXIST):
+        return True
+    return exc.errno in (errno.EACCES, errno.EPERM) and os.access(kind_folder, os.W_OK | os.X_OK) \
+        and path.parent != kind_folder
+
+
 def _checksum(key: str, value_text: str) -> str:
     """Over the key and the value's text: a sign or digit changed in the file no longer matches."""
     return hashlib.sha256(f"{key} {value_text}".encode()).hexdigest()[:16]
@@ -318,8 +331,8 @@ def _store(root, key: str, value: float, goal) -> Path | None:
         _write_entry(_entry_path(root, key), key, value, goal)
         return root
     except OSError as exc:
-        if exc.errno in (errno.EISDIR, errno.ENOTDIR) and Path(root).is_dir():
-            return root  # this entry's own path is taken by a folder (counted as damaged when read): only it is lost
+        if only_the_entry_lost(exc, _entry_path(root, key), Path(root) / BEHAVIOUR_FOLDER):
+            return root  # counted as damaged when read: only it is lost
         logger.warning("behaviour cache %s cannot be written (%s: %s); going on without writing "
                        "to it", root, exc.filename or root, exc.strerror or exc)
         return None

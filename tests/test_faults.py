@@ -115,6 +115,31 @@ def test_an_unwritable_cache_is_one_warning_and_the_run_goes_on(instances, tmp_p
         np.testing.assert_array_equal(a, b)
 
 
+def test_a_file_in_place_of_one_entry_folder_loses_only_its_entries(instances, tmp_path, caplog):
+    """A stray file where a two-letter folder goes stopped every write to the cache, on every run; now the
+    entries that belong there are lost (said as damaged when read), the others written."""
+    subset = instances[:8]
+    goals = [_goals(i) for i in subset]
+    behaviour_likelihood_table(subset, goals, cache_dir=tmp_path / "full")
+    entries = sorted((tmp_path / "full" / "behaviour").glob("*/*.json"))
+    shard = entries[0].parent.name
+    (tmp_path / "c" / "behaviour").mkdir(parents=True)
+    (tmp_path / "c" / "behaviour" / shard).write_text("stray")
+    with caplog.at_level(logging.WARNING, logger=LOG):
+        behaviour_likelihood_table(subset, goals, cache_dir=tmp_path / "c")
+    written = sorted(p.name for p in (tmp_path / "c" / "behaviour").glob("*/*.json"))
+    assert written == sorted(p.name for p in entries if p.parent.name != shard) and written
+    assert not any("cannot be written" in r.getMessage() for r in caplog.records)
+    # the kind's folder itself a file: nothing can be written there, said once
+    caplog.clear()
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "behaviour").write_text("stray")
+    with caplog.at_level(logging.WARNING, logger=LOG):
+        behaviour_likelihood_table(subset, goals, cache_dir=tmp_path / "d")
+    said = [r.getMessage() for r in caplog.records if "cannot be written" in r.getMessage()]
+    assert len(said) == 1 and "going on without writing to it" in said[0]
+
+
 def test_cli_train_with_a_full_cache_folder_trains_and_warns(tmp_path, monkeypatch, capsys, caplog):
     from groundlang.logic import storage
 
