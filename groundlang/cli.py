@@ -16,7 +16,8 @@ import os
 import sys
 import time
 
-from groundlang.interrupt import cache_entry_count, close_progress_bars, terminate_as_interrupt, what_was_kept
+from groundlang.interrupt import (HeldInterrupt, cache_entry_count, close_progress_bars, terminate_as_interrupt,
+                                  what_was_kept)
 
 # Order is the order of ``groundlang --help``.
 COMMANDS = ["demo", "check", "show", "parse", "domain", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate", "ablate"]
@@ -87,9 +88,10 @@ def main(argv: list[str] | None = None) -> int:
         message = " ".join(_said(exc).splitlines())  # one line, whatever the library said
         print(f"groundlang {args.command}: error: {message}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         close_progress_bars()
-        kept = what_was_kept(args, started, uses_cache=caching, cache_entries_before=cache_entries_before)
+        kept = what_was_kept(args, started, uses_cache=caching, cache_entries_before=cache_entries_before,
+                             held=isinstance(exc, HeldInterrupt))
         print(f"groundlang {args.command}: interrupted; {kept}", file=sys.stderr)
         return 130
 

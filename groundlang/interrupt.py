@@ -24,7 +24,11 @@ import threading
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["terminate_as_interrupt", "deferred_interrupts", "what_was_kept", "close_progress_bars"]
+__all__ = ["terminate_as_interrupt", "deferred_interrupts", "HeldInterrupt", "what_was_kept", "close_progress_bars"]
+
+
+class HeldInterrupt(KeyboardInterrupt):
+    """An interruption :func:`deferred_interrupts` held until its block (a save) had finished."""
 
 _SIGNALS = tuple(s for s in (signal.SIGINT, getattr(signal, "SIGTERM", None)) if s is not None)
 
@@ -77,7 +81,7 @@ def deferred_interrupts() -> Iterator[None]:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     if received:
-        raise KeyboardInterrupt(signal.Signals(received[0]).name)
+        raise HeldInterrupt(signal.Signals(received[0]).name)
 
 
 def close_progress_bars() -> None:
@@ -88,7 +92,7 @@ def close_progress_bars() -> None:
             bar.close()
 
 
-def _describe_output(path: Path, what: str, started: float) -> str:
+def _describe_output(path: Path, what: str, started: float, held: bool = False) -> str:
     stamp = path / "model.json" if path.is_dir() else path
     if not path.exists():
         return f"nothing written to {path}"
@@ -96,6 +100,8 @@ def _describe_output(path: Path, what: str, started: float) -> str:
         return f"{path} holds no complete {what}"
     if stamp.stat().st_mtime < started:
         return f"{path} left as it was (the previous complete {what})"
+    if held:  # the signal came while it was being written, and waited for the write to finish
+        return f"the {what} in {path} is this run's, written whole (the interruption came while it was saved)"
     return f"the {what} in {path} was complete before the interruption"
 
 
@@ -117,7 +123,8 @@ _OUTPUTS = (("output", "output"), ("json", "result"), ("out", "picture"))
 _OUTPUT_KIND = {"train": "model", "discover": "task library"}
 
 
-def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: int | None = 0) -> str:
+def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: int | None = 0,
+                  held: bool = False) -> str:
     """One line saying what an interrupted command left behind.
 
     ``started`` is ``time.time()`` at the start; ``cache_entries_before`` is
@@ -131,10 +138,10 @@ def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: 
         if isinstance(value, (str, Path)):
             if attr == "output":
                 what = _OUTPUT_KIND.get(getattr(args, "command", None), what)
-            parts.append(_describe_output(Path(value), what, started))
+            parts.append(_describe_output(Path(value), what, started, held))
     if getattr(args, "learn", False) is True and isinstance(getattr(args, "model", None), (str, Path)):
         # follow --learn saves what it learned over its --model: an output as much as -o is
-        parts.append(_describe_output(Path(args.model), "model", started))
+        parts.append(_describe_output(Path(args.model), "model", started, held))
     # Only when the cache's module was imported whole: an interrupt during its import (torch's takes seconds)
     # leaves torch half-initialised, and importing it again can crash the process in native code. A failed
     # import is not in sys.modules: no entry was written. Nor before the entries at the start were counted

@@ -170,6 +170,37 @@ def test_what_follow_learn_kept_names_its_model_and_no_negative_count(tmp_path):
         f"{tmp_path / 'model'} left as it was (the previous complete model)")
     os.utime(tmp_path / "model" / "model.json", (start + 1, start + 1))
     assert what_was_kept(Args, start, uses_cache=False) == f"the model in {tmp_path / 'model'} was complete before the interruption"
+    assert what_was_kept(Args, start, uses_cache=False, held=True) == (
+        f"the model in {tmp_path / 'model'} is this run's, written whole (the interruption came while it was saved)")
+
+
+def test_an_interruption_during_the_save_waits_for_it_and_says_so(tmp_path, monkeypatch, capsys):
+    """Ctrl-C while the model's files are renamed into place: the save finishes (all or nothing), then the
+    run stops with 130, and the line says the model there is this run's, not that it came before."""
+    import signal
+
+    from groundlang import model_io
+    from groundlang.cli import main
+    from groundlang.corpus import example_corpus_path
+
+    real = model_io.storage.write_atomically
+
+    def interrupted_write(path, data, **options):
+        if Path(path).name == "model.json":
+            os.kill(os.getpid(), signal.SIGINT)  # held by the save's deferred_interrupts
+        return real(path, data, **options)
+
+    monkeypatch.setattr(model_io.storage, "write_atomically", interrupted_write)
+    model = tmp_path / "model"
+    code = main(["--quiet", "train", str(example_corpus_path()), "--palette", "sokoban", "-o", str(model),
+                 "--cache-dir", str(tmp_path / "cache")])
+    err = capsys.readouterr().err
+    assert code == 130 and err.startswith(f"groundlang train: interrupted; the model in {model} is this run's, "
+                                          "written whole (the interruption came while it was saved)"), err
+    monkeypatch.undo()
+    from groundlang.learner import Learner
+
+    assert Learner.load(model).vocab is not None
 
 
 # ----------------------------------------------------------------- real processes
