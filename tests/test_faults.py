@@ -355,6 +355,25 @@ def test_the_groundings_of_a_layout_are_read_within_the_time_limit(monkeypatch):
     assert candidate_tasks(state, default_library())  # the same layout, read in time
 
 
+def test_follow_takes_the_time_limit_its_timeout_message_names(learner, tmp_path, capsys):
+    """A layout too large to ground in time: the line says to raise --time-limit, which follow (like train
+    and evaluate) now takes; it was "unrecognized arguments" there."""
+    from groundlang.cli import main
+
+    model = learner.save(tmp_path / "m")
+    huge = tmp_path / "huge.state"
+    huge.write_text("room,5,0,300,300,0 agent,2,2\n")
+    code = main(["follow", "go to the green room", "--env", str(huge), "--palette", "sokoban", "--model", str(model),
+                 "--time-limit", "0.5"])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "did not finish within 0.5 s" in err and "raise the time limit, --time-limit" in err
+    for command in ("train", "evaluate"):  # the same option, parsed
+        with pytest.raises(SystemExit) as stopped:
+            main([command, str(tmp_path / "absent"), "--time-limit", "0"])
+        assert stopped.value.code == 2 and "--time-limit: expected seconds above 0" in capsys.readouterr().err
+
+
 def test_a_grounding_left_running_past_the_limit_does_not_hold_the_command_up(tmp_path):
     """A 1000 x 1000 room grounds for longer than a one-second limit, and clingo cannot be stopped: the
     command says so in one line and ends at once (it crashed in clingo's native code, or hung, as the

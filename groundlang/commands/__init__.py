@@ -154,12 +154,29 @@ def json_bytes(data) -> bytes:
 
 
 def library_given(args: argparse.Namespace):
-    """The TaskLibrary of the ``--library`` files given, or None (the command's default) without one."""
-    if not args.library:
+    """The TaskLibrary of the ``--library`` files given, or None (the command's default) without one; with
+    ``--time-limit``, the package's tasks when none is given, so that the limit has a library to hold."""
+    time_limit = getattr(args, "time_limit", None)
+    if not args.library and time_limit is None:
         return None
     from groundlang.logic.tasks import TaskLibrary
 
-    return TaskLibrary.load(args.library)
+    return with_time_limit(TaskLibrary.load(args.library or None), args)
+
+
+def add_time_limit_option(parser) -> None:
+    """``--time-limit SECONDS`` for a command that grounds the library in layouts it reads (train, follow,
+    evaluate): what the message of a grounding that did not finish in time tells the user to raise."""
+    parser.add_argument("--time-limit", type=positive_seconds, default=None, metavar="SECONDS",
+                        help="stop grounding/solving the task library in a layout after this long (default 10; "
+                             "raise it for a very large layout)")
+
+
+def with_time_limit(library, args: argparse.Namespace):
+    """``library`` with ``args.time_limit`` as its grounding time limit where one was given."""
+    if getattr(args, "time_limit", None) is not None:
+        library.time_limit = args.time_limit
+    return library
 
 
 def add_lexicon_option(parser) -> None:

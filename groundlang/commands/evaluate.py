@@ -8,7 +8,7 @@ from pathlib import Path
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
                                  add_language_model_settings, add_lexicon_option, fraction, inputs_read, json_bytes,
                                  language_model_settings, library_given, library_path, open_fraction, output_path,
-                                 positive_int, require_palette)
+                                 positive_int, require_palette, add_time_limit_option, with_time_limit)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
@@ -47,6 +47,7 @@ def register(subparsers) -> None:
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES), help="language model: bow, ibm2 or parse (default parse)")
     add_language_model_settings(p)
     add_lexicon_option(p)
+    add_time_limit_option(p)
     add_em_acceleration_option(p)
     p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes; no more than the folds or the cores)")
     p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
@@ -105,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
     check_label_prefixes(corpus, labels)  # as check does: labels of another corpus are refused, not ignored
     novel = read_novel_states(args.novel_envs, args.palette) if args.novel_envs else []
     options = {"em_acceleration": args.em_acceleration, **({"lexicon": words} if words else {})}
-    if args.library:  # trained, followed and scored with the user's PFs and tasks, as train would
+    if args.library or args.time_limit is not None:  # trained, followed and scored with the user's PFs and tasks
         options["library"] = library_given(args)
     result = evaluate(
         corpus, labels, protocol=args.protocol or "loo", language_model=args.language_model,
@@ -163,7 +164,7 @@ def run_pairs(args: argparse.Namespace) -> int:
                          "end-state evidence across a command's layouts; pass --layouts separate too")
     palette = args.palette or DEFAULT_PALETTE
     words = extra_words(args.lexicon)
-    library = default_library(args.library)
+    library = with_time_limit(default_library(args.library), args)
     any_name = args.format == "williams2018"  # said: a file is read whatever its name
     train = read_pair_corpus(args.corpus, palette, any_name).commands
     if args.tuning and args.holdout is None:

@@ -12,8 +12,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import (PALETTE_HELP, add_lexicon_option, fraction, json_text, logged_by_file_names, output_path,
-                                 positive_int)
+from groundlang.commands import (PALETTE_HELP, add_lexicon_option, add_time_limit_option, fraction, json_text,
+                                 logged_by_file_names, output_path, positive_int, with_time_limit)
 
 # Exit code of a command that asked instead of acting (documented in the README).
 ASKED = 3
@@ -59,6 +59,7 @@ def register(subparsers) -> None:
                         "is left as it was)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text (default: text)")
     add_lexicon_option(p)
+    add_time_limit_option(p)
     p.set_defaults(func=run)
 
 
@@ -146,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
         check_picture_destination(args.out)
     plan_once()  # one command: a compiler pays only where one solve is worth it
     learner = Learner.load(args.model)
+    with_time_limit(learner.library, args)  # the library saved in the model, grounded in the layout of --env
     if args.learn:  # the model is saved after the answer: a folder that cannot take it is refused before asking
         from groundlang.model_io import check_model_destination
 

@@ -10,7 +10,7 @@ from groundlang.corpus import read_corpus
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
                                  add_language_model_settings, add_lexicon_option, cache_option, check_cache_outside,
                                  language_model_settings, library_given, library_path, output_path, require_palette,
-                                 seed)
+                                 seed, add_time_limit_option, with_time_limit)
 
 
 def register(subparsers) -> None:
@@ -22,6 +22,7 @@ def register(subparsers) -> None:
     p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES), help="language model: bow, ibm2 or parse (default parse)")
     add_language_model_settings(p)
     add_lexicon_option(p)
+    add_time_limit_option(p)
     p.add_argument("--library", metavar="LP", action="append", type=library_path, help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the "
                    "williams2018 domain)" + LIBRARY_NAMES)
     p.add_argument("--format", choices=("commands-to-tasks", "williams2018"),
@@ -77,7 +78,7 @@ def _pairs(args: argparse.Namespace):
     from groundlang.bdm_check import default_library
     from groundlang.pair_corpus import read_pair_corpus, training_instances
 
-    library = default_library(args.library)
+    library = with_time_limit(default_library(args.library), args)
     commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE, args.format == "williams2018").commands
     made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent, cache_dir=cache_option(args))
     skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
