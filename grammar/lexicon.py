@@ -64,10 +64,13 @@ class Lexicon:
     given as data. Raises LexiconError for an unknown category or a malformed entry.
     """
 
-    def __init__(self, entries: Mapping[str, Iterable[str]] | None = None):
+    def __init__(self, entries: Mapping[str, Iterable[str]] | None = None, *, _checked: bool = False):
         merged: dict[str, dict[str, None]] = {}  # in the order given, once each: a conflict cites the first
         for category, words in (entries or {}).items():
-            merged.setdefault(category, {}).update(dict.fromkeys(check_words(category, words, "word list")))
+            # words :meth:`extend` has checked and normalised are not checked again (a word file of 10^5
+            # nouns was checked five times over while a model loaded)
+            merged.setdefault(category, {}).update(dict.fromkeys(
+                tuple(words) if _checked else check_words(category, words, "word list")))
         said = SynonymForms()
         for pair in merged.get("SYNONYM", ()):
             said.add(pair, None, "in the words before")
@@ -155,7 +158,7 @@ class Lexicon:
         merged = {c: list(ws) for c, ws in self.entries.items()}
         for category, words in words_by_category.items():
             merged.setdefault(category, []).extend(check_words(category, words, "word list"))
-        return Lexicon(merged)
+        return Lexicon(merged, _checked=True)
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Lexicon) and self.entries == other.entries

@@ -66,7 +66,8 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
         raise LexiconError(f"{where}: the words of {category} must be a list of words, not one string")
     out = []
     for word in words:
-        if not isinstance(word, str) or not entry(word):
+        said = entry(word) if isinstance(word, str) else ""
+        if not said:
             raise LexiconError(f"{where}: {category} has an empty or non-text word {word!r}")
         if category in _PAIRED:
             form, sep, lemma = word.partition("=")
@@ -89,13 +90,13 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
             out.append(f"{entry(form)}={entry(lemma)}")
         elif "=" in word:
             raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR and SYNONYM pair words)")
-        elif not all(_WORD.fullmatch(part) for part in entry(word).split("_")):
+        elif not all(_WORD.fullmatch(part) for part in said.split("_")):
             # the tokeniser splits at any other character, so such an entry would never be read
             raise LexiconError(f"{where}: {category} word {word!r} is not a word the tokeniser reads (letters, "
                                "digits and apostrophes, or one sign such as &; '_', '-' or a space join the words of "
                                "a multiword entry)")
         else:
-            out.append(entry(word))
+            out.append(said)
     return tuple(out)
 
 
