@@ -19,7 +19,7 @@ import time
 from groundlang.logic.groundings import enumerate_groundings
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.geometry import cell_tables, state_facts
-from groundlang.model.pf_tables import pf_tables
+from groundlang.model.pf_tables import _tables
 from groundlang.model.world import Agent, Door, Layout, Room, State, Toy, get_palette
 
 
@@ -68,12 +68,12 @@ def main() -> None:
         constraints = sum(len(c) for _, c in found)
         ms = median_ms(lambda: enumerate_groundings(library, facts), args.repeats)
         cells = median_ms(lambda: cell_tables.__wrapped__(state.layout), args.repeats)
-        tables = median_ms(lambda: pf_tables.__wrapped__(state.layout, library.tabulation_program), args.repeats)
+        tables = median_ms(lambda: _tables.__wrapped__(state.layout, library.tabulation_program, library.time_limit), args.repeats)
         print(f"{num_toys} toy(s): {len(found):3d} groundings, {constraints:5d} binding constraints: "
               f"enumeration {ms} ms; cell tables {cells} ms; PF tables {tables} ms")
     big = large_state()
     cells = median_ms(lambda: cell_tables.__wrapped__(big.layout), max(3, args.repeats // 4))
-    tables = median_ms(lambda: pf_tables.__wrapped__(big.layout, library.tabulation_program), max(3, args.repeats // 4))
+    tables = median_ms(lambda: _tables.__wrapped__(big.layout, library.tabulation_program, library.time_limit), max(3, args.repeats // 4))
     print(f"16x16, 3 rooms, 3 toys ({int(big.layout.walkable.sum())} walkable cells): cell tables {cells} ms; "
           f"PF tables {tables} ms")
     # The same tasks as a user file: solved in a child process that can be killed at the time limit.
@@ -82,7 +82,7 @@ def main() -> None:
     assert enumerate_groundings(user, facts) == enumerate_groundings(library, facts)
     ms = median_ms(lambda: enumerate_groundings(user, facts), max(3, args.repeats // 4))
     layout = corpus_state(1).layout
-    tables = median_ms(lambda: pf_tables.__wrapped__(layout, user.tabulation_program), max(3, args.repeats // 4))
+    tables = median_ms(lambda: _tables.__wrapped__(layout, user.tabulation_program, user.time_limit), max(3, args.repeats // 4))
     print(f"1 toy, same library from a user file (isolated child process): enumeration {ms} ms; PF tables {tables} ms")
     # Naming every place of a parse in Python costs ~0.3 ms a statement; ground facts are left as clingo reads them.
     from groundlang.logic.sources import Source, _parsed, _relocate

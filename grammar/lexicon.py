@@ -67,8 +67,8 @@ class Lexicon:
     def __init__(self, entries: Mapping[str, Iterable[str]] | None = None, *, _checked: bool = False):
         merged: dict[str, dict[str, None]] = {}  # in the order given, once each: a conflict cites the first
         for category, words in (entries or {}).items():
-            # words :meth:`extend` has checked and normalised are not checked again (a word file of 10^5
-            # nouns was checked five times over while a model loaded)
+            # words :meth:`extend` has checked and normalised are not checked again: checking is most of the
+            # cost of loading a model whose word file is large, and each extension would repeat it
             merged.setdefault(category, {}).update(dict.fromkeys(
                 tuple(words) if _checked else check_words(category, words, "word list")))
         said = SynonymForms()

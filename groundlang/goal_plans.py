@@ -19,7 +19,7 @@ from groundlang.inference.planning import TaskSettings, solve_task
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.features import goal_mask
-from groundlang.model.pf_tables import pf_tables
+from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.relevance import exact_fits, placement_sample, pushes_scenery, state_space_for
 from groundlang.model.statespace import StateSpace
 from groundlang.model.world import State
@@ -37,7 +37,7 @@ _MASKS_KEPT = 2
 def planning_space(state: State, goal: tuple[Atom, ...] | None, library: TaskLibrary) -> StateSpace:
     """The exact state space where it fits; else, to plan for ``goal``, its relevance abstraction, and
     to compare goals (``goal`` None), a sample of placements."""
-    tables = pf_tables(state.layout, library.tabulation_program)
+    tables = library_pf_tables(state.layout, library)
     return (placement_sample(state) if not exact_fits(state) and goal is None
             else state_space_for(state, goal or (), tables=tables))
 
@@ -46,7 +46,7 @@ def plan_for_goal(space: StateSpace, state: State, goal: tuple[Atom, ...], libra
                   settings: TaskSettings, max_steps: int) -> tuple[list, list, bool, str]:
     """Plan for ``goal`` in ``space`` (built from ``state``) and act: ``(states, actions, reached, reason)``,
     at most ``max_steps`` moves, stopping before a move that would push a toy the space holds still."""
-    return plan_for_states(space, goal_mask(space, goal, pf_tables(state.layout, library.tabulation_program)),
+    return plan_for_states(space, goal_mask(space, goal, library_pf_tables(state.layout, library)),
                            settings, max_steps)
 
 

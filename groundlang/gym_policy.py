@@ -163,7 +163,7 @@ def policy(learner, command: str, state) -> CommandPolicy:
     """
     from groundlang.inference.planning import solve_task
     from groundlang.model.features import goal_mask
-    from groundlang.model.pf_tables import pf_tables
+    from groundlang.model.pf_tables import library_pf_tables
     from groundlang.model.relevance import state_space_for
 
     from groundlang.learner import Learner
@@ -180,7 +180,7 @@ def policy(learner, command: str, state) -> CommandPolicy:
         space, _, _, mask, goal = ending
     else:
         goal = post.best_goal
-        tables = pf_tables(state.layout, learner.library.tabulation_program)
+        tables = library_pf_tables(state.layout, learner.library)
         space = state_space_for(state, goal, tables=tables)
         mask = goal_mask(space, goal, tables)
     solved = solve_task(space.next_state, mask, learner.settings)

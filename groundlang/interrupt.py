@@ -80,8 +80,8 @@ def deferred_interrupts() -> Iterator[None]:
         _deferring.pop()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-    if received:
-        raise HeldInterrupt(signal.Signals(received[0]).name)
+        if received:  # also when the block failed (a save refused): the user asked to stop, and is told so
+            raise HeldInterrupt(signal.Signals(received[0]).name)
 
 
 def close_progress_bars() -> None:

@@ -103,8 +103,9 @@ class Learner:
         self.globals: dict[str, torch.Tensor] | None = None
         self.fit_result: FitResult | None = None
         self.habits: EndHabits | None = None  # what demonstrations left true besides their goals
-        # (folder, content hash) of the model last read or written (model_io): save checks it is still there
-        self.read_from: tuple[Path, str] | None = None
+        # folder -> the content hash of the model this learner read or wrote there (model_io): a save there
+        # checks that it is still there
+        self.models_seen: dict[Path, str] = {}
         self._interp_cache: dict[tuple[State, bool], list[Interpretation]] = {}
         self._world = WorldPlans(self.library, self.settings)  # spaces and plans: the world's, not the words'
 
@@ -372,17 +373,16 @@ class Learner:
         return learner_from_state(cls, state, where)
 
     def save(self, directory: str | Path) -> Path:
-        """Write the model to ``directory`` as JSON and tensors (see :mod:`groundlang.model_io`). Over the
-        folder it was loaded from (or last saved to), only if that still holds the model it read or wrote
-        there: ValueError, and nothing written, when another run saved over it meanwhile."""
+        """Write the model to ``directory`` as JSON and tensors (see :mod:`groundlang.model_io`). Over a
+        folder this learner read a model from or saved one to, only if that still holds the model it read or
+        wrote there: ValueError, and nothing written, when another run saved over it meanwhile."""
         directory = as_path(directory, "Learner.save: directory")
-        source, content = self.read_from or (None, None)
         try:
             here = directory.resolve()
         except (OSError, RuntimeError):  # a symlink loop: write_model says what is wrong with the folder
             here = None
-        written, content = write_model(self.state_dict(), directory, replacing=content if source == here else None)
-        self.read_from = (written.resolve(), content)
+        written, content = write_model(self.state_dict(), directory, replacing=self.models_seen.get(here))
+        self.models_seen[written.resolve()] = content
         return written
 
     @classmethod

@@ -161,10 +161,11 @@ def _check_drawing(p: dict) -> None:
     text}, "rgb": {colour: name}}, every key and value a string."""
     drawing = p["drawing"]
     if (not isinstance(drawing, dict) or set(drawing) - {"glyph", "rgb"}
-            or not all(isinstance(d, dict) and all(isinstance(k, str) and isinstance(v, str) for k, v in d.items())
+            or not all(isinstance(d, dict) and all(isinstance(k, str) and isinstance(v, str) and v.strip()
+                                                   for k, v in d.items())
                        for d in drawing.values())):
         raise ValueError(f"palette {p['name']!r}: drawing must be {{\"glyph\": {{shape: text}}, \"rgb\": "
-                         "{colour: name}}, every key and value a string")
+                         "{colour: name}}, every key a string and every value a string that is not blank")
 
 
 def _check_names(palette: str, field: str, values) -> None:

@@ -258,7 +258,7 @@ def _read_model(directory: Path, from_state_dict: Callable[[dict], T]) -> T:
                   if k not in ("format", "version", "globals_file", "globals_sha256", CONTENT_HASH)}
         learner = from_state_dict(fields, where=f"{directory / MODEL_JSON}")
         # where it was read from, and which model that was: a save back there replaces it only if it is still there
-        learner.read_from = (directory.resolve(), meta[CONTENT_HASH])
+        learner.models_seen[directory.resolve()] = meta[CONTENT_HASH]
         tensor_name = meta["globals_file"]
         if not isinstance(tensor_name, str) or not _TENSOR_FILE.fullmatch(tensor_name):
             raise ValueError(f"globals_file is {tensor_name!r}; expected globals-<16 hex digits>.npz")

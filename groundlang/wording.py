@@ -104,10 +104,16 @@ def object_phrase(obj: str, state: State, library: TaskLibrary) -> str:
     return f"{plain} {obj}"
 
 
+def _filled(said: str, words: Sequence[str]) -> str:
+    """A phrase/2 with places, ``{k}`` replaced by ``words[k - 1]`` (a place past them is left as written)."""
+    return _PLACE.sub(lambda m: words[int(m.group(1)) - 1] if 0 < int(m.group(1)) <= len(words) else m.group(0),
+                      said)
+
+
 def _atom_phrase(atom: Atom, state: State, library: TaskLibrary) -> str:
     said = library.phrases.get(atom.predicate)
     if said is not None and _PLACE.search(said):  # the library says how the atom reads (phrase/2)
-        return _PLACE.sub(lambda m: object_phrase(atom.args[int(m.group(1)) - 1], state, library), said)
+        return _filled(said, [object_phrase(a, state, library) for a in atom.args])
     words = _camel_words(atom.predicate)
     out, used = [], 0
     for word in words:
@@ -148,13 +154,13 @@ def _pf_meaning(d: PFDeclaration, classes: Sequence[str], said: str | None = Non
     """``roomIsRed`` -> "a room's colour is red"; ``agentInRoom`` -> "an agent in a room";
     ``doorWestOfAgent`` -> "a door west of the agent". Where the library says how the PF reads (``said``,
     its phrase/2), that is used: "{1} in a corner of {2}" -> "an agent in a corner of a room"; "large" for a
-    PF of one toy -> "a large toy" (a palette may store a size as a colour: the phrase says what it is)."""
+    PF of one toy -> "a large toy" (a palette may store a size as a colour: the phrase says what it is), and
+    a phrase of several words after the noun, as English puts them: "a toy east of where you stand"."""
     if said is not None:
         if _PLACE.search(said):
-            return _PLACE.sub(lambda m: _a(d.signature[int(m.group(1)) - 1])
-                              if 0 < int(m.group(1)) <= len(d.signature) else m.group(0), said)
+            return _filled(said, [_a(c) for c in d.signature])
         if len(d.signature) == 1:
-            return _a(f"{said} {d.signature[0]}")
+            return f"{_a(d.signature[0])} {said}" if len(said.split()) > 1 else _a(f"{said} {d.signature[0]}")
     value = _value(d.term)
     if value is not None and len(d.signature) == 1:
         # A member of a family declared over values (roomIs(C)): the PF class names what the value is of.
@@ -178,8 +184,7 @@ def _task_meaning(task: LiftedTask, phrases: Mapping[str, str]) -> str:
     for predicate, args in task.goal:
         said = phrases.get(predicate)
         if said is not None and _PLACE.search(said):
-            atoms.append(_PLACE.sub(lambda m: f"{cls.get(args[int(m.group(1)) - 1], '')} {args[int(m.group(1)) - 1]}"
-                                    .strip() if 0 < int(m.group(1)) <= len(args) else m.group(0), said))
+            atoms.append(_filled(said, [f"{cls.get(a, '')} {a}".strip() for a in args]))
             continue
         out, used = [], 0
         for word in _camel_words(predicate):

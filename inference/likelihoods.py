@@ -268,7 +268,7 @@ def behaviour_likelihood_table(
 
         bar = tqdm(total=solves, desc="behaviour likelihoods", unit="solve")
     for initial, by_goal in todo.items():
-        tables = pf_tables(initial.layout, program)
+        tables = pf_tables(initial.layout, program, *(() if library is None else (library.time_limit,)))
         if method == "exact" or (method == "auto" and exact_fits(initial)):
             for goal, entries in _exact_rows(initial, by_goal, instances, tables, settings):
                 for (i, k), value in entries:

@@ -27,7 +27,7 @@ import numpy as np
 from groundlang.inference.end_states import EndStateNoise, distances, end_state_log_likelihood
 from groundlang.logic.tasks import GroundedTask, TaskLibrary
 from groundlang.model.features import goal_mask
-from groundlang.model.pf_tables import pf_tables
+from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.relevance import abstract_space, exact_fits, relevant_toys
 from groundlang.model.statespace import enumerate_states
 from groundlang.model.tasks import candidate_tasks
@@ -64,7 +64,7 @@ class LayoutEvidence:
                  max_states: int | None = None):
         found = candidate_tasks(start, library)
         goals = list(dict.fromkeys(task.goal for task, _ in found))
-        tables = pf_tables(start.layout, library.tabulation_program)
+        tables = library_pf_tables(start.layout, library)
         space = _space(start, end, max_states)
         end_index = space.index_of(end)  # StateSpaceError when the end cannot be reached
         dist = distances(space)

@@ -219,12 +219,16 @@ def _declarations(program: Program, palette_facts: str, time_limit: float | None
     return _Declarations(signatures, order, {n: sum(c in movable for c in signatures[n]) for n in order})
 
 
-@lru_cache(maxsize=256)
 def pf_tables(layout: Layout, program: Program | None = None,
               time_limit: float | None = DEFAULT_TIME_LIMIT) -> PFTables:
-    """The PF tables of ``layout`` under ``program`` (default: the package's PFs); cached per pair.
+    """The PF tables of ``layout`` under ``program`` (default: the package's PFs), grounded within
+    ``time_limit`` seconds; cached per (layout, program, limit), however the arguments are written.
     Refused (TabulationError), before the layout is grounded, when a table would be too large."""
-    program = program or tabulation_program(())
+    return _tables(layout, program or tabulation_program(()), time_limit)
+
+
+@lru_cache(maxsize=256)
+def _tables(layout: Layout, program: Program, time_limit: float | None) -> PFTables:
     cells = int(layout.walkable.sum())
     if cells > MAX_TABULATED_CELLS:
         raise TabulationError(f"this layout has {cells:,} walkable cells; PFs are tabulated for at most "
@@ -308,8 +312,11 @@ def _asp_tuple(items: tuple[str, ...]) -> str:
 
 
 def library_pf_tables(layout: Layout, library=None) -> PFTables:
-    """The PF tables of ``layout`` under a TaskLibrary's PF rules (None: the package's PFs)."""
-    return pf_tables(layout, None if library is None else library.tabulation_program)
+    """The PF tables of ``layout`` under a TaskLibrary's PF rules (None: the package's PFs), within the
+    library's time limit."""
+    if library is None:
+        return pf_tables(layout)
+    return pf_tables(layout, library.tabulation_program, library.time_limit)
 
 
 def program_digest(program: Program) -> str | None:

@@ -368,6 +368,17 @@ def test_follow_takes_the_time_limit_its_timeout_message_names(learner, tmp_path
     err = capsys.readouterr().err
     assert code == 2 and len(err.splitlines()) == 1
     assert "did not finish within 0.5 s" in err and "raise the time limit, --time-limit" in err
+    # the limit holds for the PF tables too (they were always grounded within the default 10 s)
+    from groundlang.bdm import read_bdm
+    from groundlang.bdm_check import default_library
+    from groundlang.logic.program import AspTimeout
+    from groundlang.model.pf_tables import library_pf_tables
+
+    start = read_bdm(FIXTURES / "large" / "sixteen.bdm")[0].pairs[0].start
+    library = default_library()
+    library.time_limit = 0.001
+    with pytest.raises(AspTimeout, match=r"within 0.001 s"):
+        library_pf_tables(start.layout, library)
     for command in ("train", "evaluate"):  # the same option, parsed
         with pytest.raises(SystemExit) as stopped:
             main([command, str(tmp_path / "absent"), "--time-limit", "0"])

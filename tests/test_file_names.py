@@ -98,6 +98,25 @@ def test_log_lines_are_renamed_only_within_the_context_and_by_whole_names(caplog
             log.info("moving %s, %s; %s", "agent0", "block2", "block20")
         log.info("moving agent0, block2")
     assert [r.getMessage() for r in caplog.records] == ["moving robot, block3; block20", "moving agent0, block2"]
+    # a chain of renamings (block0 -> block1, block1 -> block2), read by two handlers: each name renamed once
+    second = logging.Handler()
+    seen = []
+    second.emit = lambda record: seen.append(record.msg)  # the text the filter left (a bad call: its format)
+    logging.getLogger().addHandler(second)
+    caplog.clear()
+    try:
+        with caplog.at_level(logging.INFO, logger="groundlang"):
+            with logged_by_file_names({"block0": "block1", "block1": "block2"}):
+                log.info("moving block0 then block1")
+    finally:
+        logging.getLogger().removeHandler(second)
+    assert seen[0] == "moving block1 then block2" and caplog.records[0].getMessage() == "moving block1 then block2"
+    assert second.filters == [] and all(not h.filters for h in logging.getLogger().handlers)
+    # a call whose arguments do not fit its format is left to logging (which says so and goes on), not raised
+    from groundlang.commands import _FileNames
+
+    bad = logging.LogRecord("groundlang", logging.INFO, __file__, 1, "block0 %d", ("x",), None)
+    assert _FileNames({"block0": "block1"}).filter(bad) is True and bad.msg == "block0 %d"
 
 
 def test_tasks_say_which_objects_they_renumbered_and_show_draws_the_files_names(tmp_path):

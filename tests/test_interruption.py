@@ -402,3 +402,19 @@ def test_a_fold_worker_dies_with_its_parent(tmp_path):
     else:
         os.kill(worker, signal.SIGKILL)
         pytest.fail("the worker outlived its parent")
+
+
+def test_an_interruption_held_over_a_block_that_failed_is_still_an_interruption():
+    """A save refused (a ValueError) while a Ctrl-C waited: the run stops as interrupted (130), not as
+    an error (2) that drops the user's Ctrl-C."""
+    import signal
+
+    import pytest
+
+    from groundlang.interrupt import HeldInterrupt, deferred_interrupts
+
+    with pytest.raises(HeldInterrupt) as stopped:
+        with deferred_interrupts():
+            os.kill(os.getpid(), signal.SIGINT)
+            raise ValueError("not written")
+    assert isinstance(stopped.value.__context__, ValueError)

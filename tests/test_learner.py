@@ -324,14 +324,19 @@ def test_lexicon_says_which_word_a_synonym_is_read_as(tmp_path, capsys):
     """A word file's synonym is read as its word: asked for "crimson", the table's row says "crimson = red"
     and the JSON is keyed as asked, with red's meanings."""
     words = tmp_path / "colours.words"
-    words.write_text("SYNONYM: crimson=red\n")
+    words.write_text("SYNONYM: crimson=red scarlet=red\n")
     model = tmp_path / "model"
     assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "--lexicon", str(words), "-o",
                  str(model)]) == 0
     capsys.readouterr()
     assert main(["--quiet", "lexicon", str(model), "--words", "Crimson", "red", "--top", "1"]) == 0
     rows = capsys.readouterr().out.splitlines()
-    assert rows[1].split() == ["crimson", "=", "red", "roomIsRed", rows[1].split()[-1]] and len(rows) == 5
+    assert rows[1].split() == ["crimson", "=", "red", "roomIsRed", rows[1].split()[-1]]
+    assert rows[2].split()[:2] == ["red", "roomIsRed"] and len(rows) == 6
     assert main(["--quiet", "lexicon", str(model), "--words", "crimson", "--json"]) == 0
     shown = json.loads(capsys.readouterr().out)
     assert list(shown) == ["crimson"] and shown["crimson"][0][0] == "roomIsRed"
+    # a synonym and its word, or two synonyms of one word: a row each
+    assert main(["--quiet", "lexicon", str(model), "--words", "crimson", "red", "scarlet", "--json"]) == 0
+    shown = json.loads(capsys.readouterr().out)
+    assert list(shown) == ["crimson", "red", "scarlet"] and shown["crimson"] == shown["red"] == shown["scarlet"]

@@ -64,7 +64,7 @@ def test_a_model_saved_over_since_it_was_loaded_is_not_replaced_by_the_loaded_on
     loaded = Learner.load(folder)
     loaded.save(folder)  # its own folder, unchanged since: saved over, as before
     loaded.save(folder)  # and again (it remembers what it wrote there)
-    Learner.load(folder).save(tmp_path / "elsewhere")
+    loaded.save(tmp_path / "elsewhere")  # a save elsewhere does not make it forget the first folder
     new.save(folder)  # another run saves a newer model there
     newer = (folder / "model.json").read_bytes()
     with pytest.raises(ValueError, match=r"m: not written: the model there changed after this one was read from it"):
@@ -467,7 +467,7 @@ def test_a_model_of_a_users_palette_follows_without_its_file(tmp_path, capsys):
 def test_a_model_whose_palette_record_cannot_be_a_palette_is_refused_at_load(learners, tmp_path, capsys):
     for k, (entry, piece) in enumerate( (({"colours": []}, "at least one"), ({"colours": ["red", "red"]}, "distinct"),
                          ({"colours": ["Red"]}, "'Red' is not one"), ({"drawing": {"glyph": {"star": 5}}}, "drawing"),
-                         ({"drawing": []}, "drawing"))):
+                         ({"drawing": []}, "drawing"), ({"drawing": {"glyph": {"star": " "}}}, "not blank"))):
         model = learners[0].save(tmp_path / f"m{k}")
         _edit_palette(model, **entry)
         code = main(["follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model", str(model)])

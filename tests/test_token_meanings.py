@@ -49,6 +49,9 @@ def test_a_library_phrase_says_what_a_palette_value_is():
     meanings = token_meanings(["toyIsLarge", "toyIsSmall", "toyIsRed"], [schema], library.phrases)
     assert meanings == {"toyIsLarge": "a large toy", "toyIsSmall": "a small toy",
                         "toyIsRed": "a toy's colour is red"}
+    # a phrase of several words follows the noun, as object_phrase puts it ("the red chair east of where you stand")
+    assert token_meanings(["toyIsLarge"], [schema], {"toyIsLarge": "bigger than the others"}) == {
+        "toyIsLarge": "a toy bigger than the others"}
     # without the phrases the schema alone speaks
     assert token_meanings(["toyIsLarge"], [schema])["toyIsLarge"] == "a toy's colour is large"
 

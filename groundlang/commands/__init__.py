@@ -236,7 +236,16 @@ class _FileNames(logging.Filter):
         self.pattern = re.compile(r"\b(" + "|".join(map(re.escape, sorted(names, key=len, reverse=True))) + r")\b")
 
     def filter(self, record: logging.LogRecord) -> bool:
-        record.msg, record.args = self.pattern.sub(lambda m: self.names[m.group(1)], record.getMessage()), None
+        # A record is shared by every handler, each with this filter: renamed once ({block0: block1, block1:
+        # block2} must not turn block0 into block2). A call whose arguments do not fit its format is left to
+        # logging, which says so and goes on.
+        if getattr(record, "by_file_names", False):
+            return True
+        try:
+            text = record.getMessage()
+        except (TypeError, ValueError):
+            return True
+        record.msg, record.args, record.by_file_names = self.pattern.sub(lambda m: self.names[m.group(1)], text), None, True
         return True
 
 
@@ -244,7 +253,7 @@ class _FileNames(logging.Filter):
 def logged_by_file_names(names: dict[str, str]):
     """Within it, the lines logged name objects by ``names`` (the layout's name -> the file's); nothing
     changes where the file renamed none."""
-    handlers = logging.getLogger().handlers if names else []
+    handlers = list(logging.getLogger().handlers) if names else []
     renamer = _FileNames(names) if names else None
     for handler in handlers:
         handler.addFilter(renamer)

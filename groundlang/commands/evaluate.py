@@ -106,8 +106,8 @@ def run(args: argparse.Namespace) -> int:
     check_label_prefixes(corpus, labels)  # as check does: labels of another corpus are refused, not ignored
     novel = read_novel_states(args.novel_envs, args.palette) if args.novel_envs else []
     options = {"em_acceleration": args.em_acceleration, **({"lexicon": words} if words else {})}
-    if args.library or args.time_limit is not None:  # trained, followed and scored with the user's PFs and tasks
-        options["library"] = library_given(args)
+    if (library := library_given(args)) is not None:  # trained, followed and scored with the user's PFs and tasks
+        options["library"] = library
     result = evaluate(
         corpus, labels, protocol=args.protocol or "loo", language_model=args.language_model,
         novel_states=novel, workers=args.workers, ray_address=args.ray,

@@ -160,10 +160,11 @@ def run(args: argparse.Namespace) -> int:
                              f"({', '.join(trained) or 'none recorded'})")
         # The model's record of the values is the palette: a file of one's own (even a copy of a shipped one
         # under its name) needs no --palette, and a shipped palette changed since keeps the model's meaning. The
-        # name is never opened as a path; a shipped palette of the same values lends its drawing hints.
+        # name is never opened as a path. The record keeps the drawing hints; for a model saved before it did,
+        # a shipped palette of the same values lends its own.
         record = learner.palettes[0]
         palette = Palette.from_record(record)
-        if palette.name in palette_names() and get_palette(palette.name) == palette:
+        if "drawing" not in record and palette.name in palette_names() and get_palette(palette.name) == palette:
             palette = get_palette(palette.name)
     state = read_initial_state(args.env, palette)
     names = file_names(args.env)  # goals and states are shown by the file's names of its objects

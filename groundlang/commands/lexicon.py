@@ -69,21 +69,21 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.wording import token_meanings
 
     learner = Learner.load(args.model)
-    said_as: dict[str, str] = {}  # a word asked for -> the synonym it was asked by
+    rows: dict[str, str] = {}  # each row's label (the word as asked) -> the word it is read as
     if args.words is not None:  # read as a command is: "RED" is red, "chair." chair; "next to" stays spaced, as
         from groundlang.grammar.parser import tokenise  # a preposition's row sends it to the preposition table
 
-        asked_words = []
         for w in args.words:
             tokens = [t.replace("_", " ") for t in tokenise(w, learner.word_lexicon) if any(c.isalnum() for c in t)]
             if not tokens:
                 raise ValueError(f"--words {w!r}: no word in it; give the words to show, e.g. --words red room")
-            asked_words += tokens
-            # a word file's synonym is read as its word ("crimson" as red): the row says so
+            # a word file's synonym is read as its word ("crimson" as red): a row of its own says so
             form = " ".join(w.lower().split())
             if form in learner.word_lexicon.synonyms and len(tokens) == 1:
-                said_as[tokens[0]] = form
-        args.words = list(dict.fromkeys(asked_words))
+                rows.setdefault(form, tokens[0])
+            else:
+                rows.update((t, t) for t in tokens if t not in rows)
+        args.words = list(dict.fromkeys(rows.values()))
     prepositions = learned = preposition_tasks(learner.globals, learner.vocab, top=args.top)
     if args.words:  # a multiword preposition is one token: "next to" is next_to
         asked = {"_".join(w.split()) for w in args.words}
@@ -95,13 +95,14 @@ def run(args: argparse.Namespace) -> int:
             _print_prepositions(prepositions, learner)
         return 0
     lexicon = learner.lexicon(top=args.top)
-    if args.words:
-        lexicon = {w: lexicon.get(w, []) for w in args.words}
+    if not args.words:
+        rows = {w: w for w in lexicon}
     if args.json:  # keyed as asked: {"crimson": ...} for a synonym of red
-        print(json_text({said_as.get(w, w): [[t, p] for t, p in m] for w, m in lexicon.items()}))
+        print(json_text({label: [[t, p] for t, p in lexicon.get(w, [])] for label, w in rows.items()}))
         return 0
     print(f"{WORD_HEADING:<16} {MEANINGS_HEADING}")
-    for word, meanings in lexicon.items():
+    for label, word in rows.items():
+        meanings = lexicon.get(word, [])
         preposition = "_".join(word.split()) in prepositions  # learned in the preposition table below
         # "corner" unknown alone, yet read inside the learned preposition to_the_corner_of
         within = sorted(p for p in learned if word in p.split("_"))
@@ -109,13 +110,13 @@ def run(args: argparse.Namespace) -> int:
                 or ("(a preposition: see the table below)" if preposition
                     else f"(unknown word alone; learned within {', '.join(within[:3])})" if within
                     else "(unknown word)"))
-        label = f"{said_as[word]} = {word}" if word in said_as else word  # "crimson = red": read as red
-        print(f"{label:<16} {text}")
+        shown = label if label == word else f"{label} = {word}"  # "crimson = red": read as red
+        print(f"{shown:<16} {text}")
     if prepositions:  # relations are learned there, not as a preposition word's tokens above
         print()
         _print_prepositions(prepositions, learner)
     # Each name once, in the order the table first shows it: the table stays compact and scannable.
-    explained = token_meanings((t for meanings in lexicon.values() for t, _ in meanings), _schemas(learner),
+    explained = token_meanings((t for w in rows.values() for t, _ in lexicon.get(w, [])), _schemas(learner),
                                 learner.library.phrases)
     if explained:
         width = max(len(t) for t in explained)
