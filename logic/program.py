@@ -22,6 +22,7 @@ Safety and errors (all ``AspError``, a ``ValueError``, so the CLI prints one lin
 
 from __future__ import annotations
 
+import functools
 import json
 import logging
 import numbers
@@ -209,6 +210,8 @@ class Program:
             messages.append(msg)
             log.debug("clingo: %s", one_line(msg))
 
+        if self.allow_scripts:
+            _enable_python_scripts()
         ctl = clingo.Control(list(arguments), logger=logger)
         try:
             with ast.ProgramBuilder(ctl) as builder:
@@ -304,6 +307,15 @@ def _solve_in_child(program: Program, facts: str, models: int, time_limit: float
         kind, message = reply["error"]
         raise _ERRORS.get(kind, AspError)(message)
     return [[clingo.parse_term(t) for t in model] for model in reply["models"]]
+
+
+@functools.cache
+def _enable_python_scripts() -> None:
+    """Let clingo run ``#script (python)`` blocks of a program allowed them: the clingo module leaves
+    Python scripting off until asked (a program that is not allowed scripts is refused them when read)."""
+    import clingo.script
+
+    clingo.script.enable_python()
 
 
 def _child_main() -> None:
