@@ -59,7 +59,8 @@ def check_bdm(args: argparse.Namespace) -> int:
     tasks = [command_task(c, library) for c in commands]
     empty = [c for c, task in zip(commands, tasks) if not task]
     print(f"corpus: {', '.join(map(str, paths))} (palette {palette})")
-    print(f"commands: {len(commands)} ({len({c.text for c in commands})} distinct texts)")
+    distinct = len({c.text for c in commands})
+    print(f"commands: {len(commands)} ({distinct} distinct text{'' if distinct == 1 else 's'})")
     print(f"pairs: {len(pairs)}; distinct layouts: {len(layouts)}")
     print("pairs by grid and blocks: " + ", ".join(f"{w}x{h} with {k}: {n}" for (w, h, k), n in sorted(sizes.items())))
     print(f"pairs whose end state cannot be reached from the start: {len(unreachable)}")

@@ -26,7 +26,7 @@ __all__ = ["RayUnavailableError", "ray_session", "run_on_ray"]
 
 log = logging.getLogger(__name__)
 
-INSTALL_HINT = "install the ray extra: pip install 'groundlang[ray]'"
+INSTALL_HINT = "install the ray extra: pip install 'groundlang[ray]' (in a clone: pip install -e '.[ray]')"
 
 # In a Ray worker process: the context this worker was initialised with, and its object ref's hex id.
 _WORKER_CONTEXT: dict = {"key": None, "context": None}

@@ -230,7 +230,7 @@ def picture_format(path: str | Path) -> str:
         import matplotlib  # noqa: F401  (an optional extra: asked here, before any work)
     except ImportError:
         raise ValueError(f"{path}: drawing a picture needs matplotlib, an optional extra: "
-                         "pip install 'groundlang[plot]'") from None
+                         "pip install 'groundlang[plot]' (in a clone: pip install -e '.[plot]')") from None
     return fmt
 
 

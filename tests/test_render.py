@@ -205,7 +205,7 @@ def test_without_matplotlib_pictures_are_refused_in_one_line_and_the_rest_runs(t
                            "--out", str(picture)], capture_output=True, text=True)
     assert done.returncode == 2 and done.stdout == "" and not picture.exists()
     assert done.stderr == (f"groundlang show: error: {picture}: drawing a picture needs matplotlib, an optional "
-                           "extra: pip install 'groundlang[plot]'\n")
+                           "extra: pip install 'groundlang[plot]' (in a clone: pip install -e '.[plot]')\n")
     done = subprocess.run([sys.executable, "-c", hide, "--quiet", "show", str(example), "--palette", "sokoban"],
                           capture_output=True, text=True)
     assert done.returncode == 0 and "command: push the star into the red room" in done.stdout, done.stderr

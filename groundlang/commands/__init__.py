@@ -126,7 +126,7 @@ def add_em_acceleration_option(parser) -> None:
 
 # Read off the package's folder: a palette added there is listed without an edit here.
 PALETTE_HELP = (f"colour and shape values of the files: a palette the package ships ({', '.join(palette_names())}; "
-                "groundlang/logic/palettes/) or the path of a .lp file of value(Attribute, Index, Name) facts")
+                "the package's logic/palettes/) or the path of a .lp file of value(Attribute, Index, Name) facts")
 
 
 LIBRARY_NAMES = (f"; a file, or a library the package ships by name ({', '.join(library_names())}), which "

@@ -65,7 +65,7 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=seed, default=0, help="seed of the training subsets")
     p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes; no more than the folds or the cores)")
     p.add_argument("--ray", metavar="ADDRESS", help="run cells on Ray ('local', 'auto' or host:port)")
-    p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics instead of stopping")
+    p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations that do not replay under the dynamics instead of stopping")
     p.add_argument("--limit", type=positive_int, help="score only the first N instances of each cell")
     add_language_model_settings(p)
     add_lexicon_option(p)

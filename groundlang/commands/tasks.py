@@ -68,7 +68,10 @@ def run(args: argparse.Namespace) -> int:
         tables, untabulated = None, str(exc)
     holding = []
     if tables is not None:
-        check_position_pfs(state, library, tables)  # a library's mistake: refused, not listed both ways
+        try:  # a library's mistake: refused, not listed both ways
+            check_position_pfs(state, library, tables)
+        except TabulationError as exc:
+            raise TabulationError(f"{library.program.user_names}, in {args.file}: {exc}") from None
         holding = [a for a in tables.holding(state.positions) if len(a.args) > 1]
     relations = {obj: atoms for obj in object_names(state) if (atoms := [a for a in holding if obj in a.args])}
     if args.json:
