@@ -219,7 +219,8 @@ def _parsed(name: str, text: str, allow_scripts: bool) -> tuple:
             source.text, statements.append, logger=lambda code, msg: messages.append(msg)
         )
     except RuntimeError:
-        text = one_line(" ".join(messages)) or "syntax error"
+        # clingo's "<string>:2:1-2: error: syntax error, ...": the CLI's line says "error:" already
+        text = re.sub(r"(<string>:[\d:-]+): error: ", r"\1: ", one_line(" ".join(messages))) or "syntax error"
         raise AspSyntaxError(text.replace("<string>", source.name)) from None
     for stm in statements:
         if stm.ast_type == ast.ASTType.Minimize:
