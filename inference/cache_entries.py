@@ -17,7 +17,8 @@ import logging
 import os
 from pathlib import Path
 
-from groundlang.inference.likelihoods import DamagedEntry, cache_directory, only_the_entry_lost, read_entry_json
+from groundlang.inference.likelihoods import (DamagedEntry, cache_directory, only_the_entry_lost, read_entry_json,
+                                              remove_stale_temporaries)
 from groundlang.logic.storage import write_atomically
 
 __all__ = ["EntryFolder"]
@@ -35,6 +36,7 @@ class EntryFolder:
         self.hits = self.computed = self.damaged = 0
         self._writable = True  # until a write fails: a cache that cannot be written is still read
         self._first_damaged: tuple[Path, str] | None = None
+        self._cleaned: set[Path] = set()  # entry folders cleared of a killed writer's temporary files
 
     def path(self, key: str) -> Path:
         return self.root / self.kind / key[:2] / f"{key}.json"
@@ -74,6 +76,7 @@ class EntryFolder:
         if self.root is None or not self._writable:
             return
         try:
+            remove_stale_temporaries(self.path(key).parent, self._cleaned)
             write_atomically(self.path(key), json.dumps({"key": key, **entry}, separators=(",", ":")),
                              durable=False, follow=False)
         except OSError as exc:

@@ -38,12 +38,14 @@ full) gives one warning and the run goes on without writing to it.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import hashlib
 import json
 import logging
 import math
 import os
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -123,6 +125,27 @@ def entry_key(initial_state, goal: Sequence[Atom], actions: Sequence[int], setti
 
 def _entry_path(root: Path, key: str) -> Path:
     return root / BEHAVIOUR_FOLDER / key[:2] / f"{key}.json"
+
+
+# A writer's temporary file lives for the moment of one write; one this old was left by a killed process.
+STALE_TEMPORARY_SECONDS = 3600
+
+
+def remove_stale_temporaries(folder: Path, done: set) -> None:
+    """Remove from ``folder`` (an entry's two-letter folder) the temporary files (``.<entry>.<hex>.tmp``)
+    of writes a ``kill -9`` cut short, once per folder per run (``done`` holds the folders seen), so that
+    they do not pile up; best effort, and never a file another writer may still be renaming."""
+    if folder in done:
+        return
+    done.add(folder)
+    now = time.time()
+    try:
+        for path in folder.glob(".*.tmp"):
+            with contextlib.suppress(OSError):
+                if now - path.lstat().st_mtime > STALE_TEMPORARY_SECONDS:
+                    path.unlink()
+    except OSError:
+        pass
 
 
 def only_the_entry_lost(exc: OSError, path: Path, kind_folder: Path) -> bool:
@@ -228,6 +251,7 @@ def behaviour_likelihood_table(
     if len(candidates) != len(instances):
         raise ValueError(f"{len(instances)} instances but {len(candidates)} candidate lists")
     root = None if cache_dir is False else cache_directory(cache_dir)
+    cleaned: set = set()  # entry folders this run has cleared of a killed writer's temporary files
     goals = [[_goal(g) for g in row] for row in candidates]
     program = library.tabulation_program if library is not None else tabulation_program(())
     pfs = program_digest(program)
@@ -273,7 +297,7 @@ def behaviour_likelihood_table(
             for goal, entries in _exact_rows(initial, by_goal, instances, tables, settings):
                 for (i, k), value in entries:
                     table[i][k] = value
-                    root = _store(root, keys[i][k], value, goal)
+                    root = _store(root, keys[i][k], value, goal, cleaned)
                 if bar is not None:
                     bar.update(1)
             continue
@@ -290,7 +314,7 @@ def behaviour_likelihood_table(
                                                              tables, settings)))
             for goal, i, k in rows:
                 table[i][k] = float(values[goal])
-                root = _store(root, keys[i][k], table[i][k], goal)
+                root = _store(root, keys[i][k], table[i][k], goal, cleaned)
             if bar is not None:
                 bar.update(len(goals))
     if bar is not None:
@@ -323,12 +347,14 @@ def _exact_rows(initial, by_goal: dict, instances, tables, settings):
         yield goal, out
 
 
-def _store(root, key: str, value: float, goal) -> Path | None:
+def _store(root, key: str, value: float, goal, cleaned: set) -> Path | None:
     """Write one entry; the root, or None once the cache cannot be written (warned once)."""
     if root is None:
         return None
     try:
-        _write_entry(_entry_path(root, key), key, value, goal)
+        path = _entry_path(root, key)
+        remove_stale_temporaries(path.parent, cleaned)
+        _write_entry(path, key, value, goal)
         return root
     except OSError as exc:
         if only_the_entry_lost(exc, _entry_path(root, key), Path(root) / BEHAVIOUR_FOLDER):

@@ -140,6 +140,37 @@ def test_a_file_in_place_of_one_entry_folder_loses_only_its_entries(instances, t
     assert len(said) == 1 and "going on without writing to it" in said[0]
 
 
+def test_a_killed_writers_temporary_files_are_removed_when_their_folder_is_written(instances, tmp_path):
+    """kill -9 during a cache write leaves ``.<entry>.<hex>.tmp``; the next run that writes into that folder
+    removes it once it is an hour old (a temporary file younger than that may be another writer's)."""
+    import os
+    import time
+
+    from groundlang.inference.cache_entries import EntryFolder
+
+    subset = instances[:8]
+    goals = [_goals(i) for i in subset]
+    behaviour_likelihood_table(subset, goals, cache_dir=tmp_path / "c")
+    entry = sorted((tmp_path / "c" / "behaviour").glob("*/*.json"))[0]
+    stale, fresh = (entry.parent / f".{entry.name}.{tag}.tmp" for tag in ("00aa", "00bb"))
+    for path in (stale, fresh):
+        path.write_text("{")
+    hours_ago = time.time() - 2 * 3600
+    os.utime(stale, (hours_ago, hours_ago))
+    entry.unlink()  # so that the next run writes into that folder
+    behaviour_likelihood_table(subset, goals, cache_dir=tmp_path / "c")
+    assert entry.is_file() and not stale.exists() and fresh.exists()
+    # the other kinds of entry (evidence, parses) likewise
+    folder = EntryFolder(tmp_path / "e", "evidence", "recomputed", logging.getLogger(LOG))
+    key = "ab" + "0" * 62
+    folder.path(key).parent.mkdir(parents=True)
+    left = folder.path(key).parent / f".{key}.json.00cc.tmp"
+    left.write_text("{")
+    os.utime(left, (hours_ago, hours_ago))
+    folder.write(key, {"x": 1})
+    assert folder.path(key).is_file() and not left.exists()
+
+
 def test_cli_train_with_a_full_cache_folder_trains_and_warns(tmp_path, monkeypatch, capsys, caplog):
     from groundlang.logic import storage
 
