@@ -149,7 +149,7 @@ def write_model(state: dict, directory: str | Path, replacing: str | None = None
     directory.mkdir(parents=True, exist_ok=True)  # to be locked
     with folder_lock(directory, exclusive=True), deferred_interrupts():
         if replacing is not None and (now := _content_hash_there(directory)) not in (None, replacing):
-            raise ValueError(f"{directory}: not written: the model there changed after this one was read from it "
+            raise ValueError(f"{directory}: not written: the model there changed after this learner read or wrote it "
                              f"(another run saved over it, content {now[:12]}); it is left as it is: load it again, "
                              "or save to another folder")
         storage.write_atomically(directory / tensor_name, tensors, follow=False)

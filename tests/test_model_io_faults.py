@@ -67,7 +67,7 @@ def test_a_model_saved_over_since_it_was_loaded_is_not_replaced_by_the_loaded_on
     loaded.save(tmp_path / "elsewhere")  # a save elsewhere does not make it forget the first folder
     new.save(folder)  # another run saves a newer model there
     newer = (folder / "model.json").read_bytes()
-    with pytest.raises(ValueError, match=r"m: not written: the model there changed after this one was read from it"):
+    with pytest.raises(ValueError, match=r"m: not written: the model there changed after this learner read or wrote it"):
         loaded.save(folder)
     assert (folder / "model.json").read_bytes() == newer and _same_globals(Learner.load(folder), new)
     assert loaded.save(tmp_path / "other") == tmp_path / "other"  # elsewhere it may go
@@ -86,7 +86,7 @@ def test_a_model_saved_over_since_it_was_loaded_is_not_replaced_by_the_loaded_on
     code = main(["--quiet", "follow", "take the star to the red room", "--env", str(EXAMPLES / "novel_a.state"),
                  "--model", str(model), "--ask", "--learn", "--min-confidence", "0.9999"])
     err = capsys.readouterr().err
-    assert code == 2 and "the model there changed after this one was read from it" in err and len(err.splitlines()) == 1
+    assert code == 2 and "the model there changed after this learner read or wrote it" in err and len(err.splitlines()) == 1
     assert _same_globals(Learner.load(model), new)
 
 

@@ -245,7 +245,8 @@ class _FileNames(logging.Filter):
             text = record.getMessage()
         except (TypeError, ValueError):
             return True
-        record.msg, record.args, record.by_file_names = self.pattern.sub(lambda m: self.names[m.group(1)], text), None, True
+        record.msg = self.pattern.sub(lambda m: self.names[m.group(1)], text)
+        record.args, record.by_file_names = None, True
         return True
 
 
