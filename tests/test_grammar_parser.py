@@ -391,3 +391,13 @@ def test_a_sentence_whose_forest_is_too_large_to_score_is_read_in_chunks(monkeyp
     assert not lf.fallback and lf.verbs == ("go", "push")
     monkeypatch.setattr(kbest, "MAX_FOREST_NODES", 5)  # the same sentence, past a bound it needs more than
     assert parse("go to the red room and push the star into the blue room")[0].logical_form.fallback
+
+
+@pytest.mark.parametrize("said", ["go to the red room, thanks", "please go to the red room, thank you",
+                                  "ok, go to the red room", "hi, go to the red room thx"])
+def test_politeness_and_discourse_markers_say_nothing_of_the_task(said):
+    """"thanks" was read as a clause of its own (thanks(), an unknown verb), which moved the posterior of
+    "go to the red room, thanks" to another task; such words are adverbs of the word file, as "please" is."""
+    plain = {str(r.logical_form) for r in parse("go to the red room")}
+    got = [str(r.logical_form).replace("_(), ", "").replace(", _()", "") for r in parse(said)]
+    assert got[0] in plain and not any("thank" in lf or "ok" in lf or "hi" in lf for lf in got)
