@@ -464,6 +464,25 @@ def test_a_model_of_a_users_palette_follows_without_its_file(tmp_path, capsys):
     assert record["drawing"]["glyph"]["star"] == "\u2605" and record["drawing"]["rgb"]
 
 
+def test_follow_draws_with_the_models_own_drawing_hints(tmp_path, capsys, monkeypatch):
+    """A palette file of the shipped sokoban's values but a glyph of its own: follow --out (no --palette)
+    draws with the glyph the model recorded, not the shipped palette's of the same values."""
+    from importlib.resources import files
+
+    import groundlang.render as render
+
+    mine = tmp_path / "sokoban.lp"
+    mine.write_text((files("groundlang.logic") / "palettes" / "sokoban.lp").read_text().replace('"\u2605"', '"*"'))
+    assert 'glyph(star, "*")' in mine.read_text()
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", str(mine), "-o", str(tmp_path / "m")]) == 0
+    drawn = []
+    monkeypatch.setattr(render, "save_picture", lambda path, state, **kw: drawn.append(state.layout.palette))
+    capsys.readouterr()
+    assert main(["--quiet", "follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model",
+                 str(tmp_path / "m"), "--guess", "--out", str(tmp_path / "f.png")]) == 0
+    assert dict(drawn[0].glyphs)["star"] == "*"
+
+
 def test_a_model_whose_palette_record_cannot_be_a_palette_is_refused_at_load(learners, tmp_path, capsys):
     for k, (entry, piece) in enumerate( (({"colours": []}, "at least one"), ({"colours": ["red", "red"]}, "distinct"),
                          ({"colours": ["Red"]}, "'Red' is not one"), ({"drawing": {"glyph": {"star": 5}}}, "drawing"),
