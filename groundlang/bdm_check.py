@@ -22,12 +22,13 @@ from groundlang.pair_tasks import command_task, reachable, text_agreement
 __all__ = ["check_bdm", "default_library", "is_corpus_library"]
 
 
-def default_library(files_given=None) -> TaskLibrary:
+def default_library(files_given=None, **load) -> TaskLibrary:
     """The task library of ``files_given`` (a ``--library`` list) or, without them, the relations,
-    superlatives and tasks of the corpus (``logic/domains/williams2018.lp``)."""
+    superlatives and tasks of the corpus (``logic/domains/williams2018.lp``); ``load``: TaskLibrary.load's
+    keywords (``time_limit``)."""
     if files_given:
-        return TaskLibrary.load(files_given)
-    return TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")])
+        return TaskLibrary.load(files_given, **load)
+    return TaskLibrary.load([str(files("groundlang.logic") / "domains" / "williams2018.lp")], **load)
 
 
 def is_corpus_library(library: TaskLibrary) -> bool:

@@ -161,7 +161,7 @@ def library_given(args: argparse.Namespace):
         return None
     from groundlang.logic.tasks import TaskLibrary
 
-    return with_time_limit(TaskLibrary.load(args.library or None), args)
+    return TaskLibrary.load(args.library or None, **time_limit_given(args))
 
 
 def add_time_limit_option(parser) -> None:
@@ -172,11 +172,10 @@ def add_time_limit_option(parser) -> None:
                              "raise it for a very large layout)")
 
 
-def with_time_limit(library, args: argparse.Namespace):
-    """``library`` with ``args.time_limit`` as its grounding time limit where one was given."""
-    if getattr(args, "time_limit", None) is not None:
-        library.time_limit = args.time_limit
-    return library
+def time_limit_given(args: argparse.Namespace) -> dict:
+    """``TaskLibrary.load``'s ``time_limit`` keyword where ``--time-limit`` was given (else its default)."""
+    time_limit = getattr(args, "time_limit", None)
+    return {} if time_limit is None else {"time_limit": time_limit}
 
 
 def add_lexicon_option(parser) -> None:

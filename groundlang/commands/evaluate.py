@@ -8,7 +8,7 @@ from pathlib import Path
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
                                  add_language_model_settings, add_lexicon_option, fraction, inputs_read, json_bytes,
                                  language_model_settings, library_given, library_path, open_fraction, output_path,
-                                 positive_int, require_palette, add_time_limit_option, with_time_limit)
+                                 positive_int, require_palette, add_time_limit_option, time_limit_given)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
@@ -164,7 +164,7 @@ def run_pairs(args: argparse.Namespace) -> int:
                          "end-state evidence across a command's layouts; pass --layouts separate too")
     palette = args.palette or DEFAULT_PALETTE
     words = extra_words(args.lexicon)
-    library = with_time_limit(default_library(args.library), args)
+    library = default_library(args.library, **time_limit_given(args))
     any_name = args.format == "williams2018"  # said: a file is read whatever its name
     train = read_pair_corpus(args.corpus, palette, any_name).commands
     if args.tuning and args.holdout is None:

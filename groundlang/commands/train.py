@@ -10,7 +10,7 @@ from groundlang.corpus import read_corpus
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
                                  add_language_model_settings, add_lexicon_option, cache_option, check_cache_outside,
                                  language_model_settings, library_given, library_path, output_path, require_palette,
-                                 seed, add_time_limit_option, with_time_limit)
+                                 seed, add_time_limit_option, time_limit_given)
 
 
 def register(subparsers) -> None:
@@ -78,7 +78,7 @@ def _pairs(args: argparse.Namespace):
     from groundlang.bdm_check import default_library
     from groundlang.pair_corpus import read_pair_corpus, training_instances
 
-    library = with_time_limit(default_library(args.library), args)
+    library = default_library(args.library, **time_limit_given(args))
     commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE, args.format == "williams2018").commands
     made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent, cache_dir=cache_option(args))
     skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
