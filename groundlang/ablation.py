@@ -81,6 +81,14 @@ class AblationResult:
 
     @classmethod
     def from_json(cls, data: dict) -> "AblationResult":
+        """The result ``to_json`` wrote (``groundlang ablate --json``); ValueError, naming what is missing, for
+        anything else, such as the rows of ``ablate --held-out-likelihood --json`` (a table of its own)."""
+        missing = [k for k in ("corpus", "corpus_size", "protocol", "seed", "rows", "seconds")
+                   if not isinstance(data, dict) or k not in data]
+        if missing:
+            other = (" (it is the table of `ablate --held-out-likelihood --json`, which says how held-out "
+                     "likelihood moves with each switch)" if isinstance(data, dict) and "folds" in data else "")
+            raise ValueError(f"not the JSON of an `ablate` grid: it has no {', '.join(missing)}{other}")
         return cls(data["corpus"], data["corpus_size"], data["protocol"], data["seed"],
                    [AblationRow(**r) for r in data["rows"]], data["seconds"],
                    dict(data.get("language_model_settings", {})))

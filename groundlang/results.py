@@ -87,7 +87,9 @@ class Posterior:
         return groups[0].probability - (groups[1].probability if len(groups) > 1 else 0.0)
 
     def table(self, top: int = 10) -> str:
-        """A plain-text table of the most probable interpretations."""
+        """A plain-text table of the ``top`` most probable interpretations (``top`` at least 1)."""
+        if isinstance(top, bool) or not isinstance(top, int) or top < 1:
+            raise ValueError(f"table(top={top!r}): top is how many rows to show, a whole number of at least 1")
         rows = [(p, interp.lifted, format_goal(interp.goal),
                  " ∧ ".join(str(a) for a in interp.constraint.atoms) or "(none)") for p, interp in self.ranked()[:top]]
         # columns as wide as their widest entry: a goal of two atoms is wider than any fixed width

@@ -108,6 +108,14 @@ def test_grid_rows_cover_every_cell_with_their_protocol(example):
     assert back.rows == result.rows
 
 
+def test_from_json_names_what_is_missing_and_the_held_out_table():
+    # notebook 03 reads GROUNDLANG_ABLATION_JSON with it; the held-out table's JSON had been a bare KeyError
+    with pytest.raises(ValueError, match=r"no corpus, corpus_size, protocol, seed, seconds .*held-out-likelihood"):
+        AblationResult.from_json({"folds": 5, "n": 24, "rows": []})
+    with pytest.raises(ValueError, match="not the JSON of an `ablate` grid: it has no corpus, corpus_size"):
+        AblationResult.from_json([])
+
+
 def test_unknown_names_are_value_errors(example):
     corpus, labels = example
     with pytest.raises(ValueError, match="unknown language model"):

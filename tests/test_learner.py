@@ -69,6 +69,9 @@ def test_posterior_is_a_distribution_with_readings(learner, corpus):
     assert [(row[goal_at:constraints_at].strip(), row[constraints_at:]) for row in rows] == [
         (format_goal(i.goal), " ∧ ".join(map(str, i.constraint.atoms)) or "(none)") for _, i in post.ranked()]
     assert any(len(i.goal) == 2 for _, i in post.ranked())
+    for top in (0, -1, 1.5, True):  # -1 had shown every row but the last
+        with pytest.raises(ValueError, match="top is how many rows"):
+            post.table(top)
 
 
 def test_reading_probabilities_line_up_with_readings_when_readings_merge(learner, corpus):
