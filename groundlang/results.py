@@ -88,7 +88,7 @@ class Posterior:
 
     def table(self, top: int = 10) -> str:
         """A plain-text table of the ``top`` most probable interpretations (``top`` at least 1)."""
-        if isinstance(top, bool) or not isinstance(top, int) or top < 1:
+        if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
             raise ValueError(f"table(top={top!r}): top is how many rows to show, a whole number of at least 1")
         rows = [(p, interp.lifted, format_goal(interp.goal),
                  " ∧ ".join(str(a) for a in interp.constraint.atoms) or "(none)") for p, interp in self.ranked()[:top]]

@@ -16,7 +16,7 @@ from groundlang.model.phrase_keys import PhraseKeys
 HABIT_PRIORS = ("absent", "overall")
 
 __all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
-           "token_words", "word_meanings"]
+           "token_words", "word_meanings", "LEARNED_SHARE"]
 
 
 class LanguageModel:
@@ -203,6 +203,12 @@ def gather_mixtures(log_emit: torch.Tensor, mix_ids: torch.Tensor, uniq: torch.T
     return out.reshape(*mix_ids.shape, U)
 
 
+# A token's row of P(word | token) is learned when its largest entry is at least this many times the
+# uniform share: an untrained row keeps its flat prior exactly, and one that spreads over a few synonyms
+# in a small vocabulary ("go", "walk", "enter", "room" for agentToRoom among 16 words) is learned.
+LEARNED_SHARE = 2.0
+
+
 def word_meanings(g: dict, vocab, top: int = 3) -> dict[str, list[tuple[str, float]]]:
     """Each known word of ``vocab``'s most probable meanings, ``P(token | word)``, under the globals ``g``:
     what a token says is its learned words and, under ``schema_names``, its name. The prior over tokens
@@ -210,7 +216,7 @@ def word_meanings(g: dict, vocab, top: int = 3) -> dict[str, list[tuple[str, flo
     does not dilute the table."""
     phi = token_words(g, torch.tensor(vocab.token_names()), token_exclusions(vocab),
                       torch.tensor(vocab.token_families()))  # [S, W]
-    learned = phi.max(-1).values > 3.0 / phi.shape[1]
+    learned = phi.max(-1).values > LEARNED_SHARE / phi.shape[1]
     meaning = phi * learned[:, None]
     meaning = meaning / meaning.sum(0, keepdim=True).clamp_min(1e-30)
     out = {}

@@ -29,7 +29,7 @@ import torch
 
 from groundlang.grammar.parser import checked_weights
 from groundlang.model.encoding import PAD_LOGIT, Encoder
-from groundlang.model.language_model_base import (NULL_MIXTURE, LanguageModel, gather_mixtures,
+from groundlang.model.language_model_base import (LEARNED_SHARE, NULL_MIXTURE, LanguageModel, gather_mixtures,
                                                   mixture_log_emissions, require_positive)
 from groundlang.model.mentions import mention_factor
 from groundlang.model.parse_encoding import CLAUSE_ARITY_BINS, ParseBatch, encode_parse_fields
@@ -376,7 +376,7 @@ def preposition_table(g: dict, vocab) -> tuple[list[str], list[str], torch.Tenso
     if "preposition" not in g or not vocab.tasks:
         return [], [], torch.zeros(0, 0)
     by_task = g["preposition"].detach().double()  # [L, P]
-    learned = by_task.max(0).values > 3.0 / by_task.shape[1]
+    learned = by_task.max(0).values > LEARNED_SHARE / by_task.shape[1]
     shown = [k for k, prep in enumerate(vocab.preps) if k >= 2 and learned[k] and bare_preposition(prep) == prep]
     given = by_task / by_task.sum(0, keepdim=True).clamp_min(1e-300)
     return list(vocab.tasks), [vocab.preps[k] for k in shown], given[:, shown]

@@ -92,6 +92,15 @@ def test_lexicon_ties_colour_words_to_room_pfs(learner):
     assert lexicon["push"][0][0] == "toyToRoom"
 
 
+def test_lexicon_keeps_a_meaning_whose_words_are_synonyms(corpus):
+    # bag of words spreads agentToRoom over go, walk, enter and room (16 words in all): its row had been
+    # dropped as flat, and "go" read as a colour word
+    lexicon = Learner(language_model="bow", cache_dir=False).fit(corpus.instances).lexicon(top=1)
+    assert [lexicon[w][0][0] for w in ("go", "walk", "enter", "red")] == [
+        "agentToRoom", "agentToRoom", "agentToRoom", "roomIsRed"]
+    assert lexicon["go"][0][1] > 0.5
+
+
 def test_saved_model_loads_back_with_the_same_posteriors(learner, corpus, tmp_path):
     learner.save(tmp_path / "m")
     loaded = Learner.load(tmp_path / "m")
