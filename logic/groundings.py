@@ -5,8 +5,9 @@ solve enumerating every answer set)."""
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable
-from itertools import combinations
+from collections.abc import Iterable, Iterator, Sequence
+from itertools import combinations, islice
+from math import comb
 
 import clingo
 
@@ -15,16 +16,65 @@ from .program import AspError, AspTimeout
 from .tasks import CLASS_ORDER, BindingConstraint, GroundedTask, TaskLibrary
 from .terms import natural_key, pf_name, symbol_text, tuple_args
 
-__all__ = ["binding_constraints", "enumerate_groundings", "ground_environment", "Descriptions", "PFTerms", "Relations"]
+__all__ = ["BindingConstraints", "MAX_ENUMERATED_ATOMS", "binding_constraints", "enumerate_groundings", "ground_environment", "Descriptions", "PFTerms", "Relations"]
 
 
-def binding_constraints(atoms: Iterable[Atom]) -> list[BindingConstraint]:
-    """Every conjunction of ``atoms`` (all subsets), largest first, the empty one last."""
-    atoms = tuple(atoms)
-    out = []
-    for k in range(len(atoms), -1, -1):
-        out.extend(BindingConstraint(c) for c in combinations(atoms, k))
-    return out
+class BindingConstraints(Sequence):
+    """Every conjunction of a grounding's constraint ``atoms`` (all 2^k subsets), largest first, the empty
+    one last, made as they are read: a grounding whose objects have many property PFs (a library of
+    twenty colours of its own) costs its largest conjunction, not 2^20 of them, until a language model
+    that enumerates them asks (:data:`MAX_ENUMERATED_ATOMS` bounds that)."""
+
+    def __init__(self, atoms: Iterable[Atom]):
+        self.atoms = tuple(atoms)
+
+    def __len__(self) -> int:
+        return 2 ** len(self.atoms)
+
+    def __iter__(self) -> Iterator[BindingConstraint]:
+        for k in range(len(self.atoms), -1, -1):
+            for c in combinations(self.atoms, k):
+                yield BindingConstraint(c)
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        n = len(self)
+        if not -n <= index < n:
+            raise IndexError("binding constraint index out of range")
+        index %= n
+        for k in range(len(self.atoms), -1, -1):  # the conjunctions of k atoms come as one block
+            block = comb(len(self.atoms), k)
+            if index < block:
+                return BindingConstraint(next(islice(combinations(self.atoms, k), index, None)))
+            index -= block
+        raise AssertionError("unreachable")
+
+    @property
+    def largest(self) -> BindingConstraint:
+        return BindingConstraint(self.atoms)
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, (list, tuple)):  # as the list of them was (the lengths first: no 2^k list is made)
+            return len(other) == len(self) and list(self) == list(other)
+        return isinstance(other, BindingConstraints) and other.atoms == self.atoms
+
+    def __hash__(self) -> int:
+        return hash(self.atoms)
+
+    def __repr__(self) -> str:
+        return f"BindingConstraints({len(self.atoms)} atoms, {len(self)} conjunctions)"
+
+
+# A language model that offers every conjunction as an interpretation of its own (bag of words, IBM Model 2,
+# the parse model without ``largest_constraint``) offers 2^k per grounding: beyond this many atoms it is refused
+# with one line rather than growing without bound.
+MAX_ENUMERATED_ATOMS = 12
+
+
+def binding_constraints(atoms: Iterable[Atom]) -> BindingConstraints:
+    """Every conjunction of ``atoms`` (all subsets), largest first, the empty one last (made as read)."""
+    return BindingConstraints(atoms)
 
 
 # Object -> PF class -> names of the unary PFs of that class true of the object, e.g.
@@ -42,7 +92,7 @@ Relations = dict[str, tuple[tuple[str, int, str], ...]]
 def enumerate_groundings(
     library: TaskLibrary, facts: str, *, time_limit: float | None = None
 ) -> list[tuple[GroundedTask, list[BindingConstraint]]]:
-    """Every permissible grounding not true initially, with its binding constraints: the first part
+    """Every permissible grounding not true initially, with its binding constraints (lazily): the first part
     of :func:`ground_environment`."""
     return ground_environment(library, facts, time_limit=time_limit)[0]
 

@@ -55,6 +55,7 @@ import numpy as np
 
 from groundlang.logic.atoms import Atom
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, LiftedTask, TaskLibrary
+from groundlang.logic.groundings import MAX_ENUMERATED_ATOMS
 from groundlang.model.features import atoms_hold_along
 from groundlang.model.geometry import cell_tables
 from groundlang.model.pf_tables import PFTables
@@ -284,10 +285,15 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     for task, constraints in candidates:
         log_prior_t = -math.log(n_lifted) - math.log(per_lifted[task.task])
         if not enumerate_constraints:
-            largest = max(constraints, key=lambda c: len(c.atoms))
+            largest = constraints[0]  # every colour/shape PF true of the bound objects (largest first)
             roles = _roles(task, largest, state, library, described, starts, relation_words, relations, bystander_roles)
             result.append(Interpretation(task, largest, log_prior_t, roles))
             continue
+        if len(constraints) > 2 ** MAX_ENUMERATED_ATOMS:
+            raise ValueError(f"{task}: its bound objects have {len(constraints[0].atoms)} property PFs, and this "
+                             f"language model offers each of their {len(constraints):,} conjunctions as a reading of "
+                             f"its own; at most {MAX_ENUMERATED_ATOMS} PFs (the parse model's largest_constraint "
+                             "offers the largest alone)")
         for constraint in constraints:
             result.append(
                 Interpretation(

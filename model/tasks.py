@@ -16,7 +16,7 @@ from typing import Collection, Mapping, Sequence
 
 from groundlang.logic.atoms import Atom
 from groundlang.logic.classes import domain_classes
-from groundlang.logic.groundings import ground_environment
+from groundlang.logic.groundings import MAX_ENUMERATED_ATOMS, BindingConstraints, ground_environment
 from groundlang.logic.tasks import BindingConstraint, GroundedTask, TaskLibrary
 
 from .geometry import state_facts
@@ -28,7 +28,7 @@ __all__ = [
     "spatial_descriptions", "viewpoint_pfs", "kind_pfs", "narrow_by_known", "NarrowedCandidate",
 ]
 
-Candidate = tuple[GroundedTask, list[BindingConstraint]]
+Candidate = tuple[GroundedTask, BindingConstraints]
 
 
 # Training walks a corpus's start states twice (interpretations, then the pairs' evidence), in the same
@@ -41,18 +41,18 @@ def _environment(state: State, library: TaskLibrary) -> tuple:
     found, described, terms, related = ground_environment(library, state_facts(state),
                                                           environment=f"palette {palette}", wholly_true=True)
     frozen = MappingProxyType({obj: MappingProxyType(by_class) for obj, by_class in described.items()})
-    return tuple((g, tuple(c)) for g, c in found), frozen, MappingProxyType(terms), MappingProxyType(related)
+    return tuple(found), frozen, MappingProxyType(terms), MappingProxyType(related)
 
 
 def candidate_tasks(state: State, library: TaskLibrary, wholly_true: bool = False) -> list[Candidate]:
     """Every permissible grounding not true in ``state`` (with ``wholly_true``, those too), each with all
-    its binding constraints.
+    its binding constraints (a :class:`BindingConstraints`, made as read).
 
     Order: tasks in library order, then bound objects in variable order; constraints
     largest first, the empty conjunction last. One clingo Control per (state, library),
     cached (the library is keyed by identity, the state by value). Raises AspError.
     """
-    return [(g, list(c)) for g, c in _environment(state, library)[0] if wholly_true or len(g.holding) < len(g.goal)]
+    return [(g, c) for g, c in _environment(state, library)[0] if wholly_true or len(g.holding) < len(g.goal)]
 
 
 def check_position_pfs(state: State, library: TaskLibrary, tables) -> None:
@@ -161,6 +161,9 @@ def narrow_by_known(
         if any(v not in binding for v in known):
             continue
         required = {Atom(p, (binding[v],)) for v, pfs in known.items() for p in pfs}
+        if len(constraints) > 2 ** MAX_ENUMERATED_ATOMS:
+            raise ValueError(f"{grounded}: its bound objects have {len(constraints[0].atoms)} property PFs, whose "
+                             f"{len(constraints):,} conjunctions would each be kept; at most {MAX_ENUMERATED_ATOMS} PFs")
         # The first (largest) constraint holds every colour/shape PF true of the bound objects.
         true_atoms = set(constraints[0].atoms) if constraints else set()
         if not required <= true_atoms:

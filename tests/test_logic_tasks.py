@@ -165,6 +165,30 @@ def test_binding_constraints_are_all_subsets_largest_first():
     assert len(cs) == 8 and len(set(cs)) == 8
     assert [len(c.atoms) for c in cs] == [3, 2, 2, 2, 1, 1, 1, 0]
     assert binding_constraints([]) == [BindingConstraint(())]
+    # indexed as listed, from either end and by slices, without making the others
+    assert [cs[i] for i in range(-8, 8)] == list(cs) * 2 and cs[2:5] == list(cs)[2:5] and cs.largest == cs[0]
+    with pytest.raises(IndexError):
+        cs[8]
+    many = binding_constraints(A(f"roomIsRed(room{k})") for k in range(40))  # 2^40: made only as read
+    assert len(many) == 2 ** 40 and len(many[0].atoms) == 40 and many[-1].atoms == () and many[1].atoms[-1] == A("roomIsRed(room38)")
+
+
+def test_a_library_of_many_properties_is_refused_by_enumerating_models_and_bounded_for_the_parse_model(tmp_path):
+    # 22 colours of the library's own on every room: 2^23 conjunctions per grounding had been built for
+    # every grounding (memory without bound, past any --time-limit); now the parse model reads the largest
+    # and a model that offers every conjunction as a reading is refused with one line
+    library = tmp_path / "many.lp"
+    library.write_text('task(t).\nvar(t, "A", agent).\nvar(t, "R", room).\ngoal(t, agentInRoom, ("A", "R")).\n'
+                       "pf(colour, roomIsX(N), (room,)) :- N = 1..22.\nholds(roomIsX(N), (R,)) :- room(R), N = 1..22.\n")
+    from groundlang.corpus import example_corpus_path, read_state_file
+    from groundlang.model.interpretations import interpretations
+    state = read_state_file(example_corpus_path() / "novel_a.state", "sokoban")
+    lib = TaskLibrary.load([str(library)])
+    read = interpretations(state, lib, enumerate_constraints=False)
+    assert len(read) == 3 and all(len(i.constraint.atoms) == 23 for i in read)
+    with pytest.raises(ValueError, match=r"23 property PFs, and this language model offers each of their 8,388,608 "
+                                         r"conjunctions .* at most 12 PFs"):
+        interpretations(state, lib, enumerate_constraints=True)
 
 
 # --- model.tasks: the adapter for a model.world.State -------------------------------------------
@@ -220,7 +244,7 @@ def test_cli_tasks_json(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["lifted_tasks"] == ["agentToRoom", "toyToRoom", "toyToRoomAgentToRoom"]
     assert out["groundings"][0] == {"task": "agentToRoom", "goal": "agentInRoom(agent0, room1)",
-                                    "constraints": [["roomIsBlue(room1)"], []]}
+                                    "constraints": [["roomIsBlue(room1)"], []], "constraint_count": 2}
     assert len(out["groundings"]) == 6
     # the agent at (1,1), the door at (4,2)
     assert list(out["descriptions"]) == ["room0", "room1", "door0", "block0", "block1"]  # the layout's order

@@ -33,6 +33,7 @@ def register(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from groundlang.logic.groundings import MAX_ENUMERATED_ATOMS
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
     from groundlang.model.pf_tables import TabulationError, library_pf_tables
@@ -45,6 +46,9 @@ def run(args: argparse.Namespace) -> int:
     if args.palette is None and not burlap:
         raise ValueError(f"{args.file}: --palette is required for a state in the corpus's format "
                          "(e.g. --palette sokoban)")
+    # A grounding's binding constraints are every conjunction of its objects' property PFs: listed while a
+    # language model could enumerate them, beyond that the largest alone (the rest are its subsets).
+    listed = 2 ** MAX_ENUMERATED_ATOMS
     state = read_initial_state(args.file, args.palette or DEFAULT_PALETTE)
     renumbered = file_names(args.file)  # the layout's name -> the file's, where they differ
     files = args.library or ([str(resources("groundlang.logic") / "domains" / "williams2018.lp")] if burlap else None)
@@ -81,7 +85,10 @@ def run(args: argparse.Namespace) -> int:
                 {
                     "task": g.task,
                     "goal": g.goal_text,
-                    "constraints": [[str(a) for a in c.atoms] for c in constraints],
+                    # every conjunction while they are few; beyond, the largest (the rest are its subsets)
+                    "constraints": [[str(a) for a in c.atoms]
+                                    for c in (constraints if len(constraints) <= listed else constraints[:1])],
+                    "constraint_count": len(constraints),
                 }
                 for g, constraints in candidates
             ],
@@ -101,8 +108,10 @@ def run(args: argparse.Namespace) -> int:
     print(f"groundings in the initial state of {args.file} ({len(candidates)}):")
     for g, constraints in candidates:
         print(f"  {g.task}: {g.goal_text}")
-        for c in constraints:
+        for c in (constraints if len(constraints) <= listed else constraints[:1]):
             print(f"      {c}")
+        if len(constraints) > listed:
+            print(f"      ... {len(constraints):,} in all: every conjunction of the first's atoms")
     print(f"unary PFs of each object in the initial state, by class ({len(described)} object{'s' * (len(described) != 1)}):")
     for obj, by_class in described.items():
         print(f"  {obj}: " + "; ".join(f"{cls} {', '.join(pfs)}" for cls, pfs in by_class.items()))
