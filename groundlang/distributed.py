@@ -67,7 +67,7 @@ def _check_reachable(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
     given an unreachable address, ``ray.init`` retried for more than ten minutes, printing only its own
     warnings."""
     host, sep, port = address.removeprefix("ray://").rpartition(":")
-    if not sep or not host or not port.isdigit():
+    if not sep or not host or not (port.isascii() and port.isdigit()):  # "²" is a digit to isdigit, not to int
         return  # "auto", or a form Ray itself judges
     if not 0 < int(port) < 65536:
         raise ValueError(f"Ray address {address}: port {port} is not a TCP port (1 to 65535)")

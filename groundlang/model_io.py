@@ -230,7 +230,9 @@ def _read_json(directory: Path, any_version: bool = False) -> dict:
         raise ModelFormatError(f"{path}: not a groundlang model (format field is not {FORMAT!r})")
     if not any_version and meta.get("version") != FORMAT_VERSION:
         raise ModelFormatError(
-            f"{path}: model format version {meta.get('version')!r}, this groundlang reads version {FORMAT_VERSION}; "
+            f"{path}: model format version {meta.get('version')!r}"
+            f"{' (a ' + type(meta.get('version')).__name__ + ')' if not isinstance(meta.get('version'), int) else ''}, "
+            f"this groundlang reads version {FORMAT_VERSION} (a number); "
             "train the model again with `groundlang train`"
         )
     if not any_version and meta.get(CONTENT_HASH) != _content_digest(meta):

@@ -86,6 +86,9 @@ def library_source(path: str | Path) -> Source:
     if not Path(path).is_file() and Path(path).name == str(path) and not Path(path).suffix:
         shipped = library_names()
         if str(path) not in shipped:
+            if Path(path).is_dir():  # "no such file" of a folder that is there read as a contradiction
+                raise IsADirectoryError(21, "a folder, not a library file (name its .lp files), nor a library the "
+                                        f"package ships ({', '.join(shipped)})", str(path))
             raise FileNotFoundError(2, f"no such file, nor a library the package ships ({', '.join(shipped)})", str(path))
         return package_source(shipped[str(path)])
     own = Path(str(files("groundlang.logic"))).resolve()

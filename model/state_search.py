@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import re
 from collections.abc import Sequence
 
 import numpy as np
@@ -46,10 +47,11 @@ def default_max_states() -> int:
     given = os.environ.get(MAX_STATES_VARIABLE, "").strip()
     if not given:
         return DEFAULT_MAX_STATES
-    text = given.replace("_", "").replace(",", "")  # digit groups, "1_000_000"; nothing but them is an error
-    if not text.isdigit() or int(text) < 1:
+    # ASCII digits, grouped as "1_000_000" or "1,000,000" if at all ("1,2,3" is no number; "²" is a digit to
+    # str.isdigit, not to int)
+    if not re.fullmatch(r"[0-9]+|[0-9]{1,3}(,[0-9]{3})+|[0-9]+(_[0-9]+)+", given) or int(given.replace(",", "")) < 1:
         raise StateSpaceError(f"{MAX_STATES_VARIABLE}={os.environ[MAX_STATES_VARIABLE]!r}: expected a positive integer")
-    return int(text)
+    return int(given.replace(",", ""))
 
 
 class StateSpaceError(ValueError):

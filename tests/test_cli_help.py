@@ -61,6 +61,16 @@ def test_an_empty_output_path_is_refused_not_taken_for_no_output(argv, capsys):
     assert "an empty path; expected where to write" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("argv", [["evaluate", "--json", "-"], ["ablate", "--json", "-"], ["train", "-o", "-"]])
+def test_a_dash_is_not_taken_for_a_file_named_dash(argv, capsys):
+    from groundlang.cli import main
+
+    with pytest.raises(SystemExit) as stopped:
+        main(argv)
+    assert stopped.value.code == 2
+    assert "'-' is no file here; name the file to write" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("command", ["check", "domain", "evaluate", "parse", "tasks", "train"])
 def test_an_empty_library_path_is_refused_not_taken_for_the_current_folder(command, capsys):
     from groundlang.cli import main

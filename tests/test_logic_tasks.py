@@ -652,3 +652,15 @@ def test_a_saved_library_that_is_a_shipped_one_word_for_word_is_solved_in_this_p
     assert not again.program.isolated and again.source_text() == text and again.names == shipped.names
     edited = TaskLibrary.from_saved_text(text + "% an edit\n", "model.json:task_library")
     assert edited.program.isolated and edited.names == shipped.names
+
+
+def test_a_library_named_by_a_folder_is_said_to_be_a_folder(tmp_path, monkeypatch):
+    # it had said "no such file" of a folder that is there
+    from groundlang.logic.sources import library_source
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mine").mkdir()
+    with pytest.raises(IsADirectoryError, match=r"a folder, not a library file \(name its .lp files\)"):
+        library_source("mine")
+    with pytest.raises(FileNotFoundError, match="no such file, nor a library the package ships"):
+        library_source("theirs")

@@ -265,7 +265,8 @@ def test_corpus_demonstrations_are_enumerated(shared_corpus):
 
 
 @pytest.mark.parametrize("given, expected", [("", 5_000_000), ("  ", 5_000_000), ("1_000", 1000), ("2,500", 2500),
-                                             ("_", None), (",", None), ("0", None), ("abc", None)])
+                                             ("_", None), (",", None), ("0", None), ("abc", None),
+                                             ("1,000,000", 1_000_000), ("²", None), ("1,2,3", None), ("1__0", None)])
 def test_the_state_limit_from_the_environment(monkeypatch, given, expected):
     from groundlang.model.state_search import default_max_states
 

@@ -37,6 +37,9 @@ def output_path(text: str) -> str:
     no output at all, and the run wrote nothing)."""
     if not text.strip():
         raise argparse.ArgumentTypeError("an empty path; expected where to write")
+    if text == "-":  # read elsewhere as standard output, here it had written a file named "-"
+        raise argparse.ArgumentTypeError("'-' is no file here; name the file to write (a command's report "
+                                         "goes to standard output already)")
     return text
 
 
