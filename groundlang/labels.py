@@ -112,10 +112,18 @@ def check_goal_objects(goal: tuple[Atom, ...], state: State, context: str = "goa
             raise LabelError(f"{context}: {exc}") from None
 
 
-def goal_holds(goal: tuple[Atom, ...] | list[Atom], state: State, library=None) -> bool:
+def goal_holds(goal: tuple[Atom, ...] | list[Atom] | str, state: State, library=None) -> bool:
     """True when every atom of the goal holds in ``state``, as the PF rules of the domain (or of
-    ``library``, a TaskLibrary with PF rules of its own) define it: the tables planning uses.
-    Raises LabelError for unknown predicates or objects."""
+    ``library``, a TaskLibrary with PF rules of its own) define it: the tables planning uses. A goal may
+    be written as the labels CSV writes it, ``"agentInRoom(agent0, room1)"``.
+    Raises LabelError for unknown predicates or objects, or a goal that is neither atoms nor their text."""
+    if isinstance(goal, str):
+        try:
+            goal = parse_goal(goal)
+        except AtomError as exc:
+            raise LabelError(f"goal {goal!r}: {exc}") from None
+    elif not isinstance(goal, (tuple, list)) or not all(isinstance(a, Atom) for a in goal):
+        raise LabelError(f"goal: expected Atoms or their text such as 'agentInRoom(agent0, room1)', got {goal!r:.60}")
     if not goal:
         return True
     tables = library_pf_tables(state.layout, library)

@@ -168,6 +168,11 @@ def test_cli_ask_reads_the_answer_from_stdin(model_dir, capsys, monkeypatch):
     assert "names none of the choices" in out  # the first answer, asked again
     assert "goal that differs); acting on the answer\nplan (1 step): west" in out
     assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room1): reached (goal)" in out
+    # a piped answer is shown as read, an escape sequence escaped (it had cleared the terminal)
+    monkeypatch.setattr("sys.stdin", io.StringIO("\x1b[2Jthe blue one\n"))
+    assert _follow(model_dir, "go to the purple room", "--ask") in (0, 3)
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "'\\x1b[2Jthe blue one'" in out
     monkeypatch.setattr("sys.stdin", io.StringIO(""))  # end of input: nothing done
     assert _follow(model_dir, "go to the purple room", "--ask") == 3
     assert capsys.readouterr().err.strip() == "groundlang follow: no answer named a choice; nothing done"

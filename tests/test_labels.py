@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from groundlang.corpus import parse_state, read_corpus, read_instance
@@ -81,6 +83,17 @@ def test_position_atoms():
     assert not goal_holds(parse_goal("toyInRoom(block0, room1) agentInRoom(agent0, room1)"), s)
     assert goal_holds(parse_goal("toyInRoom(block0, room1) agentInRoom(agent0, room1)"), state("block,12,0,5,2 agent,6,2"))
     assert goal_holds((), s)
+
+
+def test_a_goal_may_be_given_as_its_text_and_anything_else_is_a_label_error():
+    s = state("block,12,0,5,2 agent,6,2")
+    assert goal_holds("toyInRoom(block0, room1) agentInRoom(agent0, room1)", s)
+    assert not goal_holds("toyInRoom(block0, room0)", s)
+    # a string had been read one character at a time ("'a' is not an atom"), a number not at all
+    for bad, piece in ((5, "expected Atoms or their text"), (["toyInRoom"], "expected Atoms or their text"),
+                       ("toyInRoom(", "goal 'toyInRoom(': cannot read an atom")):
+        with pytest.raises(LabelError, match=re.escape(piece)):
+            goal_holds(bad, s)
 
 
 def test_colour_and_shape_atoms():

@@ -98,8 +98,9 @@ def _ask(learner, result, state, max_steps: int, names=None):
                 pass  # the rest of the line, read in bounded pieces and dropped
             print(f"\n  an answer is at most {MAX_ANSWER_CHARS} characters: a choice's number or its words")
             continue
-        if not sys.stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read
-            print(line.strip())
+        if not sys.stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read, as the
+            answer = line.strip()     # command is shown (an escape sequence would act on the terminal)
+            print(answer if answer.isprintable() else ascii(answer))
         try:  # the choices were shown with the file's names: the answer is read with the layout's
             with logged_by_file_names(names or {}):
                 return learner.clarify(result, renamed_words(line, {v: k for k, v in (names or {}).items()}),
