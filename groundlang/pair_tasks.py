@@ -5,9 +5,9 @@ and description that holds in all of its end states and not in all of its start 
 command is correct when the final state satisfies all of them. Pairs lie in different layouts ("the
 red room" is room0 in one, room2 in the next), so facts are lifted: a position PF that holds, with
 each argument replaced by one thing said of it (its class or one of its property PFs: a colour, a
-shape, a size, "the largest room"), e.g. ``agentInRoom(agent, roomIsRed)`` or
-``agentNextToToy(agent, toyIsChair)``. What holds, and what is said of an object, are read from the
-PF tables (``model.pf_tables``): the domain's ASP, nothing written here.
+shape, a size, "the largest room", or what it holds there, "the room with the chair"), e.g.
+``agentInRoom(agent, roomIsRed)`` or ``agentNextToToy(agent, toyIsChair)``. What holds, and what is said
+of an object, are read from the PF tables (``model.pf_tables``): the domain's ASP, nothing written here.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from itertools import product
 from groundlang.logic.program import AspError
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.logic.atoms import Atom
+from groundlang.logic.classes import domain_classes
 from groundlang.model.pf_tables import PFTables, library_pf_tables
 from groundlang.model.relevance import AbstractStateSpace, state_space_for
 from groundlang.model.statespace import StateSpaceError
@@ -45,13 +46,33 @@ def _said(tables: PFTables) -> dict[str, tuple[str, ...]]:
     return {name: tuple(sorted(set(said), key=said.index)) for name, said in out.items()}
 
 
+def _with_what_they_hold(said: dict[str, tuple[str, ...]], holding: list[Atom], objects: dict[str, str],
+                         relations: frozenset[str] | None) -> dict[str, tuple[str, ...]]:
+    """``said``, each object also said by what a relation of two objects holding in this state puts in it, as
+    its second argument: "the room with the chair", ``toyInRoom(toyIsChair, _)``, one for each thing said of
+    the chair. The corpus's README counts a room by what it holds among the descriptions a task is judged by;
+    the addressee (the agent, "you") is never what a room is said to hold."""
+    addressee = domain_classes().addressee
+    out = {name: list(ways) for name, ways in said.items()}
+    for atom in holding:
+        if len(atom.args) != 2 or (relations is not None and atom.predicate not in relations):
+            continue
+        held, holder = atom.args
+        if objects[held] in addressee or objects[holder] in addressee:
+            continue
+        out[holder] += [f"{atom.predicate}({way}, _)" for way in said[held]]
+    return {name: tuple(ways) for name, ways in out.items()}
+
+
 def lifted_facts(state: State, library: TaskLibrary | None = None) -> frozenset[Atom]:
     """Every lifted fact of ``state``: each relation (:func:`_relations`) that holds, with its arguments said every way
-    (an Atom whose arguments are what is said of the objects, ``agentInRoom(agent, roomIsRed)``)."""
+    (an Atom whose arguments are what is said of the objects, ``agentInRoom(agent, roomIsRed)``, and by what
+    they hold there, ``agentInRoom(agent, toyInRoom(toyIsChair, _))``)."""
     tables = library_pf_tables(state.layout, library)
-    said = _said(tables)
     relations = _relations(library)
-    return frozenset(Atom(atom.predicate, combo) for atom in tables.position_holding(state.positions)
+    holding = tables.position_holding(state.positions)
+    said = _with_what_they_hold(_said(tables), holding, tables.objects, relations)
+    return frozenset(Atom(atom.predicate, combo) for atom in holding
                      if relations is None or atom.predicate in relations
                      for combo in product(*(said[o] for o in atom.args)))
 

@@ -185,7 +185,7 @@ fig.tight_layout()
 # %% [markdown]
 # ### The four phrases
 #
-# The same for a command of each phrase: the lifted task the words make most probable in each of its first two layouts, and what its pairs show. "The room with the chair" is not read as a relation: a room is described by its own properties only (README, "Not built"), so the room that holds the chair is not singled out by these words; what the corpus's pairs for such commands show is printed beside it.
+# The same for a command of each phrase: the lifted task the words make most probable in each of its first two layouts, and what its pairs show. By default "the room with the chair" is not read as a relation (`relational_descriptions` is off: README, the Williams section), so the words do not single out the room that holds the chair; what the pairs show is printed beside it, the room said by what it holds (`agentInRoom(agent, toyInRoom(toyIsChair, _))`), as the corpus README judges.
 
 # %%
 for phrase in PHRASES:
