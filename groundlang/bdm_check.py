@@ -63,7 +63,8 @@ def check_bdm(args: argparse.Namespace) -> int:
     distinct = len({c.text for c in commands})
     print(f"commands: {len(commands)} ({distinct} distinct text{'' if distinct == 1 else 's'})")
     print(f"pairs: {len(pairs)}; distinct layouts: {len(layouts)}")
-    print("pairs by grid and blocks: " + ", ".join(f"{w}x{h} with {k}: {n}" for (w, h, k), n in sorted(sizes.items())))
+    # A grid by its largest x and y, as the corpus names its layouts (8x8: x and y from 0 to 8, 9 cells a side).
+    print("pairs by grid (largest x by largest y) and blocks: " + ", ".join(f"{w}x{h} with {k}: {n}" for (w, h, k), n in sorted(sizes.items())))
     print(f"pairs whose end state cannot be reached from the start: {len(unreachable)}")
     for command, pair in unreachable:
         print(f"  {command.path}, line {pair.line}: {command.text!r}")

@@ -75,6 +75,8 @@ def test_check_reports_the_fixture():
     assert "commands: 2 (2 distinct texts)" in done.stdout and "pairs: 6; distinct layouts: 6" in done.stdout
     assert "pairs whose end state cannot be reached from the start: 0" in done.stdout
     assert "commands whose pairs show no task: 0" in done.stdout
+    # grids named as the corpus names them, by the largest x and y (9 cells a side is 8x8), and said so
+    assert "pairs by grid (largest x by largest y) and blocks: 8x8 with 0: 3, 8x8 with 1: 2, 8x8 with 2: 1" in done.stdout
 
 
 @pytest.mark.parametrize("text, piece", [
