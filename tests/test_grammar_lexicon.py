@@ -224,7 +224,12 @@ def test_a_synonym_is_read_as_its_word_before_multiword_entries_are_joined():
     """The Williams domain is drawn north up: "east" is read as "right", so "one spot east of the chair"
     is "right of" it and "the west side of" is "the left side of"; English alone keeps the compass words."""
     williams = CLEANUP.with_files(WILLIAMS_WORDS)
-    assert williams.synonyms == {"east": ("right",), "west": ("left",)}
+    assert williams.synonyms == {"east": ("right",), "west": ("left",), "big": ("large",), "bigger": ("larger",),
+                                 "biggest": ("largest",), "tiny": ("small",), "tinier": ("smaller",),
+                                 "tiniest": ("smallest",), "little": ("small",)}
+    # degrees of size said with other words are the words the superlatives are learned from
+    assert tokenise("go to the biggest room", williams)[3] == "largest"
+    assert tokenise("go next to the tiny box", williams)[3] == "small"
     assert tokenise("move to one spot east of the red chair", williams)[4] == "right_of"
     assert tokenise("go to the West side of the chair", williams)[1] == "to_the_left_side_of"
     assert tokenise("move to the chair in the northeast room", williams)[-2] == "northeast"
