@@ -382,5 +382,6 @@ def _command(path: Path, line: int, block: list[tuple[int, str]], palette,
                 raise CorpusError(f"{path}, line {rest[k - 1][0]}: --- at line {rest[k - 1][0]} is followed by no "
                                   f"pair{found}; --- separates two pairs of one command (remove it, or add the pair)")
     if not pairs:
-        raise CorpusError(f"{path}, line {line}: the command {text[:40]!r} has no (start, end) pair")
+        raise CorpusError(f"{path}, line {line}: the command {text[:40]!r} has no (start, end) pair (its pairs "
+                          f"follow it with no blank line between: a blank line ends a command)")
     return Command(path, line, text, tuple(pairs))

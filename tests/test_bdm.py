@@ -112,6 +112,9 @@ def test_check_reports_the_fixture():
     # a command needs a word: punctuation or control characters alone say nothing to learn from
     ("go\nSTATE\nSTATE\ntrue\n\n?! ...\nSTATE\nSTATE\ntrue\n", "line 6: the command has no word, only punctuation ('?! ...')"),
     ("\x00\x07\nSTATE\nSTATE\ntrue\n", "line 1: the command is empty or only whitespace"),
+    # a blank line after the command ends its block: the message says why it has no pair
+    ("go\n\nSTATE\nSTATE\ntrue\n", "line 1: the command 'go' has no (start, end) pair (its pairs follow it with "
+                                   "no blank line between: a blank line ends a command)"),
 ])
 def test_bad_files_are_one_line_naming_file_and_line(tmp_path, text, piece):
     room = "room0 (room): [top: {4} left: {0} bottom: {0} right: {4} colour: {%s} ]"
