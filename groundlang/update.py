@@ -17,6 +17,7 @@ from groundlang.confidence import GoalGroup
 from groundlang.corpus import Instance
 from groundlang.inference.incremental import fold_in, grow_words, word_totals
 from groundlang.inference.likelihoods import behaviour_likelihood_table
+from groundlang.labels import goal_holds
 from groundlang.logic.atoms import Atom, format_goal, parse_goal, shown
 from groundlang.model.encoding import Observation
 from groundlang.model.vocabulary import Vocabulary
@@ -93,6 +94,11 @@ def update_learner(learner, command: str, state, demonstration: Sequence | str |
     if demonstration is not None:
         actions = as_actions(demonstration)
         example = Instance(Path("<update>"), command, actions, replay(state, actions))
+        if goal is not None and not any(goal_holds(i.goal, example.final_state, learner.library) for i in interps):
+            # with the goal given, the demonstration only weighs its groundings against each other: one that
+            # never reaches it would be folded in as if it did
+            raise ValueError(f"update: the demonstration ends where goal {format_goal(interps[0].goal)} does not hold; "
+                             "give one that reaches it, or the goal alone")
         if habits is not None:  # what the demonstration left true besides its goal
             habits = habits.plus([(example.initial_state, example.final_state)], learner.library)
         goals = sorted({i.goal for i in interps})

@@ -136,6 +136,9 @@ def test_bad_updates_are_refused_and_leave_the_model_as_it_was(learner, novel_b)
         learner.update("go to the purple room", novel_b, demonstration=[])
     with pytest.raises(TypeError, match="goal must be"):
         learner.update("go to the purple room", novel_b, goal=3)
+    # a demonstration and a goal it never reaches (it had been folded in as if it did: "mauve" learned as red)
+    with pytest.raises(ValueError, match=r"the demonstration ends where goal agentInRoom\(agent0, room0\) does not hold"):
+        learner.update("go to the mauve room", novel_b, demonstration=["east"], goal="agentInRoom(agent0, room0)")
     other = parse_state(ORANGE_LAYOUT.replace("room,10,", "room,1,").replace("room,8,", "room,2,")
                         .replace("room,5,", "room,3,").replace("block,12,", "block,4,"), "sokoban2")
     with pytest.raises(ValueError, match="palette"):
