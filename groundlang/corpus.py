@@ -193,6 +193,9 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
     if not lines:
         raise CorpusError(f"{path}: the file is empty; expected a command line, an action line and state lines")
     if len(lines) < 2:
+        if path.suffix == ".state":  # a layout alone, as follow --env takes: its line is no command
+            raise CorpusError(f"{path}: a .state file holds a layout, no demonstration; expected a corpus file "
+                              "(a command line, an action line and state lines)")
         raise CorpusError(f"{path}, line 2: missing; expected the actions (comma separated) after the command")
     command = lines[0].strip()
     fault = command_fault(command)

@@ -61,3 +61,12 @@ def test_irl_table_on_the_shipped_examples_has_headings_words_and_ids(capsys):
 def test_irl_missing_file_is_exit_code_2(tmp_path, capsys):
     assert main(["irl", str(tmp_path / "nope.txt"), "--palette", "sokoban"]) == 2
     assert "groundlang irl: error" in capsys.readouterr().err
+
+
+def test_irl_given_a_state_file_says_it_holds_no_demonstration(capsys):
+    # its layout line had been read as a command, and the error asked for the actions on line 2
+    from groundlang.corpus import example_corpus_path
+
+    assert main(["irl", str(example_corpus_path() / "novel_a.state"), "--palette", "sokoban"]) == 2
+    err = capsys.readouterr().err
+    assert "novel_a.state: a .state file holds a layout, no demonstration; expected a corpus file" in err
