@@ -30,7 +30,7 @@ from groundlang.model.statespace import StateSpace
 __all__ = [
     "GoalGroup", "group_goals", "expected_calibration_error", "risk_coverage", "accuracy_at_coverage",
     "auroc", "reliability", "calibration_report", "format_calibration", "choose_threshold", "unachievable_goals",
-    "GoalMasks", "given_achievable",
+    "GoalMasks", "given_achievable", "out_of_reach",
 ]
 
 # Goals below this probability are not compared by their masks: they cannot change the
@@ -127,6 +127,21 @@ def unachievable_goals(goals: Sequence[tuple[Atom, ...]], space: StateSpace, lib
     goals = list(goals)
     masks.prepare(goals)
     return {goal for goal in goals if not masks.mask(goal).any()}
+
+
+def out_of_reach(probabilities: np.ndarray, goals: Sequence[tuple[Atom, ...]],
+                 masks: GoalMasks) -> tuple[float, tuple[Atom, ...] | None]:
+    """How much of ``probabilities`` (of readings whose goals are ``goals``) is on goals no reachable state of
+    ``masks``' space satisfies, and the most probable of those goals (None where there is none)."""
+    out = unachievable_goals(set(goals), masks.space, masks=masks)
+    if not out:
+        return 0.0, None
+    mass: dict[tuple[Atom, ...], float] = {}
+    for goal, p in zip(goals, probabilities):
+        if goal in out:
+            mass[goal] = mass.get(goal, 0.0) + float(p)
+    best = most_probable_first(list(mass.items()), lambda kv: kv[1])[0][0]
+    return float(sum(mass.values())), best
 
 
 def given_achievable(probabilities: np.ndarray, goals: Sequence[tuple[Atom, ...]], masks: GoalMasks) -> np.ndarray:

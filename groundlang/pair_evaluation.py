@@ -210,7 +210,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                 names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
                 row.update(goal=format_goal(result.goal, names),
                            final_state=format_bdm_state(result.final_state, pair.toy_names),
-                           confidence=float(result.confidence))
+                           confidence=float(result.confidence), out_of_reach=float(result.posterior.out_of_reach))
                 missing = task - lifted_facts(result.final_state, library)  # pair_tasks.satisfies, keeping what is unmet
                 kind = failure_kind(result.goal, task, missing, result.reached) if missing else None
             hit = bool(task) and kind is None

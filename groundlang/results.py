@@ -28,6 +28,10 @@ class Posterior:
             first (:func:`groundlang.confidence.group_goals`); None when no state space was
             consulted, and then every goal is its own group.
 
+        out_of_reach: how much of the words' posterior, before it was conditioned on an achievable goal
+            (the language model's ``achievable_goals``), lay on goals no state the agent can reach
+            satisfies; ``out_of_reach_goal`` the most probable of those (None where there is none).
+
     ``confidence`` is the probability of the goal acted on (:attr:`best_goal`), ``margin``
     its lead over the next goal that differs in the world.
     """
@@ -38,6 +42,8 @@ class Posterior:
     readings: list = field(default_factory=list)  # grammar Readings
     reading_probabilities: np.ndarray | None = None  # [R] posterior over readings
     groups: list[GoalGroup] | None = None
+    out_of_reach: float = 0.0
+    out_of_reach_goal: tuple[Atom, ...] | None = None
 
     def __post_init__(self) -> None:
         # A model whose tables pass the loader's checks (finite numbers of the right shapes) may still not

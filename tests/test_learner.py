@@ -92,6 +92,19 @@ def test_lexicon_ties_colour_words_to_room_pfs(learner):
     assert lexicon["push"][0][0] == "toyToRoom"
 
 
+def test_the_posterior_says_how_much_of_the_words_asked_for_what_cannot_be_done(learner):
+    # the star in a corner of the red room cannot be pushed out: conditioned on an achievable goal the words
+    # are read as a walk, and out_of_reach keeps what they had asked for
+    from groundlang.corpus import parse_state
+
+    corner = parse_state("room,1,0,10,6,5 room,5,6,10,12,5 room,10,0,5,12,0 door,6,8,6,8 door,3,5,3,5 "
+                         "door,9,5,9,5 block,12,0,1,1 agent,9,5", "sokoban")
+    stuck = learner.posterior("take the star to the green room", corner)
+    assert stuck.out_of_reach > 0.99 and format_goal(stuck.out_of_reach_goal) == "toyInRoom(block0, room1)"
+    assert not any(g[0].predicate == "toyInRoom" and g[0].args[1] == "room1" for g, p in stuck.goals() if p > 0)
+    assert learner.posterior("go to the green room", corner).out_of_reach < 0.01
+
+
 def test_lexicon_keeps_a_meaning_whose_words_are_synonyms(corpus):
     # bag of words spreads agentToRoom over go, walk, enter and room (16 words in all): its row had been
     # dropped as flat, and "go" read as a colour word

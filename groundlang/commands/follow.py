@@ -206,6 +206,7 @@ def run(args: argparse.Namespace) -> int:
                                  "probability": p} for g, p in goals],
             "confidence": result.posterior.confidence,
             "margin": result.posterior.margin,
+            "out_of_reach": result.posterior.out_of_reach,
             "abstained": result.abstained,
         }
         if result.abstained:
