@@ -23,52 +23,70 @@ class BindingConstraints(Sequence):
     """Every conjunction of a grounding's constraint ``atoms`` (all 2^k subsets), largest first, the empty
     one last, made as they are read: a grounding whose objects have many property PFs (a library of
     twenty colours of its own) costs its largest conjunction, not 2^20 of them, until a language model
-    that enumerates them asks (:data:`MAX_ENUMERATED_ATOMS` bounds that)."""
+    that enumerates them asks (:data:`MAX_ENUMERATED_ATOMS` bounds that). ``count`` is how many there are;
+    ``len()`` says so too where Python can hold it (up to 62 atoms)."""
+
+    __slots__ = ("_atoms",)
 
     def __init__(self, atoms: Iterable[Atom]):
-        self.atoms = tuple(atoms)
+        self._atoms = tuple(atoms)
+
+    @property
+    def atoms(self) -> tuple[Atom, ...]:
+        return self._atoms
+
+    @property
+    def count(self) -> int:
+        return 2 ** len(self._atoms)
 
     def __len__(self) -> int:
-        return 2 ** len(self.atoms)
+        return self.count
+
+    def __bool__(self) -> bool:
+        return True  # the empty conjunction is always one of them
 
     def __iter__(self) -> Iterator[BindingConstraint]:
-        for k in range(len(self.atoms), -1, -1):
-            for c in combinations(self.atoms, k):
+        for k in range(len(self._atoms), -1, -1):
+            for c in combinations(self._atoms, k):
                 yield BindingConstraint(c)
 
     def __getitem__(self, index):
         if isinstance(index, slice):
-            return [self[i] for i in range(*index.indices(len(self)))]
-        n = len(self)
+            return [self[i] for i in range(*index.indices(self.count))]
+        if isinstance(index, bool) or not isinstance(index, int):
+            raise TypeError(f"binding constraint indices are whole numbers, not {type(index).__name__}")
+        n = self.count
         if not -n <= index < n:
             raise IndexError("binding constraint index out of range")
         index %= n
-        for k in range(len(self.atoms), -1, -1):  # the conjunctions of k atoms come as one block
-            block = comb(len(self.atoms), k)
+        for k in range(len(self._atoms), -1, -1):  # the conjunctions of k atoms come as one block
+            block = comb(len(self._atoms), k)
             if index < block:
-                return BindingConstraint(next(islice(combinations(self.atoms, k), index, None)))
+                return BindingConstraint(next(islice(combinations(self._atoms, k), index, None)))
             index -= block
         raise AssertionError("unreachable")
 
     @property
     def largest(self) -> BindingConstraint:
-        return BindingConstraint(self.atoms)
+        return BindingConstraint(self._atoms)
 
     def __eq__(self, other) -> bool:
-        if isinstance(other, (list, tuple)):  # as the list of them was (the lengths first: no 2^k list is made)
-            return len(other) == len(self) and list(self) == list(other)
-        return isinstance(other, BindingConstraints) and other.atoms == self.atoms
+        if isinstance(other, BindingConstraints):
+            return other._atoms == self._atoms
+        if isinstance(other, list):  # as the list of them was (a list has no hash to disagree with)
+            return len(other) == self.count and list(self) == other
+        return NotImplemented
 
     def __hash__(self) -> int:
-        return hash(self.atoms)
+        return hash(self._atoms)
 
     def __repr__(self) -> str:
-        return f"BindingConstraints({len(self.atoms)} atoms, {len(self)} conjunctions)"
+        return f"BindingConstraints({len(self._atoms)} atoms, {self.count} conjunctions)"
 
 
-# A language model that offers every conjunction as an interpretation of its own (bag of words, IBM Model 2,
-# the parse model without ``largest_constraint``) offers 2^k per grounding: beyond this many atoms it is refused
-# with one line rather than growing without bound.
+# A language model that offers every conjunction as an interpretation of its own (bag of words, the parse
+# model with ``largest_constraint`` off) offers 2^k per grounding: beyond this many atoms it is refused with
+# one line rather than growing without bound.
 MAX_ENUMERATED_ATOMS = 12
 
 
@@ -91,7 +109,7 @@ Relations = dict[str, tuple[tuple[str, int, str], ...]]
 
 def enumerate_groundings(
     library: TaskLibrary, facts: str, *, time_limit: float | None = None
-) -> list[tuple[GroundedTask, list[BindingConstraint]]]:
+) -> list[tuple[GroundedTask, BindingConstraints]]:
     """Every permissible grounding not true initially, with its binding constraints (lazily): the first part
     of :func:`ground_environment`."""
     return ground_environment(library, facts, time_limit=time_limit)[0]
@@ -100,7 +118,7 @@ def enumerate_groundings(
 def ground_environment(
     library: TaskLibrary, facts: str, *, time_limit: float | None = None, environment: str | None = None,
     wholly_true: bool = False,
-) -> tuple[list[tuple[GroundedTask, list[BindingConstraint]]], Descriptions, PFTerms, Relations]:
+) -> tuple[list[tuple[GroundedTask, BindingConstraints]], Descriptions, PFTerms, Relations]:
     """Every permissible grounding not true initially (with ``wholly_true``, those too), with its
     binding constraints; the
     unary PFs of every class but position true of each object, by class

@@ -289,11 +289,11 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
             roles = _roles(task, largest, state, library, described, starts, relation_words, relations, bystander_roles)
             result.append(Interpretation(task, largest, log_prior_t, roles))
             continue
-        if len(constraints) > 2 ** MAX_ENUMERATED_ATOMS:
+        if len(constraints[0].atoms) > MAX_ENUMERATED_ATOMS:
             raise ValueError(f"{task}: its bound objects have {len(constraints[0].atoms)} property PFs, and this "
-                             f"language model offers each of their {len(constraints):,} conjunctions as a reading of "
-                             f"its own; at most {MAX_ENUMERATED_ATOMS} PFs (the parse model's largest_constraint "
-                             "offers the largest alone)")
+                             f"language model offers each of their {2 ** len(constraints[0].atoms):,} conjunctions as "
+                             f"a reading of its own; at most {MAX_ENUMERATED_ATOMS} PFs (the parse model's "
+                             "largest_constraint offers the largest alone)")
         for constraint in constraints:
             result.append(
                 Interpretation(

@@ -161,13 +161,13 @@ def narrow_by_known(
         if any(v not in binding for v in known):
             continue
         required = {Atom(p, (binding[v],)) for v, pfs in known.items() for p in pfs}
-        if len(constraints) > 2 ** MAX_ENUMERATED_ATOMS:
-            raise ValueError(f"{grounded}: its bound objects have {len(constraints[0].atoms)} property PFs, whose "
-                             f"{len(constraints):,} conjunctions would each be kept; at most {MAX_ENUMERATED_ATOMS} PFs")
         # The first (largest) constraint holds every colour/shape PF true of the bound objects.
         true_atoms = set(constraints[0].atoms) if constraints else set()
         if not required <= true_atoms:
             continue
+        if len(true_atoms) > MAX_ENUMERATED_ATOMS:
+            raise ValueError(f"{grounded}: its bound objects have {len(true_atoms)} property PFs, whose "
+                             f"{2 ** len(true_atoms):,} conjunctions would each be kept; at most {MAX_ENUMERATED_ATOMS} PFs")
         consistent = tuple(c for c in constraints if required <= set(c.atoms))
         kept.append((grounded, consistent))
     if not kept:

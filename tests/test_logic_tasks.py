@@ -171,15 +171,24 @@ def test_binding_constraints_are_all_subsets_largest_first():
         cs[8]
     many = binding_constraints(A(f"roomIsRed(room{k})") for k in range(40))  # 2^40: made only as read
     assert len(many) == 2 ** 40 and len(many[0].atoms) == 40 and many[-1].atoms == () and many[1].atoms[-1] == A("roomIsRed(room38)")
+    # past what len() can hold (63 atoms and more) it is read all the same, its size said by count
+    huge = binding_constraints(A(f"roomIsRed(room{k})") for k in range(70))
+    assert huge and huge.count == 2 ** 70 and huge[0] == huge.largest and huge[-1].atoms == () and huge == huge
+    with pytest.raises(TypeError, match="whole numbers"):
+        cs[1.5]
+    assert cs != tuple(cs) and cs == list(cs)  # equal to the list it replaced; a tuple's hash would disagree
 
 
-def test_a_library_of_many_properties_is_refused_by_enumerating_models_and_bounded_for_the_parse_model(tmp_path):
+def test_a_library_of_many_properties_is_refused_by_enumerating_models_and_bounded_for_the_parse_model(tmp_path, capsys):
     # 22 colours of the library's own on every room: 2^23 conjunctions per grounding had been built for
     # every grounding (memory without bound, past any --time-limit); now the parse model reads the largest
     # and a model that offers every conjunction as a reading is refused with one line
     library = tmp_path / "many.lp"
     library.write_text('task(t).\nvar(t, "A", agent).\nvar(t, "R", room).\ngoal(t, agentInRoom, ("A", "R")).\n'
                        "pf(colour, roomIsX(N), (room,)) :- N = 1..22.\nholds(roomIsX(N), (R,)) :- room(R), N = 1..22.\n")
+    wide = tmp_path / "wide.lp"  # 70 of its own: more conjunctions than len() can say
+    wide.write_text(library.read_text().replace("1..22", "1..69"))
+    from groundlang.cli import main
     from groundlang.corpus import example_corpus_path, read_state_file
     from groundlang.model.interpretations import interpretations
     state = read_state_file(example_corpus_path() / "novel_a.state", "sokoban")
@@ -189,6 +198,12 @@ def test_a_library_of_many_properties_is_refused_by_enumerating_models_and_bound
     with pytest.raises(ValueError, match=r"23 property PFs, and this language model offers each of their 8,388,608 "
                                          r"conjunctions .* at most 12 PFs"):
         interpretations(state, lib, enumerate_constraints=True)
+    read = interpretations(state, TaskLibrary.load([str(wide)]), enumerate_constraints=False)
+    assert len(read) == 3 and all(len(i.constraint.atoms) == 70 for i in read)
+    assert main(["tasks", str(example_corpus_path() / "novel_a.state"), "--palette", "sokoban", "--library", str(wide),
+                 "--json"]) == 0
+    listed = json.loads(capsys.readouterr().out)["groundings"][0]
+    assert listed["constraint_count"] == 2 ** 70 and len(listed["constraints"]) == 1 and len(listed["constraints"][0]) == 70
 
 
 # --- model.tasks: the adapter for a model.world.State -------------------------------------------

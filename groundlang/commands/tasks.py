@@ -87,8 +87,8 @@ def run(args: argparse.Namespace) -> int:
                     "goal": g.goal_text,
                     # every conjunction while they are few; beyond, the largest (the rest are its subsets)
                     "constraints": [[str(a) for a in c.atoms]
-                                    for c in (constraints if len(constraints) <= listed else constraints[:1])],
-                    "constraint_count": len(constraints),
+                                    for c in (constraints if constraints.count <= listed else constraints[:1])],
+                    "constraint_count": constraints.count,
                 }
                 for g, constraints in candidates
             ],
@@ -108,10 +108,10 @@ def run(args: argparse.Namespace) -> int:
     print(f"groundings in the initial state of {args.file} ({len(candidates)}):")
     for g, constraints in candidates:
         print(f"  {g.task}: {g.goal_text}")
-        for c in (constraints if len(constraints) <= listed else constraints[:1]):
+        for c in (constraints if constraints.count <= listed else constraints[:1]):
             print(f"      {c}")
-        if len(constraints) > listed:
-            print(f"      ... {len(constraints):,} in all: every conjunction of the first's atoms")
+        if constraints.count > listed:
+            print(f"      ... {constraints.count:,} in all: every conjunction of the first's atoms")
     print(f"unary PFs of each object in the initial state, by class ({len(described)} object{'s' * (len(described) != 1)}):")
     for obj, by_class in described.items():
         print(f"  {obj}: " + "; ".join(f"{cls} {', '.join(pfs)}" for cls, pfs in by_class.items()))
