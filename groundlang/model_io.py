@@ -229,10 +229,11 @@ def _read_json(directory: Path, any_version: bool = False) -> dict:
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise ModelFormatError(f"{path}: not a groundlang model (format field is not {FORMAT!r})")
     if not any_version and meta.get("version") != FORMAT_VERSION:
+        version = meta.get("version")
+        given = ("no model format version" if version is None else f"model format version {version!r}"
+                 + ("" if isinstance(version, int) else f" (a {type(version).__name__}, not a number)"))
         raise ModelFormatError(
-            f"{path}: model format version {meta.get('version')!r}"
-            f"{' (a ' + type(meta.get('version')).__name__ + ')' if not isinstance(meta.get('version'), int) else ''}, "
-            f"this groundlang reads version {FORMAT_VERSION} (a number); "
+            f"{path}: {given}, this groundlang reads version {FORMAT_VERSION}; "
             "train the model again with `groundlang train`"
         )
     if not any_version and meta.get(CONTENT_HASH) != _content_digest(meta):

@@ -30,7 +30,9 @@ class Posterior:
 
         out_of_reach: how much of the words' posterior, before it was conditioned on an achievable goal
             (the language model's ``achievable_goals``), lay on goals no state the agent can reach
-            satisfies; ``out_of_reach_goal`` the most probable of those (None where there is none).
+            satisfies; ``out_of_reach_goal`` the most probable of those (None where there is none). 0 also
+            where nothing can be said out of reach: ``achievable_goals`` off, or a relevance abstraction or
+            a sample of placements instead of the enumerated layout.
 
     ``confidence`` is the probability of the goal acted on (:attr:`best_goal`), ``margin``
     its lead over the next goal that differs in the world.

@@ -119,6 +119,12 @@ MODEL_DIRS: dict[str, tuple[Callable[[Path], None], list[str]]] = {
                                           ["model files are incomplete or corrupt", "BadZipFile"]),
     "JSON from format version 99": (_set_version, ["model.json: model format version 99",
                                                    f"this groundlang reads version {FORMAT_VERSION}", "train the model again"]),
+    # the version as text reads as a contradiction unless its type is said; none at all is said so
+    "JSON with the version as text": (lambda d: _edit_meta(d, lambda meta: meta.update(version=str(FORMAT_VERSION))),
+                                      [f"model format version '{FORMAT_VERSION}' (a str, not a number), this groundlang "
+                                       f"reads version {FORMAT_VERSION}"]),
+    "JSON with no version": (lambda d: _edit_meta(d, lambda meta: meta.pop("version")),
+                             [f"model.json: no model format version, this groundlang reads version {FORMAT_VERSION}"]),
     "globals.npz swapped for a PNG": (lambda d: _tensors(d).write_bytes(PNG),
                                       [".npz: contents do not match the hash"]),
     "globals.npz swapped for a PNG, hash rewritten": (
