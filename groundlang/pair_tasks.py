@@ -47,34 +47,37 @@ def _said(tables: PFTables) -> dict[str, tuple[str, ...]]:
 
 
 def _with_what_they_hold(said: dict[str, tuple[str, ...]], holding: list[Atom], objects: dict[str, str],
-                         relations: frozenset[str] | None) -> dict[str, tuple[str, ...]]:
-    """``said``, each object also said by what a relation of two objects holding in this state puts in it, as
-    its second argument: "the room with the chair", ``toyInRoom(toyIsChair, _)``, one for each thing said of
-    the chair. The corpus's README counts a room by what it holds among the descriptions a task is judged by;
-    the addressee (the agent, "you") is never what a room is said to hold."""
+                         relations: frozenset[str] | None) -> dict[str, list[tuple[str, str | None]]]:
+    """Each object's ways of being said, with the object each way goes through (None for its own class and
+    properties): also by what a relation of two objects holding in this state puts in it, as its second
+    argument, "the room with the chair", ``toyInRoom(toyIsChair, _)`` through the chair, one for each thing
+    said of the chair. The corpus's README counts a room by what it holds among the descriptions a task is
+    judged by; the addressee (the agent, "you") neither holds nor is held in such a description."""
     addressee = domain_classes().addressee
-    out = {name: list(ways) for name, ways in said.items()}
+    out = {name: [(way, None) for way in ways] for name, ways in said.items()}
     for atom in holding:
         if len(atom.args) != 2 or (relations is not None and atom.predicate not in relations):
             continue
         held, holder = atom.args
         if objects[held] in addressee or objects[holder] in addressee:
             continue
-        out[holder] += [f"{atom.predicate}({way}, _)" for way in said[held]]
-    return {name: tuple(ways) for name, ways in out.items()}
+        out[holder] += [(f"{atom.predicate}({way}, _)", held) for way in said[held]]
+    return out
 
 
 def lifted_facts(state: State, library: TaskLibrary | None = None) -> frozenset[Atom]:
     """Every lifted fact of ``state``: each relation (:func:`_relations`) that holds, with its arguments said every way
     (an Atom whose arguments are what is said of the objects, ``agentInRoom(agent, roomIsRed)``, and by what
-    they hold there, ``agentInRoom(agent, toyInRoom(toyIsChair, _))``)."""
+    they hold there, ``agentInRoom(agent, toyInRoom(toyIsChair, _))``; never through another argument of the
+    same fact: the chair's room is not "the room with the chair" in the fact that puts the chair there)."""
     tables = library_pf_tables(state.layout, library)
     relations = _relations(library)
     holding = tables.position_holding(state.positions)
     said = _with_what_they_hold(_said(tables), holding, tables.objects, relations)
     return frozenset(Atom(atom.predicate, combo) for atom in holding
                      if relations is None or atom.predicate in relations
-                     for combo in product(*(said[o] for o in atom.args)))
+                     for combo in product(*([way for way, via in said[o] if via not in atom.args]
+                                            for o in atom.args)))
 
 
 def _relations(library: TaskLibrary | None) -> frozenset[str] | None:

@@ -11,7 +11,7 @@ import pytest
 from groundlang.bdm import format_bdm_state, parse_bdm_state, read_bdm
 from groundlang.corpus import CorpusError, read_initial_state
 from groundlang.logic.atoms import Atom
-from groundlang.pair_tasks import covers, pair_task, reachable, satisfies
+from groundlang.pair_tasks import covers, lifted_facts, pair_task, reachable, satisfies
 
 FIXTURE = Path(__file__).parent / "fixtures" / "williams2018"
 SHARED = Path(__file__).parent.parent.parent / "shared" / "data" / "williams2018" / "train"
@@ -50,6 +50,20 @@ def test_the_tasks_pairs_show_are_lifted_facts(williams_commands, williams_libra
         Atom("agentInRoom", ("agent", "toyInRoom(toyIsChair, _)")), Atom("agentInRoom", ("agent", "toyInRoom(toy, _)"))}
     for c, task in zip(williams_commands, (largest, chair)):
         assert all(satisfies(p.end, task, williams_library) and not satisfies(p.start, task, williams_library) for p in c.pairs)
+
+
+def test_a_room_is_said_by_what_it_holds_never_through_the_fact_itself(williams_commands, williams_library):
+    # the blue chair and the large box both in the red room (room0), the agent in the green room
+    line = format_bdm_state(williams_commands[1].pairs[0].start).replace("x: {6} y: {6} shape: {box}",
+                                                                          "x: {2} y: {2} shape: {box}")
+    facts = {str(a) for a in lifted_facts(parse_bdm_state(line)[0], williams_library)}
+    assert "toyInRoom(toyIsChair, toyInRoom(toyIsBox, _))" in facts  # the room with the box holds the chair
+    assert "toyInRoom(toyIsBox, toyInRoom(toyIsChair, _))" in facts
+    assert "toyInRoom(toyIsChair, roomIsRed)" in facts
+    # not the chair's room as "the room with the chair" in the fact that puts the chair there
+    assert not any(f.startswith("toyInRoom(toyIsChair, toyInRoom(toyIsChair") for f in facts)
+    assert "agentInRoom(agent, roomIsGreen)" in facts
+    assert not any("agentInRoom(" in f.split(", ", 1)[1] for f in facts if ", " in f)  # the agent holds nothing
 
 
 def test_reachability(williams_commands, tmp_path):
