@@ -38,13 +38,28 @@ def _is_path(name: str) -> bool:
     return name.endswith(".lp") or "/" in name or "\\" in name
 
 
+def read_palette(name: str) -> tuple:
+    """:func:`_read_palette` of ``name``, read again when a palette file changed since it was last read (a
+    notebook that edits its palette file reads the new one; the package's own are read once)."""
+    stamp = None
+    if _is_path(name):
+        try:
+            info = Path(name).stat()
+            stamp = (info.st_mtime_ns, info.st_size)
+        except OSError:
+            stamp = None  # reading it says what is wrong
+    return _read_palette(name, stamp)
+
+
 @lru_cache(maxsize=64)
-def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, dict[str, str]],
-                                      tuple[tuple[str, str], ...]]:
-    """``(palette name, {attribute: values by index}, drawing, added)`` of a shipped palette or a palette
-    file; ``drawing`` holds the optional ``glyph(Value, "text")`` and ``rgb(Value, "colour")`` facts as
-    ``{"glyph": {value: text}, "rgb": {value: colour}}``; ``added`` the ``attribute(Class, Attribute)``
-    facts as sorted ``(class, attribute)`` pairs.
+def _read_palette(name: str, stamp: tuple | None = None) -> tuple[str, dict[str, tuple[str, ...]], dict[str, dict[str, str]],
+                                      tuple[tuple[str, str], ...], tuple[tuple[str, tuple[str, ...]], ...]]:
+    """``(palette name, {attribute: values by index}, drawing, added, value classes)`` of a shipped palette or
+    a palette file; ``drawing`` holds the optional ``glyph(Value, "text")`` and ``rgb(Value, "colour")`` facts
+    as ``{"glyph": {value: text}, "rgb": {value: colour}}``; ``added`` the ``attribute(Class, Attribute)``
+    facts as sorted ``(class, attribute)`` pairs; value classes the optional ``value_class(Value, Class)``
+    facts as sorted ``(value, classes)``: the only classes whose objects may have that value (the Williams
+    palette's box sizes, stored in the colour field, are a toy's only).
 
     Raises PaletteError (one line, naming the file and the fact) for an unknown name, a file that is
     not one, indices that skip or repeat, or a value that is not an ASP constant.
@@ -66,8 +81,15 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, 
     found: dict[str, dict[int, str]] = {}
     drawing: dict[str, dict[str, str]] = {"glyph": {}, "rgb": {}}
     added: set[tuple[str, str]] = set()
-    for model in program.solve("#show value/3. #show glyph/2. #show rgb/2. #show attribute/2.", models=1):
+    classes: dict[str, set[str]] = {}
+    shown = "#show value/3. #show glyph/2. #show rgb/2. #show attribute/2. #show value_class/2."
+    for model in program.solve(shown, models=1):
         for sym in model:
+            if sym.name == "value_class":
+                if not all(a.type is clingo.SymbolType.Function and not a.arguments for a in sym.arguments):
+                    raise PaletteError(f"{source.name}: {sym} is not value_class(Value, Class) with two names")
+                classes.setdefault(sym.arguments[0].name, set()).add(sym.arguments[1].name)
+                continue
             if sym.name == "attribute":
                 if not all(a.type is clingo.SymbolType.Function and not a.arguments for a in sym.arguments):
                     raise PaletteError(f"{source.name}: {sym} is not attribute(Class, Attribute) with two names")
@@ -122,4 +144,8 @@ def read_palette(name: str) -> tuple[str, dict[str, tuple[str, ...]], dict[str, 
         if attribute not in values:
             raise PaletteError(f"{source.name}: attribute({cls}, {attribute}) names an attribute of no "
                                f"value/3 fact; list its values as value({attribute}, Index, Name)")
-    return label, values, drawing, tuple(sorted(added))
+    known = {v for names in values.values() for v in names}
+    for value in sorted(classes):
+        if value not in known:
+            raise PaletteError(f"{source.name}: value_class({value}, ...) names a value no value/3 fact gives")
+    return label, values, drawing, tuple(sorted(added)), tuple((v, tuple(sorted(c))) for v, c in sorted(classes.items()))

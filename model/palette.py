@@ -37,6 +37,22 @@ class Palette:
     # each added attribute's values by index. A state gives every object of such a class one of the values.
     added: tuple[tuple[str, str], ...] = ()
     added_values: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    # value_class/2 of its file: (value, the only classes whose objects may have it), sorted; a value not
+    # listed may be any class's. What states may say, not what a value means: a model saved before a palette
+    # said it reads the palette's states as before.
+    value_classes: tuple[tuple[str, tuple[str, ...]], ...] = field(default=(), compare=False)
+
+    def check_values(self, objects) -> None:
+        """WorldError for the first object (``(class, name, facts)`` as ``Layout.objects`` gives them) with a
+        value ``value_class/2`` gives to other classes only."""
+        if not self.value_classes:
+            return
+        allowed = dict(self.value_classes)
+        for cls, name, facts in objects:
+            for attribute, args in facts:
+                if args and args[0] in allowed and cls not in allowed[args[0]]:
+                    raise WorldError(f"{name} has the {attribute} {args[0]}, which palette {self.name} gives to "
+                                     f"{' and '.join(c + 's' for c in allowed[args[0]])} only (value_class/2)")
 
     def attributes_of(self, cls: str) -> tuple[str, ...]:
         """The attributes the palette adds to objects of class ``cls`` (``("material",)``), sorted."""
@@ -60,6 +76,8 @@ class Palette:
         if self.added:
             out["added"] = [list(pair) for pair in self.added]
             out["added_values"] = {a: list(vs) for a, vs in self.added_values}
+        if self.value_classes:
+            out["value_classes"] = {v: list(cs) for v, cs in self.value_classes}
         if self.glyphs or self.rgb:  # a model's own palette file is drawn as it was, with no --palette
             out["drawing"] = {"glyph": dict(self.glyphs), "rgb": dict(self.rgb)}
         return out
@@ -71,7 +89,8 @@ class Palette:
         return cls(record["name"], tuple(record["colours"]), tuple(record["shapes"]),
                    tuple(sorted(drawing.get("glyph", {}).items())), tuple(sorted(drawing.get("rgb", {}).items())),
                    added=tuple(tuple(pair) for pair in record.get("added", ())),
-                   added_values=tuple((a, tuple(vs)) for a, vs in record.get("added_values", {}).items()))
+                   added_values=tuple((a, tuple(vs)) for a, vs in record.get("added_values", {}).items()),
+                   value_classes=tuple((v, tuple(cs)) for v, cs in sorted(record.get("value_classes", {}).items())))
 
     def colour(self, index: int) -> str:
         if not 0 <= index < len(self.colours):
@@ -108,7 +127,7 @@ def get_palette(name: str | Palette) -> Palette:
     if isinstance(name, Palette):
         return name
     try:
-        label, values, drawing, added = read_palette(str(name))
+        label, values, drawing, added, value_classes = read_palette(str(name))
     except AspError as exc:
         raise WorldError(str(exc)) from None
     missing = [a for a in ("colour", "shape") if a not in values]
@@ -125,8 +144,12 @@ def get_palette(name: str | Palette) -> Palette:
             raise WorldError(f"palette {name}: attributes {a} and {b} differ in case only; a .bdm line could not "
                              "tell them apart")
     added_values = tuple((a, values[a]) for a in sorted({a for _, a in added}))
+    for value, classes in value_classes:
+        if unknown := [c for c in classes if c not in ATTRIBUTED_CLASSES]:
+            raise WorldError(f"palette {name}: value_class({value}, {unknown[0]}): {unknown[0]} is not a class whose "
+                             f"objects a palette describes ({', '.join(ATTRIBUTED_CLASSES)})")
     return Palette(label, values["colour"], values["shape"], tuple(sorted(drawing["glyph"].items())),
-                   tuple(sorted(drawing["rgb"].items())), added, added_values)
+                   tuple(sorted(drawing["rgb"].items())), added, added_values, value_classes)
 
 
 # The classes whose objects a palette may give attributes; the agent is the one addressed, not described.

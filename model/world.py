@@ -234,6 +234,7 @@ class Layout:
             raise WorldError(f"the layout has {count:,} rooms, doors and toys ({len(self.rooms):,}, {len(self.doors):,}, "
                              f"{len(self.toy_attributes):,}); at most {MAX_LAYOUT_OBJECTS:,} are read")
         self._validate_added_attributes()
+        self.palette.check_values(self.objects[1:])
         for i, r in enumerate(self.rooms):
             if r.right - r.left < 2 or r.top - r.bottom < 2:
                 raise WorldError(

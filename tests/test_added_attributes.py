@@ -3,6 +3,7 @@ a state's facts, refused where a format has no field for it, kept in a saved mod
 end to end (tests/fixtures/materials: two toys alike but for their material)."""
 
 import json
+import re
 import os
 import subprocess
 import sys
@@ -38,10 +39,11 @@ def test_a_palette_reads_the_attributes_it_adds_and_their_values():
     # a palette adding nothing is recorded as before attributes could be added (older models compare equal),
     # with its drawing hints beside the values
     record = get_palette("williams2018").record()
-    assert set(record) == {"name", "colours", "shapes", "drawing"}
+    assert set(record) == {"name", "colours", "shapes", "drawing", "value_classes"}
     assert record["drawing"]["glyph"]["box"] == "\u25a1" and record["drawing"]["rgb"]["large"] == "saddlebrown"
-    old = {k: v for k, v in record.items() if k != "drawing"}  # a model saved before the hints were kept
+    old = {k: v for k, v in record.items() if k not in ("drawing", "value_classes")}  # a model saved before either
     assert Palette.from_record(old) == Palette.from_record(record) == get_palette("williams2018")
+    assert Palette.from_record(record).value_classes == (("large", ("toy",)), ("small", ("toy",)))
     assert Palette.from_record(old).glyphs == () and Palette.from_record(record).glyphs == get_palette("williams2018").glyphs
 
 
@@ -278,3 +280,24 @@ def test_a_value_whose_pf_takes_another_pfs_name_is_refused(tmp_path):
     run = _cli("domain", "--palette", str(palette), "--library", "williams2018")
     assert run.returncode != 0 and "Traceback" not in run.stderr
     assert "PFs toyIsLargest and toyIs(largest) are both called toyIsLargest in groundlang" in run.stderr
+
+
+def test_a_value_a_palette_gives_to_one_class_is_refused_on_another(tmp_path):
+    # the Williams palette stores a box's size in the colour field: a room coloured "large" had loaded, and
+    # was then both roomIsLarge and roomIsSmallest
+    large_room = _line().replace("colour: {red} ] , room1", "colour: {large} ] , room1")
+    with pytest.raises(CorpusError, match=r"room0 has the colour large, which palette williams2018 gives to toys only"):
+        parse_bdm_state(large_room.replace(" material: {wood}", "").replace("material: {metal} ", ""), "williams2018")
+    assert parse_bdm_state(_line().replace(" material: {wood}", "").replace("material: {metal} ", "")
+                           .replace("colour: {red} ] , block3", "colour: {large} ] , block3"), "williams2018")
+    # a palette file of one's own says it the same way; a value or class it cannot mean is refused by name
+    palette = tmp_path / "sizes.lp"
+    base = "value(colour, 0, red). value(colour, 1, huge). value(shape, 0, box). "
+    palette.write_text(base + "value_class(huge, toy). value_class(huge, door).\n")
+    assert get_palette(str(palette)).value_classes == (("huge", ("door", "toy")),)
+    for fact, message in (("value_class(tiny, toy).", "value_class(tiny, ...) names a value no value/3 fact gives"),
+                          ("value_class(huge, lamp).", "value_class(huge, lamp): lamp is not a class"),
+                          ('value_class(huge, "toy").', "is not value_class(Value, Class) with two names")):
+        palette.write_text(base + fact + "\n")  # the same file edited: read again, not the first reading
+        with pytest.raises(WorldError, match=re.escape(message)):
+            get_palette(str(palette))
