@@ -124,7 +124,8 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
     objects = _read_objects(line, where)
     ordered = lambda cls: _ordered(objects, cls)  # noqa: E731 (the layout's order of a class)
     try:
-        rooms = tuple(Room(_value(a["colour"], palette.colours, where, name, "colour"), *(
+        rooms = tuple(Room(_value(a["colour"], palette.colours, where, name, "colour",
+                                  _worn(palette, "room", palette.colours)), *(
             _int(a[k], where, k, name) for k in ("left", "top", "right", "bottom"))) for name, a in ordered("room"))
         doors = tuple(Door(*(_int(a[k], where, k, name) for k in ("left", "top", "right", "bottom")))
                       for name, a in ordered("door"))
@@ -222,10 +223,18 @@ def _added_values(cls: str, named: list[tuple[str, dict[str, str]]], palette: Pa
     return out
 
 
-def _value(value: str, values: tuple[str, ...], where: str, name: str, attribute: str) -> str:
+def _worn(palette: Palette, cls: str, values: tuple[str, ...]) -> tuple[str, ...]:
+    """``values`` an object of ``cls`` may have (``value_class/2`` of the palette gives some to other classes
+    only): what a message offers a room instead of a colour it does not know."""
+    only = dict(palette.value_classes)
+    return tuple(v for v in values if v not in only or cls in only[v])
+
+
+def _value(value: str, values: tuple[str, ...], where: str, name: str, attribute: str,
+           offered: tuple[str, ...] | None = None) -> str:
     if value not in values:
         raise CorpusError(f"{where}: {name} has the {attribute} {value!r}, which the palette does not have "
-                          f"(it has {', '.join(values)})")
+                          f"(it has {', '.join(values if offered is None else offered)})")
     return value
 
 

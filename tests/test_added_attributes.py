@@ -288,6 +288,10 @@ def test_a_value_a_palette_gives_to_one_class_is_refused_on_another(tmp_path):
     large_room = _line().replace("colour: {red} ] , room1", "colour: {large} ] , room1")
     with pytest.raises(CorpusError, match=r"room0 has the colour large, which palette williams2018 gives to toys only"):
         parse_bdm_state(large_room.replace(" material: {wood}", "").replace("material: {metal} ", ""), "williams2018")
+    with pytest.raises(CorpusError, match=re.escape("room0 has the colour 'purple', which the palette does not have "
+                                                    "(it has red, green, blue, yellow)")):  # no sizes offered a room
+        parse_bdm_state(large_room.replace("{large}", "{purple}").replace(" material: {wood}", "")
+                        .replace("material: {metal} ", ""), "williams2018")
     assert parse_bdm_state(_line().replace(" material: {wood}", "").replace("material: {metal} ", "")
                            .replace("colour: {red} ] , block3", "colour: {large} ] , block3"), "williams2018")
     # a palette file of one's own says it the same way; a value or class it cannot mean is refused by name
