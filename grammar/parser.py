@@ -289,7 +289,7 @@ def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None =
     cats = tag(tokens, words)
     tags = tuple(_class_name(c).replace("_", "|") if c else "PUNCT" for c in cats)
     beam = 2 * max_readings + 4
-    logw = log_weights({**DEFAULT_WEIGHTS, **(weights or {})})
+    logw = log_weights({**DEFAULT_WEIGHTS, **(checked_weights(weights) if weights else {})})  # a typo is named
     combined: list[tuple[float, tuple]] = [(0.0, ())]
     fallback = False
     tail: list = []  # best clause values of the parts after MAX_JOINT_PARTS, in order

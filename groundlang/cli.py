@@ -10,6 +10,7 @@ code 2; nothing else is caught, so real bugs still show their traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import logging
 import os
@@ -63,6 +64,9 @@ def main(argv: list[str] | None = None) -> int:
         print("groundlang: interrupted while starting; nothing was written", file=sys.stderr)
         return 130
     args = parser.parse_args(argv)
+    for stream in (sys.stdout, sys.stderr):  # a goal's dash or a glyph where the terminal's encoding has none
+        with contextlib.suppress(AttributeError, ValueError):  # (PYTHONIOENCODING=ascii): escaped, not an error
+            stream.reconfigure(errors="backslashreplace")
     # Progress bars only where a person watches a terminal: quiet in CI, in
     # pipes and under --quiet.
     args.progress = not args.quiet and sys.stderr.isatty()

@@ -94,3 +94,25 @@ def test_python_dash_m_groundlang_is_the_command():
     assert done.returncode == 0 and "commands: 2 (2 distinct texts)" in done.stdout, done.stdout + done.stderr
     bad = subprocess.run([sys.executable, "-m", "groundlang", "check", "no/such/corpus"], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "no/such/corpus" in bad.stderr
+
+
+def test_output_a_terminal_cannot_encode_is_escaped_not_an_error():
+    # tasks writes conjunctions with "∧": under PYTHONIOENCODING=ascii the run had ended in an error line
+    import os
+    import subprocess
+    import sys
+
+    from groundlang.corpus import example_corpus_path
+
+    env = {**os.environ, "PYTHONIOENCODING": "ascii"}
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "tasks", str(example_corpus_path() / "novel_a.state"),
+                           "--palette", "sokoban"], capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr
+    assert "agentInRoom(A, RA) \\u2227 toyInRoom(T, RT)" in done.stdout
+
+
+def test_parse_names_an_unknown_grammar_rule_in_its_weights():
+    from groundlang.grammar.parser import parse
+
+    with pytest.raises(ValueError, match="unknown grammar rule\\(s\\) 'zzz'; the rules are"):
+        parse("go to the red room", weights={"zzz": 1.0})  # it had been ignored
