@@ -297,3 +297,17 @@ def test_a_room_and_a_door_attribute_fill_the_room_cells_and_the_door_cell(tmp_p
     assert list(zip(*np.nonzero(lock))) == [(7 - 3, 4)] and lock[7 - 3, 4] == 2
     assert (floor[1:7, 1:4] == 2).all() and (floor[1:7, 5:8] == 1).all()
     assert (floor[[0, 7], :] == 0).all() and (floor[:, [0, 4, 8]] == 0).all()
+
+
+def test_a_goal_over_objects_the_state_lacks_is_refused_before_the_episode_changes(state):
+    from groundlang.labels import LabelError
+    from groundlang.logic.atoms import format_goal
+
+    # it had been accepted at construction, and a reset with it left the env half reset
+    with pytest.raises(LabelError, match="names room9, which does not exist"):
+        CleanupEnv(state, "go", goal="agentInRoom(agent0, room9)")
+    env = CleanupEnv(state, "go to the green room", goal="agentInRoom(agent0, room1)")
+    env.reset(seed=0)
+    with pytest.raises(LabelError, match="names room9"):
+        env.reset(options={"goal": "agentInRoom(agent0, room9)"})
+    assert format_goal(env.goal) == "agentInRoom(agent0, room1)" and env.command == "go to the green room"
