@@ -33,7 +33,7 @@ from groundlang.model.language_models import BagOfWords, LanguageModel, get_lang
 from groundlang.model.relevance import check_abstraction_possible
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
-from groundlang.learner_state import (check_count, check_model_parts, check_state, check_threshold,
+from groundlang.learner_state import (check_count, check_model_parts, check_state, check_threshold, word_sources,
                                        check_training_options, learner_from_state, learner_state)
 from groundlang.model_io import check_parameter_bound, read_model, write_model
 from groundlang.results import FollowResult, Posterior
@@ -94,7 +94,7 @@ class Learner:
         # Only the added words are kept apart: they are what a saved model must carry to parse alike.
         # A library's word files (mine.words beside mine.lp) come first, then the words given here.
         own = word_files_beside(self.library)
-        given = [] if lexicon is None else [lexicon] if isinstance(lexicon, (str, Path, Mapping)) else list(lexicon)
+        given = [] if lexicon is None else word_sources("Learner", lexicon)
         self.lexicon_words: dict[str, list[str]] = extra_words([*own, *given])
         self.word_lexicon = domain_lexicon(self.lexicon_words)
         self.vocab: Vocabulary | None = None
@@ -113,7 +113,7 @@ class Learner:
         """Let the parser know more words (word files or words by category, as ``Learner(lexicon=...)``),
         e.g. a multiword preposition for a trained model; they are saved with the model. Words the
         vocabulary never saw in training stay unknown to the language model."""
-        more = [lexicon] if isinstance(lexicon, (str, Path, Mapping)) else list(lexicon)
+        more = word_sources("add_words", lexicon)
         added = extra_words([self.lexicon_words, *more])
         self.lexicon_words = added
         self.word_lexicon = domain_lexicon(added)
@@ -393,4 +393,3 @@ class Learner:
     def load(cls, directory: str | Path) -> "Learner":
         """Read a model :meth:`save` wrote; ModelFormatError on anything amiss."""
         return read_model(as_path(directory, "Learner.load: directory"), cls.from_state_dict)
-

@@ -7,6 +7,9 @@ a file is untrusted: every field is checked here before anything is built from i
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from pathlib import Path
+
 import numpy as np
 
 from groundlang.inference.em import EM_ACCELERATIONS
@@ -19,7 +22,8 @@ from groundlang.model.language_models import get_language_model
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
 
-__all__ = ["learner_state", "learner_from_state", "check_count", "check_training_options", "check_state"]
+__all__ = ["learner_state", "learner_from_state", "check_count", "check_training_options", "check_state",
+           "word_sources"]
 
 
 def check_count(method: str, name: str, value) -> None:
@@ -209,3 +213,15 @@ def _readable(habits) -> list:
     except ValueError as exc:
         raise ValueError(f"cannot save the end habits: {exc}") from None
     return value
+
+
+def word_sources(method: str, lexicon) -> list:
+    """``lexicon`` as a list of word sources (a word file's path, or words by category); TypeError naming
+    ``method`` for anything else (a number had failed as "'int' object is not iterable")."""
+    if isinstance(lexicon, (str, Path, Mapping)):
+        return [lexicon]
+    if isinstance(lexicon, (list, tuple)) and all(isinstance(x, (str, Path, Mapping)) for x in lexicon):
+        return list(lexicon)
+    raise TypeError(f"{method}: lexicon must be a word file's path, words by category ({{'NOUN': [...]}}) or a "
+                    f"list of them, got {type(lexicon).__name__}")
+

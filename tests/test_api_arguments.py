@@ -133,3 +133,13 @@ def test_a_library_given_as_one_path_is_read_as_one_file(tmp_path):
     own = tmp_path / "mine.lp"
     own.write_text((Path(str(files("groundlang.logic"))) / "tasks.lp").read_text())
     assert [t.name for t in TaskLibrary.load(own).tasks] == [t.name for t in TaskLibrary.load().tasks]
+
+
+@pytest.mark.parametrize("lexicon", [5, [5], [{"NOUN": ["lamp"]}, 3.0]])
+def test_word_sources_of_the_wrong_type_are_named(lexicon, trained):
+    # a number had failed as "'int' object is not iterable"
+    with pytest.raises(TypeError, match="Learner: lexicon must be a word file's path, words by category"):
+        Learner(lexicon=lexicon)
+    with pytest.raises(TypeError, match="add_words: lexicon must be"):
+        trained.add_words(lexicon)
+    assert Learner(lexicon=[{"NOUN": ["lamp"]}]).lexicon_words["NOUN"] == ["lamp"]
