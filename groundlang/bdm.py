@@ -125,7 +125,7 @@ def parse_bdm_state(line: str, palette: str | Palette = DEFAULT_PALETTE,
     ordered = lambda cls: _ordered(objects, cls)  # noqa: E731 (the layout's order of a class)
     try:
         rooms = tuple(Room(_value(a["colour"], palette.colours, where, name, "colour",
-                                  _worn(palette, "room", palette.colours)), *(
+                                  palette.worn_by("room", palette.colours)), *(
             _int(a[k], where, k, name) for k in ("left", "top", "right", "bottom"))) for name, a in ordered("room"))
         doors = tuple(Door(*(_int(a[k], where, k, name) for k in ("left", "top", "right", "bottom")))
                       for name, a in ordered("door"))
@@ -221,13 +221,6 @@ def _added_values(cls: str, named: list[tuple[str, dict[str, str]]], palette: Pa
             value = _value(a[attribute.lower()], palette.values_of(attribute), where, name, attribute)
             out.append((f"{cls}{i}", attribute, value))  # the layout's names: room0, door0, block0, ...
     return out
-
-
-def _worn(palette: Palette, cls: str, values: tuple[str, ...]) -> tuple[str, ...]:
-    """``values`` an object of ``cls`` may have (``value_class/2`` of the palette gives some to other classes
-    only): what a message offers a room instead of a colour it does not know."""
-    only = dict(palette.value_classes)
-    return tuple(v for v in values if v not in only or cls in only[v])
 
 
 def _value(value: str, values: tuple[str, ...], where: str, name: str, attribute: str,

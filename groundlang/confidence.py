@@ -130,26 +130,26 @@ def unachievable_goals(goals: Sequence[tuple[Atom, ...]], space: StateSpace, lib
 
 
 def out_of_reach(probabilities: np.ndarray, goals: Sequence[tuple[Atom, ...]],
-                 masks: GoalMasks) -> tuple[float, tuple[Atom, ...] | None]:
-    """How much of ``probabilities`` (of readings whose goals are ``goals``) is on goals no reachable state of
-    ``masks``' space satisfies, and the most probable of those goals (None where there is none)."""
-    out = unachievable_goals(set(goals), masks.space, masks=masks)
-    if not out:
-        return 0.0, None
+                 out: set[tuple[Atom, ...]]) -> tuple[float, tuple[Atom, ...] | None]:
+    """How much of ``probabilities`` (of readings whose goals are ``goals``) is on the goals ``out`` (those
+    :func:`unachievable_goals` found), and the most probable of them (None where there is none)."""
     mass: dict[tuple[Atom, ...], float] = {}
     for goal, p in zip(goals, probabilities):
         if goal in out:
             mass[goal] = mass.get(goal, 0.0) + float(p)
-    best = most_probable_first(list(mass.items()), lambda kv: kv[1])[0][0]
-    return float(sum(mass.values())), best
+    if not mass:
+        return 0.0, None
+    return float(sum(mass.values())), most_probable_first(list(mass.items()), lambda kv: kv[1])[0][0]
 
 
-def given_achievable(probabilities: np.ndarray, goals: Sequence[tuple[Atom, ...]], masks: GoalMasks) -> np.ndarray:
+def given_achievable(probabilities: np.ndarray, goals: Sequence[tuple[Atom, ...]], masks: GoalMasks,
+                     out: set[tuple[Atom, ...]] | None = None) -> np.ndarray:
     """``probabilities`` (of readings whose goals are ``goals``, one each) given that the goal can be
     reached in ``masks``' space: a command asks for what can be done, so a goal that holds in no
     reachable state (a chair against the west wall cannot be stood left of) gets none and the others
     share its mass in proportion. Unchanged where no goal is ruled out, or every goal is."""
-    out = unachievable_goals(set(goals), masks.space, masks=masks)
+    if out is None:  # ``out``: the unachievable goals, where the caller found them already
+        out = unachievable_goals(set(goals), masks.space, masks=masks)
     keep = np.array([goal not in out for goal in goals], dtype=bool)
     total = float(probabilities[keep].sum()) if out else 0.0
     return np.where(keep, probabilities, 0.0) / total if total > 0 else probabilities

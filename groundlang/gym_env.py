@@ -167,14 +167,6 @@ def _largest_value(palette) -> int:
     return max(len(values) for _, values in palette.all_values) + 1
 
 
-def _check_goal(goal: tuple[Atom, ...], state: State) -> None:
-    """LabelError for a goal over objects or PFs ``state`` does not have (it had been accepted, and the
-    first reset or step then failed)."""
-    from groundlang.labels import goal_holds
-
-    goal_holds(goal, state)
-
-
 class CleanupEnv(gymnasium.Env):
     """Cleanup World with a command: move (and push toys), then TERMINATE.
 
@@ -208,7 +200,9 @@ class CleanupEnv(gymnasium.Env):
         self._fixed_command = command_text(command) if command else ""
         self._fixed_goal = self._goal(goal)
         if state is not None and self._fixed_goal is not None:
-            _check_goal(self._fixed_goal, state)
+            from groundlang.labels import check_goal_objects
+
+            check_goal_objects(self._fixed_goal, state)  # refused now, not at the first reset
         layouts = [state.layout] if state is not None else [s.layout for s, _, _ in _example_pool()]
         self.grid_shape = (max(l.height for l in layouts), max(l.width for l in layouts))
         # Colour and shape indices + 1 must fit uint8.
@@ -285,7 +279,9 @@ class CleanupEnv(gymnasium.Env):
             raise ValueError(f"state of palette {palette.name}: its {len(values)} values of {most} do not fit the "
                              "observation space of this env; make the env with a state of that palette")
         if goal is not None:
-            _check_goal(goal, state)  # before anything changes: a refused reset leaves the episode as it was
+            from groundlang.labels import check_goal_objects
+
+            check_goal_objects(goal, state)  # before anything changes: a refused reset leaves the episode as it was
         self.state, self.command, self.goal, self.steps, self._over = state, command, goal, 0, False
         self._static = _static_grid(state, self.grid_shape)
         return self._observation(), self._info()

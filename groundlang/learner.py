@@ -17,7 +17,7 @@ import torch
 
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, answer_text, choose, clear_choice, competing, question, unknown_words
-from groundlang.confidence import given_achievable, group_goals, out_of_reach
+from groundlang.confidence import given_achievable, group_goals, out_of_reach, unachievable_goals
 from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at
 from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
@@ -241,8 +241,9 @@ class Learner:
         reach = (0.0, None)
         if self.lm.achievable_goals:
             goals = [i.goal for i in obs.interpretations]
-            reach = out_of_reach(probs, goals, masks)
-            probs = given_achievable(probs, goals, masks)
+            out = unachievable_goals(set(goals), space, masks=masks)  # once, for both
+            reach = out_of_reach(probs, goals, out)
+            probs = given_achievable(probs, goals, masks, out)
         post = Posterior(command, list(obs.interpretations), probs, list(obs.readings), reading_probs,
                          out_of_reach=reach[0], out_of_reach_goal=reach[1])
         post.groups = group_goals(post.goals(), space, self.library, masks)

@@ -94,7 +94,7 @@ def update_learner(learner, command: str, state, demonstration: Sequence | str |
     if demonstration is not None:
         actions = as_actions(demonstration)
         example = Instance(Path("<update>"), command, actions, replay(state, actions))
-        if goal is not None and not any(goal_holds(i.goal, example.final_state, learner.library) for i in interps):
+        if goal is not None and not any(goal_holds(g, example.final_state, learner.library) for g in {i.goal for i in interps}):
             # with the goal given, the demonstration only weighs its groundings against each other: one that
             # never reaches it would be folded in as if it did
             raise ValueError(f"update: the demonstration ends where goal {format_goal(interps[0].goal)} does not hold; "

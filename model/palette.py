@@ -42,6 +42,11 @@ class Palette:
     # said it reads the palette's states as before.
     value_classes: tuple[tuple[str, tuple[str, ...]], ...] = field(default=(), compare=False)
 
+    def worn_by(self, cls: str, values: tuple[str, ...]) -> tuple[str, ...]:
+        """``values`` an object of ``cls`` may have (``value_class/2`` gives some to other classes only)."""
+        only = dict(self.value_classes)
+        return tuple(v for v in values if v not in only or cls in only[v])
+
     def check_values(self, objects) -> None:
         """WorldError for the first object (``(class, name, facts)`` as ``Layout.objects`` gives them) with a
         value ``value_class/2`` gives to other classes only."""

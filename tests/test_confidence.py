@@ -102,15 +102,18 @@ def test_given_achievable_moves_the_mass_of_goals_out_of_reach_to_the_others():
 def test_out_of_reach_is_the_mass_on_goals_no_reachable_state_satisfies():
     import numpy as np
 
-    from groundlang.confidence import GoalMasks, out_of_reach
+    from groundlang.confidence import GoalMasks, out_of_reach, unachievable_goals
     from groundlang.model.relevance import placement_sample
 
     state = parse_state(STUCK, "sokoban")
     masks = GoalMasks(enumerate_states(state))
     stuck1, agent2, stuck2 = (parse_goal(g) for g in ("toyInRoom(block0, room1)", "agentInRoom(agent0, room2)",
                                                       "toyInRoom(block0, room2)"))
-    share, goal = out_of_reach(np.array([0.3, 0.1, 0.35, 0.25]), [stuck1, stuck1, agent2, stuck2], masks)
+    out = unachievable_goals({stuck1, agent2, stuck2}, masks.space, masks=masks)
+    share, goal = out_of_reach(np.array([0.3, 0.1, 0.35, 0.25]), [stuck1, stuck1, agent2, stuck2], out)
     assert share == pytest.approx(0.65) and goal == stuck1  # readings of one goal summed: 0.4 against 0.25
-    assert out_of_reach(np.array([0.6, 0.4]), [stuck1, stuck2], masks) == (pytest.approx(1.0), stuck1)  # all of it
-    assert out_of_reach(np.array([1.0]), [agent2], masks) == (0.0, None)
-    assert out_of_reach(np.array([0.5, 0.5]), [stuck1, agent2], GoalMasks(placement_sample(state, count=256))) == (0.0, None)
+    assert out_of_reach(np.array([0.6, 0.4]), [stuck1, stuck2], out) == (pytest.approx(1.0), stuck1)  # all of it
+    assert out_of_reach(np.array([1.0]), [agent2], out) == (0.0, None)
+    sample = placement_sample(state, count=256)  # a sample cannot say what is out of reach
+    assert out_of_reach(np.array([0.5, 0.5]), [stuck1, agent2],
+                        unachievable_goals({stuck1, agent2}, sample, masks=GoalMasks(sample))) == (0.0, None)

@@ -13,7 +13,7 @@ import argparse
 import sys
 
 from groundlang.commands import (PALETTE_HELP, add_lexicon_option, add_time_limit_option, fraction, json_text,
-                                 logged_by_file_names, output_path, positive_int, time_limit_given)
+                                 logged_by_file_names, output_path, positive_int)
 
 # Exit code of a command that asked instead of acting (documented in the README).
 ASKED = 3
@@ -149,7 +149,8 @@ def run(args: argparse.Namespace) -> int:
     plan_once()  # one command: a compiler pays only where one solve is worth it
     learner = Learner.load(args.model)
     # the library saved in the model, read back before the limit was known: it grounds the layout of --env
-    learner.library.time_limit = time_limit_given(args).get("time_limit", learner.library.time_limit)
+    if args.time_limit is not None:
+        learner.library.time_limit = args.time_limit
     if args.learn:  # the model is saved after the answer: a folder that cannot take it is refused before asking
         from groundlang.model_io import check_model_destination
 
