@@ -21,6 +21,8 @@ from lark import Token
 #   the "into/to/through X" after the object names the goal) favours the verb. c_part / np_part are the
 #   same choice for participles ("push star pushing it ..." vs "door leading into orange room").
 # - frag, frag_np (verbless fragments) 0.2: only a fallback reading when a verb is present.
+# - vp_ellipsis 0.2: complements after a comma continue the verb before it, against a verbless clause
+#   of their own (frag); chosen by held-out likelihood (ABLATIONS.md).
 # - subj_clause 0.5: commands are imperative; a subject reading ("star goes into blue") competes only
 #   when an NP-like word opens the clause.
 # - np_headless 0.5: an ambiguous word ("ornge") is likelier the head noun than a bare modifier.
@@ -30,7 +32,7 @@ from lark import Token
 #   coordinated noun phrases ("white" and "cream floor"); both readings stay (measured: ABLATIONS.md).
 DEFAULT_WEIGHTS: dict[str, float] = {
     "c_pp": 0.65, "np_pp": 0.35, "c_part": 0.65, "np_part": 0.35,
-    "frag": 0.2, "frag_np": 0.2, "subj_clause": 0.5, "np_headless": 0.5, "np_coord": 0.5,
+    "frag": 0.2, "frag_np": 0.2, "vp_ellipsis": 0.2, "subj_clause": 0.5, "np_headless": 0.5, "np_coord": 0.5,
     "nmods_coord": 0.5, "c_measure": 0.3, "c_adv": 1.0, "c_inf": 1.0, "c_sub": 1.0, "c_ger": 1.0, "sub_clause": 1.0,
     "np_rel": 1.0, "np_head": 1.0, "np_pron": 1.0, "pp": 1.0, "pp_coord": 1.0, "vp": 1.0, "gvp": 1.0,
 }
@@ -134,6 +136,14 @@ def _is_negation(token: Token) -> bool:
     return "NEG" in token.type.split("_")
 
 
+def _continued(vp: VP, comps) -> VP | None:
+    """A verb phrase whose complements go on after a comma; rejected (None) where a clausal complement
+    ends the verb phrase, which takes what follows it (late closure, as in ``_complements``)."""
+    if comps is None or (vp.comps and isinstance(vp.comps[-1], Sub)):
+        return None
+    return replace(vp, comps=vp.comps + comps[1])
+
+
 def _fragment(values: list) -> VP:
     nps = [v for v in values if isinstance(v, NP)]
     comps = tuple(c for v in values if isinstance(v, tuple) and v and v[0] == "comps" for c in v[1])
@@ -172,6 +182,7 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "gvp": lambda vs: _verb_phrase([("verb", str(vs[0]))] + list(vs[1:])),
     "subj_clause": lambda vs: replace(vs[1], subject=vs[0]),
     "sub_clause": lambda vs: Sub(*_connective(vs)),
+    "vp_ellipsis": lambda vs: _continued(vs[0], vs[-1]),
     "frag_np": _fragment,
     "frag": _fragment,
     "c_pp": lambda vs: vs[0],

@@ -102,6 +102,22 @@ def test_fragments_crowd_workers_write():
     assert lf.clauses[0].preps == (("from", "room1"), ("to", "room2"))
 
 
+def test_complements_after_a_comma_may_continue_the_verb_before_it():
+    readings = parse("push the star, into the red room")
+    shapes = {tuple((c.verb, c.args) for c in r.logical_form.clauses): 0.0 for r in readings}
+    for r in readings:
+        shapes[tuple((c.verb, c.args) for c in r.logical_form.clauses)] += r.probability
+    continued = (("push", ("star1", "room1")),)
+    split = (("push", ("star1",)), (None, ("room1",)))
+    # vp_ellipsis and a verbless second clause weigh the same by default (0.2 each)
+    assert shapes[continued] == pytest.approx(0.5) and shapes[split] == pytest.approx(0.5)
+    off = parse("push the star, into the red room", weights={"vp_ellipsis": 1e-9})
+    assert {tuple((c.verb, c.args) for c in r.logical_form.clauses) for r in off if r.probability > 1e-6} == {split}
+    # a clausal complement takes what follows it (late closure), so nothing is left to continue the verb
+    for r in parse("go until you reach the door , into the red room"):
+        assert r.logical_form.clauses[0].args == ()
+
+
 def test_negation_subordinate_and_gerund_clauses():
     lf = parse("push star into teal room without walking into teal room")[0].logical_form
     assert lf.verbs == ("push", "walk")

@@ -43,6 +43,8 @@ def test_every_training_command_is_followed_to_its_gold_goal(corpus, learner):
         ("push the star into the blue room", "blue", "toyInRoom"),
         ("go to the green room", "green", "agentInRoom"),
         ("walk into the red room", "red", "agentInRoom"),
+        # a comma inside one imperative (grammar: vp_ellipsis); read as the agent's task before
+        ("push the star, into the red room", "red", "toyInRoom"),
     ],
 )
 def test_commands_are_followed_in_layouts_the_corpus_never_showed(learner, command, colour, task):
