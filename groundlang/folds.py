@@ -32,7 +32,7 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
         "gold_words": goal_phrase(gold, instance.initial_state, learner.library),
         "predicted_words": result.goal_words,
         "correct": goal_holds(gold, result.final_state, learner.library),
-        "confidence": result.posterior.confidence,
+        "confidence": result.confidence,
         "margin": result.posterior.margin,
         "novel": [],
     }
@@ -46,7 +46,7 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
                 "predicted": format_goal(novel.goal),
                 "predicted_task": describe_goal(novel.goal, state),
                 "correct": goal_holds(translated, novel.final_state, learner.library),
-                "confidence": novel.posterior.confidence,
+                "confidence": novel.confidence,
             }
         )
     return record

@@ -18,7 +18,7 @@ import torch
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, answer_text, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import given_achievable, group_goals, out_of_reach, unachievable_goals
-from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at
+from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at, nearest_of, success_at
 from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.planning import TaskSettings
@@ -270,13 +270,17 @@ class Learner:
         self._check_state("follow", command, state)
         check_abstraction_possible(state)
         post = self.posterior(command, state)
-        if min_confidence is not None and post.confidence < min_confidence:
+        ending = self.ending(post, state)
+        success = None  # where the plan will end, how likely what was meant holds there
+        if ending and self.lm.success_confidence:
+            space, masks, goals, target, _ = ending
+            success = success_at(goals, masks, nearest_of(target, space))
+        if min_confidence is not None and (post.confidence if success is None else success) < min_confidence:
             choices = competing(post.goal_groups())
             unknown = unknown_words(post.readings, self._knows)
             return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
                                 question=question(choices, unknown, state, self.library),
-                                choices=choices, unknown_words=unknown)
-        ending = self.ending(post, state)
+                                choices=choices, unknown_words=unknown, success=success)
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
             _, masks, goals, target, goal = ending
             return self._act(command, state, post, goal, max_steps, target, (goals, masks, post.best_goal))
@@ -336,13 +340,16 @@ class Learner:
         posterior's goals, where they hold over the space of the ending, and the goal whose space it is)."""
         over = None if goal_masks is None else goal_masks[2]
         states, actions, reached, reason = self._world.act(state, goal, max_steps, ending, over)
+        success = None
         if ending is not None and reached:
             # Every state of ``ending`` is worth the same and the plan may end in any of them, not only
             # where ``goal`` holds: the goal said to be acted on is the one that holds where it ends.
             goals, masks, _ = goal_masks
-            goal = goal_holding_at(goals, masks, masks.space.index_of(states[-1])) or goal
+            end = masks.space.index_of(states[-1])
+            goal = goal_holding_at(goals, masks, end) or goal
+            success = success_at(goals, masks, end) if self.lm.success_confidence else None
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
-                            goal_words=goal_phrase(goal, state, self.library))
+                            goal_words=goal_phrase(goal, state, self.library), success=success)
 
     def alignments(self, command: str, state: State, interpretation: int | None = None) -> list:
         """Which object each noun phrase names: :func:`groundlang.alignments.phrase_alignments`."""

@@ -131,6 +131,10 @@ class FollowResult:
             :meth:`Learner.clarify` takes an answer naming one.
         unknown_words: words of the command's noun phrases the model never learned.
         goal_words: ``goal`` in words ("the yellow star in the red room").
+        success: the posterior probability that what was meant holds where following ends (or would
+            end, when it abstained), ``sum_g P(g | words) [s satisfies g]``; None where following planned
+            for one goal alone (the language model's ``success_confidence`` or ``expected_success`` off, or
+            a world too large to compare goals in).
     """
 
     command: str
@@ -145,6 +149,7 @@ class FollowResult:
     choices: list[GoalGroup] = field(default_factory=list)
     unknown_words: tuple[str, ...] = ()
     goal_words: str = ""
+    success: float | None = None
 
     @property
     def final_state(self) -> State:
@@ -152,7 +157,9 @@ class FollowResult:
 
     @property
     def confidence(self) -> float:
-        return self.posterior.confidence
+        """How likely acting so does what was meant: :attr:`success` where known, else the posterior
+        probability of the goal acted on (``Posterior.confidence``)."""
+        return self.posterior.confidence if self.success is None else self.success
 
     def __repr__(self) -> str:
         if self.abstained:

@@ -42,7 +42,7 @@ class LanguageModel:
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False,
                  achievable_goals: bool = True, expected_success: bool = True, step_cost: float = 0.005,
                  end_habits: bool = True, moved_toys: bool = False, habits_made_true: bool = False,
-                 bound_habits: bool = True, habit_prior: str = "absent"):
+                 bound_habits: bool = True, habit_prior: str = "absent", success_confidence: bool = True):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
         "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
         ``name_share``, and its learned words otherwise: the names a domain's author gives are words
@@ -63,7 +63,10 @@ class LanguageModel:
         was pushed into; ``EndHabits.weights``). ``habit_prior``: what a habit's share is shrunk towards
         by one pseudo-demonstration: ``"absent"``, one that did not show it (a habit is what demonstrations of
         such goals were seen to do), ``"overall"``, one at the relation's rate over all demonstrations
-        (``EndHabits.rate``)."""
+        (``EndHabits.rate``). ``success_confidence``: where following ends in a state chosen over the whole
+        posterior (``expected_success``), its confidence is the posterior probability that what was meant
+        holds there, ``sum_g P(g | words) [s satisfies g]`` (ending right of the chair satisfies "next to" as
+        well), not only the probability of the goal said to be acted on (``FollowResult.confidence``)."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
@@ -83,6 +86,7 @@ class LanguageModel:
             raise ValueError(f"language model {self.name}: habit_prior must be one of {', '.join(HABIT_PRIORS)}, "
                              f"not {habit_prior!r:.40}")
         self.habit_prior = habit_prior
+        self.success_confidence = success_confidence
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
@@ -90,7 +94,7 @@ class LanguageModel:
                 "expected_success": self.expected_success, "step_cost": self.step_cost,
                 "end_habits": self.end_habits, "moved_toys": self.moved_toys,
                 "habits_made_true": self.habits_made_true, "bound_habits": self.bound_habits,
-                "habit_prior": self.habit_prior}
+                "habit_prior": self.habit_prior, "success_confidence": self.success_confidence}
 
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""

@@ -24,7 +24,7 @@ def test_settings_make_the_model_they_name():
                                                                         "expected_success": True, "step_cost": 0.005,
                                                                         "end_habits": True, "moved_toys": False,
                                                                         "habits_made_true": False, "bound_habits": True,
-                                                                        "habit_prior": "absent"}
+                                                                        "habit_prior": "absent", "success_confidence": True}
 
 
 @pytest.mark.parametrize("name, settings, message", [

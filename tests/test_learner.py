@@ -367,3 +367,24 @@ def test_lexicon_says_which_word_a_synonym_is_read_as(tmp_path, capsys):
     assert main(["--quiet", "lexicon", str(model), "--words", "crimson", "red", "scarlet", "--json"]) == 0
     shown = json.loads(capsys.readouterr().out)
     assert list(shown) == ["crimson", "red", "scarlet"] and shown["crimson"] == shown["red"] == shown["scarlet"]
+
+
+def test_confidence_is_how_likely_what_was_meant_holds_where_following_ends(corpus, learner):
+    """With ``success_confidence`` (the default) a plan that ends where several goals hold is as likely to
+    do what was meant as their posterior mass there: "go with the star to the red room" is 0.90 the star
+    in the red room, and its end, with the agent there too, satisfies more of the posterior."""
+    state = read_state_file(EXAMPLES / "novel_a.state", "sokoban")
+    command = "go with the star to the red room"
+    result = learner.follow(command, state)
+    held = sum(p for p, interp in result.posterior.ranked() if goal_holds(interp.goal, result.final_state))
+    assert result.success == pytest.approx(min(1.0, held), abs=1e-6)
+    assert result.confidence == result.success > result.posterior.confidence + 0.01
+    between = (result.posterior.confidence + result.success) / 2  # acted on only by the success
+    assert not learner.follow(command, state, min_confidence=between).abstained
+    learner.lm.success_confidence = False
+    try:
+        alone = learner.follow(command, state, min_confidence=between)
+        assert alone.success is None and alone.abstained
+        assert alone.confidence == alone.posterior.confidence
+    finally:
+        learner.lm.success_confidence = True

@@ -126,7 +126,7 @@ def _refuse(result, args) -> None:
     # with --json nothing is asked on the terminal: the question and its choices are in the JSON printed
     how = ("the question and its choices are in the JSON (--ask asks only without --json)" if args.ask and args.json
            else "answer with --ask")
-    print(f"groundlang follow: not acting: confidence {result.posterior.confidence:.2f} is below "
+    print(f"groundlang follow: not acting: confidence {result.confidence:.2f} is below "
           f"--min-confidence {args.min_confidence:g}; {how}, or act anyway with --guess", file=sys.stderr)
 
 
@@ -205,7 +205,8 @@ def run(args: argparse.Namespace) -> int:
             "interpretations": [{"goal": format_goal(g, names),
                                  "words": renamed_words(goal_phrase(g, state, learner.library), names),
                                  "probability": p} for g, p in goals],
-            "confidence": result.posterior.confidence,
+            "confidence": result.confidence,
+            "goal_probability": result.posterior.confidence,
             "margin": result.posterior.margin,
             "out_of_reach": result.posterior.out_of_reach,
             "abstained": result.abstained,
@@ -226,7 +227,12 @@ def run(args: argparse.Namespace) -> int:
     print("interpretations:")
     for goal, p in goals:
         print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library, names)}")
-    print(f"confidence {result.posterior.confidence:.2f} (margin {result.posterior.margin:.2f} over the next "
+    if result.success is None:
+        said = f"confidence {result.confidence:.2f}"
+    else:  # the end is chosen over the whole posterior: how likely what was meant holds there
+        said = (f"confidence {result.confidence:.2f} that what was meant holds where it ends (the most probable "
+                f"goal {result.posterior.confidence:.2f},")
+    print(said + f"{' (' if result.success is None else ' '}margin {result.posterior.margin:.2f} over the next "
           f"goal that differs)" + ("; acting on the answer" if answered is not None else ""))
     if result.abstained:
         _print_question(result, state, learner.library, names)
