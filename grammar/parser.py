@@ -22,6 +22,7 @@ import itertools
 import logging
 import math
 import re
+import unicodedata
 from collections.abc import Mapping
 from importlib.resources import files
 
@@ -100,7 +101,9 @@ def tokenise(command: str, word_lexicon: Lexicon | None = None) -> list[str]:
     entries such as "left of" joined into ``left_of``) and punctuation. ``word_lexicon``: the words known
     (default: English, :meth:`Lexicon.english`)."""
     words = word_lexicon or Lexicon.english()
-    text = _without_control(command).lower().replace("\u2019", "'").replace("\u2018", "'")
+    # NFC: a letter typed as a base and a combining accent ("te\u0301le\u0301") is the word its precomposed
+    # spelling is ("télé"); split at the accent, it would be read as two words and a sign.
+    text = unicodedata.normalize("NFC", _without_control(command)).lower().replace("\u2019", "'").replace("\u2018", "'")
     text = re.sub(r"(?<=\w)-(?=\w)", " ", text)
     out: list[str] = []
     for tok in _TOKEN.findall(text):

@@ -129,6 +129,16 @@ def test_negation_subordinate_and_gerund_clauses():
     assert lf.clauses[0].negated and lf.paper_str().startswith("not enter(room1)")
 
 
+def test_a_word_typed_with_combining_accents_is_the_word_its_precomposed_spelling_is(tmp_path):
+    decomposed, composed = "te\u0301le\u0301", "t\u00e9l\u00e9"
+    assert tokenise(f"go to the {decomposed} room") == tokenise(f"go to the {composed} room") == [
+        "go", "to", "the", composed, "room"]
+    from groundlang.grammar.word_files import read_word_file
+    words = tmp_path / "accents.words"
+    words.write_text(f"NOUN: {decomposed}\n", encoding="utf-8")
+    assert read_word_file(words) == {"NOUN": (composed,)}
+
+
 def test_tokeniser_keeps_every_word_and_splits_hyphens_and_clitics():
     assert tokenise("Go to the GREEN-floored room, you're there!") == [
         "go", "to", "the", "green", "floored", "room", ",", "you", "'re", "there", "!"]
