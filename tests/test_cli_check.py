@@ -178,3 +178,11 @@ def test_check_reads_a_library_given_without_labels(capsys, tmp_path):
     bad.write_text("#script (python)\nimport os\n#end.\n")
     code, out, err = run(capsys, "check", str(example_corpus_path()), "--palette", "sokoban", "--library", str(bad))
     assert code == 2 and f"{bad}:1: #script blocks are refused" in err and out == ""
+
+
+def test_check_refuses_labels_for_a_bdm_corpus_in_one_line(capsys):
+    """A .bdm pair's end state is its label: --labels, even a file that does not exist, is said to be wrong,
+    not ignored."""
+    code = main(["check", "tests/fixtures/williams2018/small.bdm", "--labels", "no-such-labels.csv"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "--labels no-such-labels.csv" in err and ".bdm corpus" in err and "\n" not in err

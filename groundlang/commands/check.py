@@ -39,6 +39,10 @@ def run(args: argparse.Namespace) -> int:
     if args.format == "williams2018" or (args.format is None and bdm_files(args.directory)):
         from groundlang.bdm_check import check_bdm
 
+        if args.labels:  # said, not ignored: a .bdm pair's end state is its label
+            raise ValueError(f"--labels {args.labels}: for a *.txt corpus with labels; a .bdm corpus is judged "
+                             "by what its pairs show")
+
         return check_bdm(args)
     require_palette(args, args.directory)
     library = library_given(args)  # a library given is checked (refused with its line) even without --labels
