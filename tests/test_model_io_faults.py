@@ -565,3 +565,14 @@ def test_a_model_whose_model_json_the_loader_would_refuse_is_never_written(tmp_p
     monkeypatch.setattr(model_io, "MAX_JSON_BYTES", 32 * 2**20)
     larger.save(target)  # within the bound: written, and read back
     assert Learner.load(target).lm.name == "bow"
+
+
+def test_follow_refuses_a_picture_inside_the_model_folder_before_acting(learners, tmp_path, capsys):
+    """A picture left in the model folder would make the next save over it refused (a folder of one model)."""
+    model = learners[0].save(tmp_path / "m")
+    code = main(["--quiet", "follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model",
+                 str(model), "--guess", "--out", str(model / "pic.png")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "inside the model folder" in err and "\n" not in err
+    assert not (model / "pic.png").exists()
+    learners[1].save(model)  # still a folder of one model

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from groundlang.commands import (PALETTE_HELP, add_lexicon_option, add_time_limit_option, fraction, json_text,
                                  logged_by_file_names, output_path, positive_int)
@@ -146,6 +147,10 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.render import check_picture_destination
 
         check_picture_destination(args.out)
+        if Path(args.model).resolve() in Path(args.out).resolve().parents:
+            # a model folder holds the model's files only: saving a model over it would be refused
+            raise ValueError(f"--out {args.out}: inside the model folder --model {args.model}, which holds one "
+                             "model only; write the picture elsewhere")
     plan_once()  # one command: a compiler pays only where one solve is worth it
     learner = Learner.load(args.model)
     # the library saved in the model, read back before the limit was known: it grounds the layout of --env
