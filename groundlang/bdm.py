@@ -376,7 +376,9 @@ def _command(path: Path, line: int, block: list[tuple[int, str]], palette,
         k += 3
         if k < len(rest):
             if rest[k][1] != "---":
-                raise CorpusError(f"{path}, line {rest[k][0]}: expected --- between pairs, found {rest[k][1][:40]!r}")
+                after = "" if rest[k][1].startswith("{") else " (a command's block ends with a blank line)"
+                raise CorpusError(f"{path}, line {rest[k][0]}: expected --- between pairs, found "
+                                  f"{rest[k][1][:40]!r}{after}")
             k += 1
             # A file cut off after a separator would otherwise lose the pair it promised silently.
             if k == len(rest) or not rest[k][1].startswith("{"):

@@ -126,6 +126,9 @@ def test_check_reports_the_fixture():
     # a command needs a word: punctuation or control characters alone say nothing to learn from
     ("go\nSTATE\nSTATE\ntrue\n\n?! ...\nSTATE\nSTATE\ntrue\n", "line 6: the command has no word, only punctuation ('?! ...')"),
     ("\x00\x07\nSTATE\nSTATE\ntrue\n", "line 1: the command is empty or only whitespace"),
+    # commands written back to back: the next command's text is where a --- or a blank line was due
+    ("go\nSTATE\nSTATE\ntrue\nwalk\nSTATE\nSTATE\ntrue\n", "line 5: expected --- between pairs, found 'walk' "
+                                                         "(a command's block ends with a blank line)"),
     # a blank line after the command ends its block: the message says why it has no pair
     ("go\n\nSTATE\nSTATE\ntrue\n", "line 1: the command 'go' has no (start, end) pair (its pairs follow it with "
                                    "no blank line between: a blank line ends a command)"),
