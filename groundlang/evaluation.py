@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field
 from groundlang.confidence import calibration_report, format_calibration
 from groundlang.corpus import Corpus
 from groundlang.folds import run_folds
-from groundlang.goal_translation import NovelEnvironmentError, describe_goal, translate_goal
+from groundlang.goal_translation import GoalHoldsAtStart, NovelEnvironmentError, describe_goal, translate_goal
 from groundlang.labels import label_for
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
 from groundlang.model.language_models import get_language_model
@@ -83,6 +83,8 @@ class EvaluationResult:
     goal_words: dict = field(default_factory=dict)
     # number of atoms of the gold goal -> n, correct, novel_n, novel_correct (one goal against conjunctions)
     per_goal_size: dict = field(default_factory=dict)
+    # novel executions whose label's goal, carried over, already holds at the start (nothing to ask there)
+    novel_not_scored: int = 0
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -95,6 +97,9 @@ class EvaluationResult:
         ]
         if self.novel_n:
             lines.append(f"novel environments: {self.novel_accuracy:.2%} ({self.novel_correct}/{self.novel_n})")
+        if self.novel_not_scored:
+            lines.append(f"novel executions not scored (the label's goal already holds at the start): "
+                         f"{self.novel_not_scored}")
         if self.skipped:
             lines.append(f"skipped inconsistent demonstrations: {self.skipped}")
         lines.append("by size of the gold goal: " + "; ".join(
@@ -170,8 +175,11 @@ def evaluate(
     for name, state in novel_states:  # reject bad layouts before any work
         for inst, gold in zip(instances, golds):
             # Named by the layout and by the instance whose label it is: the label's goal carried over fails.
-            translate_goal(gold, inst.initial_state, state, f"{name} (the label of {inst.prefix!r}, {inst.path.name})",
-                           library)
+            try:
+                translate_goal(gold, inst.initial_state, state,
+                               f"{name} (the label of {inst.prefix!r}, {inst.path.name})", library)
+            except GoalHoldsAtStart:  # that execution is not scored (counted); the layout serves the others
+                pass
 
     training = list(range(len(instances)))
     if train_indices is not None:
@@ -228,16 +236,17 @@ def evaluate(
         row = per_goal_size[r["gold_size"]]
         row["n"] += 1
         row["correct"] += int(r["correct"])
-        row["novel_n"] += len(r["novel"])
-        row["novel_correct"] += sum(x["correct"] for x in r["novel"])
-    novel = [x["correct"] for r in scored for x in r["novel"]]
+        row["novel_n"] += sum("correct" in x for x in r["novel"])
+        row["novel_correct"] += sum(x.get("correct", False) for x in r["novel"])
+    novel = [x["correct"] for r in scored for x in r["novel"] if "correct" in x]
+    novel_not_scored = sum("not_scored" in x for r in scored for x in r["novel"])
     goal_words: dict = {}
     for r in scored:
         goal_words.setdefault(r["gold_task"], r["gold_words"])
         goal_words.setdefault(r["predicted_task"], r["predicted_words"])
     calibration = calibration_report([r["confidence"] for r in scored], [r["correct"] for r in scored],
                                      threshold=min_confidence) if scored else {}
-    novel_calibration = calibration_report([x["confidence"] for r in scored for x in r["novel"]], novel,
+    novel_calibration = calibration_report([x["confidence"] for r in scored for x in r["novel"] if "correct" in x], novel,
                                            threshold=min_confidence) if novel else {}
     low, high = wilson_interval(correct, n)
     if scored:
@@ -266,4 +275,5 @@ def evaluate(
         novel_calibration=novel_calibration,
         goal_words=goal_words,
         per_goal_size=dict(sorted(per_goal_size.items())),
+        novel_not_scored=novel_not_scored,
     )

@@ -8,7 +8,7 @@ import os
 import time
 
 from groundlang.corpus import Instance
-from groundlang.goal_translation import describe_goal, translate_goal
+from groundlang.goal_translation import GoalHoldsAtStart, describe_goal, translate_goal
 from groundlang.labels import goal_holds
 from groundlang.learner import Learner
 from groundlang.logic.atoms import format_goal
@@ -37,7 +37,11 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
         "novel": [],
     }
     for name, state in novel_states:
-        translated = translate_goal(gold, instance.initial_state, state, name, learner.library)
+        try:
+            translated = translate_goal(gold, instance.initial_state, state, name, learner.library)
+        except GoalHoldsAtStart as exc:  # counted apart, as an execution whose start admits no task
+            record["novel"].append({"environment": name, "not_scored": str(exc)})
+            continue
         novel = learner.follow(instance.command, state)
         record["novel"].append(
             {

@@ -7,11 +7,16 @@ from groundlang.labels import goal_holds
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.world import State
 
-__all__ = ["NovelEnvironmentError", "object_properties", "translate_goal", "describe_goal"]
+__all__ = ["NovelEnvironmentError", "GoalHoldsAtStart", "object_properties", "translate_goal", "describe_goal"]
 
 
 class NovelEnvironmentError(ValueError):
     """A novel layout where the gold goal cannot be carried over unambiguously."""
+
+
+class GoalHoldsAtStart(NovelEnvironmentError):
+    """A gold goal carried over that already holds in the novel layout: nothing there to ask, so that one
+    execution cannot be scored (the layout serves every other label)."""
 
 
 def object_properties(state: State, obj: str) -> tuple:
@@ -41,7 +46,7 @@ def translate_goal(goal: tuple[Atom, ...], source: State, target: State, where: 
         names[obj] = matches[0]
     translated = tuple(Atom(a.predicate, tuple(names[x] for x in a.args)) for a in goal)
     if goal_holds(translated, target, library):
-        raise NovelEnvironmentError(f"{where}: the goal {format_goal(translated)} already holds at the start")
+        raise GoalHoldsAtStart(f"{where}: the goal {format_goal(translated)} already holds at the start")
     return translated
 
 

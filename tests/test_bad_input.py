@@ -469,11 +469,6 @@ ROWS.append(Row("input/evaluate --novel-envs folder missing",
                  "--labels", str(FIXTURES / "sokoban" / "labels.csv"), "--novel-envs", "{tmp}/absent"),
                 pieces=("--novel-envs {tmp}/absent: not a folder (it does not exist or is a file)",)))
 
-ROWS.append(Row("input/a novel layout where a label's goal already holds, named with the label's instance",
-                ("evaluate", "--corpus", str(EXAMPLES), "--palette", "sokoban", "--labels", str(EXAMPLES / "labels.csv"),
-                 "--novel-envs", str(BAD / "novel_goal_holds")),
-                pieces=("in_green.state (the label of 'agent2green_', agent2green_0.txt): the goal "
-                        "agentInRoom(agent0, room1) already holds at the start",)))
 ROWS.append(Row("input/a bare --library name the package does not ship", (*_TASKS, "taskz"),
                 pieces=("groundlang tasks: error: taskz: no such file, nor a library the package ships (tasks, "
                         "williams2018)",)))

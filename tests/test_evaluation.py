@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
@@ -127,3 +128,16 @@ def test_cli_evaluate_trains_and_scores_with_the_users_library(tmp_path, capsys,
     assert code == 0, capsys.readouterr().err
     data = json.loads(out.read_text())
     assert data["n"] == data["correct"] == 4 and set(data["per_task"]) == {"agentInRoom(agent, red)", "agentNextToToy(agent, star)"}
+
+
+def test_a_novel_layout_where_a_labels_goal_already_holds_leaves_those_executions_unscored(corpus):
+    """The agent starts in the green room of ``in_green.state``: the four agent-to-green commands have
+    nothing to ask there and are counted apart; every other command is scored in it."""
+    labels = read_labels(EXAMPLES / "labels.csv")
+    where = Path(__file__).parent / "fixtures" / "bad_input" / "novel_goal_holds" / "in_green.state"
+    result = evaluate(corpus, labels, protocol="train", novel_states=[(where.name, read_state_file(where, "sokoban"))])
+    unscored = [x for r in result.records for x in r["novel"] if "not_scored" in x]
+    assert len(unscored) == result.novel_not_scored == 4
+    assert all("agentInRoom(agent0, room1) already holds at the start" in x["not_scored"] for x in unscored)
+    assert result.novel_n == 20 and "novel executions not scored (the label's goal already holds at the start): 4" \
+        in result.summary()
