@@ -118,7 +118,8 @@ class EvaluationResult:
         if self.calibration:
             lines.append(format_calibration(self.calibration, "confidence"))
         if self.novel_calibration:
-            lines.append(format_calibration(self.novel_calibration, "confidence in novel environments"))
+            lines.append(format_calibration(self.novel_calibration, "confidence in novel environments",
+                                            unit="executions"))
         if self.failed_folds:
             lines.append(f"failed folds: {len(self.failed_folds)}")
             for item in self.failed_folds[:5]:
