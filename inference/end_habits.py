@@ -209,6 +209,21 @@ class EndHabits:
         return {given: {r: self.rate(r, frozenset([given]), prior) for r in sorted(self.relations - {given})}
                 for given in sorted(self.relations)}
 
+    def shown_at(self, goal: tuple[Atom, ...], start: State, end: State, library, prior: str = "absent",
+                 moved: bool = False, least: float = 0.1) -> dict[str, float]:
+        """The relations new at ``end`` (from ``start``) besides ``goal``'s own, each with :meth:`rate` given
+        the goal's relations, those of at least ``least``: what following left true because demonstrations
+        of such goals did (``follow`` says so). :data:`MOVED` only with ``moved`` (the language model's
+        ``moved_toys``, without which it weighs nothing); bound habits are not listed."""
+        given = frozenset(canonical_predicate(atom.predicate) for atom in goal)
+        shown = {}
+        for relation in sorted(new_relations(start, end, library) - given):
+            if _BOUND.match(relation) or (relation == MOVED and not moved):
+                continue
+            if (q := self.rate(relation, given, prior)) >= least:
+                shown[relation] = q
+        return shown
+
     def bound_table(self, prior: str = "absent") -> dict[str, float]:
         """``q(b | {L})`` for every bound habit ``b`` demonstrations showed, ``L`` the relation it binds to
         (``{"agentInRoom[1]=toyInRoom[1]": 0.9, ...}``), to read what was learned."""

@@ -134,7 +134,7 @@ def test_a_novel_layout_where_a_labels_goal_already_holds_leaves_those_execution
     """The agent starts in the green room of ``in_green.state``: the four agent-to-green commands have
     nothing to ask there and are counted apart; every other command is scored in it."""
     labels = read_labels(EXAMPLES / "labels.csv")
-    where = Path(__file__).parent / "fixtures" / "bad_input" / "novel_goal_holds" / "in_green.state"
+    where = Path(__file__).parent / "fixtures" / "novel_goal_holds" / "in_green.state"
     result = evaluate(corpus, labels, protocol="train", novel_states=[(where.name, read_state_file(where, "sokoban"))])
     unscored = [x for r in result.records for x in r["novel"] if "not_scored" in x]
     assert len(unscored) == result.novel_not_scored == 4

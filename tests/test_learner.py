@@ -107,6 +107,18 @@ def test_the_posterior_says_how_much_of_the_words_asked_for_what_cannot_be_done(
     assert learner.posterior("go to the green room", corner).out_of_reach < 0.01
 
 
+def test_follow_says_when_most_of_the_words_asked_for_what_cannot_be_done(learner, tmp_path, capsys):
+    corner = tmp_path / "corner.state"
+    corner.write_text("room,1,0,10,6,5 room,5,6,10,12,5 room,10,0,5,12,0 door,6,8,6,8 door,3,5,3,5 door,9,5,9,5 "
+                      "block,12,0,1,1 agent,9,5\n")
+    learner.save(tmp_path / "m")
+    code = main(["--quiet", "follow", "take the star to the green room", "--env", str(corner), "--palette", "sokoban",
+                 "--model", str(tmp_path / "m"), "--guess"])
+    out = capsys.readouterr().out
+    assert code in (0, 1) and ("1.00 of the words' reading asks for what cannot be done from here (most: "
+                               "toyInRoom(block0, room1))") in out
+
+
 def test_lexicon_keeps_a_meaning_whose_words_are_synonyms(corpus):
     # bag of words spreads agentToRoom over go, walk, enter and room (16 words in all): its row had been
     # dropped as flat, and "go" read as a colour word

@@ -235,6 +235,13 @@ def test_train_on_pairs_then_follow_with_the_models_palette(tmp_path):
     assert run.returncode == 0, run.stderr
     result = json.loads(run.stdout)
     assert result["goal"].startswith("agentNextToToy(agent0, block0)") and result["reached"]
+    # what the end leaves true besides the goal because the fixture's demonstrations of it did: 3 of its 3
+    # next-to pairs end in a room they entered (3 / (3 + 1) with the pseudo-demonstration), 1 left of it
+    assert result["habits"] == {"agentInRoom": 0.75, "agentLeftOfToy": 0.25}
+    assert result["confidence"] >= result["best_goal_probability"] > 0.9
+    run = _cli("follow", "go next to the chair", "--model", str(model), "--env", str(FIXTURE / "one.state"), "--guess")
+    assert ("also true at the end, as in demonstrations of such goals: agentInRoom (0.75 of them), agentLeftOfToy "
+            "(0.25 of them)") in run.stdout
     # a multiword preposition asked of the word table is sent to the preposition table, where it is learned
     run = _cli("--quiet", "lexicon", str(model), "--words", "next to")
     assert run.returncode == 0, run.stderr

@@ -10,6 +10,7 @@ the model saved over ``--model``, so that the command is understood next time.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -123,11 +124,35 @@ def _learn(learner, asked, answered, state, model) -> None:
     print(f"learned that {asked.command!r} means {answered.goal_words}{said}; model saved to {model}")
 
 
+def _down(confidence: float) -> str:
+    """A confidence to two places rounded down: 0.6999 is not said to be 0.70 and "below 0.7" at once."""
+    return f"{math.floor(confidence * 100) / 100:.2f}"
+
+
+def _habits(learner, result, state) -> dict[str, float]:
+    """What following left true besides the goal because demonstrations of such goals did (end habits)."""
+    if result.abstained or not result.reached or not learner.lm.end_habits or learner.habits is None:
+        return {}
+    return learner.habits.shown_at(result.goal, state, result.final_state, learner.library, learner.lm.habit_prior,
+                                   learner.lm.moved_toys)
+
+
+def _out_of_reach(result, names) -> str | None:
+    """A line on the share of the words' reading conditioning on what can be done took away, if any."""
+    from groundlang.logic.atoms import format_goal
+
+    share = result.posterior.out_of_reach
+    if share < 0.01 or result.posterior.out_of_reach_goal is None:
+        return None
+    return (f"{share:.2f} of the words' reading asks for what cannot be done from here (most: "
+            f"{format_goal(result.posterior.out_of_reach_goal, names)}); the interpretations above are what can")
+
+
 def _refuse(result, args) -> None:
     # with --json nothing is asked on the terminal: the question and its choices are in the JSON printed
     how = ("the question and its choices are in the JSON (--ask asks only without --json)" if args.ask and args.json
            else "answer with --ask")
-    print(f"groundlang follow: not acting: confidence {result.confidence:.2f} is below "
+    print(f"groundlang follow: not acting: confidence {_down(result.confidence)} is below "
           f"--min-confidence {args.min_confidence:g}; {how}, or act anyway with --guess", file=sys.stderr)
 
 
@@ -211,7 +236,7 @@ def run(args: argparse.Namespace) -> int:
                                  "words": renamed_words(goal_phrase(g, state, learner.library), names),
                                  "probability": p} for g, p in goals],
             "confidence": result.confidence,
-            "goal_probability": result.posterior.confidence,
+            "best_goal_probability": result.posterior.confidence,
             "margin": result.posterior.margin,
             "out_of_reach": result.posterior.out_of_reach,
             "abstained": result.abstained,
@@ -223,7 +248,8 @@ def run(args: argparse.Namespace) -> int:
             data.update(goal=format_goal(result.goal, names), goal_words=renamed_words(result.goal_words, names),
                         actions=[a.word for a in result.actions],
                         final_state=format_state_like(result.final_state, args.env, names),
-                        reached=result.reached, reason=result.reason)
+                        reached=result.reached, reason=result.reason,
+                        habits=_habits(learner, result, state))
         print(json_text(data))
         if result.abstained:
             _refuse(result, args)
@@ -233,12 +259,14 @@ def run(args: argparse.Namespace) -> int:
     for goal, p in goals:
         print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library, names)}")
     if result.success is None:
-        said = f"confidence {result.confidence:.2f}"
+        said = f"confidence {_down(result.confidence)}"
     else:  # the end is chosen over the whole posterior: how likely what was meant holds there
-        said = (f"confidence {result.confidence:.2f} that what was meant holds where it ends (the most probable "
+        said = (f"confidence {_down(result.confidence)} that what was meant holds where it ends (the most probable "
                 f"goal {result.posterior.confidence:.2f},")
     print(said + f"{' (' if result.success is None else ' '}margin {result.posterior.margin:.2f} over the next "
           f"goal that differs)" + ("; acting on the answer" if answered is not None else ""))
+    if (beyond := _out_of_reach(result, names)) is not None:
+        print(beyond)
     if result.abstained:
         _print_question(result, state, learner.library, names)
         _refuse(result, args)
@@ -246,6 +274,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"plan ({len(result.actions)} step{'' if len(result.actions) == 1 else 's'}): {', '.join(a.word for a in result.actions) or '(none)'}")
     print(f"goal {labelled_goal(result.goal, state, learner.library, names)}: "
           f"{'reached' if result.reached else 'NOT reached'} ({result.reason})")
+    if habits := _habits(learner, result, state):
+        print("also true at the end, as in demonstrations of such goals: " + ", ".join(
+            f"{relation} ({q:.2f} of them)" for relation, q in habits.items()))
     if args.out:
         print(f"picture written to {args.out}")
     if not result.reached:
