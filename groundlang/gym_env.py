@@ -167,6 +167,19 @@ def _largest_value(palette) -> int:
     return max(len(values) for _, values in palette.all_values) + 1
 
 
+def _library(library):
+    """A task library given to the env: None (the domain's PFs), a TaskLibrary, or the path of its file."""
+    from pathlib import Path
+
+    from groundlang.logic.tasks import TaskLibrary
+
+    if library is None or isinstance(library, TaskLibrary):
+        return library
+    if isinstance(library, (str, Path)):
+        return TaskLibrary.load(library)
+    raise TypeError(f"library must be a TaskLibrary, the path of its .lp file or None, got {type(library).__name__}")
+
+
 class CleanupEnv(gymnasium.Env):
     """Cleanup World with a command: move (and push toys), then TERMINATE.
 
@@ -174,6 +187,8 @@ class CleanupEnv(gymnasium.Env):
     reset (by the reset's seed) with its command and gold goal.
     ``command``: the text in every observation (default: the picked instance's).
     ``goal``: atoms, or text like ``"toyInRoom(block0, room1)"``; optional.
+    ``library``: a TaskLibrary (or the path of its ``.lp`` file) whose PF rules the goal may use
+    (default: the domain's, ``logic/pfs.lp``), as ``goal_holds`` takes it.
     Reward is 1 on the step that makes the goal hold (or on TERMINATE while
     it holds), else 0. An episode terminates on TERMINATE or when the goal
     holds, and is truncated after ``max_steps`` steps. ``info["goal_holds"]``
@@ -185,7 +200,7 @@ class CleanupEnv(gymnasium.Env):
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 4}
 
     def __init__(self, state: State | None = None, command: str = "", goal=None,
-                 render_mode: str | None = None, max_steps: int = 200):
+                 render_mode: str | None = None, max_steps: int = 200, library=None):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported; expected one of "
                              f"{', '.join(self.metadata['render_modes'])} or None")
@@ -194,6 +209,7 @@ class CleanupEnv(gymnasium.Env):
             raise TypeError(f"state must be a State (or None for the example corpus's), got {type(state).__name__}")
         if not isinstance(command, str):
             raise TypeError(f"command must be a str, got {type(command).__name__}")
+        self.library = _library(library)
         self.render_mode = render_mode
         self.max_steps = int(max_steps)
         self._fixed_state = state
@@ -202,7 +218,7 @@ class CleanupEnv(gymnasium.Env):
         if state is not None and self._fixed_goal is not None:
             from groundlang.labels import check_goal_objects
 
-            check_goal_objects(self._fixed_goal, state)  # refused now, not at the first reset
+            check_goal_objects(self._fixed_goal, state, library=self.library)  # refused now, not at the first reset
         layouts = [state.layout] if state is not None else [s.layout for s, _, _ in _example_pool()]
         self.grid_shape = (max(l.height for l in layouts), max(l.width for l in layouts))
         # Colour and shape indices + 1 must fit uint8.
@@ -235,7 +251,7 @@ class CleanupEnv(gymnasium.Env):
     def _holds(self) -> bool:
         from groundlang.labels import goal_holds
 
-        return self.goal is not None and goal_holds(self.goal, self.state)
+        return self.goal is not None and goal_holds(self.goal, self.state, self.library)
 
     def _observation(self) -> dict[str, Any]:
         return {"grid": _observed_grid(self._static, self.state), "command": self.command}
@@ -281,7 +297,8 @@ class CleanupEnv(gymnasium.Env):
         if goal is not None:
             from groundlang.labels import check_goal_objects
 
-            check_goal_objects(goal, state)  # before anything changes: a refused reset leaves the episode as it was
+            # before anything changes: a refused reset leaves the episode as it was
+            check_goal_objects(goal, state, library=self.library)
         self.state, self.command, self.goal, self.steps, self._over = state, command, goal, 0, False
         self._static = _static_grid(state, self.grid_shape)
         return self._observation(), self._info()

@@ -311,3 +311,24 @@ def test_a_goal_over_objects_the_state_lacks_is_refused_before_the_episode_chang
     with pytest.raises(LabelError, match="names room9"):
         env.reset(options={"goal": "agentInRoom(agent0, room9)"})
     assert format_goal(env.goal) == "agentInRoom(agent0, room1)" and env.command == "go to the green room"
+
+
+def test_a_goal_may_use_a_pf_of_the_library_given(state):
+    """A PF a user authored in ASP (the example ``next_to.lp``) is a goal of the env given its library:
+    the domain's own PFs alone refuse it."""
+    from groundlang.labels import LabelError
+
+    library = example_corpus_path() / "next_to.lp"
+    with pytest.raises(LabelError, match="unknown predicate 'agentNextToToy'"):
+        CleanupEnv(state=state, goal="agentNextToToy(agent0, block0)")
+    env = gymnasium.make(ENV_ID, state=state, goal="agentNextToToy(agent0, block0)", library=str(library))
+    _, info = env.reset(seed=0)
+    assert not info["goal_holds"]
+    # the star at (8,2), the agent at (9,7): four steps south end beside it (diagonally), where the goal holds
+    for _ in range(3):
+        _, reward, terminated, _, info = env.step(int(CleanupAction.SOUTH))
+        assert not terminated and reward == 0.0
+    _, reward, terminated, _, info = env.step(int(CleanupAction.SOUTH))
+    assert terminated and reward == 1.0 and info["goal_holds"]
+    with pytest.raises(TypeError, match="library must be a TaskLibrary"):
+        CleanupEnv(state=state, library=5)
