@@ -307,8 +307,9 @@ def write_instance(path: str | Path, instance: Instance) -> None:
     write_atomically(path, "\n".join(lines) + "\n")
 
 
-def read_state_file(path: str | Path, palette: str | Palette) -> State:
-    """Read a one-line ``.state`` file (a state in the corpus format)."""
+def read_state_file(path: str | Path, palette: str | Palette | dict) -> State:
+    """Read a one-line ``.state`` file (a state in the corpus format, or a BURLAP line). ``palette``: a name,
+    a ``.lp`` file, a Palette, or a record of one as a trained model keeps it (``learner.palettes[0]``)."""
     path = as_path(path, "read_state_file: path")
     if path.is_dir():  # read_limited says only "Is a directory"; the CLI says what was expected
         raise CorpusError(f"{path}: a folder, not a regular file; expected a state file")

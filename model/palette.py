@@ -126,11 +126,19 @@ class Palette:
             raise WorldError(f"shape {name!r} is not in palette {self.name!r}") from None
 
 
-def get_palette(name: str | Palette) -> Palette:
-    """The palette ``name``: one the package ships (``logic/palettes/NAME.lp``) or the path of a
-    ``.lp`` file of ``value(Attribute, Index, Name)`` facts. Raises WorldError naming what is wrong."""
+def get_palette(name: str | Palette | dict) -> Palette:
+    """The palette ``name``: one the package ships (``logic/palettes/NAME.lp``), the path of a
+    ``.lp`` file of ``value(Attribute, Index, Name)`` facts, or a palette's record as a trained model keeps
+    it (``Learner.palettes``: a model trained on a file of your own reads states without the file).
+    Raises WorldError naming what is wrong."""
     if isinstance(name, Palette):
         return name
+    if isinstance(name, dict):
+        try:
+            return Palette.from_record(name)
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            raise WorldError(f"palette record {str(name)[:60]}: not a palette's record as Learner.palettes keeps "
+                             f"it ({type(exc).__name__}: {exc})") from None
     try:
         label, values, drawing, added, value_classes = read_palette(str(name))
     except AspError as exc:

@@ -70,3 +70,17 @@ def test_the_help_lists_every_palette_the_package_ships():
 
     assert "williams2018" in palette_names()  # the folder is read, not a list kept by hand
     assert f"ships ({', '.join(palette_names())};" in PALETTE_HELP
+
+
+def test_a_state_is_read_with_the_palette_record_a_trained_model_keeps(tmp_path):
+    """A model trained on a palette file of one's own reads states without the file: its record will do."""
+    from groundlang.corpus import example_corpus_path, read_state_file
+    from groundlang.model.palette import Palette
+    from groundlang.model.world import WorldError
+
+    record = get_palette("sokoban").record()
+    state = read_state_file(example_corpus_path() / "novel_a.state", record)
+    assert state.layout.palette == Palette.from_record(record)
+    assert [r.colour for r in state.layout.rooms] == ["blue", "green", "red"]
+    with pytest.raises(WorldError, match="not a palette's record"):
+        read_state_file(example_corpus_path() / "novel_a.state", {"name": "x"})
