@@ -116,3 +116,14 @@ def test_parse_names_an_unknown_grammar_rule_in_its_weights():
 
     with pytest.raises(ValueError, match="unknown grammar rule\\(s\\) 'zzz'; the rules are"):
         parse("go to the red room", weights={"zzz": 1.0})  # it had been ignored
+
+
+@pytest.mark.parametrize("argv, quiet, verbose", [
+    (["--quiet", "domain"], True, False),
+    (["domain", "--quiet"], True, False),
+    (["domain", "--verbose"], False, True),
+    (["domain"], False, False),
+])
+def test_quiet_and_verbose_may_come_before_or_after_the_command(argv, quiet, verbose):
+    args = build_parser().parse_args(argv)
+    assert (args.quiet, args.verbose) == (quiet, verbose)
