@@ -71,13 +71,21 @@ class ParseError(ValueError):
     """A command that cannot be parsed at all (empty, whitespace or punctuation only)."""
 
 
+def utf8_fault(text: str) -> str | None:
+    """``"is not UTF-8 text (byte 0xe9 at character 12)"`` where ``text`` holds a byte that was not UTF-8 (Python
+    hands it over as a lone surrogate), else None: such text has no words to read."""
+    bad = next((i for i, c in enumerate(text) if "\ud800" <= c <= "\udfff"), None)
+    if bad is None:
+        return None
+    code = ord(text[bad])
+    what = f"byte 0x{code - 0xdc00:02x}" if code >= 0xdc80 else f"U+{code:04X}"
+    return f"is not UTF-8 text ({what} at character {bad + 1})"
+
+
 def command_fault(command: str) -> str | None:
     """Why ``command`` cannot be read as a command, or None: text without a word says nothing to read."""
-    bad = next((i for i, c in enumerate(command) if "\ud800" <= c <= "\udfff"), None)
-    if bad is not None:  # a byte that was not UTF-8 (Python hands it over as a lone surrogate): no text to read
-        code = ord(command[bad])
-        what = f"byte 0x{code - 0xdc00:02x}" if code >= 0xdc80 else f"U+{code:04X}"
-        return f"is not UTF-8 text ({what} at character {bad + 1})"
+    if fault := utf8_fault(command):
+        return fault
     text = _without_control(command)
     if not text.strip():
         return "is empty or only whitespace"

@@ -21,6 +21,7 @@ import re
 from collections.abc import Callable, Sequence
 
 from groundlang.confidence import GoalGroup
+from groundlang.grammar.parser import utf8_fault
 from groundlang.logic.atoms import shown
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.phrase_keys import entity_words
@@ -124,6 +125,8 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     text = answer.strip()
     if not text:
         raise AnswerError("empty answer: expected a number or words naming one of the choices")
+    if fault := utf8_fault(answer):  # read after the command, it was blamed on the command
+        raise AnswerError(f"the answer {fault}: expected a number or words naming one of the choices")
     phrases = option_phrases(choices, state, library)
     if text.isdecimal():  # int() reads every decimal digit ("٣"), not every digit ("²")
         # int() refuses more than 4300 digits with its own error; no choice has a number that long

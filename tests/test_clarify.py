@@ -94,6 +94,14 @@ def test_follow_asks_about_an_unknown_colour_and_acts_on_the_answer(learner, nov
         learner.clarify(answered, "1")
 
 
+def test_an_answer_that_is_not_utf8_is_named_as_the_answer(learner, novel_b):
+    """It was read after the command and refused as "cannot parse the command", at a character of both."""
+    asked = learner.follow("go to the purple room", novel_b, min_confidence=DEFAULT_MIN_CONFIDENCE)
+    with pytest.raises(AnswerError, match=r"^the answer is not UTF-8 text \(byte 0xff at character 5\): expected a "
+                                          "number or words naming one of the choices"):
+        learner.clarify(asked, "the \udcff one")
+
+
 @pytest.mark.parametrize("command", ["go to the purple room", "go to a room", "move the star", "go to the blue room",
                                      "take the star to the green room"])
 def test_the_goal_said_to_be_reached_holds_where_the_agent_ends(learner, novel_b, command):
@@ -176,6 +184,24 @@ def test_cli_ask_reads_the_answer_from_stdin(model_dir, capsys, monkeypatch):
     monkeypatch.setattr("sys.stdin", io.StringIO(""))  # end of input: nothing done
     assert _follow(model_dir, "go to the purple room", "--ask") == 3
     assert capsys.readouterr().err.strip() == "groundlang follow: no answer named a choice; nothing done"
+
+
+def test_cli_ask_with_stdin_closed_is_end_of_input(model_dir, capsys, monkeypatch):
+    monkeypatch.setattr("sys.stdin", None)  # what Python makes of `<&-`: had failed with an AttributeError
+    assert _follow(model_dir, "go to the purple room", "--ask") == 3
+    assert capsys.readouterr().err.strip() == "groundlang follow: no answer named a choice; nothing done"
+
+
+def test_cli_ask_says_an_answer_is_not_utf8_and_reads_the_next(model_dir, capsys, monkeypatch):
+    import io
+
+    # strict decoding, as stdin has under a UTF-8 locale other than C.UTF-8: the run had ended blaming the command
+    stdin = io.TextIOWrapper(io.BytesIO(b"gr\xfcn\n2\n"), encoding="utf-8", errors="strict")
+    monkeypatch.setattr("sys.stdin", stdin)
+    assert _follow(model_dir, "go to the purple room", "--ask") == 0
+    out = capsys.readouterr().out
+    assert "the answer is not UTF-8 text (byte 0xfc at character 3)" in out and "command" not in out.split("answer>")[1]
+    assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room1): reached (goal)" in out
 
 
 def test_cli_ask_refuses_an_overlong_answer_without_reading_it_whole(model_dir, capsys, monkeypatch):

@@ -10,6 +10,7 @@ the model saved over ``--model``, so that the command is understood next time.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from pathlib import Path
@@ -89,18 +90,21 @@ def _ask(learner, result, state, max_steps: int, names=None):
     from groundlang.logic.atoms import renamed_words
 
     _print_question(result, state, learner.library, names)
+    stdin = sys.stdin  # None where the process was started with stdin closed: no answer can come
+    with contextlib.suppress(AttributeError, ValueError):  # bytes that are not UTF-8 reach the answer as lone
+        stdin.reconfigure(errors="surrogateescape")       # surrogates (said, asked again), not a decode error
     for _ in range(ANSWER_TRIES):
         print("answer> ", end="", flush=True)
-        line = sys.stdin.readline(MAX_ANSWER_CHARS + 1)
+        line = stdin.readline(MAX_ANSWER_CHARS + 1) if stdin is not None else ""
         if not line:
             print()
             return None
         if len(line) > MAX_ANSWER_CHARS and not line.endswith("\n"):
-            while (rest := sys.stdin.readline(1 << 16)) and not rest.endswith("\n"):
+            while (rest := stdin.readline(1 << 16)) and not rest.endswith("\n"):
                 pass  # the rest of the line, read in bounded pieces and dropped
             print(f"\n  an answer is at most {MAX_ANSWER_CHARS} characters: a choice's number or its words")
             continue
-        if not sys.stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read, as the
+        if not stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read, as the
             answer = line.strip()     # command is shown (an escape sequence would act on the terminal)
             print(answer if answer.isprintable() else ascii(answer))
         try:  # the choices were shown with the file's names: the answer is read with the layout's
