@@ -84,7 +84,7 @@ class Learner:
         if not self.library.tasks:  # a file of PFs only (discover --pfs) is a library of none
             raise ValueError(f"{self.library.program.user_names}: the task library declares no task/1; a learner "
                              "needs at least one task to read commands as")
-        check_training_options(steps, lr, seed, settings, em_acceleration)
+        check_training_options(steps, lr, seed, settings, em_acceleration, cache_dir)
         self.steps = steps
         self.em_acceleration = em_acceleration
         self.lr = lr

@@ -14,6 +14,7 @@ import numpy as np
 
 from groundlang.inference.em import EM_ACCELERATIONS
 from groundlang.inference.end_habits import EndHabits
+from groundlang.inference.likelihoods import check_cache_dir
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.logic.terms import ASP_CONSTANT
@@ -72,9 +73,11 @@ def check_model_parts(language_model, library) -> None:
                         f"{type(library).__name__}")
 
 
-def check_training_options(steps, lr, seed, settings, em_acceleration) -> None:
+def check_training_options(steps, lr, seed, settings, em_acceleration, cache_dir=None) -> None:
     """The checks of ``Learner(...)``'s training options, whether given or read from a saved model."""
     check_count("Learner", "steps", steps)
+    # at construction: an empty one put the cache in the working folder, a number failed inside fit
+    check_cache_dir(cache_dir, "Learner: cache_dir")
     if isinstance(lr, bool) or not isinstance(lr, (int, float)) or not 0 < lr < float("inf"):
         raise ValueError(f"Learner: lr must be a positive number, got {lr!r}")
     # numpy's and torch's generators take seeds of 32 bits; a wider one failed only inside fit, minutes in

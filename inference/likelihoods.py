@@ -56,7 +56,8 @@ from groundlang.inference.planning import (TaskSettings, as_transitions, demonst
 from groundlang.logic.atoms import Atom, parse_atom
 from groundlang.logic.storage import FileRefused, check_folder, read_limited, write_atomically
 
-__all__ = ["CACHE_FOLDERS", "CACHE_VERSION", "DamagedEntry", "behaviour_likelihood_table", "cache_directory", "entry_key", "layout_description",
+__all__ = ["CACHE_FOLDERS", "CACHE_VERSION", "DamagedEntry", "behaviour_likelihood_table", "cache_directory",
+           "check_cache_dir", "environment_cache", "entry_key", "layout_description",
            "pad_table", "read_entry_json"]
 
 # The cache folder's subfolders of entries: behaviour likelihoods (here), end-state evidence of (start, end)
@@ -72,12 +73,32 @@ CACHE_VERSION = 2
 MAX_ENTRY_BYTES = 64 * 1024
 
 
+def environment_cache() -> str | None:
+    """``$GROUNDLANG_CACHE``, or None where it is unset, empty or blank: a blank value is no folder a person
+    names (it made a folder " " in the working folder), and an empty one has always meant unset."""
+    value = os.environ.get("GROUNDLANG_CACHE", "")
+    return value if value.strip() else None
+
+
+def check_cache_dir(cache_dir, where: str) -> None:
+    """TypeError unless ``cache_dir`` is a folder's path, False (no cache) or None (the default); ValueError for
+    an empty or blank path, which would put the cache in the working folder. ``where`` names the argument."""
+    if cache_dir is None or cache_dir is False:
+        return
+    if not isinstance(cache_dir, (str, os.PathLike)):
+        raise TypeError(f"{where} must be a folder's path (a str or os.PathLike), False for no cache or None for "
+                        f"$GROUNDLANG_CACHE or ./.groundlang-cache, got {type(cache_dir).__name__}")
+    if not os.fsdecode(cache_dir).strip():
+        raise ValueError(f"{where} is empty or blank; name a folder (or None for $GROUNDLANG_CACHE or ./.groundlang-cache)")
+
+
 def cache_directory(cache_dir: str | os.PathLike | None = None) -> Path:
-    """The cache root: ``cache_dir``, else ``$GROUNDLANG_CACHE``, else ``./.groundlang-cache``; ValueError
-    when it, or a folder above it, is a file."""
+    """The cache root: ``cache_dir``, else ``$GROUNDLANG_CACHE`` (:func:`environment_cache`), else
+    ``./.groundlang-cache``; ValueError when it, or a folder above it, is a file, or ``cache_dir`` is empty."""
+    check_cache_dir(cache_dir, "cache_dir")
     if cache_dir is not None:
         root, what = Path(cache_dir), "the cache folder"
-    elif env := os.environ.get("GROUNDLANG_CACHE"):
+    elif env := environment_cache():
         root, what = Path(env), "GROUNDLANG_CACHE"
     else:
         root, what = Path.cwd() / ".groundlang-cache", "the cache folder"

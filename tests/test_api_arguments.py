@@ -32,6 +32,11 @@ def novel():
     ({"library": "tasks"}, TypeError, r"Learner: library must be a TaskLibrary \(TaskLibrary.load\(path\)\)"),
     ({"seed": -1}, ValueError, r"Learner: seed must be an integer from 0 to 2\*\*32 - 1, got -1"),
     ({"seed": 2**70}, ValueError, "Learner: seed must be an integer from 0 to 2"),  # failed inside fit before
+    # "" had put the cache in the working folder; 5 had failed inside fit with pathlib's message
+    ({"cache_dir": ""}, ValueError, r"Learner: cache_dir is empty or blank; name a folder \(or None for \$GROUNDLANG_CACHE"),
+    ({"cache_dir": " "}, ValueError, "Learner: cache_dir is empty or blank"),
+    ({"cache_dir": 5}, TypeError, r"Learner: cache_dir must be a folder's path \(a str or os.PathLike\), False for "
+                                  "no cache or None for .* got int"),
 ])
 def test_constructor_arguments_are_checked_at_construction(options, error, message):
     with pytest.raises(error, match=message):

@@ -123,6 +123,12 @@ def test_cache_location_and_no_cache(tmp_path, monkeypatch, small_instances):
     monkeypatch.delenv("GROUNDLANG_CACHE")
     monkeypatch.chdir(tmp_path)
     assert cache_directory() == tmp_path / ".groundlang-cache"
+    for blank in ("", " ", "\t"):  # as if unset, as an empty value always was: " " had made a folder " " here
+        monkeypatch.setenv("GROUNDLANG_CACHE", blank)
+        assert cache_directory() == tmp_path / ".groundlang-cache"
+    monkeypatch.delenv("GROUNDLANG_CACHE")
+    with pytest.raises(ValueError, match="cache_dir is empty or blank; name a folder"):
+        cache_directory(" ")  # the working folder's " ", or with "" the working folder itself
     behaviour_likelihood_table(small_instances[:1], [_agent_goals(small_instances[0].initial_state.layout)],
                                cache_dir=False)
     assert not (tmp_path / ".groundlang-cache").exists()

@@ -318,13 +318,12 @@ def check_cache_outside(cache, model: str) -> None:
     than a model's, and the training would be lost."""
     if cache is False:
         return
-    from groundlang.inference.likelihoods import cache_directory
+    from groundlang.inference.likelihoods import cache_directory, environment_cache
 
     root, folder = cache_directory(cache).resolve(), Path(model).resolve()
     if root == folder or folder in root.parents:
         named = f"--cache-dir {cache}" if cache is not None else (
-            f"GROUNDLANG_CACHE {os.environ['GROUNDLANG_CACHE']}" if os.environ.get("GROUNDLANG_CACHE")
-            else f"the cache folder {root}")
+            f"GROUNDLANG_CACHE {environment_cache()}" if environment_cache() else f"the cache folder {root}")
         raise ValueError(f"{named}: inside the model folder -o {model}, which holds one model only; name a cache "
                          "folder elsewhere")
 
