@@ -286,12 +286,18 @@ def parse(command: str, max_readings: int = 8, lexicon: SemanticLexicon | None =
     predicates of the words it knows; ``word_lexicon`` gives the words' categories (default: English
     only, :meth:`Lexicon.english`; a domain's nouns and colour words come with its word file). Raises
     ParseError (a ValueError) for empty or whitespace-only input, ValueError for ``max_readings < 1``
-    or a non-positive weight, TypeError for a non-string.
+    or a non-positive weight, TypeError for a non-string command or lexicons of the wrong type.
     """
     if not isinstance(command, str):
         raise TypeError(f"parse: command must be a str, got {type(command).__name__}")
     if max_readings < 1:
         raise ValueError(f"parse: max_readings must be >= 1, got {max_readings}")
+    if word_lexicon is not None and not isinstance(word_lexicon, Lexicon):  # a word file's text or path included
+        raise TypeError(f"parse: word_lexicon must be a Lexicon (Lexicon.english(), or with words of your own "
+                        f"groundlang.model.domain_words.domain_lexicon({{'NOUN': [...]}})) or None, got "
+                        f"{type(word_lexicon).__name__}")
+    if lexicon is not None and not isinstance(lexicon, SemanticLexicon):
+        raise TypeError(f"parse: lexicon must be a SemanticLexicon or None, got {type(lexicon).__name__}")
     words = word_lexicon or Lexicon.english()
     fault = command_fault(command)
     if fault:

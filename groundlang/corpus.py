@@ -292,9 +292,13 @@ def read_corpus(directory: str | Path, palette: str | Palette, skip_inconsistent
 def write_instance(path: str | Path, instance: Instance) -> None:
     """Write an instance in the corpus format (atomically: tmp file + rename).
 
-    Raises CorpusError when the command spans lines or states and actions do not match in number.
+    Raises CorpusError when the command spans lines or states and actions do not match in number;
+    TypeError when ``instance`` is not an Instance.
     """
     path = as_path(path, "write_instance: path")
+    if not isinstance(instance, Instance):
+        raise TypeError(f"write_instance: instance must be an Instance (read_instance, or Instance(path, command, "
+                        f"actions, states)), got {type(instance).__name__}")
     if "\n" in instance.command or "\r" in instance.command:
         raise CorpusError(f"{path}: the command must be one line")
     if len(instance.states) != len(instance.actions) + 1:

@@ -20,7 +20,7 @@ import logging
 import math
 import time
 from collections import Counter, defaultdict
-from collections.abc import Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 
 from groundlang.confidence import calibration_report, format_calibration
@@ -130,6 +130,24 @@ class EvaluationResult:
         return "\n".join(lines)
 
 
+def _checked_inputs(corpus, labels, novel_states) -> list[tuple[str, State]]:
+    """``novel_states`` as a list, after a TypeError naming ``evaluate``'s argument of the wrong type (each had
+    failed deep inside with an AttributeError, or "cannot unpack non-iterable State object")."""
+    if not isinstance(corpus, Corpus):
+        raise TypeError(f"evaluate: corpus must be a Corpus (read_corpus), got {type(corpus).__name__}")
+    if not isinstance(labels, Mapping):
+        raise TypeError(f"evaluate: labels must map file prefixes to goals (read_labels), got {type(labels).__name__}")
+    expected = "evaluate: novel_states must be (name, State) pairs, e.g. [('novel_a', state)]"
+    if isinstance(novel_states, (str, bytes)) or not isinstance(novel_states, Iterable):
+        raise TypeError(f"{expected}, got {type(novel_states).__name__}")
+    pairs = list(novel_states)
+    for pair in pairs:
+        if not (isinstance(pair, (tuple, list)) and len(pair) == 2 and isinstance(pair[1], State)):
+            raise TypeError(f"{expected}, got an item that is a {type(pair).__name__}"
+                            + (f" of {len(pair)}" if isinstance(pair, (tuple, list)) else ""))
+    return pairs
+
+
 def evaluate(
     corpus: Corpus,
     labels,
@@ -159,6 +177,7 @@ def evaluate(
     instance unseen in training (reported as protocol ``heldout``), and
     ``train`` scores the training instances.
     """
+    novel_states = _checked_inputs(corpus, labels, novel_states)
     if protocol not in ("loo", "train"):
         raise ValueError(f"unknown protocol {protocol!r}; expected loo or train")
     started = time.perf_counter()

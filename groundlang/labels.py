@@ -101,9 +101,23 @@ def read_labels(csv_path: str | Path) -> Labels:
     return labels
 
 
+def _check_state_and_library(method: str, state, library) -> None:
+    """TypeError naming ``method``'s argument for a state that is not a State or a library that is not a
+    TaskLibrary (either had failed deep inside with an AttributeError)."""
+    from groundlang.logic.tasks import TaskLibrary
+
+    if not isinstance(state, State):
+        raise TypeError(f"{method}: state must be a State (read_state_file, read_initial_state), "
+                        f"got {type(state).__name__}")
+    if library is not None and not isinstance(library, TaskLibrary):
+        raise TypeError(f"{method}: library must be a TaskLibrary (TaskLibrary.load(path)) or None, got "
+                        f"{type(library).__name__}")
+
+
 def check_goal_objects(goal: tuple[Atom, ...], state: State, context: str = "goal", library=None) -> None:
     """Raise LabelError when a goal uses a predicate the domain does not declare (``logic/pfs.lp``, or
     ``library``'s own PF rules), the wrong number of arguments or an object the state lacks."""
+    _check_state_and_library("check_goal_objects", state, library)
     tables = library_pf_tables(state.layout, library)
     for atom in goal:
         try:
@@ -116,7 +130,9 @@ def goal_holds(goal: tuple[Atom, ...] | list[Atom] | str, state: State, library=
     """True when every atom of the goal holds in ``state``, as the PF rules of the domain (or of
     ``library``, a TaskLibrary with PF rules of its own) define it: the tables planning uses. A goal may
     be written as the labels CSV writes it, ``"agentInRoom(agent0, room1)"``.
-    Raises LabelError for unknown predicates or objects, or a goal that is neither atoms nor their text."""
+    Raises LabelError for unknown predicates or objects, or a goal that is neither atoms nor their text;
+    TypeError for a state or library of the wrong type."""
+    _check_state_and_library("goal_holds", state, library)
     if isinstance(goal, str):
         try:
             goal = parse_goal(goal)

@@ -158,6 +158,8 @@ def _validate_positions(state: State) -> None:
 
 def format_state(state: State) -> str:
     """Write a state as one corpus line: rooms, doors, blocks, agent (round-trips with parse_state)."""
+    if not isinstance(state, State):
+        raise TypeError(f"format_state: state must be a State, got {type(state).__name__}")
     lay = state.layout
     pal = lay.palette
     if lay.added_attributes:

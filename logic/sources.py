@@ -72,7 +72,7 @@ def library_sources(paths, what: str) -> list[Source]:
     read one by one); TypeError starting with ``what`` for anything else."""
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
-    elif not isinstance(paths, Iterable):
+    elif isinstance(paths, (bytes, bytearray)) or not isinstance(paths, Iterable):  # bytes iterate as ints
         raise TypeError(f"{what}: paths must be a path or paths, got {type(paths).__name__}")
     return [library_source(as_path(p, f"{what}: each path")) for p in paths]
 

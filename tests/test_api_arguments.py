@@ -124,6 +124,8 @@ def test_a_folder_given_as_a_state_file_is_named():
     (lambda: Learner().save(0), "Learner.save: directory must be a path"),  # before "not trained"
     (lambda: TaskLibrary.load([3]), "TaskLibrary.load: each path must be a path"),
     (lambda: TaskLibrary.load(3), "TaskLibrary.load: paths must be a path or paths"),
+    # bytes iterate as ints: it had said "each path must be a path ..., got int"
+    (lambda: TaskLibrary.load(b"/x.lp"), "^TaskLibrary.load: paths must be a path or paths, got bytes$"),
 ])
 def test_a_path_argument_of_another_type_is_named(call, message):
     """pathlib's own message ("expected str, bytes or os.PathLike object, not int") names no argument."""

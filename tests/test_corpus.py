@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -166,7 +165,15 @@ def test_write_instance_refuses_bad_instances(fixtures, tmp_path):
         write_instance(tmp_path / "x.txt", bad)
     with pytest.raises(CorpusError, match="3 actions need 4 states, got 3"):
         write_instance(tmp_path / "x.txt", Instance(inst.path, "go", inst.actions, inst.states[:3]))
+    # had failed with AttributeError 'NoneType' object has no attribute 'command'
+    with pytest.raises(TypeError, match=r"^write_instance: instance must be an Instance \(read_instance, .* got NoneType"):
+        write_instance(tmp_path / "x.txt", None)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_format_state_names_a_state_of_another_type():
+    with pytest.raises(TypeError, match="^format_state: state must be a State, got str$"):  # had: no attribute 'layout'
+        format_state("x")
 
 
 def test_format_state_round_trips(fixtures):

@@ -32,6 +32,21 @@ def corpus():
     return read_corpus(EXAMPLES, "sokoban")
 
 
+def test_arguments_of_another_type_are_named(corpus):
+    """Each had failed deep inside: AttributeError ('list' object has no attribute 'instances', 'NoneType'
+    object has no attribute 'get') or "cannot unpack non-iterable State object"."""
+    labels = read_labels(EXAMPLES / "labels.csv")
+    state = read_state_file(EXAMPLES / "novel_a.state", "sokoban")
+    for call, message in (
+            (lambda: evaluate(corpus.instances, labels), r"^evaluate: corpus must be a Corpus \(read_corpus\), got list$"),
+            (lambda: evaluate(corpus, None), r"^evaluate: labels must map file prefixes to goals \(read_labels\), got NoneType$"),
+            (lambda: evaluate(corpus, labels, novel_states=[state]),
+             r"^evaluate: novel_states must be \(name, State\) pairs, .* got an item that is a State$"),
+            (lambda: evaluate(corpus, labels, novel_states=state), r"^evaluate: novel_states must be .* got State$")):
+        with pytest.raises(TypeError, match=message):
+            call()
+
+
 def test_goal_is_carried_over_by_colour(corpus):
     source = corpus.instances[0].initial_state
     target = read_state_file(EXAMPLES / "novel_a.state", "sokoban")

@@ -390,6 +390,14 @@ def test_cli_parse_corpus_folder(tmp_path, capsys):
     assert captured.err.strip().endswith("2 commands: 2 full parse, 0 fallback only")
 
 
+def test_lexicons_of_another_type_are_named():
+    # a word file's text had failed with AttributeError 'str' object has no attribute 'read_as'
+    with pytest.raises(TypeError, match=r"^parse: word_lexicon must be a Lexicon \(Lexicon.english\(\), .* got str$"):
+        parser.parse("go", word_lexicon="NOUN: x")
+    with pytest.raises(TypeError, match="^parse: lexicon must be a SemanticLexicon or None, got dict$"):
+        parser.parse("go", lexicon={"red": "roomIsRed"})
+
+
 def test_a_command_without_a_word_is_refused_and_control_characters_are_spaces():
     for text, said in (("?!., ;", "it has no word, only punctuation ('?!., ;')"),
                        ("__ _", "it has no word, only punctuation ('__ _')"),

@@ -96,6 +96,17 @@ def test_a_goal_may_be_given_as_its_text_and_anything_else_is_a_label_error():
             goal_holds(bad, s)
 
 
+def test_a_state_or_library_of_another_type_is_named():
+    """Each had failed deep inside with an AttributeError ('str' object has no attribute 'layout')."""
+    s = state("block,12,0,5,2 agent,6,2")
+    with pytest.raises(TypeError, match=re.escape("goal_holds: state must be a State (read_state_file, "
+                                                  "read_initial_state), got str")):
+        goal_holds("agentInRoom(agent0, room0)", "x")
+    with pytest.raises(TypeError, match=re.escape("goal_holds: library must be a TaskLibrary (TaskLibrary.load(path)) "
+                                                  "or None, got str")):
+        goal_holds("agentInRoom(agent0, room0)", s, library="tasks")
+
+
 def test_colour_and_shape_atoms():
     s = state("block,12,0,5,2 agent,4,2")
     assert goal_holds(parse_goal("roomIsGreen(room0) roomIsRed(room1) toyIsYellow(block0) toyIsStar(block0)"), s)
