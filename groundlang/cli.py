@@ -93,6 +93,8 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except (ValueError, OSError) as exc:
         message = " ".join(_said(exc).splitlines())  # one line, whatever the library said
+        if "time_limit" in vars(args) and type(exc).__name__ == "AspTimeout":  # the library names no option
+            message += "; --time-limit SECONDS sets it"
         print(f"groundlang {args.command}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:

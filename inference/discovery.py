@@ -69,7 +69,7 @@ from groundlang.logic.program import Source
 from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary
 
 __all__ = ["DISCOVERY_IRL", "DiscoverySettings", "DemonstrationReport", "Discovery", "discover_tasks",
-           "lift_goal", "structure_key", "task_name", "singling_out", "write_library"]
+           "lift_goal", "lifted_key", "structure_key", "task_name", "singling_out", "write_library"]
 
 logger = logging.getLogger(__name__)
 
@@ -340,7 +340,8 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
         tasks = tuple(_restricted(t, reports, demos, attributes) for t in tasks)
     text = library_text(tasks, reports, score, settings, len(instances), pfs)
     # Loaded back beside the PF files its restrictions may name, so that they are checked now.
-    library = TaskLibrary([Source("<discovered tasks>", text), *(pfs.sources if pfs else ())])
+    library = TaskLibrary([Source("<discovered tasks>", text), *(pfs.sources if pfs else ())],
+                          **({"time_limit": pfs.time_limit} if pfs else {}))
     logger.info("discovery: library %s (score %.3f)", ", ".join(t.name for t in tasks), score)
     alternatives = tuple((tuple(candidates.tasks[j].name for j in subset), s) for subset, s in ranked)
     return Discovery(library, library.tasks, candidates.tasks, tuple(reports), score, text, alternatives)

@@ -121,9 +121,11 @@ def _run_with_limit(work, time_limit: float | None, what: str) -> None:
         if thread.is_alive():
             _ABANDONED.append(thread)
     if thread.is_alive():
+        # No option is named: not every command that grounds a program takes --time-limit (the CLI names it
+        # where one does), and the API's is TaskLibrary's time_limit.
         raise AspTimeout(
             f"{what} did not finish within {time_limit:g} s; the program grounds too many atoms: infinitely "
-            "many (a rule without a bound), or a large layout's many (raise the time limit, --time-limit or time_limit=, if it is just large)"
+            "many (a rule without a bound), or a large layout's many (raise the time limit if it is just large)"
         )
     if "error" in box:
         raise box["error"]

@@ -186,3 +186,33 @@ def test_check_refuses_labels_for_a_bdm_corpus_in_one_line(capsys):
     code = main(["check", "tests/fixtures/williams2018/small.bdm", "--labels", "no-such-labels.csv"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "--labels no-such-labels.csv" in err and ".bdm corpus" in err and "\n" not in err
+
+
+@pytest.mark.parametrize("argv", [
+    ["check", "{examples}", "--palette", "sokoban", "--library", "{lp}"],
+    ["parse", "go to the red room", "--library", "{lp}"],
+    ["discover", "{examples}", "--palette", "sokoban", "-o", "{tmp}/found.lp", "--pfs", "{lp}"],
+])
+def test_a_grounding_that_times_out_names_the_time_limit_the_command_takes(capsys, tmp_path, argv):
+    """The message had said "--time-limit or time_limit=" where check, parse and discover took no --time-limit;
+    they take it now, and the CLI names it beside the message."""
+    forever = tmp_path / "forever.lp"
+    forever.write_text("n(0). n(X+1) :- n(X).\n")
+    args = [a.format(examples=example_corpus_path(), lp=forever, tmp=tmp_path) for a in argv]
+    code, _, err = run(capsys, *args, "--time-limit", "0.5")
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert err.strip().endswith("did not finish within 0.5 s; the program grounds too many atoms: infinitely many (a "
+                                "rule without a bound), or a large layout's many (raise the time limit if it is just "
+                                "large); --time-limit SECONDS sets it")
+
+
+def test_a_command_without_a_time_limit_is_not_told_to_raise_one(capsys, monkeypatch):
+    from groundlang.commands import irl
+    from groundlang.logic.program import AspTimeout
+
+    def too_large(*_):
+        raise AspTimeout("grounding the layout did not finish within 10 s (raise the time limit if it is just large)")
+
+    monkeypatch.setattr(irl, "fit_file", too_large)
+    code, _, err = run(capsys, "irl", str(example_corpus_path() / "agent2red_0.txt"), "--palette", "sokoban")
+    assert code == 2 and "did not finish within 10 s" in err and "--time-limit" not in err

@@ -168,8 +168,9 @@ def library_given(args: argparse.Namespace):
 
 
 def add_time_limit_option(parser) -> None:
-    """``--time-limit SECONDS`` for a command that grounds the library in layouts it reads (train, follow,
-    evaluate): what the message of a grounding that did not finish in time tells the user to raise."""
+    """``--time-limit SECONDS`` for a command that grounds a library in layouts it reads (train, follow, evaluate,
+    and check, parse and discover, which read a user's .lp files): the CLI names it beside the message of a
+    grounding that did not finish in time."""
     parser.add_argument("--time-limit", type=positive_seconds, default=None, metavar="SECONDS",
                         help="stop grounding/solving the task library in a layout after this long (default 10; "
                              "raise it for a very large layout)")

@@ -14,7 +14,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, library_given, library_path, require_palette
+from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, add_time_limit_option, library_given, library_path,
+                                 require_palette)
 from groundlang.corpus import read_corpus
 
 
@@ -30,6 +31,7 @@ def register(subparsers) -> None:
     p.add_argument("--labels", metavar="CSV", help="gold labels (prefix,goal) to check against final states")
     p.add_argument("--skip-inconsistent", action="store_true",
                    help="skip demonstrations that do not replay (counted) instead of failing")
+    add_time_limit_option(p)
     p.set_defaults(func=run)
 
 

@@ -16,7 +16,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from groundlang.commands import PALETTE_HELP, cache_option, fraction, inputs_read, json_text, output_path, positive_int
+from groundlang.commands import (PALETTE_HELP, add_time_limit_option, cache_option, fraction, inputs_read, json_text,
+                                 output_path, positive_int, time_limit_given)
 
 
 def register(subparsers) -> None:
@@ -40,6 +41,7 @@ def register(subparsers) -> None:
                         "objects apart in the report and for --restrict, besides pfs.lp's (repeatable; "
                         "load it beside the written library)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    add_time_limit_option(p)
     p.set_defaults(func=run)
 
 
@@ -52,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     check_destination(args.output, "-o", inputs_read(args, "directory", "pfs", "palette", "lexicon"))
     cache = cache_option(args)
-    pfs = TaskLibrary.load(args.pfs) if args.pfs else None  # a bad file is refused before any work
+    pfs = TaskLibrary.load(args.pfs, **time_limit_given(args)) if args.pfs else None  # a bad file: before any work
     corpus = read_corpus(args.directory, args.palette)
     if not corpus.instances:
         raise ValueError(f"{args.directory}: no corpus files (*.txt) found")

@@ -14,7 +14,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from groundlang.commands import LIBRARY_NAMES, add_lexicon_option, json_text, library_given, library_path, positive_int
+from groundlang.commands import (LIBRARY_NAMES, add_lexicon_option, add_time_limit_option, json_text, library_given,
+                                 library_path, positive_int)
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import ParseError, command_fault, parse
 from groundlang.logic.storage import read_limited
@@ -35,6 +36,7 @@ def register(subparsers) -> None:
                         "mine.lp) join the parser's, as a learner trained with it reads them" + LIBRARY_NAMES)
     p.add_argument("--palette", help="a palette (a name or a .lp file): its colour and shape names join the "
                                      "parser's words, as a learner trained on states of it reads them")
+    add_time_limit_option(p)
     p.set_defaults(func=run)
 
 
