@@ -361,6 +361,19 @@ def test_cli_parse_text_and_json(capsys):
         {"logical_form": "go(green1), P1(green1, green)", "probability": 1.0, "fallback": False}]}
 
 
+def test_cli_parse_escapes_a_commands_control_characters(tmp_path, capsys):
+    """An escape sequence had been printed raw (and cleared the terminal); follow shows it escaped, and so does parse."""
+    assert main(["parse", "go to the \x1b[2Jred room"]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and out.splitlines()[0] == "'go to the \\x1b[2Jred room'"
+    path = tmp_path / "commands.txt"
+    path.write_text("go to the \x1b[2Jred room\ngo to the red room\n", encoding="utf-8")
+    assert main(["parse", "--file", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "'go to the \\x1b[2Jred room'" in out.splitlines()
+    assert "go to the red room" in out.splitlines()  # printable text is shown as typed
+
+
 def test_cli_parse_file_summary_and_errors(tmp_path, capsys):
     path = tmp_path / "commands.txt"
     path.write_text("go to green\n\nthe into green star room of blue the the\n", encoding="utf-8")

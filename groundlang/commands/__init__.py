@@ -151,6 +151,12 @@ def json_text(data, indent: int | None = None) -> str:
     return json.dumps(finite(data), indent=indent, allow_nan=False)
 
 
+def as_typed(text: str) -> str:
+    """``text`` as typed unless it holds characters a terminal would obey (an escape sequence clears the screen)
+    or not show: then as a Python string literal, every character visible."""
+    return text if text.isprintable() else ascii(text)
+
+
 def json_bytes(data) -> bytes:
     """``data`` as the JSON text of a result file (:func:`json_text`, indented)."""
     return (json_text(data, indent=1) + "\n").encode("utf-8")

@@ -15,8 +15,8 @@ import math
 import sys
 from pathlib import Path
 
-from groundlang.commands import (PALETTE_HELP, add_lexicon_option, add_time_limit_option, fraction, json_text,
-                                 logged_by_file_names, output_path, positive_int)
+from groundlang.commands import (PALETTE_HELP, add_lexicon_option, add_time_limit_option, as_typed, fraction,
+                                 json_text, logged_by_file_names, output_path, positive_int)
 
 # Exit code of a command that asked instead of acting (documented in the README).
 ASKED = 3
@@ -105,8 +105,7 @@ def _ask(learner, result, state, max_steps: int, names=None):
             print(f"\n  an answer is at most {MAX_ANSWER_CHARS} characters: a choice's number or its words")
             continue
         if not stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read, as the
-            answer = line.strip()     # command is shown (an escape sequence would act on the terminal)
-            print(answer if answer.isprintable() else ascii(answer))
+            print(as_typed(line.strip()))  # command is shown
         try:  # the choices were shown with the file's names: the answer is read with the layout's
             with logged_by_file_names(names or {}):
                 return learner.clarify(result, renamed_words(line, {v: k for k, v in (names or {}).items()}),
@@ -214,10 +213,7 @@ def run(args: argparse.Namespace) -> int:
     except NoTaskError as exc:  # the state is at fault, not the command or the model: name its file
         raise NoTaskError(f"{args.env}: {exc}") from None
     if not args.json:
-        # Shown as typed unless it holds control characters, which a terminal would obey (an escape
-        # sequence clears the screen): then as a Python string literal, every character visible.
-        text = args.command_text
-        print(f"command: {text if text.isprintable() else ascii(text)}")
+        print(f"command: {as_typed(args.command_text)}")
     answered = None
     if result.abstained and args.ask and not args.json:
         answered = _ask(learner, result, state, args.max_steps, names)

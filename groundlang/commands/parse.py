@@ -14,8 +14,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from groundlang.commands import (LIBRARY_NAMES, add_lexicon_option, add_time_limit_option, json_text, library_given,
-                                 library_path, positive_int)
+from groundlang.commands import (LIBRARY_NAMES, add_lexicon_option, add_time_limit_option, as_typed, json_text,
+                                 library_given, library_path, positive_int)
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import ParseError, command_fault, parse
 from groundlang.logic.storage import read_limited
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             print(json_text({"command": command, "readings": [r.to_json() for r in readings]}))
         else:
-            print(command)
+            print(as_typed(command))  # an escape sequence in it would act on the terminal, as follow's would
             for r in readings:
                 mark = "  [fallback]" if r.logical_form.fallback else ""
                 print(f"  {r.probability:.3f}  {r.logical_form.paper_str()}{mark}")
