@@ -109,9 +109,12 @@ def cache_entry_count(args) -> int:
     """Whole cache entries now in the cache a command uses (0 without one), of every kind it keeps."""
     if getattr(args, "no_cache", False) is True:
         return 0
+    given = getattr(args, "cache_dir", None)
+    if isinstance(given, str) and not given.strip():  # the command refuses it by its option's name (cache_option),
+        return 0                                      # not cache_directory by the API's "cache_dir"
     from groundlang.inference.likelihoods import CACHE_FOLDERS, cache_directory
 
-    root = cache_directory(getattr(args, "cache_dir", None))
+    root = cache_directory(given)
     # Temporary files start with "."; only renamed, whole entries count.
     return sum(1 for name in CACHE_FOLDERS if (root / name).is_dir()
                for p in (root / name).glob("*/*.json") if not p.name.startswith("."))
@@ -149,9 +152,9 @@ def what_was_kept(args, started: float, uses_cache: bool, cache_entries_before: 
     likelihoods = sys.modules.get("groundlang.inference.likelihoods")
     if (uses_cache and getattr(args, "no_cache", False) is not True and likelihoods is not None
             and cache_entries_before is not None):
-        root = likelihoods.cache_directory(getattr(args, "cache_dir", None))
         count = cache_entry_count(args) - cache_entries_before
         if count > 0:  # fewer than at the start: the cache was cleared meanwhile, and no count says what is new
+            root = likelihoods.cache_directory(getattr(args, "cache_dir", None))
             entries = "entry is" if count == 1 else "entries are"
             parts.append(f"{count} new cache {entries} kept in {root} (behaviour likelihoods, end-state evidence "
                          "and readings; a rerun resumes from them)")
