@@ -132,10 +132,14 @@ class Corpus:
 # ---------------------------------------------------------------- parsing
 
 
-def _read_lines(path: Path) -> list[str]:
+def _read_lines(path: Path, what: str = "a corpus or state file") -> list[str]:
     """Decode a file as UTF-8 and split it into lines (CRLF and a leading byte-order mark accepted, trailing
-    blank lines dropped)."""
-    lines = text_lines(utf8_text(read_limited(path, MAX_FILE_BYTES, "a corpus or state file"), path))
+    blank lines dropped). ``what`` names the file expected, for a folder or a file too large."""
+    try:
+        data = read_limited(path, MAX_FILE_BYTES, what)
+    except IsADirectoryError:  # the OS says only "Is a directory" (an API caller saw "[Errno 21]")
+        raise CorpusError(f"{path}: a folder, not a regular file; expected {what}") from None
+    lines = text_lines(utf8_text(data, path))
     while lines and not lines[-1].strip():
         lines.pop()
     return lines
@@ -189,7 +193,7 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
         raise CorpusError(f"{path}: a .bdm file holds (start, end) pairs, no moves; expected a commands-to-tasks "
                           "file (command, actions, states)")
     palette = get_palette(palette)
-    lines = _read_lines(path)
+    lines = _read_lines(path, "a corpus file")
     if not lines:
         raise CorpusError(f"{path}: the file is empty; expected a command line, an action line and state lines")
     if len(lines) < 2:
@@ -315,9 +319,7 @@ def read_state_file(path: str | Path, palette: str | Palette | dict) -> State:
     """Read a one-line ``.state`` file (a state in the corpus format, or a BURLAP line). ``palette``: a name,
     a ``.lp`` file, a Palette, or a record of one as a trained model keeps it (``learner.palettes[0]``)."""
     path = as_path(path, "read_state_file: path")
-    if path.is_dir():  # read_limited says only "Is a directory"; the CLI says what was expected
-        raise CorpusError(f"{path}: a folder, not a regular file; expected a state file")
-    lines = _read_lines(path)
+    lines = _read_lines(path, "a state file")
     if not lines:
         raise CorpusError(f"{path}: the file is empty; expected one state line")
     if len(lines) > 1 and path.suffix == ".bdm" and not lines[0].lstrip().startswith("{"):

@@ -112,6 +112,9 @@ def test_a_folder_given_as_a_state_file_is_named():
 
     with pytest.raises(CorpusError, match=f"^{EXAMPLES}: a folder, not a regular file; expected a state file$"):
         read_state_file(EXAMPLES, "sokoban")
+    # read_instance agrees: it had raised IsADirectoryError "[Errno 21] Is a directory"
+    with pytest.raises(CorpusError, match=f"^{EXAMPLES}: a folder, not a regular file; expected a corpus file$"):
+        read_instance(EXAMPLES, "sokoban")
 
 
 @pytest.mark.parametrize("call, message", [

@@ -819,6 +819,24 @@ def test_an_output_no_file_can_be_created_in_is_refused_before_the_work(argv, wo
     assert ".tmp" not in err
 
 
+@pytest.mark.parametrize("argv, said", [
+    (("demo", "--language-model", "xyz"), "argument --language-model: invalid choice: 'xyz' (choose from 'bow', "
+                                          "'ibm2', 'parse')"),
+    (("demo", "--command", ""), "--command: the command is empty or only whitespace; expected the command's words"),
+    (("demo", "--command", "?!"), "--command: the command has no word, only punctuation ('?!')"),
+])
+def test_demo_refuses_a_bad_command_or_language_model_before_the_work(argv, said, capsys, monkeypatch, tmp_path):
+    """Both had been refused only after the corpus check and the training."""
+    for work in ("groundlang.corpus.read_corpus", "groundlang.learner.Learner.fit"):
+        monkeypatch.setattr(work, lambda *a, work=work, **k: pytest.fail(f"{work} ran before the options were checked"))
+    try:
+        code = main(["--quiet", *argv, "--out", str(tmp_path / "demo.png")])
+    except SystemExit as stopped:  # how argparse refuses an option's value
+        code = stopped.code
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.splitlines()) == 1 and said in err, err
+
+
 @pytest.mark.parametrize("isolated", [False, True])
 def test_numpy_and_fraction_time_limits_are_seconds_too(isolated):
     from fractions import Fraction

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from groundlang.commands import output_path
+from groundlang.commands import LANGUAGE_MODEL_NAMES, output_path
 
 DEMO_COMMAND = "take the star to the red room"
 DEMO_LAYOUT = "novel_a.state"
@@ -21,17 +21,22 @@ def register(subparsers) -> None:
     p.add_argument("--out", default="demo.png", type=output_path, metavar="PNG", help="picture to write (default demo.png)")
     p.add_argument("--command", dest="demo_command", default=DEMO_COMMAND,
                    help=f"the command to follow (default {DEMO_COMMAND!r})")
-    p.add_argument("--language-model", default="parse", help="language model: bow, ibm2 or parse (default parse)")
+    p.add_argument("--language-model", default="parse", choices=list(LANGUAGE_MODEL_NAMES),
+                   help="language model: bow, ibm2 or parse (default parse)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
+    from groundlang.grammar.parser import command_fault
     from groundlang.labels import label_coverage, read_labels
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal
     from groundlang.render import ascii_state, check_picture_destination, picture_title, save_picture
 
+    # Before the corpus check and the training, which it would otherwise follow by seconds
+    if fault := command_fault(args.demo_command):
+        raise ValueError(f"--command: the command {fault}; expected the command's words")
     check_picture_destination(args.out)
     folder = example_corpus_path()
     corpus = read_corpus(folder, "sokoban")
