@@ -357,8 +357,11 @@ def test_cli_parse_text_and_json(capsys):
     assert "0.650  push(star1, room1), P1(room1, green)" in out
     assert main(["parse", "--json", "go to green"]) == 0
     record = json.loads(capsys.readouterr().out)
-    assert record == {"command": "go to green", "readings": [
+    assert record == {"command": "go to green", "words": ["go", "to", "green"], "readings": [
         {"logical_form": "go(green1), P1(green1, green)", "probability": 1.0, "fallback": False}]}
+    # a multiword entry of a word file is read as one word: parse says so (the logical form shows no preposition)
+    assert main(["parse", "stand to the left of the red chair"]) == 0
+    assert capsys.readouterr().out.splitlines()[1] == "  read as: stand to_the_left_of the red chair"
 
 
 def test_cli_parse_escapes_a_commands_control_characters(tmp_path, capsys):

@@ -93,10 +93,13 @@ def run(args: argparse.Namespace) -> int:
             fallback += 1
         else:
             full += 1
+        tokens = readings[0].logical_form.words
         if args.json:
-            print(json_text({"command": command, "readings": [r.to_json() for r in readings]}))
+            print(json_text({"command": command, "words": list(tokens), "readings": [r.to_json() for r in readings]}))
         else:
             print(as_typed(command))  # an escape sequence in it would act on the terminal, as follow's would
+            if any("_" in t for t in tokens):  # a word file's multiword entry was read as one word: say which
+                print(f"  read as: {as_typed(' '.join(tokens))}")
             for r in readings:
                 mark = "  [fallback]" if r.logical_form.fallback else ""
                 print(f"  {r.probability:.3f}  {r.logical_form.paper_str()}{mark}")
