@@ -152,8 +152,9 @@ def test_two_chairs_told_apart_by_id_are_named_and_answered_by_the_files_names(t
     one by the file's name acts on that one (the file's block1 is the layout's block0, its block2 block1)."""
     chairs = (FIXTURE / "one.state").read_text().strip().replace(
         "block0 (block): [x: {2} y: {6} shape: {chair} colour: {green} ]",
-        "block1 (block): [x: {2} y: {6} shape: {chair} colour: {green} ] , "
-        "block2 (block): [x: {2} y: {7} shape: {chair} colour: {green} ]")
+        # each in a corner, where no push moves it: no state is next to both, which would satisfy either reading
+        "block1 (block): [x: {1} y: {7} shape: {chair} colour: {green} ] , "
+        "block2 (block): [x: {7} y: {1} shape: {chair} colour: {green} ]")
     env = tmp_path / "chairs.bdm"
     env.write_text(chairs + "\n")
     asked = _cli("follow", "--model", str(model), "--env", str(env), "go next to the chair", "--json")
