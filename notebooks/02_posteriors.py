@@ -61,8 +61,9 @@ ax.figure
 # %% [markdown]
 # The third command ties: no training command of the example corpus says "from", and none shows the agent and
 # the star ending in two rooms, so the two ways of placing them are equally likely (the crowd corpus's model reads
-# it as the star's task, 0.70). `follow` asks there rather than acting: the most probable goal's 0.48 is below its
-# `--min-confidence` of 0.7 ("Knowing when it does not know" in the README).
+# it as the star's task, 0.70). `follow` asks there rather than acting: its end would satisfy 0.49 of the posterior
+# (the most probable goal's 0.48 and a little more), below its `--min-confidence` of 0.7 ("Knowing when it does
+# not know" in the README).
 #
 # Which object each noun phrase of the most probable reading names, under the most probable interpretation
 # (`Learner.alignments`: exact with the mention model).
@@ -146,7 +147,7 @@ else:
 # %% [markdown]
 # ## Knowing when it does not know: calibration
 #
-# A reading's confidence is the posterior probability of the goal it acts on (goals with the same outcome in the layout count as one). Leave-one-out on both crowd folders (full mode, when the corpus is present; the example corpus otherwise) gives each held-out command a confidence and whether acting on it was right. The **reliability diagram** sets accuracy against confidence per bin (on the diagonal: calibrated); the **risk-coverage curve** gives the accuracy of the commands acted on when the learner abstains from the least confident first. `follow` asks instead of acting below `--min-confidence` (0.7, the dotted line's coverage).
+# Following's confidence is how likely what was meant holds where it ends: the posterior mass of the goals its end satisfies (`success_confidence`; where it plans for one goal alone, that goal's probability, goals with the same outcome in the layout counted as one). Leave-one-out on both crowd folders (full mode, when the corpus is present; the example corpus otherwise) gives each held-out command a confidence and whether acting on it was right. The **reliability diagram** sets accuracy against confidence per bin (on the diagonal: calibrated); the **risk-coverage curve** gives the accuracy of the commands acted on when the learner abstains from the least confident first. `follow` asks instead of acting below `--min-confidence` (0.7, the dotted line's coverage).
 
 # %%
 from groundlang.confidence import format_calibration
