@@ -138,7 +138,8 @@ def _is_negation(token: Token) -> bool:
 
 def _continued(vp: VP, comps) -> VP | None:
     """A verb phrase whose complements go on after a comma; rejected (None) where a clausal complement
-    ends the verb phrase, which takes what follows it (late closure, as in ``_complements``)."""
+    ends the verb phrase: what follows would belong to that clause, not to this verb (late closure, as in
+    ``_complements``), and the grammar reads it as a fragment of its own."""
     if comps is None or (vp.comps and isinstance(vp.comps[-1], Sub)):
         return None
     return replace(vp, comps=vp.comps + comps[1])

@@ -376,7 +376,10 @@ def _command(path: Path, line: int, block: list[tuple[int, str]], palette,
         k += 3
         if k < len(rest):
             if rest[k][1] != "---":
-                after = "" if rest[k][1].startswith("{") else " (a command's block ends with a blank line)"
+                text = rest[k][1].strip()
+                # the next command's text, written with no blank line before it: say where a block ends
+                after = ("" if text.startswith("{") or text.lower() in ("true", "false") or set(text) <= {"-"}
+                         else " (a command's block ends with a blank line)")
                 raise CorpusError(f"{path}, line {rest[k][0]}: expected --- between pairs, found "
                                   f"{rest[k][1][:40]!r}{after}")
             k += 1

@@ -43,7 +43,9 @@ def check_bdm(args: argparse.Namespace) -> int:
         raise ValueError(f"{args.directory}: no .bdm file there (with --format williams2018 also a file of any "
                          "name or a folder of .txt files)")
     palette = args.palette or DEFAULT_PALETTE
-    library = default_library(args.library)
+    from groundlang.commands import time_limit_given
+
+    library = default_library(args.library, **time_limit_given(args))
     commands = [c for path in paths for c in read_bdm(path, palette)]
     pairs = [(c, p) for c in commands for p in c.pairs]
     layouts = {p.start.layout for _, p in pairs}

@@ -24,7 +24,7 @@ from groundlang.model.relevance import exact_fits, placement_sample, pushes_scen
 from groundlang.model.statespace import StateSpace
 from groundlang.model.world import State
 
-__all__ = ["planning_space", "plan_for_goal", "plan_for_states", "expected_success_states", "success_at", "nearest_of",
+__all__ = ["planning_space", "plan_for_goal", "plan_for_states", "expected_success_states", "success_at",
            "WorldPlans"]
 
 # State spaces kept for grouping goals and planning (crowd layouts: about 100 states each).
@@ -115,14 +115,6 @@ def success_at(goals, masks: GoalMasks, index: int) -> float:
     ``sum_g P(g) [s satisfies g]`` over ``goals`` (``(goal, probability)``) of a share of at least
     NEGLIGIBLE, at most 1."""
     return min(1.0, float(sum(p for goal, p in goals if p >= NEGLIGIBLE and masks.mask(goal)[index])))
-
-
-def nearest_of(target: np.ndarray, space) -> int:
-    """The index of the state of ``target`` (``[S]`` bool) fewest moves from the start: where a plan for
-    ``target`` ends."""
-    dist = distances(space)
-    within = np.flatnonzero(target & (dist >= 0))
-    return int(within[np.argmin(dist[within])])
 
 
 class WorldPlans:

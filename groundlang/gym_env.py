@@ -169,13 +169,13 @@ def _largest_value(palette) -> int:
 
 def _library(library):
     """A task library given to the env: None (the domain's PFs), a TaskLibrary, or the path of its file."""
-    from pathlib import Path
+    import os
 
     from groundlang.logic.tasks import TaskLibrary
 
     if library is None or isinstance(library, TaskLibrary):
         return library
-    if isinstance(library, (str, Path)):
+    if isinstance(library, (str, os.PathLike, list, tuple)):  # what TaskLibrary.load takes
         return TaskLibrary.load(library)
     raise TypeError(f"library must be a TaskLibrary, the path of its .lp file or None, got {type(library).__name__}")
 

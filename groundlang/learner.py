@@ -18,7 +18,7 @@ import torch
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, answer_text, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import given_achievable, group_goals, out_of_reach, unachievable_goals
-from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at, nearest_of, success_at
+from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at, success_at
 from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.planning import TaskSettings
@@ -271,20 +271,19 @@ class Learner:
         check_abstraction_possible(state)
         post = self.posterior(command, state)
         ending = self.ending(post, state)
-        success = None  # where the plan will end, how likely what was meant holds there
-        if ending and self.lm.success_confidence:
-            space, masks, goals, target, _ = ending
-            success = success_at(goals, masks, nearest_of(target, space))
-        if min_confidence is not None and (post.confidence if success is None else success) < min_confidence:
+        # Planned before deciding: the confidence is read where the plan ends (plans are the world's, kept).
+        if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
+            _, masks, goals, target, goal = ending
+            acted = self._act(command, state, post, goal, max_steps, target, (goals, masks, post.best_goal))
+        else:
+            acted = self._act(command, state, post, post.best_goal, max_steps)
+        if min_confidence is not None and acted.confidence < min_confidence:
             choices = competing(post.goal_groups())
             unknown = unknown_words(post.readings, self._knows)
             return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
                                 question=question(choices, unknown, state, self.library),
-                                choices=choices, unknown_words=unknown, success=success)
-        if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies
-            _, masks, goals, target, goal = ending
-            return self._act(command, state, post, goal, max_steps, target, (goals, masks, post.best_goal))
-        return self._act(command, state, post, post.best_goal, max_steps)
+                                choices=choices, unknown_words=unknown, success=acted.success)
+        return acted
 
     def ending(self, post: Posterior, state: State):
         """Where following ``post``'s command from ``state`` ends, with the language model's
@@ -341,12 +340,14 @@ class Learner:
         over = None if goal_masks is None else goal_masks[2]
         states, actions, reached, reason = self._world.act(state, goal, max_steps, ending, over)
         success = None
-        if ending is not None and reached:
-            # Every state of ``ending`` is worth the same and the plan may end in any of them, not only
-            # where ``goal`` holds: the goal said to be acted on is the one that holds where it ends.
+        if ending is not None:
             goals, masks, _ = goal_masks
-            end = masks.space.index_of(states[-1])
-            goal = goal_holding_at(goals, masks, end) or goal
+            end = masks.space.index_of(states[-1])  # a plan moves within the space it was made in
+            if reached:
+                # Every state of ``ending`` is worth the same and the plan may end in any of them, not only
+                # where ``goal`` holds: the goal said to be acted on is the one that holds where it ends.
+                goal = goal_holding_at(goals, masks, end) or goal
+            # where it ends, reached or stopped short (max_steps, scenery)
             success = success_at(goals, masks, end) if self.lm.success_confidence else None
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library), success=success)

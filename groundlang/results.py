@@ -132,9 +132,9 @@ class FollowResult:
         unknown_words: words of the command's noun phrases the model never learned.
         goal_words: ``goal`` in words ("the yellow star in the red room").
         success: the posterior probability that what was meant holds where following ends (or would
-            end, when it abstained), ``sum_g P(g | words) [s satisfies g]``; None where following planned
-            for one goal alone (the language model's ``success_confidence`` or ``expected_success`` off, or
-            a world too large to compare goals in).
+            end, when it abstained), reached or not, ``sum_g P(g | words) [s satisfies g]``; None where
+            following planned for one goal alone (the language model's ``success_confidence`` or
+            ``expected_success`` off, or no goal of the posterior within reach).
     """
 
     command: str

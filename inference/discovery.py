@@ -314,6 +314,7 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
     if not lifted:
         raise ValueError("no demonstration yields a candidate goal: nothing can be discovered")
     candidates = TaskLibrary.from_tasks(lifted, "<discovery candidates>")
+    candidates.time_limit = pfs.time_limit if pfs is not None else candidates.time_limit  # the user's, if given
     scores, best = _score_table(demos, candidates, settings, cache_dir, progress)
     sizes = np.array([len(t.goal) for t in candidates.tasks])
     usable = np.isfinite(scores).any(axis=1)

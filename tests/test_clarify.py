@@ -174,7 +174,8 @@ def test_cli_ask_reads_the_answer_from_stdin(model_dir, capsys, monkeypatch):
     assert _follow(model_dir, "go to the purple room", "--ask") == 0
     out = capsys.readouterr().out
     assert "names none of the choices" in out  # the first answer, asked again
-    assert "goal that differs); acting on the answer\nplan (1 step): west" in out
+    assert "acting on the answer (from the words alone: the most probable goal 0.33, margin 0.00 over the next " \
+           "goal that differs)\nplan (1 step): west" in out
     assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room1): reached (goal)" in out
     # a piped answer is shown as read, an escape sequence escaped (it had cleared the terminal)
     monkeypatch.setattr("sys.stdin", io.StringIO("\x1b[2Jthe blue one\n"))
@@ -215,3 +216,11 @@ def test_cli_ask_refuses_an_overlong_answer_without_reading_it_whole(model_dir, 
     assert f"an answer is at most {MAX_ANSWER_CHARS} characters" in out
     assert "x" * (MAX_ANSWER_CHARS + 1) not in out  # not echoed whole
     assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room1): reached (goal)" in out
+
+
+def test_confidences_are_shown_rounded_down_so_a_threshold_is_never_contradicted():
+    """0.6999 shown as 0.70 had read "confidence 0.70 is below --min-confidence 0.7"; a value that is exact in
+    hundredths stays itself (0.29 * 100 is 28.999... in floating point)."""
+    from groundlang.commands.follow import _down
+
+    assert [_down(x) for x in (0.6999, 0.7, 0.29, 0.58, 1.0, 0.0)] == ["0.69", "0.70", "0.29", "0.58", "1.00", "0.00"]

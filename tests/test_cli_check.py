@@ -216,3 +216,11 @@ def test_a_command_without_a_time_limit_is_not_told_to_raise_one(capsys, monkeyp
     monkeypatch.setattr(irl, "fit_file", too_large)
     code, _, err = run(capsys, "irl", str(example_corpus_path() / "agent2red_0.txt"), "--palette", "sokoban")
     assert code == 2 and "did not finish within 10 s" in err and "--time-limit" not in err
+
+
+def test_time_limit_acts_on_a_bdm_check_and_is_refused_where_it_would_not(capsys, tmp_path):
+    code, _, err = run(capsys, "check", "tests/fixtures/williams2018/small.bdm", "--time-limit", "0.001")
+    assert code == 2 and "did not finish within 0.001 s" in err
+    code, _, err = run(capsys, "discover", str(example_corpus_path()), "--palette", "sokoban", "-o",
+                       str(tmp_path / "found.lp"), "--time-limit", "1")
+    assert code == 2 and "--time-limit: discover grounds a --pfs file of yours under it" in err

@@ -113,7 +113,7 @@ def test_complements_after_a_comma_may_continue_the_verb_before_it():
     assert shapes[continued] == pytest.approx(0.5) and shapes[split] == pytest.approx(0.5)
     off = parse("push the star, into the red room", weights={"vp_ellipsis": 1e-9})
     assert {tuple((c.verb, c.args) for c in r.logical_form.clauses) for r in off if r.probability > 1e-6} == {split}
-    # a clausal complement takes what follows it (late closure), so nothing is left to continue the verb
+    # after a clausal complement, what follows is not this verb's (late closure): it stays a fragment
     for r in parse("go until you reach the door , into the red room"):
         assert r.logical_form.clauses[0].args == ()
 

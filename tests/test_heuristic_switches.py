@@ -124,6 +124,14 @@ def test_a_model_saved_before_habit_prior_weighs_its_habits_as_it_did(examples):
     assert Learner.from_state_dict(state).lm.habit_prior == "overall"
 
 
+def test_a_model_saved_before_success_confidence_asks_as_it_did(examples):
+    learner = Learner("parse", steps=5).fit(examples[:4])
+    state = learner.state_dict()
+    assert Learner.from_state_dict(state).lm.success_confidence is True
+    del state["language_model_settings"]["success_confidence"]
+    assert Learner.from_state_dict(state).lm.success_confidence is False
+
+
 @pytest.mark.parametrize("name", SWITCHES)
 def test_train_accepts_each_switch_off_and_refuses_a_wrong_value_in_one_line(name, tmp_path, capsys):
     model = tmp_path / "model"

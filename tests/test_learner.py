@@ -391,6 +391,11 @@ def test_confidence_is_how_likely_what_was_meant_holds_where_following_ends(corp
     held = sum(p for p, interp in result.posterior.ranked() if goal_holds(interp.goal, result.final_state))
     assert result.success == pytest.approx(min(1.0, held), abs=1e-6)
     assert result.confidence == result.success > result.posterior.confidence + 0.01
+    # a plan stopped short is judged where it stopped, and acting is decided on that same number
+    short = learner.follow(command, state, max_steps=3)
+    held = sum(p for p, interp in short.posterior.ranked() if goal_holds(interp.goal, short.final_state))
+    assert not short.reached and short.success == pytest.approx(min(1.0, held), abs=1e-6) and short.success < 0.5
+    assert learner.follow(command, state, max_steps=3, min_confidence=short.confidence + 1e-3).abstained
     between = (result.posterior.confidence + result.success) / 2  # acted on only by the success
     assert not learner.follow(command, state, min_confidence=between).abstained
     learner.lm.success_confidence = False

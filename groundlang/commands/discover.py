@@ -54,6 +54,9 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     check_destination(args.output, "-o", inputs_read(args, "directory", "pfs", "palette", "lexicon"))
     cache = cache_option(args)
+    if args.time_limit is not None and not args.pfs:  # refused, not ignored: only a --pfs file is grounded under it
+        raise ValueError("--time-limit: discover grounds a --pfs file of yours under it; without --pfs there is "
+                         "none (the package's PFs ground at once)")
     pfs = TaskLibrary.load(args.pfs, **time_limit_given(args)) if args.pfs else None  # a bad file: before any work
     corpus = read_corpus(args.directory, args.palette)
     if not corpus.instances:

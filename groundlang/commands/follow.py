@@ -129,7 +129,7 @@ def _learn(learner, asked, answered, state, model) -> None:
 
 def _down(confidence: float) -> str:
     """A confidence to two places rounded down: 0.6999 is not said to be 0.70 and "below 0.7" at once."""
-    return f"{math.floor(confidence * 100) / 100:.2f}"
+    return f"{math.floor(round(confidence * 100, 9)) / 100:.2f}"  # round first: 0.29 * 100 is 28.999...
 
 
 def _habits(learner, result, state) -> dict[str, float]:
@@ -258,13 +258,16 @@ def run(args: argparse.Namespace) -> int:
     print("interpretations:")
     for goal, p in goals:
         print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library, names)}")
-    if result.success is None:
-        said = f"confidence {_down(result.confidence)}"
+    margin = f"margin {_down(result.posterior.margin)} over the next goal that differs"
+    if answered is not None:  # what the words alone said, before the answer chose
+        print(f"acting on the answer (from the words alone: the most probable goal {_down(result.posterior.confidence)}, "
+              f"{margin})")
+    elif result.success is None:
+        print(f"confidence {_down(result.confidence)} ({margin})")
     else:  # the end is chosen over the whole posterior: how likely what was meant holds there
-        said = (f"confidence {_down(result.confidence)} that what was meant holds where it ends (the most probable "
-                f"goal {result.posterior.confidence:.2f},")
-    print(said + f"{' (' if result.success is None else ' '}margin {result.posterior.margin:.2f} over the next "
-          f"goal that differs)" + ("; acting on the answer" if answered is not None else ""))
+        print(f"confidence {_down(result.confidence)} that what was meant holds where it "
+              f"{'would end' if result.abstained else 'ends'} (the most probable goal "
+              f"{_down(result.posterior.confidence)}, {margin})")
     if (beyond := _out_of_reach(result, names)) is not None:
         print(beyond)
     if result.abstained:
