@@ -363,7 +363,7 @@ def test_lexicon_says_which_word_a_synonym_is_read_as(tmp_path, capsys):
     """A word file's synonym is read as its word: asked for "crimson", the table's row says "crimson = red"
     and the JSON is keyed as asked, with red's meanings."""
     words = tmp_path / "colours.words"
-    words.write_text("SYNONYM: crimson=red scarlet=red\n")
+    words.write_text("SYNONYM: crimson=red scarlet=red vermilionlike=red\n")
     model = tmp_path / "model"
     assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "--lexicon", str(words), "-o",
                  str(model)]) == 0
@@ -379,6 +379,10 @@ def test_lexicon_says_which_word_a_synonym_is_read_as(tmp_path, capsys):
     assert main(["--quiet", "lexicon", str(model), "--words", "crimson", "red", "scarlet", "--json"]) == 0
     shown = json.loads(capsys.readouterr().out)
     assert list(shown) == ["crimson", "red", "scarlet"] and shown["crimson"] == shown["red"] == shown["scarlet"]
+    # a row wider than the word column widens it: the meanings start in one column
+    assert main(["--quiet", "lexicon", str(model), "--words", "vermilionlike", "red", "--top", "1"]) == 0
+    rows = capsys.readouterr().out.splitlines()[1:3]
+    assert rows[0].startswith("vermilionlike = red ") and rows[0].index("roomIsRed") == rows[1].index("roomIsRed")
 
 
 def test_confidence_is_how_likely_what_was_meant_holds_where_following_ends(corpus, learner):

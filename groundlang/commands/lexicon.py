@@ -100,7 +100,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json:  # keyed as asked: {"crimson": ...} for a synonym of red
         print(json_text({label: [[t, p] for t, p in lexicon.get(w, [])] for label, w in rows.items()}))
         return 0
-    print(f"{WORD_HEADING:<16} {MEANINGS_HEADING}")
+    shown_as = {label: label if label == word else f"{label} = {word}" for label, word in rows.items()}
+    width = max([16, *(len(shown) + 1 for shown in shown_as.values())])  # "biggest = largest" fits its column
+    print(f"{WORD_HEADING:<{width}} {MEANINGS_HEADING}")
     for label, word in rows.items():
         meanings = lexicon.get(word, [])
         preposition = "_".join(word.split()) in prepositions  # learned in the preposition table below
@@ -110,8 +112,7 @@ def run(args: argparse.Namespace) -> int:
                 or ("(a preposition: see the table below)" if preposition
                     else f"(unknown word alone; learned within {', '.join(within[:3])})" if within
                     else "(unknown word)"))
-        shown = label if label == word else f"{label} = {word}"  # "crimson = red": read as red
-        print(f"{shown:<16} {text}")
+        print(f"{shown_as[label]:<{width}} {text}")  # "crimson = red": read as red
     if prepositions:  # relations are learned there, not as a preposition word's tokens above
         print()
         _print_prepositions(prepositions, learner)
