@@ -100,6 +100,12 @@ def _without_control(text: str) -> str:
     return _CONTROL.sub(" ", text)
 
 
+def _without_format(text: str) -> str:
+    """Without Unicode's invisible format characters (category Cf: a zero-width joiner, a soft hyphen, a
+    right-to-left mark, a byte order mark): inside a word they are no part of it ("re\u200dd" is red)."""
+    return text if text.isascii() else "".join(c for c in text if unicodedata.category(c) != "Cf")
+
+
 Word = tuple[str, frozenset[str]]
 
 
@@ -111,7 +117,8 @@ def tokenise(command: str, word_lexicon: Lexicon | None = None) -> list[str]:
     words = word_lexicon or Lexicon.english()
     # NFC: a letter typed as a base and a combining accent ("te\u0301le\u0301") is the word its precomposed
     # spelling is ("télé"); split at the accent, it would be read as two words and a sign.
-    text = unicodedata.normalize("NFC", _without_control(command)).lower().replace("\u2019", "'").replace("\u2018", "'")
+    text = unicodedata.normalize("NFC", _without_format(_without_control(command))).lower()
+    text = text.replace("\u2019", "'").replace("\u2018", "'")
     text = re.sub(r"(?<=\w)-(?=\w)", " ", text)
     out: list[str] = []
     for tok in _TOKEN.findall(text):

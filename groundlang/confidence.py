@@ -139,7 +139,8 @@ def out_of_reach(probabilities: np.ndarray, goals: Sequence[tuple[Atom, ...]],
             mass[goal] = mass.get(goal, 0.0) + float(p)
     if not mass:
         return 0.0, None
-    return float(sum(mass.values())), most_probable_first(list(mass.items()), lambda kv: kv[1])[0][0]
+    # at most 1: float32 masses summed may pass it by a rounding (1.0000001 where every goal is out of reach)
+    return min(1.0, float(sum(mass.values()))), most_probable_first(list(mass.items()), lambda kv: kv[1])[0][0]
 
 
 def given_achievable(probabilities: np.ndarray, goals: Sequence[tuple[Atom, ...]], masks: GoalMasks,

@@ -21,10 +21,10 @@ from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.features import goal_mask
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.relevance import exact_fits, placement_sample, pushes_scenery, state_space_for
-from groundlang.model.statespace import StateSpace
+from groundlang.model.statespace import StateSpace, StateSpaceError
 from groundlang.model.world import State
 
-__all__ = ["planning_space", "plan_for_goal", "plan_for_states", "expected_success_states", "success_at",
+__all__ = ["planning_space", "plan_for_goal", "plan_for_states", "expected_success_states", "success_at", "nearest_of",
            "WorldPlans"]
 
 # State spaces kept for grouping goals and planning (crowd layouts: about 100 states each).
@@ -99,8 +99,7 @@ def expected_success_states(goals, masks: GoalMasks, step_cost: float, habits: E
         return None  # no goal holds where the agent can go: the goal acted on is said to be out of reach
     value = np.where(dist >= 0, score - step_cost * dist, -np.inf)
     target = value >= value.max() - 1e-9
-    nearest = int(np.flatnonzero(target)[np.argmin(dist[target])])
-    said = goal_holding_at(kept, masks, nearest)
+    said = goal_holding_at(kept, masks, nearest_of(target, space))
     return None if said is None else (target, said)
 
 
@@ -108,6 +107,14 @@ def goal_holding_at(goals, masks: GoalMasks, index: int) -> tuple[Atom, ...] | N
     """The most probable of ``goals`` (``(goal, probability)``, most probable first) of a share of at least
     NEGLIGIBLE that holds in the state ``index`` of ``masks.space``; None where none does."""
     return next((goal for goal, p in goals if p >= NEGLIGIBLE and masks.mask(goal)[index]), None)
+
+
+def nearest_of(target: np.ndarray, space) -> int:
+    """The index of the reachable state of ``target`` (``[S]`` bool) fewest moves from the start: where a
+    plan for ``target`` ends."""
+    dist = distances(space)
+    within = np.flatnonzero(target & (dist >= 0))
+    return int(within[np.argmin(dist[within])])
 
 
 def success_at(goals, masks: GoalMasks, index: int) -> float:
@@ -149,6 +156,18 @@ class WorldPlans:
             found = GoalMasks(space, self.library)
             self._masks = [found, *self._masks][:_MASKS_KEPT]
         return found
+
+    def success_where(self, goals, state: State, over: tuple[Atom, ...], final: State) -> float | None:
+        """:func:`success_at` the state ``final`` of the space goals are compared in (``self.space(state,
+        over)``); None where that space's states are not enumerated from the start, or ``final`` is not one."""
+        space = self.space(state, over)
+        if getattr(space, "level_sizes", None) is None:
+            return None
+        try:
+            index = space.index_of(final)
+        except StateSpaceError:
+            return None
+        return success_at(goals, self.goal_masks(space), index)
 
     def act(self, state: State, goal: tuple[Atom, ...], max_steps: int,
             ending: np.ndarray | None = None, over: tuple[Atom, ...] | None = None) -> tuple[list, list, bool, str]:

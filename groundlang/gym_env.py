@@ -176,7 +176,13 @@ def _library(library):
     if library is None or isinstance(library, TaskLibrary):
         return library
     if isinstance(library, (str, os.PathLike, list, tuple)):  # what TaskLibrary.load takes
-        return TaskLibrary.load(library)
+        if not str(library).strip() or library in ([], ()):  # "" would read the working folder
+            raise ValueError(f"library {library!r}: empty; give a TaskLibrary or the path of its .lp file")
+        try:
+            return TaskLibrary.load(library)
+        except OSError as exc:  # a folder, a missing file: said of the library, not as an Errno
+            raise ValueError(f"library {exc.filename or library}: {exc.strerror or exc}; expected the path of a "
+                             ".lp file") from None
     raise TypeError(f"library must be a TaskLibrary, the path of its .lp file or None, got {type(library).__name__}")
 
 

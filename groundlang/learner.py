@@ -18,7 +18,7 @@ import torch
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, answer_text, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import given_achievable, group_goals, out_of_reach, unachievable_goals
-from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at, success_at
+from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at, nearest_of, success_at
 from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
 from groundlang.inference.planning import TaskSettings
@@ -277,7 +277,8 @@ class Learner:
             acted = self._act(command, state, post, goal, max_steps, target, (goals, masks, post.best_goal))
         else:
             acted = self._act(command, state, post, post.best_goal, max_steps)
-        if min_confidence is not None and acted.confidence < min_confidence:
+        # Not where nothing can be done: no reading is within reach, so no answer could help.
+        if min_confidence is not None and acted.confidence < min_confidence and acted.reason != "unreachable":
             choices = competing(post.goal_groups())
             unknown = unknown_words(post.readings, self._knows)
             return FollowResult(command, post, post.best_goal, [state], [], False, "abstained", abstained=True,
@@ -347,8 +348,11 @@ class Learner:
                 # Every state of ``ending`` is worth the same and the plan may end in any of them, not only
                 # where ``goal`` holds: the goal said to be acted on is the one that holds where it ends.
                 goal = goal_holding_at(goals, masks, end) or goal
-            # where it ends, reached or stopped short (max_steps, scenery)
-            success = success_at(goals, masks, end) if self.lm.success_confidence else None
+            # Stopped short (max_steps, scenery): where the plan was going; the confidence is in the reading.
+            success = success_at(goals, masks, end if reached else nearest_of(ending, masks.space))
+        elif self.lm.expected_success:  # one goal planned for (an answer's, or none within reach): where it ended
+            success = self._world.success_where(post.goals(), state, post.best_goal, states[-1])
+        success = success if self.lm.success_confidence else None
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library), success=success)
 

@@ -7,6 +7,7 @@ a file is untrusted: every field is checked here before anything is built from i
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -36,8 +37,7 @@ def check_count(method: str, name: str, value) -> None:
 def check_threshold(method: str, name: str, value) -> None:
     """ValueError unless ``value`` is None or a number from 0 to 1 (a confidence threshold): with nan, every
     comparison is false and the learner acted however unsure."""
-    if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.floating))
-                              or not 0 <= value <= 1):
+    if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 <= value <= 1):
         raise ValueError(f"{method}: {name} must be a number from 0 to 1 (or None), got {value!r:.40}")
 
 

@@ -224,3 +224,8 @@ def test_confidences_are_shown_rounded_down_so_a_threshold_is_never_contradicted
     from groundlang.commands.follow import _down
 
     assert [_down(x) for x in (0.6999, 0.7, 0.29, 0.58, 1.0, 0.0)] == ["0.69", "0.70", "0.29", "0.58", "1.00", "0.00"]
+    # as many places as the threshold has: 0.996 is not shown as 0.99 against --min-confidence 0.995
+    from groundlang.commands.follow import _places
+
+    assert [_places(t) for t in (0.7, 0.995, 0.9961, 0.12345678)] == [2, 3, 4, 6]
+    assert _down(0.996, _places(0.995)) == "0.996"

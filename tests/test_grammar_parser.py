@@ -133,6 +133,9 @@ def test_a_word_typed_with_combining_accents_is_the_word_its_precomposed_spellin
     decomposed, composed = "te\u0301le\u0301", "t\u00e9l\u00e9"
     assert tokenise(f"go to the {decomposed} room") == tokenise(f"go to the {composed} room") == [
         "go", "to", "the", composed, "room"]
+    # invisible format characters are no part of a word: a zero-width joiner, a soft hyphen, marks of direction
+    assert tokenise("go to the re\u200dd room") == tokenise("go to the gr\u00adeen\u200f room\ufeff")[:3] + ["red", "room"]
+    assert tokenise("go to the gr\u00adeen\u200f room\ufeff") == ["go", "to", "the", "green", "room"]
     from groundlang.grammar.word_files import read_word_file
     words = tmp_path / "accents.words"
     words.write_text(f"NOUN: {decomposed}\n", encoding="utf-8")

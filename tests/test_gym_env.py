@@ -332,3 +332,7 @@ def test_a_goal_may_use_a_pf_of_the_library_given(state):
     assert terminated and reward == 1.0 and info["goal_holds"]
     with pytest.raises(TypeError, match="library must be a TaskLibrary"):
         CleanupEnv(state=state, library=5)
+    for bad, said in (("", "empty"), ([], "empty"), (str(example_corpus_path()), "expected the path of a .lp file"),
+                      ("no-such.lp", "expected the path of a .lp file")):
+        with pytest.raises(ValueError, match=said):
+            CleanupEnv(state=state, library=bad)

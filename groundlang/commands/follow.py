@@ -32,9 +32,9 @@ MAX_ANSWER_CHARS = 1000
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "follow", help="interpret a command in an environment, plan and act (or ask when unsure)",
-        description="Interpret COMMAND in the layout of --env with a trained model, plan for the goal it most "
-                    "probably means and act. A reading less confident than --min-confidence is not acted on: "
-                    "the competing readings are printed as a question and the exit code is 3.",
+        description="Interpret COMMAND in the layout of --env with a trained model, plan to end where what it "
+                    "means most probably holds, and act. Where that is less likely than --min-confidence, it does "
+                    "not act: the competing readings are printed as a question and the exit code is 3.",
     )
     p.add_argument("command_text", metavar="COMMAND", help="the command, in quotes")
     p.add_argument("--env", required=True, metavar="FILE",
@@ -48,11 +48,12 @@ def register(subparsers) -> None:
     p.add_argument("--max-steps", type=positive_int, default=200,
                    help="stop acting after this many steps if the goal does not hold by then (default 200)")
     p.add_argument("--min-confidence", type=fraction, default=DEFAULT_MIN_CONFIDENCE, metavar="P",
-                   help="ask instead of acting when the chosen goal's probability is below P, 0 to 1 "
+                   help="ask instead of acting when the confidence (how likely what was meant holds where it would "
+                        "end) is below P, 0 to 1 "
                         f"(default {DEFAULT_MIN_CONFIDENCE}, chosen on held-out crowd commands; see README)")
     ask = p.add_mutually_exclusive_group()
     ask.add_argument("--guess", action="store_true",
-                     help="act on the most probable goal however unsure (what --min-confidence 0 does)")
+                     help="act however unsure (what --min-confidence 0 does)")
     ask.add_argument("--ask", action="store_true",
                      help="when unsure, ask on the terminal (stdin) and act on the answer: a number or words "
                           "such as 'the green one' (up to 3 tries; with --json it reports the question instead)")
@@ -76,12 +77,12 @@ def _choices_json(result, state, library, names=None) -> list[dict]:
             for k, (phrase, c) in enumerate(zip(phrases, result.choices), start=1)]
 
 
-def _print_question(result, state, library, names=None) -> None:
+def _print_question(result, state, library, names=None, places: int = 2) -> None:
     from groundlang.logic.atoms import renamed_words
 
     print(renamed_words(result.question, names))
     for row in _choices_json(result, state, library, names):
-        print(f"  {row['number']}) {row['words']}  ({row['probability']:.2f}; {row['goal']})")
+        print(f"  {row['number']}) {row['words']}  ({_down(row['probability'], places)}; {row['goal']})")
 
 
 def _ask(learner, result, state, max_steps: int, names=None):
@@ -127,9 +128,18 @@ def _learn(learner, asked, answered, state, model) -> None:
     print(f"learned that {asked.command!r} means {answered.goal_words}{said}; model saved to {model}")
 
 
-def _down(confidence: float) -> str:
-    """A confidence to two places rounded down: 0.6999 is not said to be 0.70 and "below 0.7" at once."""
-    return f"{math.floor(round(confidence * 100, 9)) / 100:.2f}"  # round first: 0.29 * 100 is 28.999...
+def _down(confidence: float, places: int = 2) -> str:
+    """A confidence rounded down to ``places``: 0.6999 is not said to be 0.70 and "below 0.7" at once."""
+    scale = 10 ** places
+    return f"{math.floor(round(confidence * scale, 9)) / scale:.{places}f}"  # round first: 0.29 * 100 is 28.999...
+
+
+def _places(threshold: float) -> int:
+    """As many places as the threshold needs (2 to 6): 0.99 shown against --min-confidence 0.995 said nothing."""
+    places = 2
+    while places < 6 and round(threshold, places) != threshold:
+        places += 1
+    return places
 
 
 def _habits(learner, result, state) -> dict[str, float]:
@@ -147,16 +157,19 @@ def _out_of_reach(result, names) -> str | None:
     share = result.posterior.out_of_reach
     if share < 0.01 or result.posterior.out_of_reach_goal is None:
         return None
-    return (f"{share:.2f} of the words' reading asks for what cannot be done from here (most: "
-            f"{format_goal(result.posterior.out_of_reach_goal, names)}); the interpretations above are what can")
+    most = format_goal(result.posterior.out_of_reach_goal, names)
+    if result.reason == "unreachable":  # conditioning had nothing to keep: the interpretations above are these
+        return f"none of the words' readings can be done from here (the most probable: {most})"
+    return (f"{_down(share)} of the words' reading asks for what cannot be done from here (most: {most}); the "
+            "interpretations above are what can")
 
 
 def _refuse(result, args) -> None:
     # with --json nothing is asked on the terminal: the question and its choices are in the JSON printed
     how = ("the question and its choices are in the JSON (--ask asks only without --json)" if args.ask and args.json
            else "answer with --ask")
-    print(f"groundlang follow: not acting: confidence {_down(result.confidence)} is below "
-          f"--min-confidence {args.min_confidence:g}; {how}, or act anyway with --guess", file=sys.stderr)
+    print(f"groundlang follow: not acting: confidence {_down(result.confidence, _places(args.min_confidence))} is below "
+          f"--min-confidence {args.min_confidence!r}; {how}, or act anyway with --guess", file=sys.stderr)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -258,20 +271,22 @@ def run(args: argparse.Namespace) -> int:
     print("interpretations:")
     for goal, p in goals:
         print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library, names)}")
-    margin = f"margin {_down(result.posterior.margin)} over the next goal that differs"
+    places = _places(args.min_confidence)
+    margin = f"margin {_down(result.posterior.margin, places)} over the next goal that differs"
     if answered is not None:  # what the words alone said, before the answer chose
-        print(f"acting on the answer (from the words alone: the most probable goal {_down(result.posterior.confidence)}, "
+        print(f"acting on the answer (from the words alone: the most probable goal "
+              f"{_down(result.posterior.confidence, places)}, "
               f"{margin})")
     elif result.success is None:
-        print(f"confidence {_down(result.confidence)} ({margin})")
+        print(f"confidence {_down(result.confidence, places)} ({margin})")
     else:  # the end is chosen over the whole posterior: how likely what was meant holds there
-        print(f"confidence {_down(result.confidence)} that what was meant holds where it "
-              f"{'would end' if result.abstained else 'ends'} (the most probable goal "
-              f"{_down(result.posterior.confidence)}, {margin})")
+        print(f"confidence {_down(result.confidence, places)} that what was meant holds where it "
+              f"{'ends' if result.reached else 'would end'} (the most probable goal "
+              f"{_down(result.posterior.confidence, places)}, {margin})")
     if (beyond := _out_of_reach(result, names)) is not None:
         print(beyond)
     if result.abstained:
-        _print_question(result, state, learner.library, names)
+        _print_question(result, state, learner.library, names, places)
         _refuse(result, args)
         return ASKED
     print(f"plan ({len(result.actions)} step{'' if len(result.actions) == 1 else 's'}): {', '.join(a.word for a in result.actions) or '(none)'}")
