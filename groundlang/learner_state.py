@@ -18,8 +18,8 @@ from groundlang.inference.end_habits import EndHabits
 from groundlang.inference.likelihoods import check_cache_dir
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.tasks import TaskLibrary
-from groundlang.logic.terms import ASP_CONSTANT
-from groundlang.model.palette import Palette, added_attribute_problem
+from groundlang.model.palette import Palette
+from groundlang.model.palette_records import checked_palettes
 from groundlang.model.language_models import get_language_model
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
@@ -134,7 +134,7 @@ def learner_from_state(cls, state: dict, where: str):
         em_acceleration=state["training"].get("em_acceleration", "none"),
     )
     learner.vocab = Vocabulary.from_json(state["vocabulary"], learner.word_lexicon)
-    learner.palettes = _checked_palettes(state["palettes"])
+    learner.palettes = checked_palettes(state["palettes"])
     missing = {t.name for t in learner.library.tasks} - set(learner.vocab.tasks)
     if missing:
         raise ValueError(f"the vocabulary lacks the lifted tasks {sorted(missing)} of the saved task library")
@@ -143,69 +143,6 @@ def learner_from_state(cls, state: dict, where: str):
     if state.get("globals") is not None:
         learner.globals = dict(state["globals"])
     return learner
-
-
-def _checked_palettes(palettes) -> list[dict]:
-    """The palettes a model was trained on, as written: a list of {name, colours, shapes} (and the attributes
-    a palette added, ``Palette.record``)."""
-    if not isinstance(palettes, list) or not palettes:
-        raise ValueError("palettes must be a non-empty list")
-    for p in palettes:
-        if (not isinstance(p, dict) or not isinstance(p.get("name"), str)
-                or not all(isinstance(v, list) and all(isinstance(x, str) for x in v)
-                           for v in (p.get("colours"), p.get("shapes")))):
-            raise ValueError("each palette must be {name: str, colours: [str], shapes: [str]}")
-        for field in ("colours", "shapes"):  # a state is read with them (follow): each a value, once
-            _check_names(p["name"], field, p[field])
-        if "added" in p or "added_values" in p:
-            _check_added(p)
-        if "drawing" in p:
-            _check_drawing(p)
-    return palettes
-
-
-def _check_drawing(p: dict) -> None:
-    """A palette record's drawing hints, as ``Palette.record`` writes them: ``drawing`` {"glyph": {shape:
-    text}, "rgb": {colour: name}}, every key and value a string."""
-    drawing = p["drawing"]
-    if (not isinstance(drawing, dict) or set(drawing) - {"glyph", "rgb"}
-            or not all(isinstance(d, dict) and all(isinstance(k, str) and isinstance(v, str) and v.strip()
-                                                   for k, v in d.items())
-                       for d in drawing.values())):
-        raise ValueError(f"palette {p['name']!r}: drawing must be {{\"glyph\": {{shape: text}}, \"rgb\": "
-                         "{colour: name}}, every key a string and every value a string that is not blank")
-
-
-def _check_names(palette: str, field: str, values) -> None:
-    """ValueError unless ``values`` are distinct lowerCamelCase names, at least one (a palette's values of one
-    attribute, as a state's facts write them)."""
-    if not isinstance(values, list) or not all(isinstance(v, str) for v in values):
-        raise ValueError(f"palette {palette!r}: {field} must be a list of names")
-    odd = next((v for v in values if not ASP_CONSTANT.match(v)), None)
-    if not values or odd is not None or len(set(values)) != len(values):
-        raise ValueError(f"palette {palette!r}: {field} must be distinct lowerCamelCase names, at least "
-                         f"one" + (f" ({odd!r} is not one)" if odd is not None else ""))
-
-
-def _check_added(p: dict) -> None:
-    """The attributes a palette record adds: ``added`` [[class, attribute], ...], each attribute's values
-    under ``added_values`` {attribute: [value, ...]}, as ``Palette.record`` writes them."""
-    added, values = p.get("added"), p.get("added_values")
-    shape = f"palette {p['name']!r}: added must be [[class, attribute], ...] and added_values {{attribute: [values]}}"
-    if (not isinstance(added, list) or not isinstance(values, dict)
-            or not all(isinstance(x, list) and len(x) == 2 and all(isinstance(s, str) for s in x) for x in added)):
-        raise ValueError(shape)
-    if {a for _, a in added} != set(values):
-        raise ValueError(f"{shape}, the same attributes in both")
-    for cls, attribute in added:
-        if problem := added_attribute_problem(cls, attribute):
-            raise ValueError(f"palette {p['name']!r}: attribute({cls}, {attribute}): {problem}")
-    seen = set(p["colours"]) | set(p["shapes"])
-    for attribute, vs in values.items():
-        _check_names(p["name"], f"{attribute} values", vs)
-        if twice := sorted(seen & set(vs)):  # as a palette file may not: the PFs of the two would be one
-            raise ValueError(f"palette {p['name']!r}: {twice[0]} is a value of {attribute} and of another attribute")
-        seen |= set(vs)
 
 
 def _readable(habits) -> list:

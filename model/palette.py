@@ -7,6 +7,7 @@ re-exports: a palette index out of range is an invalid world too.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -134,11 +135,16 @@ def get_palette(name: str | Palette | dict) -> Palette:
     if isinstance(name, Palette):
         return name
     if isinstance(name, dict):
+        from groundlang.model.palette_records import checked_palettes  # (it reads this module's names)
+
         try:
-            return Palette.from_record(name)
+            return Palette.from_record(checked_palettes([name])[0])
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise WorldError(f"palette record {str(name)[:60]}: not a palette's record as Learner.palettes keeps "
-                             f"it ({type(exc).__name__}: {exc})") from None
+                             f"it ({exc})") from None
+    if not isinstance(name, (str, os.PathLike)):
+        raise TypeError(f"palette must be a name, the path of a .lp file, a Palette or a palette's record (a dict), "
+                        f"got {type(name).__name__}")
     try:
         label, values, drawing, added, value_classes = read_palette(str(name))
     except AspError as exc:

@@ -230,12 +230,12 @@ def test_words_for_materials_are_learned_and_followed_in_a_layout_training_never
     ({"added": "toy"}, "added must be [[class, attribute], ...]"),
 ])
 def test_a_saved_models_record_of_added_attributes_is_checked(change, message):
-    from groundlang.learner_state import _checked_palettes
+    from groundlang.model.palette_records import checked_palettes
 
     record = {**get_palette(PALETTE).record(), **change}
     with pytest.raises(ValueError, match=message.replace("[", r"\[").replace("]", r"\]")):
-        _checked_palettes([record])
-    assert _checked_palettes([get_palette(PALETTE).record()])
+        checked_palettes([record])
+    assert checked_palettes([get_palette(PALETTE).record()])
 
 
 def test_a_material_reads_in_the_librarys_words():

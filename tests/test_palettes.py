@@ -84,3 +84,23 @@ def test_a_state_is_read_with_the_palette_record_a_trained_model_keeps(tmp_path)
     assert [r.colour for r in state.layout.rooms] == ["blue", "green", "red"]
     with pytest.raises(WorldError, match="not a palette's record"):
         read_state_file(example_corpus_path() / "novel_a.state", {"name": "x"})
+
+
+@pytest.mark.parametrize("change, said", [
+    ({"name": 5}, "name: str (not blank)"), ({"name": " "}, "name: str (not blank)"),
+    ({"colours": [None] * 13}, "colours: [str]"), ({"colours": ["red"] * 13}, "distinct lowerCamelCase names"),
+    ({"shapes": "star"}, "shapes: [str]"), ({"value_classes": {"red": "toy"}}, "value_classes must be"),
+    ({"added": "ab"}, "added must be"),
+])
+def test_a_malformed_palette_record_is_refused_in_one_line_naming_it(change, said):
+    from groundlang.corpus import example_corpus_path, read_state_file
+
+    record = {**get_palette("sokoban").record(), **change}
+    with pytest.raises(WorldError, match="palette record") as caught:
+        read_state_file(example_corpus_path() / "novel_b.state", record)
+    assert said in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_a_palette_of_the_wrong_type_is_a_type_error_naming_what_is_taken():
+    with pytest.raises(TypeError, match="palette must be a name, the path of a .lp file, a Palette or a palette's"):
+        get_palette([get_palette("sokoban").record()])
