@@ -83,7 +83,8 @@ def question(choices: Sequence[GoalGroup], unknown: Sequence[str], state: State,
     """One line: the unknown words, then which of ``choices`` is meant."""
     said = ""
     if unknown:
-        quoted = choice_list([f"'{w}'" for w in unknown]).replace(" or ", " and ")
+        # a word file's multiword entry ("coffee_table") is said as it was written
+        quoted = choice_list([f"'{w.replace('_', ' ')}'" for w in unknown]).replace(" or ", " and ")
         said = f"I don't know the word{'s' if len(unknown) > 1 else ''} {quoted}. "
     objects = _differing_object(choices)
     if objects is not None:

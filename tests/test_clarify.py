@@ -61,6 +61,8 @@ def test_question_for_rooms_toys_and_conjunctions(novel_b, library):
     assert (question(mixed, ("fetch", "blu"), novel_b, library)
             == "I don't know the words 'fetch' and 'blu'. "
                "Do you mean the agent in the blue room or the yellow star in the blue room?")
+    # a word file's multiword entry is said as written, not as the tokeniser joins it
+    assert question(rooms, ("coffee_table",), novel_b, library).startswith("I don't know the word 'coffee table'.")
 
 
 def test_answers_by_number_and_by_words(novel_b, library):

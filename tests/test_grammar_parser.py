@@ -354,7 +354,7 @@ def test_every_corpus_command_gets_a_logical_form(shared_corpus, folder):
     assert full >= 200  # measured 209 (original) and 215 (simplified); guards against grammar regressions
 
 
-def test_cli_parse_text_and_json(capsys):
+def test_cli_parse_text_and_json(capsys, tmp_path):
     assert main(["parse", "Push the star into the green room"]) == 0
     out = capsys.readouterr().out
     assert "0.650  push(star1, room1), P1(room1, green)" in out
@@ -365,6 +365,13 @@ def test_cli_parse_text_and_json(capsys):
     # a multiword entry of a word file is read as one word: parse says so (the logical form shows no preposition)
     assert main(["parse", "stand to the left of the red chair"]) == 0
     assert capsys.readouterr().out.splitlines()[1] == "  read as: stand to_the_left_of the red chair"
+    # and where a word file's synonym was read as its word, or nothing was read otherwise than typed
+    words = tmp_path / "syn.words"
+    words.write_text("SYNONYM: toward=into\n")
+    assert main(["parse", "--lexicon", str(words), "go toward the red room"]) == 0
+    assert capsys.readouterr().out.splitlines()[1] == "  read as: go into the red room"
+    assert main(["parse", "go to the red room ."]) == 0
+    assert "read as" not in capsys.readouterr().out
 
 
 def test_cli_parse_escapes_a_commands_control_characters(tmp_path, capsys):
