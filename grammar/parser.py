@@ -40,7 +40,7 @@ from .phrases import DEFAULT_WEIGHTS, top_k
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["DEFAULT_WEIGHTS", "ParseError", "Word", "checked_weights", "parse", "tokenise", "tag"]
+__all__ = ["DEFAULT_WEIGHTS", "ParseError", "Word", "checked_weights", "parse", "tokenise", "tag", "typed_words"]
 
 # Longer sentences are split at commas first, then chunked: Earley is cubic and the number of PP
 # attachments grows exponentially, and no corpus sentence needs more.
@@ -106,6 +106,22 @@ def _without_format(text: str) -> str:
     return text if text.isascii() else "".join(c for c in text if unicodedata.category(c) != "Cf")
 
 
+def _normalised(command: str) -> str:
+    """A command as the tokeniser reads it, before any word file: control characters as spaces, invisible
+    format characters dropped, Unicode NFC (a letter typed as a base and a combining accent, "te\u0301le\u0301",
+    is the word its precomposed spelling is; split at the accent, it would be two words and a sign), lower
+    case, typographic apostrophes as "'"."""
+    text = unicodedata.normalize("NFC", _without_format(_without_control(command))).lower()
+    return text.replace("\u2019", "'").replace("\u2018", "'")
+
+
+def typed_words(command: str) -> list[str]:
+    """The command's words and signs as typed (normalised as :func:`tokenise` reads it): what its tokens are
+    unless a word file's multiword entries or synonyms, or the tokeniser's splits (clitics, hyphens, colour
+    compounds), read them otherwise (``groundlang parse`` says how they were read where they differ)."""
+    return _TOKEN.findall(_normalised(command))
+
+
 Word = tuple[str, frozenset[str]]
 
 
@@ -115,11 +131,7 @@ def tokenise(command: str, word_lexicon: Lexicon | None = None) -> list[str]:
     entries such as "left of" joined into ``left_of``) and punctuation. ``word_lexicon``: the words known
     (default: English, :meth:`Lexicon.english`)."""
     words = word_lexicon or Lexicon.english()
-    # NFC: a letter typed as a base and a combining accent ("te\u0301le\u0301") is the word its precomposed
-    # spelling is ("télé"); split at the accent, it would be read as two words and a sign.
-    text = unicodedata.normalize("NFC", _without_format(_without_control(command))).lower()
-    text = text.replace("\u2019", "'").replace("\u2018", "'")
-    text = re.sub(r"(?<=\w)-(?=\w)", " ", text)
+    text = re.sub(r"(?<=\w)-(?=\w)", " ", _normalised(command))
     out: list[str] = []
     for tok in _TOKEN.findall(text):
         m = _CLITIC.match(tok)

@@ -258,15 +258,16 @@ def evaluate(
         row["correct"] += int(r["correct"])
         row["novel_n"] += sum("correct" in x for x in r["novel"])
         row["novel_correct"] += sum(x.get("correct", False) for x in r["novel"])
-    novel = [x["correct"] for r in scored for x in r["novel"] if "correct" in x]
-    novel_not_scored = sum("not_scored" in x for r in scored for x in r["novel"])
+    novel_scored = [x for r in scored for x in r["novel"] if "correct" in x]  # the others: not scored
+    novel = [x["correct"] for x in novel_scored]
+    novel_not_scored = sum(len(r["novel"]) for r in scored) - len(novel_scored)
     goal_words: dict = {}
     for r in scored:
         goal_words.setdefault(r["gold_task"], r["gold_words"])
         goal_words.setdefault(r["predicted_task"], r["predicted_words"])
     calibration = calibration_report([r["confidence"] for r in scored], [r["correct"] for r in scored],
                                      threshold=min_confidence) if scored else {}
-    novel_calibration = calibration_report([x["confidence"] for r in scored for x in r["novel"] if "correct" in x], novel,
+    novel_calibration = calibration_report([x["confidence"] for x in novel_scored], novel,
                                            threshold=min_confidence) if novel else {}
     low, high = wilson_interval(correct, n)
     if scored:

@@ -348,11 +348,11 @@ class Learner:
                 # Every state of ``ending`` is worth the same and the plan may end in any of them, not only
                 # where ``goal`` holds: the goal said to be acted on is the one that holds where it ends.
                 goal = goal_holding_at(goals, masks, end) or goal
-            # Stopped short (max_steps, scenery): where the plan was going; the confidence is in the reading.
-            success = success_at(goals, masks, end if reached else nearest_of(ending, masks.space))
-        elif self.lm.expected_success:  # one goal planned for (an answer's, or none within reach): where it ended
+            if self.lm.success_confidence:
+                # Stopped short (max_steps, scenery): where the plan was going; the confidence is in the reading.
+                success = success_at(goals, masks, end if reached else nearest_of(ending, masks.space))
+        elif self.lm.expected_success and self.lm.success_confidence:  # one goal (an answer's, or none in reach)
             success = self._world.success_where(post.goals(), state, post.best_goal, states[-1])
-        success = success if self.lm.success_confidence else None
         return FollowResult(command, post, goal, list(states), list(actions), reached, reason,
                             goal_words=goal_phrase(goal, state, self.library), success=success)
 

@@ -17,7 +17,7 @@ from pathlib import Path
 from groundlang.commands import (LIBRARY_NAMES, add_lexicon_option, add_time_limit_option, as_typed, json_text,
                                  library_given, library_path, positive_int)
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
-from groundlang.grammar.parser import ParseError, command_fault, parse
+from groundlang.grammar.parser import ParseError, command_fault, parse, typed_words
 from groundlang.logic.storage import read_limited
 from groundlang.state_line import text_lines, utf8_text
 
@@ -59,15 +59,6 @@ def _commands(path: Path) -> list[tuple[str, str]]:
     return [(f"{path}:{i}", line.strip()) for i, line in enumerate(lines, 1) if line.strip()]
 
 
-def _as_typed_words(command: str) -> list[str]:
-    """The command's words and signs as typed, lower case: what the tokens are unless a word file's multiword
-    entries, synonyms or the tokeniser's splits (clitics, hyphens, colour compounds) read them otherwise."""
-    import re
-    import unicodedata
-
-    return re.findall(r"\w+(?:'\w+)*|\.{2,}|[^\w\s]", unicodedata.normalize("NFC", command).lower())
-
-
 def run(args: argparse.Namespace) -> int:
     if (args.text is None) == (args.file is None):
         raise ValueError("give either a COMMAND or --file FILE_OR_CORPUS_DIR (exactly one)")
@@ -107,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
             print(json_text({"command": command, "words": list(tokens), "readings": [r.to_json() for r in readings]}))
         else:
             print(as_typed(command))  # an escape sequence in it would act on the terminal, as follow's would
-            if list(tokens) != _as_typed_words(command):  # a multiword entry joined, a synonym read: say how
+            if list(tokens) != typed_words(command):  # a multiword entry joined, a synonym read: say how
                 print(f"  read as: {as_typed(' '.join(tokens))}")
             for r in readings:
                 mark = "  [fallback]" if r.logical_form.fallback else ""
