@@ -140,13 +140,22 @@ def text_position(text: str) -> float:
     return int.from_bytes(digest[:8], "big") / 2**64
 
 
-def fold_of_text(text: str, folds: int) -> int:
+def fold_of_text(text: str, folds: int, beyond: float = 0.0) -> int | None:
     """The fold (0 to ``folds - 1``) that holds out ``text`` in a ``folds``-fold split by text: fold ``k``
     holds out the texts whose position falls in ``[k / folds, (k + 1) / folds)``, so with five folds fold 0
-    is ``held_out_by_text(commands, 0.2)``'s held-out side and fold 1 the tuning split's."""
+    is ``held_out_by_text(commands, 0.2)``'s held-out side and fold 1 the tuning split's.
+
+    With ``beyond`` (a development split's fraction), the folds cut only the range from ``beyond`` on, in
+    equal parts, and a text before it is in no fold (None): cross-validation that never reads that split."""
     if folds < 2:
         raise ValueError(f"{folds} folds: a split by text needs at least 2")
+    if not 0 <= beyond < 1:
+        raise ValueError(f"beyond={beyond}: expected a fraction in [0, 1)")
     x = text_position(text)
+    if beyond:
+        if x < beyond:
+            return None
+        return next(k for k in range(folds) if x < beyond + (k + 1) * (1 - beyond) / folds or k == folds - 1)
     # Compared with the same quotients held_out_by_text's bounds are (0.2, 2 * 0.2 == 2 / 5), not floor(x * k),
     # whose rounding could put a text on the boundary into another fold than the held-out split does.
     return next(k for k in range(folds) if x < (k + 1) / folds)

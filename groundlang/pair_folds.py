@@ -41,11 +41,13 @@ class PairCrossValidation:
     held_out: list[list[int]]  # the corpus indices each fold held out
     pooled: PairEvaluation
     seconds: float  # wall time of the whole run
+    beyond: float = 0.0  # the development split set aside (--holdout F --tuning), 0 for none
 
     def to_json(self) -> dict:
         data = self.pooled.to_json()
         # what each fold trained on is under "folds": summed over folds, a command would count K - 1 times
-        data.update(train_commands=None, train_pairs=None, train_skipped=None, seconds=self.seconds)
+        data.update(train_commands=None, train_pairs=None, train_skipped=None, seconds=self.seconds,
+                    development_split_set_aside=self.beyond)
         data["folds"] = [{key: value for key, value in fold.to_json().items() if key != "executions"}
                          | {"fold": k, "held_out_commands": len(self.held_out[k])}
                          for k, fold in enumerate(self.folds)]
@@ -55,7 +57,9 @@ class PairCrossValidation:
         p = self.pooled
         sizes = [fold.train_commands for fold in self.folds]
         lines = [f"{len(self.folds)} folds by text, each trained on the others' commands ({min(sizes)} to "
-                 f"{max(sizes)} commands; {p.demonstrations}, layouts {p.layouts}); every text held out once",
+                 f"{max(sizes)} commands; {p.demonstrations}, layouts {p.layouts}); every text held out once"
+                 + (f" but the development split's (the first {self.beyond:g} of the texts), which no fold reads"
+                    if self.beyond else ""),
                  "fold  held out  per execution            per command"]
         for k, fold in enumerate(self.folds):
             lines.append(f"{k:>4}  {fold.test_commands:>8}  "
@@ -72,28 +76,36 @@ def _ratio(k: int, n: int) -> str:
     return f"{k / n:.2%} ({k}/{n})" if n else "- (none)"
 
 
-def fold_indices(commands: list[Command], folds: int) -> list[list[int]]:
-    """The corpus indices each of ``folds`` folds holds out (``pair_corpus.fold_of_text``), in corpus order."""
+def fold_indices(commands: list[Command], folds: int, beyond: float = 0.0) -> list[list[int]]:
+    """The corpus indices each of ``folds`` folds holds out (``pair_corpus.fold_of_text``), in corpus order;
+    with ``beyond``, the commands of the development split it names are in none."""
     held: list[list[int]] = [[] for _ in range(folds)]
     for i, command in enumerate(commands):
-        held[fold_of_text(command.text, folds)].append(i)
+        if (k := fold_of_text(command.text, folds, beyond)) is not None:
+            held[k].append(i)
     return held
 
 
 def cross_validate_pairs(commands: list[Command], folds: int, library, workers: int = 1,
-                         min_confidence: float = DEFAULT_MIN_CONFIDENCE, **options) -> PairCrossValidation:
+                         min_confidence: float = DEFAULT_MIN_CONFIDENCE, beyond: float = 0.0,
+                         **options) -> PairCrossValidation:
     """Evaluate ``folds`` folds by text (module docstring); ``options`` go to ``evaluate_pairs`` (not
-    ``progress``: the folds report only when done). Raises ValueError for a fold count out of range or a
-    fold that holds out nothing or leaves nothing to train on, before any fold is trained."""
+    ``progress``: the folds report only when done). With ``beyond`` (``--holdout F --tuning``), the
+    commands of the development split ``held_out_by_text(commands, beyond)`` are neither held out nor
+    trained on, and the folds cut the rest: cross-validation to choose mechanisms on. Raises ValueError for a
+    fold count out of range or a fold that holds out nothing or leaves nothing to train on, before any fold
+    is trained."""
     if not 2 <= folds <= MAX_FOLDS:
         raise ValueError(f"--folds {folds}: expected 2 to {MAX_FOLDS} folds")
-    held = fold_indices(commands, folds)
+    held = fold_indices(commands, folds, beyond)
+    in_folds = sum(map(len, held))
     for k, indices in enumerate(held):
         if not indices:
             fewer = "use fewer folds" if folds > 2 else "the corpus has one text: nothing to hold out by text"
             raise ValueError(f"fold {k} of {folds} holds out no command (no text falls in it): {fewer}")
-        if len(indices) == len(commands):
-            raise ValueError(f"fold {k} of {folds} holds out every command (one text): nothing to train on")
+        if len(indices) == in_folds:
+            every = "beyond the development split" if beyond else "(one text)"
+            raise ValueError(f"fold {k} of {folds} holds out every command {every}: nothing to train on")
     started = time.perf_counter()
     context = {"commands": commands, "held": held, "library": library, "options": options,
                "min_confidence": min_confidence}
@@ -117,7 +129,8 @@ def cross_validate_pairs(commands: list[Command], folds: int, library, workers: 
             for result in pool_.imap(_fold, range(folds), chunksize=1):
                 take(result)
     evaluations = [_renumbered(result, held[k], k) for k, result in enumerate(results)]
-    return PairCrossValidation(evaluations, held, pool(evaluations, min_confidence), time.perf_counter() - started)
+    return PairCrossValidation(evaluations, held, pool(evaluations, min_confidence), time.perf_counter() - started,
+                               beyond)
 
 
 def _init(context: dict) -> None:
@@ -128,7 +141,8 @@ def _init(context: dict) -> None:
 
 def _fold(k: int) -> PairEvaluation | str:
     commands, held = _CONTEXT["commands"], set(_CONTEXT["held"][k])
-    train = [c for i, c in enumerate(commands) if i not in held]
+    in_folds = {i for indices in _CONTEXT["held"] for i in indices}  # all but a development split set aside
+    train = [c for i, c in enumerate(commands) if i not in held and i in in_folds]
     test = [c for i, c in enumerate(commands) if i in held]
     started = time.perf_counter()
     try:

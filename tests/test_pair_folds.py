@@ -144,3 +144,46 @@ def test_a_folds_error_stops_the_run_at_that_fold(monkeypatch):
     with pytest.raises(ValueError, match=r"^fold 0 of 5: no usable training pair"):
         cross_validate_pairs(_many(), 5, library=None)
     assert len(calls) == 1
+
+
+def test_folds_beyond_a_development_split_never_read_it(monkeypatch):
+    """--folds K --holdout F --tuning: cross-validation to choose mechanisms on, the development split unread."""
+    import groundlang.pair_folds as pair_folds
+    from groundlang.pair_folds import cross_validate_pairs
+
+    many = _many()
+    development = {c.text for c in held_out_by_text(many, 0.2)[1]}
+    held = fold_indices(many, 4, beyond=0.2)
+    assert not {many[i].text for fold in held for i in fold} & development
+    assert sorted(i for fold in held for i in fold) == [i for i, c in enumerate(many) if c.text not in development]
+    assert all(40 < len(fold) < 90 for fold in held)  # a quarter of the 240 or so texts beyond it each
+    assert fold_of_text(next(iter(development)), 4, beyond=0.2) is None
+    with pytest.raises(ValueError, match="beyond=1"):
+        fold_of_text("go", 4, beyond=1)
+
+    seen = []
+
+    def recording(train, test, library, **options):
+        seen.append(({c.text for c in train}, {c.text for c in test}))
+        raise ValueError("stop")
+
+    monkeypatch.setattr(pair_folds, "evaluate_pairs", recording)
+    with pytest.raises(ValueError, match="stop"):
+        cross_validate_pairs(many, 4, library=None, beyond=0.2)
+    train, test = seen[0]
+    assert not (train | test) & development and not train & test
+    assert train | test == {c.text for c in many} - development
+
+
+def test_evaluate_with_tuning_folds_says_what_it_set_aside(tmp_path):
+    # the fixture's two texts hash to about 0.31 and 0.59: beyond 0.05, two folds cut [0.05, 0.525) and [0.525, 1)
+    out = tmp_path / "tuning_folds.json"
+    run = _cli("evaluate", "--corpus", str(SMALL), "--folds", "2", "--holdout", "0.05", "--tuning", "--json", str(out))
+    assert run.returncode == 0, run.stderr
+    assert "but the development split's (the first 0.05 of the texts), which no fold reads" in run.stdout
+    data = json.loads(out.read_text())
+    assert data["development_split_set_aside"] == 0.05 and [f["held_out_commands"] for f in data["folds"]] == [1, 1]
+    # set aside 0.35, both texts fall in the first fold: one line, nothing trained
+    run = _cli("evaluate", "--corpus", str(SMALL), "--folds", "2", "--holdout", "0.35", "--tuning")
+    assert run.returncode == 2 and run.stderr.count("\n") == 1, run.stderr
+    assert "fold 0 of 2 holds out every command beyond the development split: nothing to train on" in run.stderr

@@ -33,7 +33,8 @@ def register(subparsers) -> None:
                         "others; prints each fold's figures and the pooled ones (--workers folds at once)")
     p.add_argument("--tuning", action="store_true",
                    help="with --holdout F: hold out the next F of the texts and train on the rest beyond it, "
-                        "never reading the development split (a split to choose mechanisms on)")
+                        "never reading the development split (a split to choose mechanisms on); with --holdout F "
+                        "--folds K: K folds over the texts beyond the development split, which none reads")
     p.add_argument("--format", choices=["commands-to-tasks", "williams2018"],
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
     p.add_argument("--library", metavar="LP", action="append", type=library_path,
@@ -151,9 +152,11 @@ def run_pairs(args: argparse.Namespace) -> int:
     from groundlang.pair_corpus import held_out_by_text, read_pair_corpus
     from groundlang.pair_evaluation import evaluate_pairs
 
-    if sum(x is not None for x in (args.test, args.holdout, args.folds)) != 1:
+    tuning_folds = args.tuning and args.folds is not None and args.holdout is not None and args.test is None
+    if not tuning_folds and sum(x is not None for x in (args.test, args.holdout, args.folds)) != 1:
         raise ValueError(f"{args.corpus}: a corpus of (start, end) pairs is evaluated against a test file, a "
-                         "held-out split or folds: pass one of --test TEST.bdm, --holdout F and --folds K")
+                         "held-out split or folds: pass one of --test TEST.bdm, --holdout F and --folds K "
+                         "(or --folds K --holdout F --tuning: folds beyond the development split)")
     given = [f"--{name.replace('_', '-')}" for name in _TEXT_OPTIONS if getattr(args, name)]
     if given:
         raise ValueError(f"{', '.join(given)}: for a *.txt corpus with labels; a .bdm corpus is scored by what its "
@@ -168,7 +171,7 @@ def run_pairs(args: argparse.Namespace) -> int:
     any_name = args.format == "williams2018"  # said: a file is read whatever its name
     train = read_pair_corpus(args.corpus, palette, any_name).commands
     if args.tuning and args.holdout is None:
-        raise ValueError("--tuning splits the training side of --holdout F; pass --holdout too (not --test or --folds)")
+        raise ValueError("--tuning splits the training side of --holdout F; pass --holdout too (not --test)")
     if args.folds is not None:
         return _run_folds(args, train, library, _learner_options(args, words))
     if args.test:
@@ -206,6 +209,7 @@ def _run_folds(args: argparse.Namespace, commands: list, library, options: dict)
     from groundlang.pair_folds import cross_validate_pairs
 
     result = cross_validate_pairs(commands, args.folds, library, workers=args.workers,
+                                  beyond=args.holdout if args.tuning else 0.0,
                                   min_confidence=args.min_confidence, demonstrations=args.demonstrations,
                                   layouts=args.layouts, skip_inconsistent=args.skip_inconsistent,
                                   learner_options=options)
