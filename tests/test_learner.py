@@ -363,7 +363,8 @@ def test_lexicon_says_which_word_a_synonym_is_read_as(tmp_path, capsys):
     """A word file's synonym is read as its word: asked for "crimson", the table's row says "crimson = red"
     and the JSON is keyed as asked, with red's meanings."""
     words = tmp_path / "colours.words"
-    words.write_text("SYNONYM: crimson=red scarlet=red vermilionlike=red\n")
+    words.write_text("SYNONYM: crimson=red scarlet=red vermilionlike=red \u8d64\u8272\u306e\u90e8\u5c4b\u306e\u8272=red\n",
+                     encoding="utf-8")
     model = tmp_path / "model"
     assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "--lexicon", str(words), "-o",
                  str(model)]) == 0
@@ -383,6 +384,17 @@ def test_lexicon_says_which_word_a_synonym_is_read_as(tmp_path, capsys):
     assert main(["--quiet", "lexicon", str(model), "--words", "vermilionlike", "red", "--top", "1"]) == 0
     rows = capsys.readouterr().out.splitlines()[1:3]
     assert rows[0].startswith("vermilionlike = red ") and rows[0].index("roomIsRed") == rows[1].index("roomIsRed")
+    # a synonym inside a phrase labels its word's row as typed; the other words are rows of their own
+    assert main(["--quiet", "lexicon", str(model), "--words", "go Crimson", "--json"]) == 0
+    assert list(json.loads(capsys.readouterr().out)) == ["go", "crimson"]
+    # the column is counted in screen columns: a wide (CJK) character takes two
+    wide = "\u8d64\u8272\u306e\u90e8\u5c4b\u306e\u8272"
+    assert main(["--quiet", "lexicon", str(model), "--words", wide, "red", "--top", "1"]) == 0
+    rows = capsys.readouterr().out.splitlines()[1:3]
+    assert rows[0].startswith(f"{wide} = red ")
+    # the label, a column's margin and the separating space before the meanings, in screen columns
+    starts = [len(rows[0][:rows[0].index("roomIsRed")]) + len(wide), rows[1].index("roomIsRed")]
+    assert starts[0] == starts[1] == 2 * len(wide) + len(" = red") + 2
 
 
 def test_confidence_is_how_likely_what_was_meant_holds_where_following_ends(corpus, learner):

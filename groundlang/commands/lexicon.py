@@ -15,6 +15,7 @@ most probable lifted tasks, ``P(L | preposition)`` under a uniform prior over L
 from __future__ import annotations
 
 import argparse
+import unicodedata
 
 from groundlang.commands import json_text, positive_int
 
@@ -47,6 +48,15 @@ def _schemas(learner) -> list:
     return [palette_schema(learner.library, Palette.from_record(p)) for p in learner.palettes]
 
 
+def _columns(text: str) -> int:
+    """The screen columns ``text`` takes: a wide (CJK) character two, a combining mark none."""
+    return sum(0 if unicodedata.combining(c) else 2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in text)
+
+
+def _padded(text: str, width: int) -> str:
+    return text + " " * max(0, width - _columns(text))
+
+
 def _print_prepositions(prepositions: dict, learner) -> None:
     if not prepositions:
         if not hasattr(learner.lm, "preposition_concentration"):
@@ -57,10 +67,30 @@ def _print_prepositions(prepositions: dict, learner) -> None:
             why = "none of the prepositions asked was seen in training"
         print(f"no preposition table: {why}")
         return
-    width = max(16, *(len(p) + 1 for p in prepositions))  # multiword ones: to_the_right_side_of
+    width = max(16, *(_columns(p) + 1 for p in prepositions))  # multiword ones: to_the_right_side_of
     print(f"{'preposition':<{width}} lifted tasks it says, most probable first")
     for prep, tasks in prepositions.items():
-        print(f"{prep:<{width}} {', '.join(f'{t} {q:.2f}' for t, q in tasks)}")
+        print(f"{_padded(prep, width)} {', '.join(f'{t} {q:.2f}' for t, q in tasks)}")
+
+
+def _as_read(words: str, word_lexicon) -> list[tuple[str, str]]:
+    """(the words as typed, the word read) for each word of ``words`` as a command reads them: "crimson" is
+    read as red, "east of" as "right of" ("next to" stays spaced). Where the tokeniser's own splits
+    (hyphens, clitics, colour compounds) leave no one-to-one line between the two, each word is its label."""
+    from groundlang.grammar.parser import tokenise, typed_words
+
+    tokens = [t for t in tokenise(words, word_lexicon) if any(c.isalnum() for c in t)]
+    pieces = [(piece, typed) for typed in typed_words(words) if any(c.isalnum() for c in typed)
+              for piece in word_lexicon.read_as(typed)]
+    out, i = [], 0
+    for token in tokens:
+        parts = token.split("_")
+        chunk = pieces[i:i + len(parts)]
+        if [piece for piece, _ in chunk] != parts:
+            return [(t.replace("_", " "), t.replace("_", " ")) for t in tokens]
+        i += len(parts)
+        out.append((" ".join(dict.fromkeys(typed for _, typed in chunk)), " ".join(parts)))
+    return out
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,18 +101,12 @@ def run(args: argparse.Namespace) -> int:
     learner = Learner.load(args.model)
     rows: dict[str, str] = {}  # each row's label (the word as asked) -> the word it is read as
     if args.words is not None:  # read as a command is: "RED" is red, "chair." chair; "next to" stays spaced, as
-        from groundlang.grammar.parser import tokenise  # a preposition's row sends it to the preposition table
-
-        for w in args.words:
-            tokens = [t.replace("_", " ") for t in tokenise(w, learner.word_lexicon) if any(c.isalnum() for c in t)]
-            if not tokens:
+        for w in args.words:  # a preposition's row sends it to the preposition table
+            labelled = _as_read(w, learner.word_lexicon)
+            if not labelled:
                 raise ValueError(f"--words {w!r}: no word in it; give the words to show, e.g. --words red room")
-            # a word file's synonym is read as its word ("crimson" as red): a row of its own says so
-            form = " ".join(w.lower().split())
-            if form in learner.word_lexicon.synonyms and len(tokens) == 1:
-                rows.setdefault(form, tokens[0])
-            else:
-                rows.update((t, t) for t in tokens if t not in rows)
+            for label, token in labelled:  # a word file's synonym ("crimson", "east of") labels its word's row
+                rows.setdefault(label, token)
         args.words = list(dict.fromkeys(rows.values()))
     prepositions = learned = preposition_tasks(learner.globals, learner.vocab, top=args.top)
     if args.words:  # a multiword preposition is one token: "next to" is next_to
@@ -101,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         print(json_text({label: [[t, p] for t, p in lexicon.get(w, [])] for label, w in rows.items()}))
         return 0
     shown_as = {label: label if label == word else f"{label} = {word}" for label, word in rows.items()}
-    width = max([16, *(len(shown) + 1 for shown in shown_as.values())])  # "biggest = largest" fits its column
+    width = max([16, *(_columns(shown) + 1 for shown in shown_as.values())])  # "biggest = largest" fits its column
     print(f"{WORD_HEADING:<{width}} {MEANINGS_HEADING}")
     for label, word in rows.items():
         meanings = lexicon.get(word, [])
@@ -112,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
                 or ("(a preposition: see the table below)" if preposition
                     else f"(unknown word alone; learned within {', '.join(within[:3])})" if within
                     else "(unknown word)"))
-        print(f"{shown_as[label]:<{width}} {text}")  # "crimson = red": read as red
+        print(f"{_padded(shown_as[label], width)} {text}")  # "crimson = red": read as red
     if prepositions:  # relations are learned there, not as a preposition word's tokens above
         print()
         _print_prepositions(prepositions, learner)
