@@ -27,6 +27,18 @@ agent(agent0). at(agent0, 3, 2).
 AGENT_IN_DOOR = "agent(agent0). at(agent0, 4, 2). toy(block0). colour(block0, red). shape(block0, moon). at(block0, 1, 1)."
 
 
+# The Williams domain's three rooms (tests/fixtures/williams2018/one.state), room0's colour given.
+WILLIAMS = ("domain.lp", "pfs.lp", "domains/williams2018.lp")
+THREE_ROOMS = """
+palette_colour(red; green; blue; yellow). palette_shape(chair; box).
+room(room0). rect(room0, 0, 4, 4, 0). colour(room0, {room0}).
+room(room1). rect(room1, 4, 4, 8, 0). colour(room1, red).
+room(room2). rect(room2, 0, 8, 8, 4). colour(room2, green).
+door(door0). rect(door0, 2, 4, 2, 4). door(door1). rect(door1, 6, 4, 6, 4).
+agent(agent0). at(agent0, 2, 2). toy(block0). colour(block0, red). shape(block0, chair). at(block0, 2, 6).
+"""
+
+
 @lru_cache(maxsize=None)
 def program(*names: str) -> Program:
     return Program(tuple(package_source(n) for n in names))
@@ -83,6 +95,17 @@ CASES = [
       "pf(position,agentTouchingToy,(agent,toy))", "pf(colour,roomIs(darkGray),(room,))",
       "pf(colour,toyIs(red),(toy,))", "pf(shape,toyIs(moon),(toy,))", "pf(spatial,doorWestOfAgent,(door,))"],
      ["pf(shape,toyIs(red),(toy,))", "pf(colour,toyIs(star),(toy,))", "pf(position,roomIs(green),(room,))"]),
+    # a superlative among the rooms of one colour holds only where another room has that colour: room2 and room0
+    # are green (areas 21 and 9), room1 alone red; a red chair is no room of red's
+    ("superlatives of a colour compare rooms of that colour", WILLIAMS, THREE_ROOMS.format(room0="green"),
+     ["holds(roomIsLargestOfItsColour,(room2,))", "holds(roomIsSmallestOfItsColour,(room0,))",
+      "holds(roomIsLargest,(room2,))", "holds(roomIsSmallest,(room0,))", "holds(roomIsSmallest,(room1,))"],
+     ["holds(roomIsLargestOfItsColour,(room0,))", "holds(roomIsSmallestOfItsColour,(room2,))",
+      "holds(roomIsLargestOfItsColour,(room1,))", "holds(roomIsSmallestOfItsColour,(room1,))"]),
+    ("no superlative of a colour no other room has", WILLIAMS, THREE_ROOMS.format(room0="blue"),
+     ["holds(roomIs(blue),(room0,))", "holds(roomIsLargest,(room2,))"],
+     [f"holds(roomIs{size}OfItsColour,({room},))" for size in ("Largest", "Smallest")
+      for room in ("room0", "room1", "room2")]),
 ]
 
 
