@@ -58,7 +58,8 @@ class PairCrossValidation:
         sizes = [fold.train_commands for fold in self.folds]
         lines = [f"{len(self.folds)} folds by text, each trained on the others' commands ({min(sizes)} to "
                  f"{max(sizes)} commands; {p.demonstrations}, layouts {p.layouts}); every text held out once"
-                 + (f" but the development split's (the first {self.beyond:g} of the texts), which no fold reads"
+                 + (f" but the development split's (the texts hashing into the first {self.beyond:g} of the range), "
+                    "which no fold reads"
                     if self.beyond else ""),
                  "fold  held out  per execution            per command"]
         for k, fold in enumerate(self.folds):
@@ -99,13 +100,20 @@ def cross_validate_pairs(commands: list[Command], folds: int, library, workers: 
         raise ValueError(f"--folds {folds}: expected 2 to {MAX_FOLDS} folds")
     held = fold_indices(commands, folds, beyond)
     in_folds = sum(map(len, held))
+    if beyond and not in_folds:
+        raise ValueError(f"no text hashes beyond the development split (the first {beyond:g} of the range): "
+                         "nothing to cross-validate; set aside a smaller --holdout")
+    texts = len({commands[i].text.strip().lower() for fold in held for i in fold})
+    where = "beyond the development split" if beyond else "in the corpus"
     for k, indices in enumerate(held):
         if not indices:
-            fewer = "use fewer folds" if folds > 2 else "the corpus has one text: nothing to hold out by text"
+            fewer = (f"one text {where}: nothing to hold out by text" if texts == 1 else
+                     "use fewer folds" if texts >= folds else f"{texts} texts {where}: use at most {texts} folds")
             raise ValueError(f"fold {k} of {folds} holds out no command (no text falls in it): {fewer}")
         if len(indices) == in_folds:
-            every = "beyond the development split" if beyond else "(one text)"
-            raise ValueError(f"fold {k} of {folds} holds out every command {every}: nothing to train on")
+            raise ValueError(f"fold {k} of {folds} holds out every command {where} (its "
+                             f"{'one text hashes' if texts == 1 else f'{texts} texts all hash'} into that fold): "
+                             "nothing to train on")
     started = time.perf_counter()
     context = {"commands": commands, "held": held, "library": library, "options": options,
                "min_confidence": min_confidence}

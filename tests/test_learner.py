@@ -241,6 +241,8 @@ def test_cli_train_follow_lexicon(tmp_path, capsys):
     assert set(shown) == {"red", "room"} and shown["red"][0][0] == "roomIsRed"
     assert main(["--quiet", "lexicon", str(model), "--words", " "]) == 2
     assert "--words ' ': no word in it" in capsys.readouterr().err
+    assert main(["--quiet", "lexicon", str(model), "--words"]) == 2  # an empty list is not "every word"
+    assert "--words: no word given" in capsys.readouterr().err
     # what a preposition says of the lifted task: P(L | preposition), every task of the library once
     assert main(["--quiet", "lexicon", str(model), "--prepositions", "--json", "--words", "to", "into"]) == 0
     said = json.loads(capsys.readouterr().out)
@@ -395,6 +397,22 @@ def test_lexicon_says_which_word_a_synonym_is_read_as(tmp_path, capsys):
     # the label, a column's margin and the separating space before the meanings, in screen columns
     starts = [len(rows[0][:rows[0].index("roomIsRed")]) + len(wide), rows[1].index("roomIsRed")]
     assert starts[0] == starts[1] == 2 * len(wide) + len(" = red") + 2
+
+
+def test_lexicon_rows_are_labelled_by_the_words_as_typed():
+    """``lexicon --words``: each row is the word read, labelled as typed where a word file's synonym reads it
+    otherwise; where one typed word would label two rows, the rows are the words read."""
+    from groundlang.commands.lexicon import _as_read
+    from groundlang.model.domain_words import domain_lexicon
+
+    words = domain_lexicon({"SYNONYM": ["nextto=next_to", "crimson=red", "east=right"]})
+    assert _as_read("stand East of the chair.", words) == [
+        ("stand", "stand"), ("east of", "right of"), ("the", "the"), ("chair", "chair")]
+    assert _as_read("go nextto the crimson chair", words) == [
+        ("go", "go"), ("nextto", "next to"), ("the", "the"), ("crimson", "red"), ("chair", "chair")]
+    # after "the", "next" heads a noun phrase and is not joined: "nextto" is read as two words, each its own row
+    assert _as_read("the nextto chair", words) == [("the", "the"), ("next", "next"), ("to", "to"), ("chair", "chair")]
+    assert _as_read("?!", words) == []
 
 
 def test_confidence_is_how_likely_what_was_meant_holds_where_following_ends(corpus, learner):

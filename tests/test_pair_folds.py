@@ -115,7 +115,7 @@ def test_folds_in_two_processes_give_the_rows_of_one(tmp_path):
     (["--folds", "2", "--test", str(SMALL)], "pass one of --test TEST.bdm, --holdout F and --folds K"),
     (["--folds", "2", "--tuning"], "--tuning splits the training side of --holdout F"),
     # the fixture's two texts hash to about 0.31 and 0.59: of 5 folds, fold 0 holds out neither
-    (["--folds", "5"], "fold 0 of 5 holds out no command (no text falls in it): use fewer folds"),
+    (["--folds", "5"], "fold 0 of 5 holds out no command (no text falls in it): 2 texts in the corpus: use at most 2 folds"),
 ])
 def test_evaluate_with_folds_refuses_in_one_line(args, message):
     run = _cli("evaluate", "--corpus", str(SMALL), *args)
@@ -180,10 +180,28 @@ def test_evaluate_with_tuning_folds_says_what_it_set_aside(tmp_path):
     out = tmp_path / "tuning_folds.json"
     run = _cli("evaluate", "--corpus", str(SMALL), "--folds", "2", "--holdout", "0.05", "--tuning", "--json", str(out))
     assert run.returncode == 0, run.stderr
-    assert "but the development split's (the first 0.05 of the texts), which no fold reads" in run.stdout
+    assert "but the development split's (the texts hashing into the first 0.05 of the range), which no fold reads" in run.stdout
     data = json.loads(out.read_text())
     assert data["development_split_set_aside"] == 0.05 and [f["held_out_commands"] for f in data["folds"]] == [1, 1]
-    # set aside 0.35, both texts fall in the first fold: one line, nothing trained
+    # set aside 0.35, the text at 0.31 is in the development split and the one at 0.59 alone in the folds (in
+    # fold 0): one line, nothing trained
     run = _cli("evaluate", "--corpus", str(SMALL), "--folds", "2", "--holdout", "0.35", "--tuning")
     assert run.returncode == 2 and run.stderr.count("\n") == 1, run.stderr
-    assert "fold 0 of 2 holds out every command beyond the development split: nothing to train on" in run.stderr
+    assert ("fold 0 of 2 holds out every command beyond the development split (its one text hashes into that "
+            "fold): nothing to train on") in run.stderr
+    for holdout, folds, message in [("0.6", "2", "no text hashes beyond the development split (the first 0.6 of "
+                                     "the range): nothing to cross-validate; set aside a smaller --holdout"),
+                                    ("0.05", "3", "2 texts beyond the development split: use at most 2 folds")]:
+        run = _cli("evaluate", "--corpus", str(SMALL), "--folds", folds, "--holdout", holdout, "--tuning")
+        assert run.returncode == 2 and message in run.stderr and run.stderr.count("\n") == 1, run.stderr
+    run = _cli("evaluate", "--corpus", str(SMALL), "--folds", "2", "--holdout", "0.05", "--tuning", "--test", str(SMALL))
+    assert run.returncode == 2 and "pass one of --test TEST.bdm, --holdout F and --folds K" in run.stderr, run.stderr
+
+
+def test_a_fold_holding_every_text_says_how_many(monkeypatch):
+    from groundlang.pair_folds import cross_validate_pairs
+
+    two = [c for c in _many() if fold_of_text(c.text, 2) == 0][:2]
+    with pytest.raises(ValueError, match=r"^fold 0 of 2 holds out every command in the corpus \(its 2 texts all hash "
+                                         r"into that fold\): nothing to train on$"):
+        cross_validate_pairs(two, 2, library=None)

@@ -90,6 +90,8 @@ def _as_read(words: str, word_lexicon) -> list[tuple[str, str]]:
             return [(t.replace("_", " "), t.replace("_", " ")) for t in tokens]
         i += len(parts)
         out.append((" ".join(dict.fromkeys(typed for _, typed in chunk)), " ".join(parts)))
+    if len({label for label, _ in out}) < len({pair for pair in out}):  # one typed word read as two rows
+        return [(t.replace("_", " "), t.replace("_", " ")) for t in tokens]
     return out
 
 
@@ -100,6 +102,9 @@ def run(args: argparse.Namespace) -> int:
 
     learner = Learner.load(args.model)
     rows: dict[str, str] = {}  # each row's label (the word as asked) -> the word it is read as
+    if args.words == []:  # "--words $(cat empty-file)": showing every word would answer another question
+        raise ValueError("--words: no word given; give the words to show, e.g. --words red room (or leave out "
+                         "--words for every word)")
     if args.words is not None:  # read as a command is: "RED" is red, "chair." chair; "next to" stays spaced, as
         for w in args.words:  # a preposition's row sends it to the preposition table
             labelled = _as_read(w, learner.word_lexicon)
