@@ -143,9 +143,10 @@ class Learner:
 
         return observations(self, instances, progress)
 
-    def _command_observation(self, command: str, state: State) -> Observation:
+    def _command_observation(self, command: str, state: State, held: bool = False) -> Observation:
         readings = tuple(parse(command, weights=self.lm.parser_weights, word_lexicon=self.word_lexicon))
-        return Observation(tuple(readings[0].logical_form.words), readings, tuple(self._interpretations(state)))
+        return Observation(tuple(readings[0].logical_form.words), readings,
+                           tuple(self._interpretations(state, demonstrated=held)))
 
     # ----------------------------------------------------------------- training
     def _schema(self, palette):
@@ -219,15 +220,18 @@ class Learner:
         """TypeError for arguments of the wrong type; ValueError for a state of a palette not trained on."""
         check_state(self.palettes, method, command, state)
 
-    def posterior(self, command: str, state: State) -> Posterior:
+    def posterior(self, command: str, state: State, held: bool = False) -> Posterior:
         """Posterior over interpretations of ``command`` in ``state`` from the words, given (with the
         language model's ``achievable_goals``, the default) that the goal can be reached from ``state``.
+        With ``held`` goals that already hold in ``state`` are offered too, as for a demonstration that
+        leaves and comes back: what the words say of them ("go to the blue room" said in it), which
+        following sets aside (a goal that holds at the start asks nothing).
 
         TypeError for a non-string command or a non-State state; ValueError when the state's palette
         is not one the model was trained on."""
         self._require_fitted()
         self._check_state("posterior", command, state)
-        obs = self._command_observation(command, state)
+        obs = self._command_observation(command, state, held)
         batch = self.lm.encode([obs], self.vocab)
         # The interpretation and the reading: the two sites the model enumerates per command.
         probs, structures = local_posteriors(batch, self.lm, self.globals, use_behaviour=False)

@@ -451,3 +451,25 @@ def test_confidence_is_how_likely_what_was_meant_holds_where_following_ends(corp
         assert alone.confidence == alone.posterior.confidence
     finally:
         learner.lm.success_confidence = True
+
+
+def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys):
+    """"go to the red room" said in it: following sets the goal aside (it asks nothing), and without a word
+    the interpretations would leave out the room named; follow says it is already true."""
+    model = tmp_path / "m"
+    assert main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(model)]) == 0
+    layout = (EXAMPLES / "novel_a.state").read_text().split(" agent,")[0]
+    inside, outside = tmp_path / "inside.state", tmp_path / "outside.state"
+    inside.write_text(layout + " agent,3,3\n")  # in the red room, room2
+    outside.write_text(layout + " agent,3,8\n")  # in the blue room, room0
+    capsys.readouterr()
+    follow = ["--quiet", "follow", "go to the red room", "--model", str(model), "--palette", "sokoban", "--env"]
+    main([*follow, str(inside), "--json"])
+    done = json.loads(capsys.readouterr().out)["already_true"]
+    assert done["goal"] == "agentInRoom(agent0, room2)" and done["probability"] > 0.9
+    main([*follow, str(inside)])
+    assert re.search(r"^already true here: the agent in the red room .*agentInRoom\(agent0, room2\); the words "
+                     r"most probably ask for it \(0\.9\d of their reading", capsys.readouterr().out, re.M)
+    # where it is not true yet, nothing is said
+    assert main([*follow, str(outside), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["already_true"] is None

@@ -164,6 +164,17 @@ def _out_of_reach(result, names) -> str | None:
             "interpretations above are what can")
 
 
+def _already_true(learner, command: str, state) -> tuple[tuple, float] | None:
+    """The goal the words most probably ask for, with goals that hold at the start offered too, and its
+    probability, where that goal holds at the start: following sets such a goal aside (it asks nothing), so
+    without a word the interpretations shown would leave out what was named ("go to the blue room" said in it)."""
+    from groundlang.labels import goal_holds
+
+    held = learner.posterior(command, state, held=True)
+    goal = held.best_goal
+    return (goal, held.confidence) if goal and goal_holds(goal, state, learner.library) else None
+
+
 def _refuse(result, args) -> None:
     # with --json nothing is asked on the terminal: the question and its choices are in the JSON printed
     how = ("the question and its choices are in the JSON (--ask asks only without --json)" if args.ask and args.json
@@ -237,6 +248,7 @@ def run(args: argparse.Namespace) -> int:
             _learn(learner, result, answered, state, args.model)
         result = answered
     goals = result.posterior.goals()[: args.top]
+    done = _already_true(learner, args.command_text, state)
     if args.out and not result.abstained:
         from groundlang.render import picture_title, save_picture
 
@@ -252,6 +264,9 @@ def run(args: argparse.Namespace) -> int:
             "best_goal_probability": result.posterior.confidence,
             "margin": result.posterior.margin,
             "out_of_reach": result.posterior.out_of_reach,
+            "already_true": None if done is None else {
+                "goal": format_goal(done[0], names), "words": renamed_words(goal_phrase(done[0], state, learner.library),
+                                                                            names), "probability": done[1]},
             "abstained": result.abstained,
         }
         if result.abstained:
@@ -285,6 +300,10 @@ def run(args: argparse.Namespace) -> int:
               f"{_down(result.posterior.confidence, places)}, {margin})")
     if (beyond := _out_of_reach(result, names)) is not None:
         print(beyond)
+    if done is not None:
+        print(f"already true here: {labelled_goal(done[0], state, learner.library, names)}; the words most probably "
+              f"ask for it ({_down(done[1], places)} of their reading with goals that hold at the start offered too), "
+              "but such a goal asks nothing: the interpretations above are the rest")
     if result.abstained:
         _print_question(result, state, learner.library, names, places)
         _refuse(result, args)
