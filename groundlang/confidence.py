@@ -296,7 +296,7 @@ def format_calibration(report: dict, title: str = "confidence", unit: str = "com
     lines = [f"{title} ({report['n']} {counted}): expected calibration error {report['ece']:.3f}, "
              f"AUROC for correctness {separation}, mean confidence {report['mean_confidence']:.3f}"]
     for row in report["at_coverage"]:
-        lines.append(f"  acting on the {row['reached']:.1%} most confident (asked {row['coverage']:.0%}): "
+        lines.append(f"  acting on the {row['reached']:.1%} most confident (target {row['coverage']:.0%}): "
                      f"accuracy {row['accuracy']:.2%}")
     if "threshold" in report:
         t = report["threshold"]
