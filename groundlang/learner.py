@@ -224,13 +224,15 @@ class Learner:
         """Posterior over interpretations of ``command`` in ``state`` from the words, given (with the
         language model's ``achievable_goals``, the default) that the goal can be reached from ``state``.
         With ``held`` goals that already hold in ``state`` are offered too, as for a demonstration that
-        leaves and comes back: what the words say of them ("go to the blue room" said in it), which
-        following sets aside (a goal that holds at the start asks nothing).
+        leaves and comes back, and nothing is conditioned on what can be done: what the words say ("go to
+        the blue room" said in it), of which following sets such goals aside (they ask nothing).
 
         TypeError for a non-string command or a non-State state; ValueError when the state's palette
         is not one the model was trained on."""
         self._require_fitted()
         self._check_state("posterior", command, state)
+        if not isinstance(held, bool):
+            raise TypeError(f"posterior: held must be True or False, not {type(held).__name__}")
         obs = self._command_observation(command, state, held)
         batch = self.lm.encode([obs], self.vocab)
         # The interpretation and the reading: the two sites the model enumerates per command.
@@ -243,7 +245,7 @@ class Learner:
         space = self._world.space(state)
         masks = self._world.goal_masks(space)
         reach = (0.0, None)
-        if self.lm.achievable_goals:
+        if self.lm.achievable_goals and not held:
             goals = [i.goal for i in obs.interpretations]
             out = unachievable_goals(set(goals), space, masks=masks)  # once, for both
             reach = out_of_reach(probs, goals, out)

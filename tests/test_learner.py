@@ -473,3 +473,30 @@ def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys)
     # where it is not true yet, nothing is said
     assert main([*follow, str(outside), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["already_true"] is None
+    # nor of a negated command, read without its negation (negation is no task): it asks for no such thing
+    main(["--quiet", "follow", "do not go to the red room", "--model", str(model), "--palette", "sokoban", "--env",
+          str(inside), "--json"])
+    assert json.loads(capsys.readouterr().out)["already_true"] is None
+
+
+def test_the_words_reading_of_what_holds_conditions_on_nothing(learner, tmp_path):
+    """``posterior(held=True)``: what the words say, goals that hold at the start offered; a room the agent
+    cannot reach keeps its share (conditioning on what can be done would hand it to the room it is in)."""
+    from groundlang.logic.atoms import Atom
+
+    def read_state_text(line: str, palette: str):
+        (tmp_path / "s.state").write_text(line + "\n")
+        return read_state_file(tmp_path / "s.state", palette)
+
+    layout = (EXAMPLES / "novel_a.state").read_text().split(" agent,")[0]
+    inside = read_state_text(layout + " agent,3,3", "sokoban")  # in the red room
+    held = learner.posterior("go to the red room", inside, held=True)
+    assert held.best_goal == (Atom("agentInRoom", ("agent0", "room2")),) and held.confidence > 0.9
+    assert learner.posterior("go to the red room", inside).best_goal != held.best_goal  # set aside when following
+    walled = read_state_text(layout.replace("door,3,5,3,5 ", "").replace("door,9,5,9,5 ", "") + " agent,3,8",
+                             "sokoban")  # in the blue room, no door to the red room: out of reach
+    assert learner.posterior("go to the red room", walled).out_of_reach > 0.9
+    said = learner.posterior("go to the red room", walled, held=True)
+    assert said.best_goal == (Atom("agentInRoom", ("agent0", "room2")),) and said.out_of_reach == 0.0
+    with pytest.raises(TypeError, match="held must be True or False, not str"):
+        learner.posterior("go to the red room", inside, held="yes")

@@ -167,12 +167,24 @@ def _out_of_reach(result, names) -> str | None:
 def _already_true(learner, command: str, state) -> tuple[tuple, float] | None:
     """The goal the words most probably ask for, with goals that hold at the start offered too, and its
     probability, where that goal holds at the start: following sets such a goal aside (it asks nothing), so
-    without a word the interpretations shown would leave out what was named ("go to the blue room" said in it)."""
+    without a word the interpretations shown would leave out what was named ("go to the blue room" said in it).
+    None for a command with a negated clause: "do not go to the blue room" is read as a task without its
+    negation (negation is no task), and what it asks for is not what it says."""
     from groundlang.labels import goal_holds
 
     held = learner.posterior(command, state, held=True)
+    if any(c.negated for r in held.readings for c in r.logical_form.clauses):
+        return None
     goal = held.best_goal
     return (goal, held.confidence) if goal and goal_holds(goal, state, learner.library) else None
+
+
+def _print_already_true(done, state, library, names, places: int) -> None:
+    from groundlang.wording import labelled_goal
+
+    print(f"already true here: {labelled_goal(done[0], state, library, names)}; the words most probably "
+          f"ask for it ({_down(done[1], places)} of their reading with goals that hold at the start offered too), "
+          "but such a goal asks nothing: the interpretations below are the rest")
 
 
 def _refuse(result, args) -> None:
@@ -238,6 +250,11 @@ def run(args: argparse.Namespace) -> int:
         raise NoTaskError(f"{args.env}: {exc}") from None
     if not args.json:
         print(f"command: {as_typed(args.command_text)}")
+    # what the words say of the start, from the model as it was: before an answer is asked for or learned
+    done = _already_true(learner, args.command_text, state)
+    places = _places(args.min_confidence)
+    if done is not None and not args.json:  # before a question, whose choices leave it out
+        _print_already_true(done, state, learner.library, names, places)
     answered = None
     if result.abstained and args.ask and not args.json:
         answered = _ask(learner, result, state, args.max_steps, names)
@@ -248,7 +265,6 @@ def run(args: argparse.Namespace) -> int:
             _learn(learner, result, answered, state, args.model)
         result = answered
     goals = result.posterior.goals()[: args.top]
-    done = _already_true(learner, args.command_text, state)
     if args.out and not result.abstained:
         from groundlang.render import picture_title, save_picture
 
@@ -286,7 +302,6 @@ def run(args: argparse.Namespace) -> int:
     print("interpretations:")
     for goal, p in goals:
         print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library, names)}")
-    places = _places(args.min_confidence)
     margin = f"margin {_down(result.posterior.margin, places)} over the next goal that differs"
     if answered is not None:  # what the words alone said, before the answer chose
         print(f"acting on the answer (from the words alone: the most probable goal "
@@ -300,10 +315,6 @@ def run(args: argparse.Namespace) -> int:
               f"{_down(result.posterior.confidence, places)}, {margin})")
     if (beyond := _out_of_reach(result, names)) is not None:
         print(beyond)
-    if done is not None:
-        print(f"already true here: {labelled_goal(done[0], state, learner.library, names)}; the words most probably "
-              f"ask for it ({_down(done[1], places)} of their reading with goals that hold at the start offered too), "
-              "but such a goal asks nothing: the interpretations above are the rest")
     if result.abstained:
         _print_question(result, state, learner.library, names, places)
         _refuse(result, args)
