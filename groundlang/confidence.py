@@ -23,7 +23,7 @@ import numpy as np
 
 from groundlang.inference.end_states import distances
 from groundlang.logic.atoms import Atom
-from groundlang.model.features import atoms_hold_along
+from groundlang.model.features import atoms_hold, atoms_hold_along
 from groundlang.model.pf_tables import library_pf_tables
 from groundlang.model.statespace import StateSpace
 
@@ -304,3 +304,22 @@ def format_calibration(report: dict, title: str = "confidence", unit: str = "com
         lines.append(f"  acting at confidence >= {t['min_confidence']:g} (--min-confidence): "
                      f"{t['acted']} of {report['n']} ({t['coverage']:.1%}), {accuracy}")
     return "\n".join(lines)
+
+
+def held_goals_success(held, success: float, end, library) -> float:
+    """The confidence of following (``success``: the share of what was meant its end satisfies, goals that hold
+    at the start set aside) counting what the words say of those goals: ``held`` is the command's posterior
+    with them offered and conditioned on nothing (``Learner.posterior(..., held=True)``). Following sets them
+    aside, since they ask nothing, so their share counts for the end only where such a goal still holds there::
+
+        (1 - share) * success + sum_{g holds at the start} P(g | words) [g holds at the end]
+
+    ("go to the blue room" said in it, 0.95 the blue room: walking to the only other room is not 0.99 sure)."""
+    wholly = {i.goal for i in held.interpretations if len(i.task.holding) == len(i.task.goal)}
+    at_start = [(goal, p) for goal, p in held.goals() if goal in wholly]
+    if not at_start:
+        return success
+    share = sum(p for _, p in at_start)
+    tables = library_pf_tables(end.layout, library)
+    kept = sum(p for goal, p in at_start if atoms_hold(end, goal, tables).all())
+    return min(1.0, max(0.0, (1.0 - share) * success + kept))

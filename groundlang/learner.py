@@ -17,7 +17,7 @@ import torch
 
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, answer_text, choose, clear_choice, competing, question, unknown_words
-from groundlang.confidence import given_achievable, group_goals, out_of_reach, unachievable_goals
+from groundlang.confidence import given_achievable, group_goals, held_goals_success, out_of_reach, unachievable_goals
 from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at, nearest_of, success_at
 from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
@@ -283,6 +283,9 @@ class Learner:
             acted = self._act(command, state, post, goal, max_steps, target, (goals, masks, post.best_goal))
         else:
             acted = self._act(command, state, post, post.best_goal, max_steps)
+        if acted.success is not None and self.lm.held_goals_confidence:
+            acted.success = held_goals_success(self.posterior(command, state, held=True), acted.success,
+                                               acted.final_state, self.library)
         # Not where nothing can be done: no reading is within reach, so no answer could help.
         if min_confidence is not None and acted.confidence < min_confidence and acted.reason != "unreachable":
             choices = competing(post.goal_groups())

@@ -42,7 +42,8 @@ class LanguageModel:
     def __init__(self, word_concentration: float = 1.05, null_token: bool = True, schema_names: bool = False,
                  achievable_goals: bool = True, expected_success: bool = True, step_cost: float = 0.005,
                  end_habits: bool = True, moved_toys: bool = False, habits_made_true: bool = False,
-                 bound_habits: bool = True, habit_prior: str = "absent", success_confidence: bool = True):
+                 bound_habits: bool = True, habit_prior: str = "absent", success_confidence: bool = True,
+                 held_goals_confidence: bool = False):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
         "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
         ``name_share``, and its learned words otherwise: the names a domain's author gives are words
@@ -66,7 +67,11 @@ class LanguageModel:
         (``EndHabits.rate``). ``success_confidence``: where following ends in a state chosen over the whole
         posterior (``expected_success``), its confidence is the posterior probability that what was meant
         holds there, ``sum_g P(g | words) [s satisfies g]`` (ending right of the chair satisfies "next to" as
-        well), not only the probability of the goal said to be acted on (``FollowResult.confidence``)."""
+        well), not only the probability of the goal said to be acted on (``FollowResult.confidence``).
+        ``held_goals_confidence`` (off: ABLATIONS.md): with ``success_confidence``, the words' share on goals that already hold at
+        the start (which following sets aside: they ask nothing) counts against that confidence, each such
+        goal for where following ends only if it still holds there ("go to the blue room" said in it is not
+        sure of walking to the only other room)."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
@@ -87,6 +92,7 @@ class LanguageModel:
                              f"not {habit_prior!r:.40}")
         self.habit_prior = habit_prior
         self.success_confidence = success_confidence
+        self.held_goals_confidence = held_goals_confidence
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
@@ -94,7 +100,8 @@ class LanguageModel:
                 "expected_success": self.expected_success, "step_cost": self.step_cost,
                 "end_habits": self.end_habits, "moved_toys": self.moved_toys,
                 "habits_made_true": self.habits_made_true, "bound_habits": self.bound_habits,
-                "habit_prior": self.habit_prior, "success_confidence": self.success_confidence}
+                "habit_prior": self.habit_prior, "success_confidence": self.success_confidence,
+                "held_goals_confidence": self.held_goals_confidence}
 
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""

@@ -132,6 +132,14 @@ def test_a_model_saved_before_success_confidence_asks_as_it_did(examples):
     assert Learner.from_state_dict(state).lm.success_confidence is False
 
 
+def test_a_model_saved_before_held_goals_confidence_asks_as_it_did(examples):
+    learner = Learner(get_language_model("parse", held_goals_confidence=True), steps=5).fit(examples[:4])
+    state = learner.state_dict()
+    assert Learner.from_state_dict(state).lm.held_goals_confidence is True
+    del state["language_model_settings"]["held_goals_confidence"]
+    assert Learner.from_state_dict(state).lm.held_goals_confidence is False
+
+
 @pytest.mark.parametrize("name", SWITCHES)
 def test_train_accepts_each_switch_off_and_refuses_a_wrong_value_in_one_line(name, tmp_path, capsys):
     model = tmp_path / "model"

@@ -24,7 +24,8 @@ def test_settings_make_the_model_they_name():
                                                                         "expected_success": True, "step_cost": 0.005,
                                                                         "end_habits": True, "moved_toys": False,
                                                                         "habits_made_true": False, "bound_habits": True,
-                                                                        "habit_prior": "absent", "success_confidence": True}
+                                                                        "habit_prior": "absent", "success_confidence": True,
+                                                                        "held_goals_confidence": False}
 
 
 @pytest.mark.parametrize("name, settings, message", [

@@ -12,6 +12,7 @@ from groundlang.cli import main
 from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
 from groundlang.labels import goal_holds, label_for, read_labels
 from groundlang.learner import Learner, NotFittedError
+from groundlang.model.language_models import get_language_model
 from groundlang.logic.atoms import format_goal
 from groundlang.model_io import ModelFormatError
 
@@ -500,3 +501,22 @@ def test_the_words_reading_of_what_holds_conditions_on_nothing(learner, tmp_path
     assert said.best_goal == (Atom("agentInRoom", ("agent0", "room2")),) and said.out_of_reach == 0.0
     with pytest.raises(TypeError, match="held must be True or False, not str"):
         learner.posterior("go to the red room", inside, held="yes")
+
+
+def test_the_words_share_on_what_already_holds_counts_against_following(learner, corpus, tmp_path):
+    """``held_goals_confidence`` (off by default): "go to the red room" said in it is 0.98 the room the agent is
+    in, a goal following sets aside; walking to another room is then not a confident reading of the words."""
+    from groundlang.confidence import held_goals_success
+
+    layout = (EXAMPLES / "novel_a.state").read_text().split(" agent,")[0]
+    (tmp_path / "inside.state").write_text(layout + " agent,3,3\n")  # in the red room
+    inside = read_state_file(tmp_path / "inside.state", "sokoban")
+    counting = Learner(get_language_model("parse", held_goals_confidence=True)).fit(corpus.instances)
+    result = counting.follow("go to the red room", inside, min_confidence=0.7)
+    held = counting.posterior("go to the red room", inside, held=True)
+    assert held.confidence > 0.9 and result.abstained and result.confidence < 0.1
+    # the share on the held goal counts only where following leaves it: an end still in the red room keeps it
+    assert held_goals_success(held, 0.5, inside, learner.library) == pytest.approx(
+        (1 - held.confidence) * 0.5 + held.confidence, abs=1e-6)
+    # off (the default), the confidence is where the end stands among the rest
+    assert learner.follow("go to the red room", inside).confidence > 0.45
