@@ -314,10 +314,12 @@ def held_goals_success(held, success: float, end, library) -> float:
 
         (1 - share) * success + sum_{g holds at the start} P(g | words) [g holds at the end]
 
-    ("go to the blue room" said in it, 0.95 the blue room: walking to the only other room is not 0.99 sure)."""
+    ("go to the blue room" said in it, 0.95 the blue room: walking to the only other room is not 0.99 sure).
+    Counted only where the words' most probable goal is one of them: where they most probably name another
+    goal, the share left on what holds is the reading's spread, not what was named."""
     wholly = {i.goal for i in held.interpretations if len(i.task.holding) == len(i.task.goal)}
     at_start = [(goal, p) for goal, p in held.goals() if goal in wholly]
-    if not at_start:
+    if not at_start or held.best_goal not in wholly:
         return success
     share = sum(p for _, p in at_start)
     tables = library_pf_tables(end.layout, library)
