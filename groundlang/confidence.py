@@ -306,6 +306,12 @@ def format_calibration(report: dict, title: str = "confidence", unit: str = "com
     return "\n".join(lines)
 
 
+def goals_held_at_start(held) -> set[tuple[Atom, ...]]:
+    """The goals of ``held`` (a posterior with goals that hold at the start offered, ``Learner.posterior(...,
+    held=True)``) that hold there as a whole: their groundings found every atom holding."""
+    return {i.goal for i in held.interpretations if len(i.task.holding) == len(i.task.goal)}
+
+
 def held_goals_success(held, success: float, end, library) -> float:
     """The confidence of following (``success``: the share of what was meant its end satisfies, goals that hold
     at the start set aside) counting what the words say of those goals: ``held`` is the command's posterior
@@ -317,7 +323,7 @@ def held_goals_success(held, success: float, end, library) -> float:
     ("go to the blue room" said in it, 0.95 the blue room: walking to the only other room is not 0.99 sure).
     Counted only where the words' most probable goal is one of them: where they most probably name another
     goal, the share left on what holds is the reading's spread, not what was named."""
-    wholly = {i.goal for i in held.interpretations if len(i.task.holding) == len(i.task.goal)}
+    wholly = goals_held_at_start(held)
     at_start = [(goal, p) for goal, p in held.goals() if goal in wholly]
     if not at_start or held.best_goal not in wholly:
         return success

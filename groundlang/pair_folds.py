@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 from groundlang.bdm import Command
 from groundlang.folds import prepare_worker, usable_workers
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE
-from groundlang.pair_corpus import fold_of_text
+from groundlang.pair_corpus import fold_of_text, text_position
 from groundlang.pair_evaluation import PairEvaluation, calibration_of_rows, evaluate_pairs
 
 __all__ = ["PairCrossValidation", "cross_validate_pairs", "pool", "MAX_FOLDS"]
@@ -103,7 +103,7 @@ def cross_validate_pairs(commands: list[Command], folds: int, library, workers: 
     if beyond and not in_folds:
         raise ValueError(f"no text hashes beyond the development split (the first {beyond:g} of the range): "
                          "nothing to cross-validate; set aside a smaller --holdout")
-    texts = len({commands[i].text.strip().lower() for fold in held for i in fold})
+    texts = len({text_position(commands[i].text) for fold in held for i in fold})  # a text as the folds cut them
     where = "beyond the development split" if beyond else "in the corpus"
     for k, indices in enumerate(held):
         if not indices:

@@ -170,13 +170,12 @@ def _already_true(learner, command: str, state) -> tuple[tuple, float] | None:
     without a word the interpretations shown would leave out what was named ("go to the blue room" said in it).
     None for a command with a negated clause: "do not go to the blue room" is read as a task without its
     negation (negation is no task), and what it asks for is not what it says."""
-    from groundlang.labels import goal_holds
+    from groundlang.confidence import goals_held_at_start
 
     held = learner.posterior(command, state, held=True)
     if any(c.negated for r in held.readings for c in r.logical_form.clauses):
         return None
-    goal = held.best_goal
-    return (goal, held.confidence) if goal and goal_holds(goal, state, learner.library) else None
+    return (held.best_goal, held.confidence) if held.best_goal in goals_held_at_start(held) else None
 
 
 def _print_already_true(done, state, library, names, places: int) -> None:

@@ -80,6 +80,7 @@ def _as_read(words: str, word_lexicon) -> list[tuple[str, str]]:
     from groundlang.grammar.parser import tokenise, typed_words
 
     tokens = [t for t in tokenise(words, word_lexicon) if any(c.isalnum() for c in t)]
+    unlabelled = [(t.replace("_", " "), t.replace("_", " ")) for t in tokens]
     pieces = [(piece, typed) for typed in typed_words(words) if any(c.isalnum() for c in typed)
               for piece in word_lexicon.read_as(typed)]
     out, i = [], 0
@@ -87,12 +88,10 @@ def _as_read(words: str, word_lexicon) -> list[tuple[str, str]]:
         parts = token.split("_")
         chunk = pieces[i:i + len(parts)]
         if [piece for piece, _ in chunk] != parts:
-            return [(t.replace("_", " "), t.replace("_", " ")) for t in tokens]
+            return unlabelled
         i += len(parts)
         out.append((" ".join(dict.fromkeys(typed for _, typed in chunk)), " ".join(parts)))
-    if len({label for label, _ in out}) < len({pair for pair in out}):  # one typed word read as two rows
-        return [(t.replace("_", " "), t.replace("_", " ")) for t in tokens]
-    return out
+    return unlabelled if len({label for label, _ in out}) < len(set(out)) else out  # one typed word, two rows
 
 
 def run(args: argparse.Namespace) -> int:
