@@ -97,11 +97,22 @@ CASES = [
      ["pf(shape,toyIs(red),(toy,))", "pf(colour,toyIs(star),(toy,))", "pf(position,roomIs(green),(room,))"]),
     # a superlative among the rooms of one colour holds only where another room has that colour: room2 and room0
     # are green (areas 21 and 9), room1 alone red; a red chair is no room of red's
+    # and a superlative picks out one: room0 and room1 tie for smallest (area 9), so neither is "the smallest room"
     ("superlatives of a colour compare rooms of that colour", WILLIAMS, THREE_ROOMS.format(room0="green"),
      ["holds(roomIsLargestOfItsColour,(room2,))", "holds(roomIsSmallestOfItsColour,(room0,))",
-      "holds(roomIsLargest,(room2,))", "holds(roomIsSmallest,(room0,))", "holds(roomIsSmallest,(room1,))"],
+      "holds(roomIsLargest,(room2,))"],
      ["holds(roomIsLargestOfItsColour,(room0,))", "holds(roomIsSmallestOfItsColour,(room2,))",
-      "holds(roomIsLargestOfItsColour,(room1,))", "holds(roomIsSmallestOfItsColour,(room1,))"]),
+      "holds(roomIsLargestOfItsColour,(room1,))", "holds(roomIsSmallestOfItsColour,(room1,))",
+      "holds(roomIsSmallest,(room0,))", "holds(roomIsSmallest,(room1,))"]),
+    ("a tie among the rooms of one colour names none of them", WILLIAMS, THREE_ROOMS.format(room0="red"),
+     ["holds(roomIs(red),(room0,))", "holds(roomIs(red),(room1,))", "holds(roomIsLargest,(room2,))"],
+     [f"holds(roomIs{size}OfItsColour,({room},))" for size in ("Largest", "Smallest")
+      for room in ("room0", "room1", "room2")] + ["holds(roomIsSmallest,(room0,))", "holds(roomIsSmallest,(room1,))"]),
+    ("the smallest room where one is smaller than the others", WILLIAMS,
+     THREE_ROOMS.format(room0="blue").replace("rect(room0, 0, 4, 4, 0)", "rect(room0, 0, 4, 3, 0)")
+                                      .replace("rect(room1, 4, 4, 8, 0)", "rect(room1, 3, 4, 8, 0)"),
+     ["holds(roomIsSmallest,(room0,))", "holds(roomIsLargest,(room2,))"],
+     ["holds(roomIsSmallest,(room1,))", "holds(roomIsLargest,(room1,))", "holds(roomIsSmallest,(room2,))"]),
     ("no superlative of a colour no other room has", WILLIAMS, THREE_ROOMS.format(room0="blue"),
      ["holds(roomIs(blue),(room0,))", "holds(roomIsLargest,(room2,))"],
      [f"holds(roomIs{size}OfItsColour,({room},))" for size in ("Largest", "Smallest")
