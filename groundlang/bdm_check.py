@@ -17,6 +17,7 @@ from importlib.resources import files
 
 from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
 from groundlang.logic.tasks import TaskLibrary
+from groundlang.model.relevance import STATE_SOURCE, reading_states
 from groundlang.pair_tasks import command_task, reachable, text_agreement
 
 __all__ = ["check_bdm", "default_library", "is_corpus_library"]
@@ -53,12 +54,14 @@ def check_bdm(args: argparse.Namespace) -> int:
     # Everything is computed before anything is printed: a pair that cannot be read as a task (a layout
     # too large to tabulate) is then one error line, not a summary cut off by it.
     unreachable, unchecked = [], 0
-    for command, pair in pairs:
-        found = reachable(pair.start, pair.end)
-        if found is None:
-            unchecked += 1
-        elif not found:
-            unreachable.append((command, pair))
+    with reading_states():
+        for command, pair in pairs:
+            STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
+            found = reachable(pair.start, pair.end)
+            if found is None:
+                unchecked += 1
+            elif not found:
+                unreachable.append((command, pair))
     tasks = [command_task(c, library) for c in commands]
     empty = [c for c, task in zip(commands, tasks) if not task]
     print(f"corpus: {', '.join(map(str, paths))} (palette {palette})")

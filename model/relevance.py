@@ -32,7 +32,9 @@ too large, :func:`placement_sample` gives a seeded sample of placements.
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from functools import lru_cache
 
 import numpy as np
@@ -45,13 +47,28 @@ from .statespace import StateSpace, StateSpaceError, enumerate_states
 from .world import ACTION_DELTAS, State
 
 __all__ = ["AbstractStateSpace", "abstract_space", "abstract_space_uncached", "abstraction_bound", "announce",
-           "exact_fits", "relevant_toys", "state_space_for",
+           "STATE_SOURCE", "reading_states", "exact_fits", "relevant_toys", "state_space_for",
            "check_abstraction_possible", "pushes_scenery", "PlacementSample", "placement_sample"]
 
 logger = logging.getLogger(__name__)
 
 # (layout, max_states, message) already announced at info level, oldest first (bounded).
 _ANNOUNCED: dict = {}
+# Where the state being sized was read from ("part2.bdm, line 1234"), set by whoever reads states from a
+# file: an announced line then names the pair that needed it. A corpus's many pairs in one layout share
+# one line, so it names the first.
+STATE_SOURCE: ContextVar[str | None] = ContextVar("state_source", default=None)
+
+
+@contextmanager
+def reading_states() -> Iterator[None]:
+    """A loop over states read from files sets :data:`STATE_SOURCE` to each one's place inside this;
+    leaving it forgets the last, so that what runs afterwards is not said to come from there."""
+    token = STATE_SOURCE.set(None)
+    try:
+        yield
+    finally:
+        STATE_SOURCE.reset(token)
 
 
 class AbstractStateSpace(StateSpace):
@@ -272,6 +289,9 @@ def announce(layout, max_states: int, message: str, *args) -> None:
     _ANNOUNCED[layout, max_states, message] = None
     if len(_ANNOUNCED) > 256:
         _ANNOUNCED.pop(next(iter(_ANNOUNCED)))
+    source = STATE_SOURCE.get()
+    if source is not None:
+        message, args = "%s: " + message, (source, *args)
     logger.log(logging.DEBUG if seen else logging.INFO, message, *args)
 
 

@@ -313,3 +313,31 @@ def test_williams_goals_are_planned_for_in_a_16x16_layout_with_three_blocks(goal
     states, actions = rollout_states(space, path)
     assert path.reason == "goal" and replay(start, actions)[-1] == states[-1]
     assert goal_holds(atoms, states[-1], library)
+
+
+def test_a_log_line_names_the_pair_it_was_sized_for_and_only_while_reading(caplog):
+    from groundlang.model.relevance import STATE_SOURCE, announce, reading_states
+
+    with caplog.at_level(logging.DEBUG, logger="groundlang.model.relevance"):
+        with reading_states():
+            STATE_SOURCE.set("part2.bdm, line 262")
+            announce("layout-a", 5, "state space: %d states", 41006)
+            announce("layout-a", 5, "state space: %d states", 41006)  # again: at debug level, still named
+        announce("layout-b", 5, "state space: %d states", 202)
+    assert [r.getMessage() for r in caplog.records] == [
+        "part2.bdm, line 262: state space: 41006 states", "part2.bdm, line 262: state space: 41006 states",
+        "state space: 202 states"]
+    assert [r.levelno for r in caplog.records] == [logging.INFO, logging.DEBUG, logging.INFO]
+    assert STATE_SOURCE.get() is None
+
+
+def test_check_names_the_pair_whose_layout_needed_the_abstraction():
+    import subprocess
+    import sys
+
+    path = LARGE / "sixteen.bdm"
+    run = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(path)], capture_output=True,
+                         text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    said = [t for t in run.stderr.splitlines() if "state space: relevance abstraction" in t]
+    assert said and all(t.startswith(f"{path}, line 2: state space: relevance abstraction") for t in said), said
