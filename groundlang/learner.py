@@ -10,7 +10,7 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import torch
@@ -33,11 +33,11 @@ from groundlang.model.language_models import BagOfWords, LanguageModel, get_lang
 from groundlang.model.relevance import check_abstraction_possible
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
-from groundlang.learner_state import (check_count, check_model_parts, check_state, check_threshold, word_sources,
-                                       check_training_options, learner_from_state, learner_state)
+from groundlang.learner_state import (check_count, check_fit_arguments, check_model_parts, check_state, check_threshold,
+                                       word_sources, check_training_options, learner_from_state, learner_state)
 from groundlang.model_io import check_parameter_bound, read_model, write_model
 from groundlang.results import FollowResult, Posterior
-from groundlang.training_vocabulary import build_vocabulary, palette_schema, word_files_beside
+from groundlang.training_vocabulary import build_vocabulary, word_files_beside
 from groundlang.wording import goal_phrase
 
 __all__ = ["Learner", "Posterior", "FollowResult", "NotFittedError", "AnswerError", "DEFAULT_MIN_CONFIDENCE"]
@@ -149,9 +149,6 @@ class Learner:
                            tuple(self._interpretations(state, demonstrated=held)))
 
     # ----------------------------------------------------------------- training
-    def _schema(self, palette):
-        return palette_schema(self.library, palette)
-
     def _build_vocabulary(self, observations: Iterable[Observation], palettes: Iterable) -> Vocabulary:
         return build_vocabulary(observations, palettes, self.library, self.word_lexicon,
                                 relational=self.lm.relational_descriptions, keys=self.lm.phrase_keys(),
@@ -168,18 +165,7 @@ class Learner:
         vocabulary they were encoded with to stay in place, as does ``init``,
         which warm-starts the globals.
         """
-        if instances is None or isinstance(instances, (str, bytes)):
-            raise TypeError(f"fit: instances must be a sequence of corpus instances, not {type(instances).__name__}")
-        instances = list(instances)
-        if not instances:
-            raise ValueError("cannot fit on an empty corpus")
-        bad = next((x for x in instances if not isinstance(getattr(x, "initial_state", None), State)), None)
-        if bad is not None:
-            raise TypeError(f"fit: each instance needs command, initial_state, states and actions (a corpus "
-                            f"Instance); got {type(bad).__name__}")
-        check_count("fit", "steps", self.steps)
-        if init is not None and not (isinstance(init, Mapping) and all(isinstance(v, torch.Tensor) for v in init.values())):
-            raise TypeError(f"fit: init must map global names to tensors (a learner's globals), got {type(init).__name__}")
+        instances = check_fit_arguments(instances, self.steps, init)
         if batch is None:
             if observations is None:
                 observations = self.observe(instances, progress=progress)

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
+import torch
 
 from groundlang.inference.em import EM_ACCELERATIONS
 from groundlang.inference.end_habits import EndHabits
@@ -88,6 +89,23 @@ def check_training_options(steps, lr, seed, settings, em_acceleration, cache_dir
     if em_acceleration not in EM_ACCELERATIONS:
         raise ValueError(f"Learner: em_acceleration must be one of {', '.join(EM_ACCELERATIONS)}, "
                          f"got {em_acceleration!r}")
+
+
+def check_fit_arguments(instances, steps, init) -> list:
+    """``fit``'s instances as a list, after TypeError or ValueError for what it cannot train on."""
+    if instances is None or isinstance(instances, (str, bytes)):
+        raise TypeError(f"fit: instances must be a sequence of corpus instances, not {type(instances).__name__}")
+    instances = list(instances)
+    if not instances:
+        raise ValueError("cannot fit on an empty corpus")
+    bad = next((x for x in instances if not isinstance(getattr(x, "initial_state", None), State)), None)
+    if bad is not None:
+        raise TypeError(f"fit: each instance needs command, initial_state, states and actions (a corpus "
+                        f"Instance); got {type(bad).__name__}")
+    check_count("fit", "steps", steps)
+    if init is not None and not (isinstance(init, Mapping) and all(isinstance(v, torch.Tensor) for v in init.values())):
+        raise TypeError(f"fit: init must map global names to tensors (a learner's globals), got {type(init).__name__}")
+    return instances
 
 
 def learner_state(learner) -> dict:
