@@ -271,8 +271,8 @@ def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstration
         more = tuple(sorted(set(relevant) | set(_touched_scenery(space))))
         if more == relevant or abstraction_bound(state, more) > max_states:
             break
-        logger.info("relevance abstraction: goal %s unreachable with %d toy(s) as walls; letting %d more move",
-                    _goal_text(goal), len(space.scenery), len(more) - len(relevant))
+        logger.info(*_from_source("relevance abstraction: goal %s unreachable with %d toy(s) as walls; letting %d "
+                                  "more move", _goal_text(goal), len(space.scenery), len(more) - len(relevant)))
         relevant = more
         space = abstract_space(state, relevant, max_states)
     announce(state.layout, max_states, "state space: relevance abstraction, %d states (whole layout up to %s %s "
@@ -289,10 +289,13 @@ def announce(layout, max_states: int, message: str, *args) -> None:
     _ANNOUNCED[layout, max_states, message] = None
     if len(_ANNOUNCED) > 256:
         _ANNOUNCED.pop(next(iter(_ANNOUNCED)))
+    logger.log(logging.DEBUG if seen else logging.INFO, *_from_source(message, *args))
+
+
+def _from_source(message: str, *args) -> tuple:
+    """A log call's message and arguments, said of :data:`STATE_SOURCE`'s pair where one is set."""
     source = STATE_SOURCE.get()
-    if source is not None:
-        message, args = "%s: " + message, (source, *args)
-    logger.log(logging.DEBUG if seen else logging.INFO, message, *args)
+    return (message, *args) if source is None else ("%s: " + message, source, *args)
 
 
 def _goal_reachable(space: StateSpace, goal: Sequence[Atom], tables) -> bool:

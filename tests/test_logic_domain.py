@@ -108,6 +108,13 @@ CASES = [
      ["holds(roomIs(red),(room0,))", "holds(roomIs(red),(room1,))", "holds(roomIsLargest,(room2,))"],
      [f"holds(roomIs{size}OfItsColour,({room},))" for size in ("Largest", "Smallest")
       for room in ("room0", "room1", "room2")] + ["holds(roomIsSmallest,(room0,))", "holds(roomIsSmallest,(room1,))"]),
+    # areas 6 (room0), 12 (room1) and 12 (room2, narrowed): two rooms tie for the largest, one is the smallest
+    ("a tie for the largest names no room", WILLIAMS,
+     THREE_ROOMS.format(room0="blue").replace("rect(room0, 0, 4, 4, 0)", "rect(room0, 0, 4, 3, 0)")
+                                      .replace("rect(room1, 4, 4, 8, 0)", "rect(room1, 3, 4, 8, 0)")
+                                      .replace("rect(room2, 0, 8, 8, 4)", "rect(room2, 0, 8, 5, 4)"),
+     ["holds(roomIsSmallest,(room0,))"],
+     ["holds(roomIsLargest,(room1,))", "holds(roomIsLargest,(room2,))", "holds(roomIsLargest,(room0,))"]),
     ("the smallest room where one is smaller than the others", WILLIAMS,
      THREE_ROOMS.format(room0="blue").replace("rect(room0, 0, 4, 4, 0)", "rect(room0, 0, 4, 3, 0)")
                                       .replace("rect(room1, 4, 4, 8, 0)", "rect(room1, 3, 4, 8, 0)"),

@@ -341,3 +341,13 @@ def test_check_names_the_pair_whose_layout_needed_the_abstraction():
     assert run.returncode == 0, run.stderr
     said = [t for t in run.stderr.splitlines() if "state space: relevance abstraction" in t]
     assert said and all(t.startswith(f"{path}, line 2: state space: relevance abstraction") for t in said), said
+
+
+def test_reading_states_forgets_the_place_when_the_loop_fails():
+    from groundlang.model.relevance import STATE_SOURCE, reading_states
+
+    with pytest.raises(ValueError, match="bad pair"):
+        with reading_states():
+            STATE_SOURCE.set("part1.bdm, line 7")
+            raise ValueError("bad pair")
+    assert STATE_SOURCE.get() is None
