@@ -80,6 +80,8 @@ class PairEvaluation:
     # Whether the tasks scored are the corpus's own (the Williams library, ``is_corpus_library``): only then is
     # the published figure set beside the run's (a domain author's library scores other tasks).
     published: bool = True
+    # The library the test pairs were judged with where it is not the learner's (``judge``): its files' names.
+    judged_by: str | None = None
 
     @property
     def accuracy(self) -> float:
@@ -101,6 +103,7 @@ class PairEvaluation:
             f"trained on {self.train_commands} commands, {self.train_pairs} pairs ({self.demonstrations}, "
             f"layouts {self.layouts}); pairs skipped: {skipped}",
             *self.figure_lines(),
+            *([f"judged with the library of {self.judged_by} (not the learner's)"] if self.judged_by else []),
             f"wall time: training {self.seconds_training:.1f} s, following {self.seconds_following:.1f} s"])
 
     def figure_lines(self) -> list[str]:
@@ -172,13 +175,17 @@ def failure_kind(goal, task: frozenset[Atom], missing: frozenset[Atom], reached:
 def evaluate_pairs(train: list[Command], test: list[Command], library, demonstrations: str = "end-state",
                    layouts: str = "shared", skip_inconsistent: bool = False, learner_options: dict | None = None,
                    max_states: int = REACHABILITY_MAX_STATES, progress: bool = False,
-                   min_confidence: float = DEFAULT_MIN_CONFIDENCE) -> PairEvaluation:
+                   min_confidence: float = DEFAULT_MIN_CONFIDENCE, judge=None) -> PairEvaluation:
     """Train on ``train``'s pairs, follow ``test``'s commands from each start state (module docstring).
 
     Every command is acted on; ``min_confidence`` is the threshold whose coverage and accuracy the
-    calibration report gives (what ``follow --min-confidence`` would act on), predictions unchanged."""
+    calibration report gives (what ``follow --min-confidence`` would act on), predictions unchanged.
+    ``judge``: a TaskLibrary to judge what the test pairs show and whether a final state does it with, where
+    not ``library`` (two domains compared under one judge: a domain's descriptions are also the judge's)."""
     started = time.perf_counter()
-    tasks = [command_task(command, library) for command in test]  # a test file's bad layout, before training
+    judged_by = None if judge is None else judge.program.user_names
+    judge = library if judge is None else judge
+    tasks = [command_task(command, judge) for command in test]  # a test file's bad layout, before training
     made = training_instances(train, library, demonstrations, skip_inconsistent=skip_inconsistent, max_states=max_states,
                               layouts=layouts)
     if not made.instances:
@@ -214,7 +221,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                     row.update(goal=format_goal(result.goal, names),
                                final_state=format_bdm_state(result.final_state, pair.toy_names),
                                confidence=float(result.confidence), out_of_reach=float(result.posterior.out_of_reach))
-                    missing = task - lifted_facts(result.final_state, library)  # pair_tasks.satisfies, keeping what is unmet
+                    missing = task - lifted_facts(result.final_state, judge)  # pair_tasks.satisfies, keeping what is unmet
                     kind = failure_kind(result.goal, task, missing, result.reached) if missing else None
                 hit = bool(task) and kind is None
                 if task:
@@ -252,7 +259,8 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         per_task={k: tuple(v) for k, v in per_task.items()}, failures=dict(failures),
         seconds_training=trained - started, seconds_following=finished - trained,
         demonstrations=demonstrations, layouts=layouts, no_task_executions=unscored, executions=rows,
-        calibration=calibration, command_calibration=command_calibration, published=is_corpus_library(library),
+        calibration=calibration, command_calibration=command_calibration, published=is_corpus_library(judge),
+        judged_by=judged_by,
     )
 
 

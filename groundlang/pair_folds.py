@@ -200,5 +200,5 @@ def pool(parts: list[PairEvaluation], min_confidence: float = DEFAULT_MIN_CONFID
         seconds_following=sum(p.seconds_following for p in parts), demonstrations=parts[0].demonstrations,
         layouts=parts[0].layouts, no_task_executions=summed("no_task_executions"), executions=rows,
         calibration=calibration, command_calibration=command_calibration,
-        published=all(part.published for part in parts),
+        published=all(part.published for part in parts), judged_by=parts[0].judged_by,
     )

@@ -454,3 +454,33 @@ def test_an_execution_whose_start_admits_no_task_is_not_scored_and_follow_names_
     err = capsys.readouterr().err.strip()
     assert err == (f"groundlang follow: error: {tmp_path / 'red.state'}: no task of the library can be carried out "
                    "from this state (every grounding is impossible or already true)")
+
+
+def test_evaluate_judges_with_another_library_where_asked(tmp_path):
+    """--judge: the same learner and final states, judged with a library whose "largest room" is the
+    smallest; "go to the largest room" then shows no task in small.bdm's layouts (its pairs end in the
+    largest room, never in the smallest in all three), and only "go next to the chair" is scored."""
+    from importlib.resources import files
+
+    shipped = (files("groundlang.logic") / "domains" / "williams2018.lp").read_text()
+    rule = "holds(roomIsLargest, (R,)) :- area(R, A), A = #max { A2 : area(_, A2) }, #count { R2 : area(R2, A) } = 1."
+    assert rule in shipped
+    inverted = tmp_path / "inverted.lp"
+    inverted.write_text(shipped.replace(rule, "holds(roomIsLargest, (R,)) :- area(R, A), A = #min { A2 : area(_, A2) }."))
+    small, out = str(FIXTURE / "small.bdm"), tmp_path / "judged.json"
+    own = _cli("evaluate", "--corpus", small, "--test", small)
+    judged = _cli("evaluate", "--corpus", small, "--test", small, "--judge", str(inverted), "--json", str(out))
+    assert own.returncode == 0 and judged.returncode == 0, judged.stderr
+    assert "per execution: 66.67% (4/6" in own.stdout and "judged with" not in own.stdout
+    assert "test: 2 commands; 1 whose pairs show no task (not scored)" in judged.stdout
+    assert "per execution: 100.00% (3/3" in judged.stdout
+    assert f"judged with the library of {inverted} (not the learner's)" in judged.stdout
+    data = json.loads(out.read_text())
+    assert data["judged_by"] == str(inverted) and data["published_f1"] is None  # not the corpus's tasks
+    # the same final states as the learner's own judge saw: only the judging differs
+    mine = tmp_path / "own.json"
+    assert _cli("evaluate", "--corpus", small, "--test", small, "--json", str(mine)).returncode == 0
+    assert [r["final_state"] for r in data["executions"]] == [r["final_state"] for r in json.loads(mine.read_text())["executions"]]
+    sokoban = str(Path(__file__).parent / "fixtures" / "sokoban")
+    wrong = _cli("evaluate", "--corpus", sokoban, "--palette", "sokoban", "--judge", str(inverted))
+    assert wrong.returncode != 0 and "--judge: for a .bdm corpus" in wrong.stderr and "Traceback" not in wrong.stderr

@@ -40,6 +40,10 @@ def register(subparsers) -> None:
     p.add_argument("--library", metavar="LP", action="append", type=library_path,
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp, for .bdm the package's "
                         "williams2018 domain); labels may use its PFs" + LIBRARY_NAMES)
+    p.add_argument("--judge", metavar="LP", action="append", type=library_path,
+                   help="for a .bdm corpus: judge what the test pairs show, and each final state, with this task "
+                        "library instead of the one learned and followed with (repeatable, as --library): two "
+                        "domains compared under one judge, since a domain's descriptions are also the judge's")
     p.add_argument("--demonstrations", choices=["end-state", "shortest-plan"], default="end-state",
                    help="how a (start, end) pair without a trajectory is evidence (default end-state: the end "
                         "state's likelihood under each task; shortest-plan: a synthesised shortest plan)")
@@ -88,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.json:
         check_destination(args.json, "--json", inputs_read(args, "corpus", "test", "labels", "layouts", "library",
-                                                           "novel_envs", "palette", "lexicon"))
+                                                           "judge", "novel_envs", "palette", "lexicon"))
     if _is_pairs(args):
         return run_pairs(args)
     if args.test:
@@ -134,7 +138,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 # Options of one corpus format only (name -> default): refused, not ignored, with the other.
-_PAIR_OPTIONS = {"holdout": None, "folds": None, "tuning": False, "layouts": "shared", "demonstrations": "end-state"}
+_PAIR_OPTIONS = {"holdout": None, "folds": None, "tuning": False, "layouts": "shared", "demonstrations": "end-state",
+                 "judge": None}
 _TEXT_OPTIONS = ("labels", "novel_envs", "protocol", "limit", "cold_folds", "ray")
 
 
@@ -168,12 +173,13 @@ def run_pairs(args: argparse.Namespace) -> int:
     palette = args.palette or DEFAULT_PALETTE
     words = extra_words(args.lexicon)
     library = default_library(args.library, **time_limit_given(args))
+    judge = None if args.judge is None else default_library(args.judge, **time_limit_given(args))
     any_name = args.format == "williams2018"  # said: a file is read whatever its name
     train = read_pair_corpus(args.corpus, palette, any_name).commands
     if args.tuning and args.holdout is None:
         raise ValueError("--tuning splits the training side of --holdout F; pass --holdout too (not --test)")
     if args.folds is not None:
-        return _run_folds(args, train, library, _learner_options(args, words))
+        return _run_folds(args, train, library, _learner_options(args, words), judge)
     if args.test:
         test = read_pair_corpus(args.test, palette, any_name).commands
     else:
@@ -189,7 +195,7 @@ def run_pairs(args: argparse.Namespace) -> int:
     result = evaluate_pairs(train, test, library, demonstrations=args.demonstrations,
                             layouts=args.layouts,
                             skip_inconsistent=args.skip_inconsistent, learner_options=_learner_options(args, words),
-                            progress=args.progress, min_confidence=args.min_confidence)
+                            progress=args.progress, min_confidence=args.min_confidence, judge=judge)
     _report(args, result)
     return 0
 
@@ -204,7 +210,7 @@ def _learner_options(args: argparse.Namespace, words) -> dict:
     return options
 
 
-def _run_folds(args: argparse.Namespace, commands: list, library, options: dict) -> int:
+def _run_folds(args: argparse.Namespace, commands: list, library, options: dict, judge) -> int:
     """``--folds K``: cross-validation by text (groundlang.pair_folds), the folds in ``--workers`` processes."""
     from groundlang.pair_folds import cross_validate_pairs
 
@@ -212,7 +218,7 @@ def _run_folds(args: argparse.Namespace, commands: list, library, options: dict)
                                   beyond=args.holdout if args.tuning else 0.0,
                                   min_confidence=args.min_confidence, demonstrations=args.demonstrations,
                                   layouts=args.layouts, skip_inconsistent=args.skip_inconsistent,
-                                  learner_options=options)
+                                  learner_options=options, judge=judge)
     _report(args, result)
     return 0
 
