@@ -12,7 +12,11 @@ Words choose the choice whose phrase shares the most words with the answer,
 counting only words that set the phrases apart ("the green one" picks "the
 green room" among rooms; "room" and "the" count for none); when none shares one,
 or two tie, the answer is read by the model as a description of the object
-asked for ("the tan one" in a model that learned "tan").
+asked for ("the tan one" in a model that learned "tan"), and counts only where
+its words are themselves evidence for one choice: the reading with them is at
+least twice as sure of it against every other choice as the reading without
+them was. Words the model never learned ("abc") leave the reading as it was,
+and so choose nothing.
 """
 
 from __future__ import annotations
@@ -136,6 +140,11 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
             raise AnswerError(f"answer {shown(text)}: expected a number from 1 to {len(choices)}")
         return choices[k - 1]
     named = [_words(p) for p in phrases]
+    if len(choices) == 1:  # "Do you mean ...?": its number, or words all of its phrase ("the red room", not "no")
+        if _words(text) <= named[0]:
+            return choices[0]
+        raise AnswerError(f"{shown(repr(text), limit=60)} does not name the choice ({phrases[0]}): answer 1, or "
+                          "its words, to act on it")
     telling = set().union(*named) - set.intersection(*named)  # words some phrases have and others lack
     words = _words(text) & telling
     overlap = [len(words & n) for n in named]
@@ -149,11 +158,19 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     return chosen
 
 
-def clear_choice(goals: dict, choices: Sequence[GoalGroup]) -> GoalGroup | None:
+def clear_choice(goals: dict, choices: Sequence[GoalGroup], before: dict | None = None) -> GoalGroup | None:
     """The choice at least twice as probable as any other, where ``goals`` maps each goal to its
-    probability (the model's reading of the command followed by the answer), or None."""
+    probability (the model's reading of the command followed by the answer), or None. With ``before`` (the
+    reading of the command alone), only a choice the answer's words made at least twice as likely against
+    each other choice as it was without them (a Bayes factor of 2): a reading the answer left as it was
+    (words the model never learned) is the question's own doubt, not an answer."""
     mass = [sum(goals.get(g, 0.0) for g in c.goals) for c in choices]
     order = sorted(range(len(choices)), key=lambda k: -mass[k])
     if len(order) > 1 and mass[order[0]] < 2 * mass[order[1]]:
         return None
-    return choices[order[0]]
+    top = order[0]
+    if before is not None and len(order) > 1:
+        prior = [sum(before.get(g, 0.0) for g in c.goals) for c in choices]
+        if any(mass[top] * prior[k] < 2 * prior[top] * mass[k] for k in order[1:]):
+            return None
+    return choices[top]

@@ -311,7 +311,8 @@ class Learner:
         self._check_state("clarify", result.command, state)
         chosen = choose(answer, result.choices, state, self.library,
                         read=lambda text, choices: clear_choice(
-                            dict(self.posterior(f"{result.command}, {text}", state).goals()), choices))
+                            dict(self.posterior(f"{result.command}, {text}", state).goals()), choices,
+                            before=dict(result.posterior.goals())))
         return self._act(result.command, state, result.posterior, chosen.goal, max_steps)
 
     def update(self, command: str, state: State, demonstration=None, goal=None) -> "Learner":

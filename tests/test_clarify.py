@@ -81,6 +81,40 @@ def test_answers_by_number_and_by_words(novel_b, library):
     assert choose("the mauve one", rooms, novel_b, library, read=lambda text, c: c[1]) is rooms[1]
 
 
+def test_the_models_reading_of_an_answer_counts_only_where_its_words_moved_it(novel_b, library):
+    from groundlang.clarify import clear_choice
+
+    rooms = _groups("agentInRoom(agent0, room0)", "agentInRoom(agent0, room1)")
+    sure = {rooms[0].goals[0]: 0.8, rooms[1].goals[0]: 0.2}
+    # Without the reading before the answer, a clear reading is taken as the answer
+    assert clear_choice(sure, rooms) is rooms[0]
+    # The answer's words left it as it was ("abc", never learned): the question's own doubt, no answer
+    assert clear_choice(sure, rooms, before=sure) is None
+    assert clear_choice(sure, rooms, before={rooms[0].goals[0]: 0.5, rooms[1].goals[0]: 0.5}) is rooms[0]
+    # moved, but by less than a Bayes factor of 2 against the other choice: 0.8/0.2 after 0.7/0.3 is 1.7
+    assert clear_choice(sure, rooms, before={rooms[0].goals[0]: 0.7, rooms[1].goals[0]: 0.3}) is None
+    # a choice the reading before gave nothing is moved by any mass
+    assert clear_choice(sure, rooms, before={rooms[1].goals[0]: 1.0}) is rooms[0]
+
+
+def test_an_answer_of_unknown_words_chooses_nothing(learner, novel_b):
+    """"abc" read after the command leaves the reading as it was: asked at confidence 1, the reading's own
+    most probable choice had been taken as the answer (and, with follow --ask --learn, saved)."""
+    result = learner.follow("go to the room", novel_b, min_confidence=1.0)
+    assert result.abstained and len(result.choices) >= 2
+    for answer in ("abc", "-1", "1e9"):
+        with pytest.raises(AnswerError, match="names none of the choices"):
+            learner.clarify(result, answer)
+    # one choice ("Do you mean the agent in the red room?"): its number or its words, not "no" or "abc"
+    one = learner.follow("go to the red room", novel_b, min_confidence=1.0)
+    assert one.abstained and len(one.choices) == 1
+    for answer in ("no", "abc", "not the red room"):
+        with pytest.raises(AnswerError, match="does not name the choice"):
+            learner.clarify(one, answer)
+    assert learner.clarify(one, "the red room").goal == one.choices[0].goal
+    assert learner.clarify(one, "1").goal == one.choices[0].goal
+
+
 def test_follow_asks_about_an_unknown_colour_and_acts_on_the_answer(learner, novel_b):
     result = learner.follow("go to the purple room", novel_b, min_confidence=DEFAULT_MIN_CONFIDENCE)
     assert result.abstained and result.reason == "abstained" and not result.actions
