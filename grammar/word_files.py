@@ -70,6 +70,10 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
         said = entry(word) if isinstance(word, str) else ""
         if not said:
             raise LexiconError(f"{where}: {category} has an empty or non-text word {word!r}")
+        if hidden := next((ch for ch in word if unicodedata.category(ch) in ("Cc", "Cf") and not ch.isspace()), None):
+            # the tokeniser reads a command without them (a space, or nothing), so such an entry is never read
+            raise LexiconError(f"{where}: {category} word {word!r} has an invisible or control character "
+                               f"(U+{ord(hidden):04X}), which commands are read without")
         if category in _PAIRED:
             form, sep, lemma = word.partition("=")
             if not sep or not entry(form) or not entry(lemma) or "=" in lemma:

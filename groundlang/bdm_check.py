@@ -18,7 +18,7 @@ from importlib.resources import files
 from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.relevance import STATE_SOURCE, reading_states
-from groundlang.pair_tasks import command_task, reachable, text_agreement
+from groundlang.pair_tasks import command_task, layout_fits, reachable, text_agreement
 
 __all__ = ["check_bdm", "default_library", "is_corpus_library"]
 
@@ -56,7 +56,8 @@ def check_bdm(args: argparse.Namespace) -> int:
     unreachable, unchecked = [], 0
     with reading_states():
         for command, pair in pairs:
-            STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
+            STATE_SOURCE.set(where := f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
+            layout_fits(pair.start.layout, where)  # before its states are enumerated
             found = reachable(pair.start, pair.end)
             if found is None:
                 unchecked += 1

@@ -35,7 +35,7 @@ from groundlang.model.state_search import StateKeyError
 from groundlang.model.statespace import StateSpaceError
 from groundlang.model.tasks import candidate_tasks
 from groundlang.model.world import State, replay
-from groundlang.pair_tasks import REACHABILITY_MAX_STATES, shortest_actions
+from groundlang.pair_tasks import REACHABILITY_MAX_STATES, layout_fits, shortest_actions
 
 __all__ = ["PairInstance", "PairedCommand", "PairCorpus", "LAYOUTS", "read_pair_corpus", "training_instances", "held_out_by_text",
            "text_position", "fold_of_text", "DEMONSTRATIONS"]
@@ -201,7 +201,8 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
         for index, command in enumerate(commands):
             usable = []
             for pair in command.pairs:
-                STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
+                STATE_SOURCE.set(where := f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
+                layout_fits(pair.start.layout, where)  # before its states are enumerated or its layout grounded
                 if not _fits(pair, demonstrations, max_states):
                     out.skipped.append((command, pair, "too large"))
                     continue

@@ -34,7 +34,7 @@ from .palette import check_attribute_clash
 from .world import Layout
 
 __all__ = ["PFTables", "TabulationError", "pf_tables", "library_pf_tables", "tabulation_program", "MAX_TABLE_CELLS",
-           "MAX_TABULATED_COPIES"]
+           "MAX_TABULATED_COPIES", "check_table_size"]
 
 # Entries of one atom's table (cells to the power of its movable arguments): two movable arguments
 # on a 32x32 grid are 10^6; three are refused here rather than grounded for minutes.
@@ -227,8 +227,10 @@ def pf_tables(layout: Layout, program: Program | None = None,
     return _tables(layout, program or tabulation_program(()), time_limit)
 
 
-@lru_cache(maxsize=256)
-def _tables(layout: Layout, program: Program, time_limit: float | None) -> PFTables:
+def check_table_size(layout: Layout) -> None:
+    """TabulationError where the layout's PF tables would be too large, said before anything is grounded or
+    enumerated in it: a reader of many layouts checks each first (a state space of a layout too large to
+    tabulate, enumerated first, had taken gigabytes to be refused afterwards)."""
     cells = int(layout.walkable.sum())
     if cells > MAX_TABULATED_CELLS:
         raise TabulationError(f"this layout has {cells:,} walkable cells; PFs are tabulated for at most "
@@ -238,6 +240,12 @@ def _tables(layout: Layout, program: Program, time_limit: float | None) -> PFTab
         raise TabulationError(f"this layout has {moving:,} movable objects on {cells:,} walkable cells; PFs are "
                               f"tabulated for at most {MAX_TABULATED_COPIES:,} objects x cells (every movable "
                               "object is copied onto each cell)")
+
+
+@lru_cache(maxsize=256)
+def _tables(layout: Layout, program: Program, time_limit: float | None) -> PFTables:
+    check_table_size(layout)
+    cells = int(layout.walkable.sum())
     check_attribute_clash(layout.palette, program)
     declared = _declarations(program, palette_facts(layout), time_limit)
     for n, movers in declared.movers.items():

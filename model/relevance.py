@@ -52,6 +52,9 @@ __all__ = ["AbstractStateSpace", "abstract_space", "abstract_space_uncached", "a
 
 logger = logging.getLogger(__name__)
 
+# An abstraction keeps every object's position in every state ([S, objects, 2] int16): its states are bounded by
+# max_states, but a layout of hundreds of toys multiplies them (one of 700 had taken 2.9 GB to be refused).
+MAX_POSITION_BYTES = 1 << 30
 # (layout, max_states, message) already announced at info level, oldest first (bounded).
 _ANNOUNCED: dict = {}
 # Where the state being sized was read from ("part2.bdm, line 1234"), set by whoever reads states from a
@@ -185,6 +188,10 @@ def abstract_space_uncached(state: State, relevant: tuple[int, ...], max_states:
     moving = [0] + [1 + i for i in relevant]
     names = [state.layout.movable_names[j] for j in moving]
     next_state, sub, keys, cell_of, sizes = search(walkable, pos[moving], names, max_states)
+    if len(sub) * len(pos) * 4 > MAX_POSITION_BYTES:
+        raise StateSpaceError(f"the relevance abstraction has {len(sub):,} states of {len(pos):,} objects each: "
+                              f"their positions would take {len(sub) * len(pos) * 4 / 2**30:.1f} GiB, more than "
+                              f"{MAX_POSITION_BYTES // 2**30} GiB")
     full = np.empty((len(sub), len(pos), 2), dtype=np.int16)
     full[:] = pos.astype(np.int16)[None]
     full[:, moving] = sub

@@ -450,6 +450,14 @@ ROWS.append(Row("input/check a .bdm whose layout is too large to tabulate: the e
                 pieces=("too_large_to_tabulate.bdm, line 2: this layout has 9,801 walkable cells; PFs are tabulated "
                         "for at most 4,096",),
                 check=lambda out: _has("", out)))
+for _command in (("train", str(BAD / "too_large_to_tabulate.bdm"), "-o", "{tmp}/m"),
+                 ("evaluate", "--corpus", str(BAD / "too_large_to_tabulate.bdm"), "--test",
+                  str(FIXTURES / "williams2018" / "small.bdm"))):
+    # refused by its file and line before a state is enumerated or the layout grounded (the grounding's
+    # time limit had run out first, naming neither, and advising a longer one)
+    ROWS.append(Row(f"input/{_command[0]} on a .bdm whose layout is too large to tabulate", _command,
+                    pieces=("too_large_to_tabulate.bdm, line 2: this layout has 9,801 walkable cells; PFs are "
+                            "tabulated for at most 4,096",), absent=("{tmp}/m",)))
 ROWS.append(Row("input/a task library that does not exist", (*_TASKS, "{tmp}/nope.lp"),
                 pieces=("groundlang tasks: error: {tmp}/nope.lp: No such file or directory",)))
 ROWS.append(Row("input/a folder where a state file is expected", ("tasks", str(FIXTURES), "--palette", "sokoban"),
@@ -879,3 +887,36 @@ def test_a_library_that_is_a_symbolic_link_loop_is_said_to_loop(command, tmp_pat
     second.symlink_to(first)
     assert main(["--quiet", *command, "--library", str(first)]) == 2
     assert capsys.readouterr().err == f"groundlang {command[0]}: error: {first}: Too many levels of symbolic links\n"
+
+
+def test_check_refuses_a_layout_too_large_to_tabulate_before_enumerating_it(tmp_path):
+    """A 1000x1000 room with 700 blocks: its abstraction had been enumerated (2.9 GB) before being refused."""
+    import subprocess
+    import sys
+
+    blocks = " , ".join(f"block{i} (block): [x: {{{2 + i}}} y: {{5}} shape: {{chair}} colour: {{red}} ]" for i in range(700))
+    line = ("{agent0 (agent): [x: {1} y: {1} ] , " + blocks
+            + " , room0 (room): [top: {1000} left: {0} bottom: {0} right: {1000} colour: {red} ] , }")
+    corpus = tmp_path / "many.bdm"
+    corpus.write_text(f"go to the red room\n{line}\n{line.replace('x: {1} y: {1}', 'x: {2} y: {1}')}\ntrue\n")
+    # through a process of its own, whose only child is the check: its peak memory is the check's
+    measure = ("import resource, subprocess, sys; run = subprocess.run(sys.argv[1:], capture_output=True, text=True); "
+               "sys.stderr.write(run.stderr); print(run.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
+    run = subprocess.run([sys.executable, "-c", measure, sys.executable, "-m", "groundlang.cli", "check", str(corpus)],
+                         capture_output=True, text=True, timeout=300)
+    code, peak_kb = map(int, run.stdout.split())
+    assert code == 2 and "Traceback" not in run.stderr
+    assert f"{corpus}, line 2: this layout has 998,001 walkable cells" in run.stderr
+    assert peak_kb < 800 * 1024  # no abstraction was built (2.9 GB before)
+
+
+def test_an_abstraction_of_many_objects_is_refused_before_its_positions_are_stored():
+    from groundlang.bdm import parse_bdm_state
+    from groundlang.model.relevance import abstract_space_uncached
+    from groundlang.model.statespace import StateSpaceError
+
+    blocks = " , ".join(f"block{i} (block): [x: {{{2 + i}}} y: {{5}} shape: {{chair}} colour: {{red}} ]" for i in range(700))
+    state, _ = parse_bdm_state("{agent0 (agent): [x: {1} y: {1} ] , " + blocks
+                               + " , room0 (room): [top: {1000} left: {0} bottom: {0} right: {1000} colour: {red} ] , }")
+    with pytest.raises(StateSpaceError, match=r"997,301 states of 701 objects each: their positions would take 2\.6 GiB"):
+        abstract_space_uncached(state, (), 5_000_000)

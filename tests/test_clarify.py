@@ -229,6 +229,21 @@ def test_cli_ask_with_stdin_closed_is_end_of_input(model_dir, capsys, monkeypatc
     assert capsys.readouterr().err.strip() == "groundlang follow: no answer named a choice; nothing done"
 
 
+def test_cli_ask_gives_up_on_an_input_with_no_line_end(model_dir, capsys, monkeypatch):
+    import io
+
+    class Endless(io.TextIOBase):  # /dev/zero: a line that never ends had been read forever
+        def readline(self, size=-1):
+            return "\0" * (size if size > 0 else 1 << 16)
+
+    monkeypatch.setattr("sys.stdin", Endless())
+    monkeypatch.setattr("groundlang.commands.follow.MAX_DROPPED_CHARS", 1 << 20)
+    assert _follow(model_dir, "go to the purple room", "--ask") == 3
+    captured = capsys.readouterr()
+    assert "no line end within 1,048,576 characters: no answer" in captured.out
+    assert captured.err.strip() == "groundlang follow: no answer named a choice; nothing done"
+
+
 def test_cli_ask_says_an_answer_is_not_utf8_and_reads_the_next(model_dir, capsys, monkeypatch):
     import io
 

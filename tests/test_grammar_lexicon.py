@@ -126,6 +126,8 @@ def test_a_users_word_file_adds_a_noun_and_a_multiword_preposition(tmp_path):
     # an entry the tokeniser would split at a sign can never be read; a word, a clitic or one sign can
     ("NOUN: mug o'clock 're &\nNOUN: !!!\n", 2, "NOUN word '!!!' is not a word the tokeniser reads"),
     ("NOUN: a_b c-d e.f\n", 1, "NOUN word 'e.f' is not a word the tokeniser reads"),
+    # the tokeniser reads a command without invisible format characters: an entry holding one is never read
+    ("NOUN: mug\nNOUN: cup\u200b\n", 2, "NOUN word 'cup\\u200b' has an invisible or control character (U+200B)"),
     # a comment may hold a separator str.splitlines would end a line at: the lines are an editor's
     ("# a\u2028comment and\x0cthis\x85too\nNOUN: mug\nmug sink\n", 3, "got 'mug sink'"),
 ])
@@ -313,3 +315,18 @@ def test_words_given_as_data_that_read_one_form_as_two_words_are_refused_citing_
         Lexicon({"SYNONYM": ["east=right", "west=left", "east=left"]})
     assert str(caught.value) == "SYNONYM 'east' is read as left here and as right in the words before"
     assert Lexicon({"SYNONYM": ["east=right", "east=right"]}).synonyms == {"east": ("right",)}
+
+
+@pytest.mark.parametrize("command", ["train", "evaluate"])
+def test_a_synonym_the_domains_word_file_reads_otherwise_names_the_users_file(tmp_path, capsys, command):
+    """--lexicon's words reach the learner as data; the clash had been said of "a trained model's own" words."""
+    words = tmp_path / "mine.words"
+    words.write_text("SYNONYM: big=huge\n", encoding="utf-8")
+    small = str(Path(__file__).parent / "fixtures" / "williams2018" / "small.bdm")
+    argv = (["train", small, "-o", str(tmp_path / "m")] if command == "train"
+            else ["evaluate", "--corpus", small, "--test", small])
+    assert main(["--quiet", *argv, "--lexicon", str(words)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"groundlang {command}: error: {words}: SYNONYM 'big' is read as huge here and as large in ")
+    assert err.rstrip().endswith("williams2018.words") and "trained model" not in err
+    assert not (tmp_path / "m").exists()

@@ -197,6 +197,18 @@ def add_lexicon_option(parser) -> None:
     )
 
 
+def lexicon_beside(args, library) -> None:
+    """LexiconError, naming ``--lexicon``'s file, where it gives a SYNONYM form another word than the word
+    files of ``library`` (None: the default) do. A Learner receives ``--lexicon``'s words as data, read once
+    for the workers, so its own check could name only the library's file."""
+    if args.lexicon:
+        from groundlang.logic.tasks import TaskLibrary
+        from groundlang.model.domain_words import extra_words
+        from groundlang.training_vocabulary import word_files_beside
+
+        extra_words([*word_files_beside(library if library is not None else TaskLibrary.load()), *args.lexicon])
+
+
 def inputs_read(args, *names: str) -> list[tuple[str, str]]:
     """``(option, path)`` for each of ``args``' path options ``names`` that is given (a repeatable option
     gives one pair per path), for :func:`groundlang.logic.storage.check_destination` to keep an output off

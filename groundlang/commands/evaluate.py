@@ -8,7 +8,7 @@ from pathlib import Path
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
                                  add_language_model_settings, add_lexicon_option, fraction, inputs_read, json_bytes,
                                  language_model_settings, library_given, library_path, open_fraction, output_path,
-                                 positive_int, require_palette, add_time_limit_option, time_limit_given)
+                                 positive_int, require_palette, add_time_limit_option, time_limit_given, lexicon_beside)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
@@ -113,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
     options = {"em_acceleration": args.em_acceleration, **({"lexicon": words} if words else {})}
     if (library := library_given(args)) is not None:  # trained, followed and scored with the user's PFs and tasks
         options["library"] = library
+    lexicon_beside(args, library)
     result = evaluate(
         corpus, labels, protocol=args.protocol or "loo", language_model=args.language_model,
         novel_states=novel, workers=args.workers, ray_address=args.ray,
@@ -173,6 +174,7 @@ def run_pairs(args: argparse.Namespace) -> int:
     palette = args.palette or DEFAULT_PALETTE
     words = extra_words(args.lexicon)
     library = default_library(args.library, **time_limit_given(args))
+    lexicon_beside(args, library)
     judge = None if args.judge is None else default_library(args.judge, **time_limit_given(args))
     any_name = args.format == "williams2018"  # said: a file is read whatever its name
     train = read_pair_corpus(args.corpus, palette, any_name).commands

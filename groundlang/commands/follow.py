@@ -25,8 +25,10 @@ ASKED = 3
 DEFAULT_MIN_CONFIDENCE = 0.7
 ANSWER_TRIES = 3
 # An answer names one of a few choices ("the blue one", "2"); a longer line is no answer, and reading it
-# whole would hold whatever a pipe sends in memory.
+# whole would hold whatever a pipe sends in memory. Its rest is dropped up to a bound: beyond it, an input that
+# never ends a line (/dev/zero) is no answer, and would be read forever.
 MAX_ANSWER_CHARS = 1000
+MAX_DROPPED_CHARS = 1 << 24
 
 
 def register(subparsers) -> None:
@@ -101,8 +103,12 @@ def _ask(learner, result, state, max_steps: int, names=None):
             print()
             return None
         if len(line) > MAX_ANSWER_CHARS and not line.endswith("\n"):
-            while (rest := stdin.readline(1 << 16)) and not rest.endswith("\n"):
-                pass  # the rest of the line, read in bounded pieces and dropped
+            dropped = 0  # the rest of the line, read in bounded pieces and dropped, up to a bound: an input
+            while (rest := stdin.readline(1 << 16)) and not rest.endswith("\n"):  # of no line end (/dev/zero)
+                dropped += len(rest)                                             # would be read forever
+                if dropped > MAX_DROPPED_CHARS:
+                    print(f"\n  no line end within {MAX_DROPPED_CHARS:,} characters: no answer")
+                    return None
             print(f"\n  an answer is at most {MAX_ANSWER_CHARS} characters: a choice's number or its words")
             continue
         if not stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read, as the

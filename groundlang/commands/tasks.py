@@ -34,6 +34,7 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.logic.groundings import MAX_ENUMERATED_ATOMS
+    from groundlang.logic.program import AspTimeout
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
     from groundlang.model.pf_tables import TabulationError, library_pf_tables
@@ -53,7 +54,10 @@ def run(args: argparse.Namespace) -> int:
     renumbered = file_names(args.file)  # the layout's name -> the file's, where they differ
     files = args.library or ([str(resources("groundlang.logic") / "domains" / "williams2018.lp")] if burlap else None)
     library = TaskLibrary.load(files, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
-    candidates = candidate_tasks(state, library)
+    try:
+        candidates = candidate_tasks(state, library)
+    except AspTimeout as exc:  # a layout too large to ground in time: the file it came from is the one to look at
+        raise AspTimeout(f"{args.file}: {exc}") from None
     by_name = object_descriptions(state, library)
     # The layout's order (rooms, doors, toys), as the corpus writes a state, not the names' alphabetical order.
     described = {obj: by_name[obj] for obj in object_names(state) if obj in by_name}

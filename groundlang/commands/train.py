@@ -10,7 +10,7 @@ from groundlang.corpus import read_corpus
 from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
                                  add_language_model_settings, add_lexicon_option, cache_option, check_cache_outside,
                                  language_model_settings, library_given, library_path, output_path, require_palette,
-                                 seed, add_time_limit_option, time_limit_given)
+                                 seed, add_time_limit_option, time_limit_given, lexicon_beside)
 
 
 def register(subparsers) -> None:
@@ -58,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"skipped {len(corpus.skipped)} inconsistent demonstrations")
         instances = corpus.instances
         library = library_given(args)
+    lexicon_beside(args, library)
     learner = Learner(lm, library=library, seed=args.seed, lexicon=words, cache_dir=cache_option(args),
                       em_acceleration=args.em_acceleration)
     learner.fit(instances, progress=args.progress)
