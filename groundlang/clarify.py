@@ -21,11 +21,13 @@ and so choose nothing.
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable, Sequence
 
 from groundlang.confidence import GoalGroup
-from groundlang.grammar.parser import utf8_fault
+from groundlang.grammar.lexicon import Lexicon
+from groundlang.grammar.parser import tokenise, utf8_fault
 from groundlang.logic.atoms import shown
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.phrase_keys import entity_words
@@ -141,13 +143,22 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
         return choices[k - 1]
     named = [_words(p) for p in phrases]
     if len(choices) == 1:  # "Do you mean ...?": its number, or words all of its phrase ("the red room", not "no")
-        if _words(text) <= named[0]:
+        if _words(text) and _words(text) <= named[0]:
             return choices[0]
         raise AnswerError(f"{shown(repr(text), limit=60)} does not name the choice ({phrases[0]}): answer 1, or "
                           "its words, to act on it")
     telling = set().union(*named) - set.intersection(*named)  # words some phrases have and others lack
     words = _words(text) & telling
     overlap = [len(words & n) for n in named]
+    if _negated(text):  # "not the red one": the choices it names are the ones left out
+        left = [c for c, shared in zip(choices, overlap) if not shared]
+        if words and len(left) == 1:
+            return left[0]
+        said = ("leaves out every choice" if not left else
+                f"leaves out {len(choices) - len(left)} of the choices, so more than one is left" if words else
+                "names no choice, so each is left")
+        raise AnswerError(f"{shown(repr(text), limit=60)} says what is not meant and {said} ({choice_list(phrases)}): "
+                          f"answer with the number, 1 to {len(choices)}, or the words of the one meant")
     best = max(overlap)
     if best > 0 and overlap.count(best) == 1:
         return choices[overlap.index(best)]
@@ -158,6 +169,13 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     return chosen
 
 
+def _negated(text: str) -> bool:
+    """Whether the answer has a word English lists as a negation (``NEG`` of grammar/english.words), or one
+    ending in the negating clitic ("isn't", which the tokeniser keeps whole)."""
+    english = Lexicon.english()
+    return any("NEG" in english.listed(token) or token.endswith("n't") for token in tokenise(text))
+
+
 def clear_choice(goals: dict, choices: Sequence[GoalGroup], before: dict | None = None) -> GoalGroup | None:
     """The choice at least twice as probable as any other, where ``goals`` maps each goal to its
     probability (the model's reading of the command followed by the answer), or None. With ``before`` (the
@@ -165,6 +183,8 @@ def clear_choice(goals: dict, choices: Sequence[GoalGroup], before: dict | None 
     each other choice as it was without them (a Bayes factor of 2): a reading the answer left as it was
     (words the model never learned) is the question's own doubt, not an answer."""
     mass = [sum(goals.get(g, 0.0) for g in c.goals) for c in choices]
+    if not choices or not all(math.isfinite(m) and m >= 0 for m in mass) or not sum(mass) > 0:
+        return None  # a reading that gives the choices nothing, or no number, says nothing of them
     order = sorted(range(len(choices)), key=lambda k: -mass[k])
     if len(order) > 1 and mass[order[0]] < 2 * mass[order[1]]:
         return None

@@ -22,6 +22,8 @@ from groundlang.bdm_check import is_corpus_library
 from groundlang.confidence import calibration_report, format_calibration
 from groundlang.evaluation import wilson_interval
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
+from groundlang.learner_state import check_threshold
+from groundlang.logic.tasks import TaskLibrary
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.interpretations import NoTaskError
 from groundlang.model.relevance import STATE_SOURCE, reading_states
@@ -182,6 +184,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     calibration report gives (what ``follow --min-confidence`` would act on), predictions unchanged.
     ``judge``: a TaskLibrary to judge what the test pairs show and whether a final state does it with, where
     not ``library`` (two domains compared under one judge: a domain's descriptions are also the judge's)."""
+    check_pair_evaluation(library, judge, min_confidence)
     started = time.perf_counter()
     judged_by = None if judge is None else judge.program.user_names
     judge = library if judge is None else judge
@@ -262,6 +265,17 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         calibration=calibration, command_calibration=command_calibration, published=is_corpus_library(judge),
         judged_by=judged_by,
     )
+
+
+def check_pair_evaluation(library, judge, min_confidence) -> None:
+    """TypeError or ValueError, before any training, for a library, judge or threshold an evaluation cannot use."""
+    for name, value in (("library", library), ("judge", judge)):
+        if not isinstance(value, TaskLibrary) and not (name == "judge" and value is None):
+            raise TypeError(f"evaluate_pairs: {name} must be a TaskLibrary{' or None' if name == 'judge' else ''}, "
+                            f"not {type(value).__name__}")
+    if min_confidence is None:
+        raise ValueError("evaluate_pairs: min_confidence must be a number from 0 to 1, got None")
+    check_threshold("evaluate_pairs", "min_confidence", min_confidence)
 
 
 def calibration_of_rows(rows: list[dict], min_confidence: float) -> tuple[dict, dict]:

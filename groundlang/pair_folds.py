@@ -21,7 +21,7 @@ from groundlang.bdm import Command
 from groundlang.folds import prepare_worker, usable_workers
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE
 from groundlang.pair_corpus import fold_of_text, text_position
-from groundlang.pair_evaluation import PairEvaluation, calibration_of_rows, evaluate_pairs
+from groundlang.pair_evaluation import PairEvaluation, calibration_of_rows, check_pair_evaluation, evaluate_pairs
 
 __all__ = ["PairCrossValidation", "cross_validate_pairs", "pool", "MAX_FOLDS"]
 
@@ -96,6 +96,11 @@ def cross_validate_pairs(commands: list[Command], folds: int, library, workers: 
     trained on, and the folds cut the rest: cross-validation to choose mechanisms on. Raises ValueError for a
     fold count out of range or a fold that holds out nothing or leaves nothing to train on, before any fold
     is trained."""
+    if isinstance(folds, bool) or not isinstance(folds, int):
+        raise TypeError(f"cross_validate_pairs: folds must be an integer, not {type(folds).__name__}")
+    if isinstance(beyond, bool) or not isinstance(beyond, (int, float)) or not 0 <= beyond < 1:
+        raise ValueError(f"cross_validate_pairs: beyond must be a fraction from 0 to below 1, got {beyond!r:.40}")
+    check_pair_evaluation(library, options.get("judge"), min_confidence)
     if not 2 <= folds <= MAX_FOLDS:
         raise ValueError(f"--folds {folds}: expected 2 to {MAX_FOLDS} folds")
     held = fold_indices(commands, folds, beyond)

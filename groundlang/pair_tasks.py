@@ -93,7 +93,12 @@ def pair_task(pairs, library: TaskLibrary | None = None, where: list[str] | None
     per pair, the place (file and line) named when its layout's facts cannot be read (too many cells to
     tabulate): then a ValueError that names it."""
     starts, ends = [], []
+    pairs = list(pairs)
+    if not pairs:
+        raise ValueError("pair_task: no (start, end) pair: a command's task is what its pairs show")
     for k, (start, end) in enumerate(pairs):
+        if start.layout != end.layout:  # a pair is one layout's start and end: facts of two say nothing
+            raise ValueError(f"{where[k] + ': ' if where else ''}a pair's start and end states are of two layouts")
         try:
             starts.append(lifted_facts(start, library))
             ends.append(lifted_facts(end, library))
@@ -151,6 +156,8 @@ def text_agreement(commands, tasks) -> tuple[int, int, int]:
 
 def satisfies(state: State, task: frozenset[Atom], library: TaskLibrary | None = None) -> bool:
     """True when every fact of ``task`` holds in ``state`` (in its own layout); False for an empty task."""
+    if not isinstance(task, (set, frozenset)) or not all(isinstance(a, Atom) for a in task):
+        raise TypeError(f"satisfies: task must be a set of Atoms (pair_task's), not {type(task).__name__}")
     return bool(task) and task <= lifted_facts(state, library)
 
 

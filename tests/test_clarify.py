@@ -95,6 +95,29 @@ def test_the_models_reading_of_an_answer_counts_only_where_its_words_moved_it(no
     assert clear_choice(sure, rooms, before={rooms[0].goals[0]: 0.7, rooms[1].goals[0]: 0.3}) is None
     # a choice the reading before gave nothing is moved by any mass
     assert clear_choice(sure, rooms, before={rooms[1].goals[0]: 1.0}) is rooms[0]
+    # a reading that gives the choices nothing, or no number, says nothing of them (it had returned the first)
+    for nothing in ({}, {rooms[0].goals[0]: 0.0, rooms[1].goals[0]: 0.0}, {rooms[0].goals[0]: float("nan")},
+                    {rooms[0].goals[0]: float("inf")}):
+        assert clear_choice(nothing, rooms) is None
+
+
+def test_a_negated_answer_names_the_choices_it_leaves_out(novel_b, library):
+    rooms = _groups("agentInRoom(agent0, room0)", "agentInRoom(agent0, room1)", "agentInRoom(agent0, room2)")
+    two = rooms[:2]
+    # "not red" had chosen the red room: its word matched, the negation was not read
+    assert choose("not the red one", two, novel_b, library) is two[1]
+    assert choose("the one that isn't red", two, novel_b, library) is two[1]
+    assert choose("not the blue room", two, novel_b, library) is two[0]
+    with pytest.raises(AnswerError, match="leaves out 1 of the choices, so more than one is left"):
+        choose("not the red one", rooms, novel_b, library)
+    with pytest.raises(AnswerError, match="names no choice, so each is left"):
+        choose("no", two, novel_b, library)
+    with pytest.raises(AnswerError, match="leaves out every choice"):
+        choose("not red or blue", two, novel_b, library)
+    # a question of one choice: words all from its phrase, and some words
+    for nothing in ("?", "...", "\u202e"):
+        with pytest.raises(AnswerError, match="does not name the choice"):
+            choose(nothing, rooms[:1], novel_b, library)
 
 
 def test_an_answer_of_unknown_words_chooses_nothing(learner, novel_b):

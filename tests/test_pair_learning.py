@@ -484,3 +484,35 @@ def test_evaluate_judges_with_another_library_where_asked(tmp_path):
     sokoban = str(Path(__file__).parent / "fixtures" / "sokoban")
     wrong = _cli("evaluate", "--corpus", sokoban, "--palette", "sokoban", "--judge", str(inverted))
     assert wrong.returncode != 0 and "--judge: for a .bdm corpus" in wrong.stderr and "Traceback" not in wrong.stderr
+
+
+def test_evaluations_refuse_what_they_cannot_use_before_training(williams_commands, williams_library):
+    from groundlang.pair_evaluation import evaluate_pairs
+    from groundlang.pair_folds import cross_validate_pairs
+
+    small = williams_commands
+    with pytest.raises(TypeError, match="evaluate_pairs: judge must be a TaskLibrary or None, not str"):
+        evaluate_pairs(small, small, williams_library, judge="williams2018")
+    with pytest.raises(TypeError, match="evaluate_pairs: library must be a TaskLibrary, not NoneType"):
+        evaluate_pairs(small, small, None)
+    for bad in (float("nan"), 5, -1, True, "0.7"):  # nan had reported accuracy nan at coverage 0, after training
+        with pytest.raises(ValueError, match="min_confidence must be a number from 0 to 1"):
+            evaluate_pairs(small, small, williams_library, min_confidence=bad)
+        with pytest.raises(ValueError, match="min_confidence must be a number from 0 to 1"):
+            cross_validate_pairs(small, 2, williams_library, min_confidence=bad)
+    with pytest.raises(TypeError, match="folds must be an integer, not float"):
+        cross_validate_pairs(small, 2.5, williams_library)
+    with pytest.raises(ValueError, match="beyond must be a fraction from 0 to below 1"):
+        cross_validate_pairs(small, 2, williams_library, beyond=None)
+    with pytest.raises(TypeError, match="judge must be a TaskLibrary or None, not int"):
+        cross_validate_pairs(small, 2, williams_library, judge=5)
+
+
+def test_a_pair_of_two_layouts_shows_no_task_but_an_error(williams_commands, williams_library):
+    first, second = williams_commands[0].pairs[:2]
+    with pytest.raises(ValueError, match="a pair's start and end states are of two layouts"):
+        pair_task([(first.start, second.end)], williams_library)
+    with pytest.raises(ValueError, match="no \\(start, end\\) pair"):
+        pair_task([], williams_library)
+    with pytest.raises(TypeError, match="task must be a set of Atoms"):
+        satisfies(first.end, None, williams_library)
