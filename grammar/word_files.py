@@ -65,11 +65,15 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
                            f"{', '.join(FILE_CATEGORIES)}")
     if isinstance(words, str):
         raise LexiconError(f"{where}: the words of {category} must be a list of words, not one string")
+    if not isinstance(words, (list, tuple)):
+        raise LexiconError(f"{where}: the words of {category} must be a list of words, not {type(words).__name__}")
     out = []
     for word in words:
         said = entry(word) if isinstance(word, str) else ""
         if not said:
             raise LexiconError(f"{where}: {category} has an empty or non-text word {word!r}")
+        if any(0xD800 <= ord(ch) <= 0xDFFF for ch in word):  # no text: a byte that was not UTF-8, or half a pair
+            raise LexiconError(f"{where}: {category} word {word!r} is not text (a lone surrogate)")
         if hidden := next((ch for ch in word if unicodedata.category(ch) in ("Cc", "Cf") and not ch.isspace()), None):
             # the tokeniser reads a command without them (a space, or nothing), so such an entry is never read
             raise LexiconError(f"{where}: {category} word {word!r} has an invisible or control character "
@@ -132,6 +136,8 @@ def read_word_file(path: str | Path) -> dict[str, tuple[str, ...]]:
 
     Raises LexiconError naming the file and line of the first malformed line, OSError if unreadable.
     """
+    if not str(path) or "\0" in str(path):  # "" would open the working folder, a NUL no file at all
+        raise LexiconError(f"word file {str(path)!r}: not a file name")
     path = Path(path)
     # logic.storage.read_limited's twin (grammar imports no other layer): opened non-blocking, so that a
     # FIFO cannot hang the open; its kind is read from the open file; no more than the limit is read.

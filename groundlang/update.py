@@ -10,7 +10,7 @@ added, with word-distribution columns that hold no counts yet; then incremental 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from groundlang.confidence import GoalGroup
@@ -33,6 +33,8 @@ def as_goals(goal) -> tuple[tuple[Atom, ...], ...]:
     """The goals ``goal`` allows: a goal string ("agentInRoom(agent0, room1)"), an Atom, a tuple of
     Atoms (a conjunction), or a :class:`GoalGroup` (any of its goals, which have the same outcome)."""
     if isinstance(goal, GoalGroup):
+        if not goal.goals:  # an edited group: it allows nothing
+            raise ValueError("update: goal is a GoalGroup of no goals")
         return tuple(goal.goals)
     if isinstance(goal, str):
         try:
@@ -53,10 +55,14 @@ def as_actions(demonstration) -> tuple[Action, ...]:
     if isinstance(demonstration, str):
         demonstration = [w for w in demonstration.split(",") if w.strip()]
     elif isinstance(demonstration, (list, tuple)):
-        odd = next((a for a in demonstration if not isinstance(a, (Action, str))), None)
-        if odd is not None:
+        # (a flag, not next(..., None): None is itself an action of the wrong type)
+        odd = [a for a in demonstration if not isinstance(a, (Action, str))]
+        if odd:
             raise TypeError(f"update: demonstration: each action must be an Action or its word ('north'), got "
-                            f"{type(odd).__name__}")
+                            f"{type(odd[0]).__name__}")
+    elif isinstance(demonstration, (bytes, bytearray, Mapping)):  # read by what iterating gives: keys, byte values
+        raise TypeError(f"update: demonstration must be a sequence of actions, or a string of their words, "
+                        f"not {type(demonstration).__name__}")
     try:
         actions = tuple(a if isinstance(a, Action) else Action.parse(a) for a in demonstration)
     except TypeError:

@@ -3,6 +3,7 @@ before any work, instead of an AttributeError from deep inside or a silently wro
 
 from __future__ import annotations
 
+import re
 from importlib.resources import files
 from pathlib import Path
 
@@ -71,6 +72,16 @@ def test_clarify_takes_a_choice_by_number_and_checks_the_rest(trained, novel):
 def test_update_names_what_is_wrong_in_a_short_line(trained, novel):
     with pytest.raises(TypeError, match="update: demonstration: each action must be an Action or its word"):
         trained.update("go north", novel, demonstration=[1, 2])
+    # None among the actions had slipped past the check (it was the check's own "none found")
+    with pytest.raises(TypeError, match="each action must be an Action or its word \\('north'\\), got NoneType"):
+        trained.update("go north", novel, demonstration=[None])
+    for iterated in (b"north", {"north": 1}):  # read by their byte values, by their keys
+        with pytest.raises(TypeError, match="update: demonstration must be a sequence of actions"):
+            trained.update("go north", novel, demonstration=iterated)
+    from groundlang.confidence import GoalGroup
+
+    with pytest.raises(ValueError, match="update: goal is a GoalGroup of no goals"):  # a bare StopIteration
+        trained.update("go north", novel, goal=GoalGroup((), 1.0))
     with pytest.raises(ValueError, match="update: goal") as caught:
         trained.update("go", novel, goal="agentInRoom(agent0" + ", room1" * 100000)
     assert len(str(caught.value)) < 400
@@ -153,3 +164,14 @@ def test_word_sources_of_the_wrong_type_are_named(lexicon, trained):
     with pytest.raises(TypeError, match="add_words: lexicon must be"):
         trained.add_words(lexicon)
     assert Learner(lexicon=[{"NOUN": ["lamp"]}]).lexicon_words["NOUN"] == ["lamp"]
+
+
+def test_add_words_names_what_is_wrong(trained):
+    from groundlang.grammar.lexicon import LexiconError
+
+    for words, said in (({"NOUN": None}, "the words of NOUN must be a list of words, not NoneType"),
+                        ("", "word file '': not a file name"),  # it had opened the working folder
+                        ("\x00", "not a file name"),
+                        ({"NOUN": ["\ud800"]}, "is not text (a lone surrogate)")):  # had been saved with the model
+        with pytest.raises(LexiconError, match=re.escape(said)):
+            trained.add_words(words)
