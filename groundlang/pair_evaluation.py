@@ -269,10 +269,9 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
 
 def check_pair_evaluation(library, judge, min_confidence) -> None:
     """TypeError or ValueError, before any training, for a library, judge or threshold an evaluation cannot use."""
-    for name, value in (("library", library), ("judge", judge)):
-        if not isinstance(value, TaskLibrary) and not (name == "judge" and value is None):
-            raise TypeError(f"evaluate_pairs: {name} must be a TaskLibrary{' or None' if name == 'judge' else ''}, "
-                            f"not {type(value).__name__}")
+    for name, value in (("library", library), ("judge", judge)):  # None: the default library, the learner's
+        if not isinstance(value, (TaskLibrary, type(None))):
+            raise TypeError(f"evaluate_pairs: {name} must be a TaskLibrary or None, not {type(value).__name__}")
     if min_confidence is None:
         raise ValueError("evaluate_pairs: min_confidence must be a number from 0 to 1, got None")
     check_threshold("evaluate_pairs", "min_confidence", min_confidence)

@@ -493,8 +493,8 @@ def test_evaluations_refuse_what_they_cannot_use_before_training(williams_comman
     small = williams_commands
     with pytest.raises(TypeError, match="evaluate_pairs: judge must be a TaskLibrary or None, not str"):
         evaluate_pairs(small, small, williams_library, judge="williams2018")
-    with pytest.raises(TypeError, match="evaluate_pairs: library must be a TaskLibrary, not NoneType"):
-        evaluate_pairs(small, small, None)
+    with pytest.raises(TypeError, match="evaluate_pairs: library must be a TaskLibrary or None, not str"):
+        evaluate_pairs(small, small, "williams2018")
     for bad in (float("nan"), 5, -1, True, "0.7"):  # nan had reported accuracy nan at coverage 0, after training
         with pytest.raises(ValueError, match="min_confidence must be a number from 0 to 1"):
             evaluate_pairs(small, small, williams_library, min_confidence=bad)
