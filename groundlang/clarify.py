@@ -48,7 +48,9 @@ class AnswerError(ValueError):
 
 
 def competing(groups: Sequence[GoalGroup]) -> list[GoalGroup]:
-    """The groups worth asking about: those within RELATIVE_FLOOR of the best (at most MAX_CHOICES)."""
+    """The groups worth asking about: those within RELATIVE_FLOOR of the best (at most MAX_CHOICES); none of none."""
+    if not groups:
+        return []
     top = groups[0].probability
     return [g for g in groups if g.probability >= RELATIVE_FLOOR * top][:MAX_CHOICES]
 
@@ -86,7 +88,9 @@ def _differing_object(choices: Sequence[GoalGroup]) -> list[str] | None:
 
 
 def question(choices: Sequence[GoalGroup], unknown: Sequence[str], state: State, library: TaskLibrary) -> str:
-    """One line: the unknown words, then which of ``choices`` is meant."""
+    """One line: the unknown words, then which of ``choices`` is meant. ValueError for no choices."""
+    if not choices:
+        raise ValueError("question: no choices to ask about")
     said = ""
     if unknown:
         # a word file's multiword entry ("coffee_table") is said as it was written

@@ -303,3 +303,11 @@ def test_confidences_are_shown_rounded_down_so_a_threshold_is_never_contradicted
 
     assert [_places(t) for t in (0.7, 0.995, 0.9961, 0.12345678)] == [2, 3, 4, 6]
     assert _down(0.996, _places(0.995)) == "0.996"
+
+
+def test_no_choices_are_no_question(novel_b, library):
+    from groundlang.clarify import competing
+
+    assert competing([]) == []  # an IndexError
+    with pytest.raises(ValueError, match="question: no choices to ask about"):  # "Do you mean ?"
+        question([], (), novel_b, library)
