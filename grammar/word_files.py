@@ -13,7 +13,7 @@ import os
 import re
 import unicodedata
 import stat
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 __all__ = [
@@ -65,7 +65,7 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
                            f"{', '.join(FILE_CATEGORIES)}")
     if isinstance(words, str):
         raise LexiconError(f"{where}: the words of {category} must be a list of words, not one string")
-    if not isinstance(words, (list, tuple)):
+    if isinstance(words, (bytes, bytearray, Mapping)) or not isinstance(words, Iterable):
         raise LexiconError(f"{where}: the words of {category} must be a list of words, not {type(words).__name__}")
     out = []
     for word in words:

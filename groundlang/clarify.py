@@ -10,7 +10,9 @@ don't know the word 'purple'."): they are why the words could not decide.
 An answer is a number (the choice's place in the list, from 1) or words.
 Words choose the choice whose phrase shares the most words with the answer,
 counting only words that set the phrases apart ("the green one" picks "the
-green room" among rooms; "room" and "the" count for none); when none shares one,
+green room" among rooms; "room" and "the" count for none); words after a negation
+in their clause name the choices left out ("not the red one", "red, not blue": see
+:func:`_said_and_denied`); when none shares one,
 or two tie, the answer is read by the model as a description of the object
 asked for ("the tan one" in a model that learned "tan"), and counts only where
 its words are themselves evidence for one choice: the reading with them is at
@@ -38,6 +40,8 @@ from groundlang.wording import choice_list, goal_phrase, object_phrase
 
 __all__ = ["AnswerError", "competing", "unknown_words", "question", "choose", "clear_choice"]
 
+# Tokens that end a clause of an answer, and with it what a negation in it denies.
+_CLAUSE_ENDS = frozenset({",", ".", ";", ":", "!", "?", "but"})
 # A group is offered when it has at least this share of the most probable group's probability.
 RELATIVE_FLOOR = 0.1
 MAX_CHOICES = 6
@@ -152,32 +156,46 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
         raise AnswerError(f"{shown(repr(text), limit=60)} does not name the choice ({phrases[0]}): answer 1, or "
                           "its words, to act on it")
     telling = set().union(*named) - set.intersection(*named)  # words some phrases have and others lack
-    words = _words(text) & telling
+    said_words, denied_words = _said_and_denied(text)
+    words = said_words & telling
     overlap = [len(words & n) for n in named]
-    if _negated(text):  # "not the red one": the choices it names are the ones left out
-        left = [c for c, shared in zip(choices, overlap) if not shared]
-        if words and len(left) == 1:
+    denied = {k for k, n in enumerate(named) if denied_words & telling & n}
+    if denied and not words:  # "not the red one": the choices it names are the ones left out
+        left = [c for k, c in enumerate(choices) if k not in denied]
+        if len(left) == 1:
             return left[0]
-        said = ("leaves out every choice" if not left else
-                f"leaves out {len(choices) - len(left)} of the choices, so more than one is left" if words else
-                "names no choice, so each is left")
+        said = "leaves out every choice" if not left else "leaves out some choices, so more than one is left"
         raise AnswerError(f"{shown(repr(text), limit=60)} says what is not meant and {said} ({choice_list(phrases)}): "
                           f"answer with the number, 1 to {len(choices)}, or the words of the one meant")
+    overlap = [0 if k in denied else shared for k, shared in enumerate(overlap)]  # "red, not blue": red
     best = max(overlap)
     if best > 0 and overlap.count(best) == 1:
         return choices[overlap.index(best)]
     chosen = read(text, choices) if read is not None else None
     if chosen is None:
-        raise AnswerError(f"{shown(repr(text), limit=60)} names none of the choices ({choice_list(phrases)}): "
+        how = "names more than one" if best > 0 else "names none"
+        raise AnswerError(f"{shown(repr(text), limit=60)} {how} of the choices ({choice_list(phrases)}): "
                           f"answer with their number, 1 to {len(choices)}, or their words")
     return chosen
 
 
-def _negated(text: str) -> bool:
-    """Whether the answer has a word English lists as a negation (``NEG`` of grammar/english.words), or one
-    ending in the negating clitic ("isn't", which the tokeniser keeps whole)."""
+def _said_and_denied(text: str) -> tuple[set[str], set[str]]:
+    """The answer's words said of the choice meant, and those a negation denies: a word English lists as a
+    negation (``NEG`` of grammar/english.words, or one ending in the clitic n't, which the tokeniser keeps
+    whole) denies the words after it up to the clause's end (a comma, a full stop, "but"): "not the red one",
+    "the one that isn't red", "red, not blue"; "no, the red one" and "the red one, no?" deny nothing named."""
     english = Lexicon.english()
-    return any("NEG" in english.listed(token) or token.endswith("n't") for token in tokenise(text))
+    said: set[str] = set()
+    denied: set[str] = set()
+    negating = False
+    for token in tokenise(text):
+        if token in _CLAUSE_ENDS:
+            negating = False
+        elif "NEG" in english.listed(token) or token.endswith("n't"):
+            negating = True
+        else:
+            (denied if negating else said).update(_words(token))
+    return said, denied
 
 
 def clear_choice(goals: dict, choices: Sequence[GoalGroup], before: dict | None = None) -> GoalGroup | None:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import multiprocessing
+import numbers
 import os
 import time
 from collections import defaultdict
@@ -96,9 +97,9 @@ def cross_validate_pairs(commands: list[Command], folds: int, library, workers: 
     trained on, and the folds cut the rest: cross-validation to choose mechanisms on. Raises ValueError for a
     fold count out of range or a fold that holds out nothing or leaves nothing to train on, before any fold
     is trained."""
-    if isinstance(folds, bool) or not isinstance(folds, int):
+    if isinstance(folds, bool) or not isinstance(folds, numbers.Integral):
         raise TypeError(f"cross_validate_pairs: folds must be an integer, not {type(folds).__name__}")
-    if isinstance(beyond, bool) or not isinstance(beyond, (int, float)) or not 0 <= beyond < 1:
+    if isinstance(beyond, bool) or not isinstance(beyond, numbers.Real) or not 0 <= beyond < 1:
         raise ValueError(f"cross_validate_pairs: beyond must be a fraction from 0 to below 1, got {beyond!r:.40}")
     check_pair_evaluation(library, options.get("judge"), min_confidence)
     if not 2 <= folds <= MAX_FOLDS:

@@ -169,7 +169,9 @@ def test_word_sources_of_the_wrong_type_are_named(lexicon, trained):
 def test_add_words_names_what_is_wrong(trained):
     from groundlang.grammar.lexicon import LexiconError
 
+    trained.add_words({"NOUN": {"mug"}})  # any iterable of words but text, bytes or a mapping
     for words, said in (({"NOUN": None}, "the words of NOUN must be a list of words, not NoneType"),
+                        ({"NOUN": b"mug"}, "the words of NOUN must be a list of words, not bytes"),
                         ("", "word file '': not a file name"),  # it had opened the working folder
                         ("\x00", "not a file name"),
                         ({"NOUN": ["\ud800"]}, "is not text (a lone surrogate)")):  # had been saved with the model

@@ -108,12 +108,20 @@ def test_a_negated_answer_names_the_choices_it_leaves_out(novel_b, library):
     assert choose("not the red one", two, novel_b, library) is two[1]
     assert choose("the one that isn't red", two, novel_b, library) is two[1]
     assert choose("not the blue room", two, novel_b, library) is two[0]
-    with pytest.raises(AnswerError, match="leaves out 1 of the choices, so more than one is left"):
+    with pytest.raises(AnswerError, match="leaves out some choices, so more than one is left"):
         choose("not the red one", rooms, novel_b, library)
-    with pytest.raises(AnswerError, match="names no choice, so each is left"):
+    with pytest.raises(AnswerError, match="'no' names none of the choices"):
         choose("no", two, novel_b, library)
     with pytest.raises(AnswerError, match="leaves out every choice"):
         choose("not red or blue", two, novel_b, library)
+    assert choose("not red or blue", rooms, novel_b, library) is rooms[2]
+    # a negation denies what follows it in its clause: "no, the red one" is the red one, not the blue
+    for answer in ("no, the red one", "no, red", "the red one, no?", "the red one no doubt", "red isn't it",
+                   "red, not blue", "not blue, red"):
+        assert choose(answer, two, novel_b, library) is two[0], answer
+    assert choose("the red one, not the blue one", rooms, novel_b, library) is rooms[0]  # had been green
+    with pytest.raises(AnswerError, match="names more than one of the choices"):
+        choose("the red one. no wait, the blue one", rooms, novel_b, library)
     # a question of one choice: words all from its phrase, and some words
     for nothing in ("?", "...", "\u202e"):
         with pytest.raises(AnswerError, match="does not name the choice"):
@@ -311,3 +319,11 @@ def test_no_choices_are_no_question(novel_b, library):
     assert competing([]) == []  # an IndexError
     with pytest.raises(ValueError, match="question: no choices to ask about"):  # "Do you mean ?"
         question([], (), novel_b, library)
+
+
+def test_cli_guess_takes_no_threshold(model_dir, capsys):
+    """--guess acts however unsure: a --min-confidence beside it had been dropped without a word."""
+    assert _follow(model_dir, "go to the purple room", "--guess", "--min-confidence", "0.9") == 2
+    assert capsys.readouterr().err.strip() == ("groundlang follow: error: --guess acts however unsure, so "
+                                               "--min-confidence 0.9 would do nothing: give one or the other")
+    assert _follow(model_dir, "go to the purple room", "--guess") == 0

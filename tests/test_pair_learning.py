@@ -502,6 +502,8 @@ def test_evaluations_refuse_what_they_cannot_use_before_training(williams_comman
             cross_validate_pairs(small, 2, williams_library, min_confidence=bad)
     with pytest.raises(TypeError, match="folds must be an integer, not float"):
         cross_validate_pairs(small, 2.5, williams_library)
+    with pytest.raises(ValueError, match="--folds 1: expected 2 to"):  # a numpy integer is an integer
+        cross_validate_pairs(small, np.int64(1), williams_library, beyond=np.float32(0.2))
     with pytest.raises(ValueError, match="beyond must be a fraction from 0 to below 1"):
         cross_validate_pairs(small, 2, williams_library, beyond=None)
     with pytest.raises(TypeError, match="judge must be a TaskLibrary or None, not int"):

@@ -49,7 +49,7 @@ def register(subparsers) -> None:
     p.add_argument("--top", type=positive_int, default=5, help="how many goals to list with their probabilities (default 5)")
     p.add_argument("--max-steps", type=positive_int, default=200,
                    help="stop acting after this many steps if the goal does not hold by then (default 200)")
-    p.add_argument("--min-confidence", type=fraction, default=DEFAULT_MIN_CONFIDENCE, metavar="P",
+    p.add_argument("--min-confidence", type=fraction, default=None, metavar="P",
                    help="ask instead of acting when the confidence (how likely what was meant holds where it would "
                         "end) is below P, 0 to 1 "
                         f"(default {DEFAULT_MIN_CONFIDENCE}, chosen on held-out crowd commands; see README)")
@@ -212,6 +212,11 @@ def run(args: argparse.Namespace) -> int:
 
     if args.learn and not args.ask:
         raise ValueError("--learn learns from the answer to a question: use it with --ask")
+    if args.guess and args.min_confidence is not None:  # it had been dropped without a word
+        raise ValueError(f"--guess acts however unsure, so --min-confidence {args.min_confidence!r} would do "
+                         "nothing: give one or the other")
+    if args.min_confidence is None:
+        args.min_confidence = DEFAULT_MIN_CONFIDENCE
     if args.out:
         from groundlang.render import check_picture_destination
 
