@@ -276,6 +276,15 @@ def _toy_symbols(state: State) -> list[str]:
     return [str(i % 10) for i in range(len(state.toys))]
 
 
+def _room_symbols(state: State) -> list[str]:
+    """Colour initials in lower case, or letters in order when two rooms' initials would collide (two red
+    rooms, or a green and a gray one): a picture whose rooms look alike says nothing of which is which."""
+    initials = [r.colour[:1].lower() for r in state.layout.rooms]
+    if len(set(initials)) == len(initials):
+        return initials
+    return [chr(ord("a") + i % 26) for i in range(len(initials))]
+
+
 def ascii_state(state: State, names: Mapping[str, str] | None = None) -> str:
     """A text picture, north up: ``#`` wall, ``+`` door, room floors by colour initial, ``A`` agent, toys.
 
@@ -287,8 +296,9 @@ def ascii_state(state: State, names: Mapping[str, str] | None = None) -> str:
     grid = np.full((lay.width, lay.height), " ", dtype="<U1")
     grid[lay.wall] = "#"
     grid[lay.wall & lay.walkable] = "+"
-    for r in lay.rooms:
-        grid[r.left + 1 : r.right, r.bottom + 1 : r.top] = r.colour[:1].lower()
+    rooms = _room_symbols(state)
+    for sym, r in zip(rooms, lay.rooms):
+        grid[r.left + 1 : r.right, r.bottom + 1 : r.top] = sym
     symbols = _toy_symbols(state)
     for sym, toy in zip(symbols, state.toys):
         grid[toy.x, toy.y] = sym
@@ -297,8 +307,8 @@ def ascii_state(state: State, names: Mapping[str, str] | None = None) -> str:
     legend = [f"legend: # wall, + door, A {shown(lay.movable_names[0])}"]
     legend += [f"  {s} {shown(name)} ({t.colour} {t.shape}{_added(lay, name)})"
                for s, name, t in zip(symbols, lay.toy_names, state.toys)]
-    legend += [f"  {r.colour[:1].lower()} {shown(name)} ({r.colour}{_added(lay, name)})"
-               for name, r in zip(lay.room_names, lay.rooms)]
+    legend += [f"  {sym} {shown(name)} ({r.colour}{_added(lay, name)})"
+               for sym, name, r in zip(rooms, lay.room_names, lay.rooms)]
     return "\n".join(rows + legend)
 
 

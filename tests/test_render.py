@@ -240,3 +240,22 @@ def test_every_printable_ascii_glyph_is_drawable_mathtext():
     parser = MathTextParser("agg")
     for code in range(33, 127):
         parser.parse(_mathtext(chr(code)))  # raises for a glyph mathtext cannot draw
+
+
+def test_ascii_rooms_of_one_initial_are_told_apart():
+    """Two red rooms had both been drawn 'r' (the legend naming both): letters in order where initials collide."""
+    from groundlang.bdm import parse_bdm_state
+
+    def line(first: str, second: str) -> str:
+        return ("{agent0 (agent): [x: {2} y: {2} ] , door0 (door): [top: {4} left: {2} bottom: {4} right: {2} ] , "
+                "door1 (door): [top: {4} left: {6} bottom: {4} right: {6} ] , "
+                f"room0 (room): [top: {{4}} left: {{0}} bottom: {{0}} right: {{8}} colour: {{{first}}} ] , "
+                f"room1 (room): [top: {{8}} left: {{0}} bottom: {{4}} right: {{4}} colour: {{{second}}} ] , "
+                "room2 (room): [top: {8} left: {4} bottom: {4} right: {8} colour: {green} ] , }")
+
+    same = ascii_state(parse_bdm_state(line("red", "red"))[0]).splitlines()
+    assert same[:9] == ["#########", "#bbb#ccc#", "#bbb#ccc#", "#bbb#ccc#", "##+###+##",
+                        "#aaaaaaa#", "#aAaaaaa#", "#aaaaaaa#", "#########"]
+    assert same[-3:] == ["  a room0 (red)", "  b room1 (red)", "  c room2 (green)"]
+    apart = ascii_state(parse_bdm_state(line("red", "blue"))[0])
+    assert "  r room0 (red)\n  b room1 (blue)\n  g room2 (green)" in apart and "#bbb#ggg#" in apart
