@@ -107,13 +107,14 @@ def main(argv: list[str] | None = None) -> int:
 
 def run() -> None:
     """The ``groundlang`` command: :func:`main`, then the process ends with its code. When a grounding
-    that timed out still runs (a layout too large for the time limit), the interpreter's normal exit
-    would wait on it or crash in clingo's native code: what was to be said is written, so the process
-    ends at once."""
+    that timed out still runs (a layout too large for the time limit), or an interrupt stopped the work
+    while native threads ran (torch's, clingo's), the interpreter's normal exit would wait on them or
+    crash in their code ("terminate called without an active exception", a Ctrl-C during training): what
+    was to be said is written, and what was written is whole, so the process ends at once."""
     from groundlang.logic.program import grounding_left_running
 
     code = main()
-    if grounding_left_running():
+    if code == 130 or grounding_left_running():
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)
