@@ -18,7 +18,7 @@ from importlib.resources import files
 from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.relevance import STATE_SOURCE, reading_states
-from groundlang.pair_tasks import command_task, layout_fits, reachable, text_agreement
+from groundlang.pair_tasks import command_task, reachable, text_agreement
 
 __all__ = ["check_bdm", "default_library", "is_corpus_library"]
 
@@ -38,6 +38,7 @@ def is_corpus_library(library: TaskLibrary) -> bool:
     return [s.text for s in library.program.sources] == [s.text for s in default_library().program.sources]
 
 
+@reading_states()
 def check_bdm(args: argparse.Namespace) -> int:
     paths = bdm_files(args.directory, any_name=getattr(args, "format", None) == "williams2018")
     if not paths:
@@ -53,17 +54,17 @@ def check_bdm(args: argparse.Namespace) -> int:
     sizes = Counter((p.start.layout.width - 1, p.start.layout.height - 1, len(p.start.toys)) for _, p in pairs)
     # Everything is computed before anything is printed: a pair that cannot be read as a task (a layout
     # too large to tabulate) is then one error line, not a summary cut off by it.
-    unreachable, unchecked = [], 0
-    with reading_states():
-        for command, pair in pairs:
-            STATE_SOURCE.set(where := f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
-            layout_fits(pair.start.layout, where)  # before its states are enumerated
-            found = reachable(pair.start, pair.end)
-            if found is None:
-                unchecked += 1
-            elif not found:
-                unreachable.append((command, pair))
+    # The tasks first: reading one refuses a layout too large to tabulate, by file and line, before any of its
+    # states is enumerated (the reachability check had taken gigabytes to get there).
     tasks = [command_task(c, library) for c in commands]
+    unreachable, unchecked = [], 0
+    for command, pair in pairs:
+        STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
+        found = reachable(pair.start, pair.end)
+        if found is None:
+            unchecked += 1
+        elif not found:
+            unreachable.append((command, pair))
     empty = [c for c, task in zip(commands, tasks) if not task]
     print(f"corpus: {', '.join(map(str, paths))} (palette {palette})")
     distinct = len({c.text for c in commands})

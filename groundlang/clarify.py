@@ -158,7 +158,6 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     telling = set().union(*named) - set.intersection(*named)  # words some phrases have and others lack
     said_words, denied_words = _said_and_denied(text)
     words = said_words & telling
-    overlap = [len(words & n) for n in named]
     denied = {k for k, n in enumerate(named) if denied_words & telling & n}
     if denied and not words:  # "not the red one": the choices it names are the ones left out
         left = [c for k, c in enumerate(choices) if k not in denied]
@@ -167,7 +166,7 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
         said = "leaves out every choice" if not left else "leaves out some choices, so more than one is left"
         raise AnswerError(f"{shown(repr(text), limit=60)} says what is not meant and {said} ({choice_list(phrases)}): "
                           f"answer with the number, 1 to {len(choices)}, or the words of the one meant")
-    overlap = [0 if k in denied else shared for k, shared in enumerate(overlap)]  # "red, not blue": red
+    overlap = [0 if k in denied else len(words & n) for k, n in enumerate(named)]  # "red, not blue": red
     best = max(overlap)
     if best > 0 and overlap.count(best) == 1:
         return choices[overlap.index(best)]

@@ -177,6 +177,7 @@ class TrainingPairs:
         return dict(Counter(why for _, _, why in self.skipped))
 
 
+@reading_states()  # each pair named in the log lines of the spaces sized for it
 def training_instances(commands: list[Command], library: TaskLibrary, demonstrations: str = "end-state",
                        skip_inconsistent: bool = False, max_states: int = REACHABILITY_MAX_STATES,
                        layouts: str = "shared", cache_dir=None) -> TrainingPairs:
@@ -197,53 +198,52 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
     out = TrainingPairs()
     noise = EndStateNoise()
     cache = EvidenceCache(library, noise, cache_dir) if demonstrations == "end-state" else None
-    with reading_states():
-        for index, command in enumerate(commands):
-            usable = []
-            for pair in command.pairs:
-                STATE_SOURCE.set(where := f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
-                layout_fits(pair.start.layout, where)  # before its states are enumerated or its layout grounded
-                if not _fits(pair, demonstrations, max_states):
+    for index, command in enumerate(commands):
+        usable = []
+        for pair in command.pairs:
+            STATE_SOURCE.set(where := f"{command.path}, line {pair.line}")
+            layout_fits(pair.start.layout, where)  # before its states are enumerated or its layout grounded
+            if not _fits(pair, demonstrations, max_states):
+                out.skipped.append((command, pair, "too large"))
+                continue
+            if demonstrations == "shortest-plan":
+                actions = shortest_actions(pair.start, pair.end, max_states)
+                instance = None if actions is None else Instance(
+                    Path(f"{command.path}:{pair.line}"), command.text, actions, tuple(replay(pair.start, actions)))
+            else:
+                try:  # enumerates the pair's states once: the reachability check and the evidence
+                    evidence = cache.evidence(pair.start, pair.end, max_states)
+                except StateKeyError:  # more moving blocks than a state's key holds: too large, as above
                     out.skipped.append((command, pair, "too large"))
                     continue
-                if demonstrations == "shortest-plan":
-                    actions = shortest_actions(pair.start, pair.end, max_states)
-                    instance = None if actions is None else Instance(
-                        Path(f"{command.path}:{pair.line}"), command.text, actions, tuple(replay(pair.start, actions)))
+                except StateSpaceError:
+                    instance = None
                 else:
-                    try:  # enumerates the pair's states once: the reachability check and the evidence
-                        evidence = cache.evidence(pair.start, pair.end, max_states)
-                    except StateKeyError:  # more moving blocks than a state's key holds: too large, as above
-                        out.skipped.append((command, pair, "too large"))
-                        continue
-                    except StateSpaceError:
-                        instance = None
-                    else:
-                        instance = PairInstance(command.path, pair.line, command.text, pair.start, pair.end,
-                                                evidence=(evidence,))
-                if instance is None:
-                    if not skip_inconsistent:
-                        raise InconsistentDemonstration(
-                            f"{command.path}, line {pair.line}: the end state cannot be reached from the start state "
-                            "under the project's dynamics (pass --skip-inconsistent to skip such pairs)",
-                            Path(command.path), pair.line, 0)
-                    out.skipped.append((command, pair, "unreachable"))
-                    continue
-                if not _admits_task(instance, library):
-                    if not skip_inconsistent:
-                        raise InconsistentDemonstration(
-                            f"{command.path}, line {pair.line}: no task of the library can be carried out from the start "
-                            "state (every grounding is impossible or already true), so the pair is evidence of none "
-                            "(pass --skip-inconsistent to skip such pairs)", Path(command.path), pair.line, 0)
-                    out.skipped.append((command, pair, "no task"))
-                    continue
-                usable.append(instance)
-            if layouts == "shared" and usable:
-                usable = [PairedCommand(command.path, command.line, command.text,
-                                        tuple((i.initial_state, i.final_state) for i in usable),
-                                        evidence=tuple(e for i in usable for e in i.evidence))]
-            out.instances.extend(usable)
-            out.commands.extend([index] * len(usable))
+                    instance = PairInstance(command.path, pair.line, command.text, pair.start, pair.end,
+                                            evidence=(evidence,))
+            if instance is None:
+                if not skip_inconsistent:
+                    raise InconsistentDemonstration(
+                        f"{where}: the end state cannot be reached from the start state "
+                        "under the project's dynamics (pass --skip-inconsistent to skip such pairs)",
+                        Path(command.path), pair.line, 0)
+                out.skipped.append((command, pair, "unreachable"))
+                continue
+            if not _admits_task(instance, library):
+                if not skip_inconsistent:
+                    raise InconsistentDemonstration(
+                        f"{where}: no task of the library can be carried out from the start "
+                        "state (every grounding is impossible or already true), so the pair is evidence of none "
+                        "(pass --skip-inconsistent to skip such pairs)", Path(command.path), pair.line, 0)
+                out.skipped.append((command, pair, "no task"))
+                continue
+            usable.append(instance)
+        if layouts == "shared" and usable:
+            usable = [PairedCommand(command.path, command.line, command.text,
+                                    tuple((i.initial_state, i.final_state) for i in usable),
+                                    evidence=tuple(e for i in usable for e in i.evidence))]
+        out.instances.extend(usable)
+        out.commands.extend([index] * len(usable))
     if cache is not None:
         cache.report()
     return out

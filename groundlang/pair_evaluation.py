@@ -174,6 +174,7 @@ def failure_kind(goal, task: frozenset[Atom], missing: frozenset[Atom], reached:
     return "more than the goal" if asked <= {atom.predicate for atom in task} else "another relation"
 
 
+@reading_states()  # each test pair named in the log lines of the spaces sized for it
 def evaluate_pairs(train: list[Command], test: list[Command], library, demonstrations: str = "end-state",
                    layouts: str = "shared", skip_inconsistent: bool = False, learner_options: dict | None = None,
                    max_states: int = REACHABILITY_MAX_STATES, progress: bool = False,
@@ -200,55 +201,54 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     per_task: dict[str, list[int]] = defaultdict(lambda: [0, 0])
     failures: dict[str, dict[str, int]] = defaultdict(dict)  # kind -> the relations left unmet -> count
     correct = n = commands_correct = scored = no_task = unseen_n = unseen_correct = skipped = unscored = 0
-    with reading_states():
-        for index, (command, task) in enumerate(zip(test, tasks)):
-            unseen = command.text.strip().lower() not in seen
-            all_right = True
-            followed = 0  # executions of the command that could be scored
-            for k, pair in enumerate(command.pairs):
-                STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
-                row = {"index": index, "pair": k, "command": command.text}
-                try:  # a layout too large to enumerate is planned in its relevance abstraction (model.relevance)
-                    result = learner.follow(command.text, pair.start)
-                except NoTaskError as exc:  # nothing can be asked there, so no reading is right or wrong
-                    row.update(goal=None, final_state=None, not_scored=f"{command.path}, line {pair.line}: {exc}")
-                    unscored += 1
-                    rows.append(row)
-                    continue
-                except StateSpaceError as exc:  # what neither the exact space nor the abstraction can hold
-                    row.update(goal=None, final_state=None, skipped=str(exc), confidence=0.0)
-                    skipped += 1
-                    missing, kind = task, "skipped"
-                else:
-                    names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
-                    row.update(goal=format_goal(result.goal, names),
-                               final_state=format_bdm_state(result.final_state, pair.toy_names),
-                               confidence=float(result.confidence), out_of_reach=float(result.posterior.out_of_reach))
-                    missing = task - lifted_facts(result.final_state, judge)  # pair_tasks.satisfies, keeping what is unmet
-                    kind = failure_kind(result.goal, task, missing, result.reached) if missing else None
-                hit = bool(task) and kind is None
-                if task:
-                    row["correct"] = hit
-                    if not hit:
-                        row.update(failure=kind, unmet=sorted(map(str, missing)))
-                        unmet = "+".join(sorted({a.predicate for a in missing})) or "(none)"
-                        failures[kind][unmet] = failures[kind].get(unmet, 0) + 1
-                    n += 1
-                    correct += hit
-                    per_task[_task_kind(task)][0] += hit
-                    per_task[_task_kind(task)][1] += 1
-                    if unseen:
-                        unseen_n += 1
-                        unseen_correct += hit
-                all_right &= hit
-                followed += 1
+    for index, (command, task) in enumerate(zip(test, tasks)):
+        unseen = command.text.strip().lower() not in seen
+        all_right = True
+        followed = 0  # executions of the command that could be scored
+        for k, pair in enumerate(command.pairs):
+            STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
+            row = {"index": index, "pair": k, "command": command.text}
+            try:  # a layout too large to enumerate is planned in its relevance abstraction (model.relevance)
+                result = learner.follow(command.text, pair.start)
+            except NoTaskError as exc:  # nothing can be asked there, so no reading is right or wrong
+                row.update(goal=None, final_state=None, not_scored=f"{command.path}, line {pair.line}: {exc}")
+                unscored += 1
                 rows.append(row)
-            if task and followed:
-                scored += 1
-                commands_correct += all_right
-            elif not task:
-                no_task += 1
-            # (A task shown, yet no start state admits one: its executions are counted as not scored.)
+                continue
+            except StateSpaceError as exc:  # what neither the exact space nor the abstraction can hold
+                row.update(goal=None, final_state=None, skipped=str(exc), confidence=0.0)
+                skipped += 1
+                missing, kind = task, "skipped"
+            else:
+                names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
+                row.update(goal=format_goal(result.goal, names),
+                           final_state=format_bdm_state(result.final_state, pair.toy_names),
+                           confidence=float(result.confidence), out_of_reach=float(result.posterior.out_of_reach))
+                missing = task - lifted_facts(result.final_state, judge)  # pair_tasks.satisfies, keeping what is unmet
+                kind = failure_kind(result.goal, task, missing, result.reached) if missing else None
+            hit = bool(task) and kind is None
+            if task:
+                row["correct"] = hit
+                if not hit:
+                    row.update(failure=kind, unmet=sorted(map(str, missing)))
+                    unmet = "+".join(sorted({a.predicate for a in missing})) or "(none)"
+                    failures[kind][unmet] = failures[kind].get(unmet, 0) + 1
+                n += 1
+                correct += hit
+                per_task[_task_kind(task)][0] += hit
+                per_task[_task_kind(task)][1] += 1
+                if unseen:
+                    unseen_n += 1
+                    unseen_correct += hit
+            all_right &= hit
+            followed += 1
+            rows.append(row)
+        if task and followed:
+            scored += 1
+            commands_correct += all_right
+        elif not task:
+            no_task += 1
+        # (A task shown, yet no start state admits one: its executions are counted as not scored.)
     finished = time.perf_counter()
 
     calibration, command_calibration = calibration_of_rows(rows, min_confidence)
