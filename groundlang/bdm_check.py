@@ -18,7 +18,7 @@ from importlib.resources import files
 from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.relevance import STATE_SOURCE, reading_states
-from groundlang.pair_tasks import command_task, reachable, text_agreement
+from groundlang.pair_tasks import command_task, reachable, tabulation_refusal, text_agreement
 
 __all__ = ["check_bdm", "default_library", "is_corpus_library"]
 
@@ -52,20 +52,22 @@ def check_bdm(args: argparse.Namespace) -> int:
     pairs = [(c, p) for c in commands for p in c.pairs]
     layouts = {p.start.layout for _, p in pairs}
     sizes = Counter((p.start.layout.width - 1, p.start.layout.height - 1, len(p.start.toys)) for _, p in pairs)
-    # Everything is computed before anything is printed: a pair that cannot be read as a task (a layout
-    # too large to tabulate) is then one error line, not a summary cut off by it.
-    # The tasks first: reading one refuses a layout too large to tabulate, by file and line, before any of its
-    # states is enumerated (the reachability check had taken gigabytes to get there).
+    # Everything is computed before anything is printed. A layout too large to tabulate is set aside before
+    # any of its states is enumerated or it is grounded (the reachability check had taken gigabytes to get
+    # there); a command's task is what its other pairs show.
+    too_large = [(c, p, why) for c, p in pairs if (why := tabulation_refusal(p.start.layout)) is not None]
     tasks = [command_task(c, library) for c in commands]
     unreachable, unchecked = [], 0
     for command, pair in pairs:
+        if tabulation_refusal(pair.start.layout) is not None:
+            continue
         STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
         found = reachable(pair.start, pair.end)
         if found is None:
             unchecked += 1
         elif not found:
             unreachable.append((command, pair))
-    empty = [c for c, task in zip(commands, tasks) if not task]
+    empty = [c for c, task in zip(commands, tasks) if task is not None and not task]
     print(f"corpus: {', '.join(map(str, paths))} (palette {palette})")
     distinct = len({c.text for c in commands})
     print(f"commands: {len(commands)} ({distinct} distinct text{'' if distinct == 1 else 's'})")
@@ -76,12 +78,18 @@ def check_bdm(args: argparse.Namespace) -> int:
     for command, pair in unreachable:
         print(f"  {command.path}, line {pair.line}: {command.text!r}")
     print(f"pairs not checked (too large even for the relevance abstraction, or not reached in it): {unchecked}")
+    print(f"pairs in a layout too large to tabulate (training skips them): {len(too_large)}")
+    for command, pair, why in too_large[:20]:
+        print(f"  {command.path}, line {pair.line}: {why}")
+    if len(too_large) > 20:
+        print(f"  ... and {len(too_large) - 20} more")
     print(f"commands whose pairs show no task: {len(empty)}")
     for c in empty[:20]:
         print(f"  {c.path}, line {c.line}: {c.text!r}")
     if len(empty) > 20:
         print(f"  ... and {len(empty) - 20} more")
-    texts, shared, covered = text_agreement(commands, tasks)
+    read = [(c, t) for c, t in zip(commands, tasks) if t is not None]
+    texts, shared, covered = text_agreement([c for c, _ in read], [t for _, t in read])
     if shared:
         print(f"commands whose text another command shares: {shared} ({texts} text{'' if texts == 1 else 's'}); "
               f"one task per text does what the pairs of at most {covered} of them show "

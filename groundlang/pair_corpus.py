@@ -11,7 +11,8 @@ Such a corpus shows no trajectory, so a pair becomes evidence in one of two ways
 Which is better was measured on a development split (ABLATIONS.md). End-state evidence is computed
 once per distinct pair and kept in the cache folder (``inference.evidence_cache``). A pair too large
 to enumerate is scored, with end-state evidence, in the relevance abstraction where the toys it moves
-move (``inference.shared_meaning``); one too large even for that is skipped and counted; one whose end
+move (``inference.shared_meaning``); one too large even for that, or in a layout whose PFs are too large
+to tabulate (``pf_tables.check_table_size``), is skipped and counted; one whose end
 state cannot be reached from its start is an inconsistent demonstration (an error naming file and
 line, or skipped with ``skip_inconsistent``), and so is one whose start state admits no task of the
 library (every grounding impossible or already true): it can be evidence of no reading.
@@ -35,7 +36,7 @@ from groundlang.model.state_search import StateKeyError
 from groundlang.model.statespace import StateSpaceError
 from groundlang.model.tasks import candidate_tasks
 from groundlang.model.world import State, replay
-from groundlang.pair_tasks import REACHABILITY_MAX_STATES, layout_fits, shortest_actions
+from groundlang.pair_tasks import REACHABILITY_MAX_STATES, shortest_actions, tabulation_refusal
 
 __all__ = ["PairInstance", "PairedCommand", "PairCorpus", "LAYOUTS", "read_pair_corpus", "training_instances", "held_out_by_text",
            "text_position", "fold_of_text", "DEMONSTRATIONS"]
@@ -182,7 +183,7 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
                        skip_inconsistent: bool = False, max_states: int = REACHABILITY_MAX_STATES,
                        layouts: str = "shared", cache_dir=None) -> TrainingPairs:
     """The instances of ``commands``' pairs (see the module docstring); pairs too large to enumerate are
-    skipped as ``"too large"``, unreachable ones and those whose start state admits no task raise
+    skipped as ``"too large"`` (``"too large to tabulate"`` in a layout too large for PF tables), unreachable ones and those whose start state admits no task raise
     InconsistentDemonstration unless ``skip_inconsistent`` (then skipped as ``"unreachable"`` or
     ``"no task"``). With ``layouts="shared"`` (end-state
     evidence only) a command's usable pairs make one :class:`PairedCommand`. End-state evidence is read
@@ -202,7 +203,9 @@ def training_instances(commands: list[Command], library: TaskLibrary, demonstrat
         usable = []
         for pair in command.pairs:
             STATE_SOURCE.set(where := f"{command.path}, line {pair.line}")
-            layout_fits(pair.start.layout, where)  # before its states are enumerated or its layout grounded
+            if tabulation_refusal(pair.start.layout) is not None:  # before a state is enumerated or it is grounded
+                out.skipped.append((command, pair, "too large to tabulate"))
+                continue
             if not _fits(pair, demonstrations, max_states):
                 out.skipped.append((command, pair, "too large"))
                 continue

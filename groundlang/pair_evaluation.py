@@ -7,7 +7,9 @@ not in all its start states, the data README's rule); a command is correct when 
 are. A test command whose pairs show no task cannot be scored and is counted apart, and so is an
 execution from a start state that admits no task of the library (nothing to follow). A layout too large
 to enumerate is followed in its relevance abstraction; one too large even for that is counted as
-skipped (and wrong), never dropped silently. Training skips pairs too large to enumerate (counted).
+skipped (and wrong), never dropped silently, and so is one in a layout too large to tabulate (a command
+none of whose layouts can be is counted wrong in each). Training skips pairs too large to enumerate or
+tabulate (counted).
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from groundlang.model.interpretations import NoTaskError
 from groundlang.model.relevance import STATE_SOURCE, reading_states
 from groundlang.model.statespace import StateSpaceError
 from groundlang.pair_corpus import training_instances
-from groundlang.pair_tasks import REACHABILITY_MAX_STATES, command_task, lifted_facts
+from groundlang.pair_tasks import REACHABILITY_MAX_STATES, command_task, lifted_facts, tabulation_refusal
 
 __all__ = ["PairEvaluation", "evaluate_pairs", "calibration_of_rows", "failure_kind", "FAILURE_KINDS", "PUBLISHED_F1"]
 
@@ -42,7 +44,7 @@ PUBLISHED_F1 = 0.82
 # Why an execution failed, told from the goal acted on, what the pairs show and the final state alone
 # (no word is read), so that the kinds are counted the same way on any corpus of pairs.
 FAILURE_KINDS = {
-    "skipped": "too large to follow, even in the relevance abstraction",
+    "skipped": "too large to follow, even in the relevance abstraction, or its layout too large to tabulate",
     "unreached": "the goal acted on was not reached",
     "more than the goal": "the goal was met; the pairs also show a relation it does not ask for",
     "another relation": "a relation the pairs do not show was acted on",
@@ -121,7 +123,7 @@ class PairEvaluation:
             lines.append(f"executions not scored (their start state admits no task of the library): "
                          f"{self.no_task_executions}")
         if self.skipped_executions:
-            lines.append(f"executions skipped (too large even for the relevance abstraction; counted wrong "
+            lines.append(f"executions skipped (too large even for the relevance abstraction, or to tabulate; counted wrong "
                          f"above): {self.skipped_executions}")
         lines.append("per task (relations the pairs show), per execution:")
         for task, (k, n) in sorted(self.per_task.items(), key=lambda item: -item[1][1]):
@@ -155,6 +157,8 @@ def share(k: int, n: int) -> str:
 
 def _task_kind(task) -> str:
     """The relations a task is made of, without what is said of their arguments: ``agentInRoom``."""
+    if task is None:  # no layout of the command could be tabulated
+        return "(unknown: too large to tabulate)"
     return "+".join(sorted({atom.predicate for atom in task})) or "(none)"
 
 
@@ -193,7 +197,8 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     made = training_instances(train, library, demonstrations, skip_inconsistent=skip_inconsistent, max_states=max_states,
                               layouts=layouts)
     if not made.instances:
-        raise ValueError("no usable training pair (every pair was skipped)")
+        skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
+        raise ValueError(f"no usable training pair (every pair was skipped: {skipped or 'none read'})")
     learner = Learner(library=library, **(learner_options or {})).fit(made.instances, progress=progress)
     trained = time.perf_counter()
     seen = {c.text.strip().lower() for c in train}
@@ -208,7 +213,10 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         for k, pair in enumerate(command.pairs):
             STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
             row = {"index": index, "pair": k, "command": command.text}
+            too_large = tabulation_refusal(pair.start.layout)
             try:  # a layout too large to enumerate is planned in its relevance abstraction (model.relevance)
+                if too_large is not None:
+                    raise StateSpaceError(f"{command.path}, line {pair.line}: {too_large}")
                 result = learner.follow(command.text, pair.start)
             except NoTaskError as exc:  # nothing can be asked there, so no reading is right or wrong
                 row.update(goal=None, final_state=None, not_scored=f"{command.path}, line {pair.line}: {exc}")
@@ -218,7 +226,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
             except StateSpaceError as exc:  # what neither the exact space nor the abstraction can hold
                 row.update(goal=None, final_state=None, skipped=str(exc), confidence=0.0)
                 skipped += 1
-                missing, kind = task, "skipped"
+                missing, kind = task or frozenset(), "skipped"
             else:
                 names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
                 row.update(goal=format_goal(result.goal, names),
@@ -227,7 +235,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                 missing = task - lifted_facts(result.final_state, judge)  # pair_tasks.satisfies, keeping what is unmet
                 kind = failure_kind(result.goal, task, missing, result.reached) if missing else None
             hit = bool(task) and kind is None
-            if task:
+            if task or task is None:  # None: no layout of the command could be tabulated, all skipped (wrong)
                 row["correct"] = hit
                 if not hit:
                     row.update(failure=kind, unmet=sorted(map(str, missing)))
@@ -243,7 +251,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
             all_right &= hit
             followed += 1
             rows.append(row)
-        if task and followed:
+        if (task or task is None) and followed:
             scored += 1
             commands_correct += all_right
         elif not task:

@@ -23,7 +23,7 @@ from groundlang.model.relevance import AbstractStateSpace, state_space_for
 from groundlang.model.statespace import StateSpaceError
 from groundlang.model.world import State
 
-__all__ = ["lifted_facts", "pair_task", "command_task", "layout_fits", "satisfies", "reachable", "covers", "text_agreement",
+__all__ = ["lifted_facts", "pair_task", "command_task", "tabulation_refusal", "satisfies", "reachable", "covers", "text_agreement",
            "REACHABILITY_MAX_STATES"]
 
 # Upper bound (the enumerator's estimate) on the states a reachability check may enumerate: the 8x8
@@ -109,19 +109,23 @@ def pair_task(pairs, library: TaskLibrary | None = None, where: list[str] | None
     return frozenset.intersection(*ends) - frozenset.intersection(*starts)
 
 
-def layout_fits(layout, where: str) -> None:
-    """ValueError naming ``where`` (a pair's file and line) when the layout's PF tables would be too large
-    (``pf_tables.check_table_size``): checked before its states are enumerated or it is grounded."""
+def tabulation_refusal(layout) -> str | None:
+    """Why the layout's PF tables would be too large (``pf_tables.check_table_size``), or None where they are
+    not: asked before its states are enumerated or it is grounded."""
     try:
         check_table_size(layout)
     except TabulationError as exc:
-        raise ValueError(f"{where}: {exc}") from None
+        return str(exc)
+    return None
 
 
-def command_task(command, library: TaskLibrary | None = None) -> frozenset[Atom]:
-    """:func:`pair_task` of a ``.bdm`` command's pairs, a layout it cannot read named by file and line."""
-    return pair_task([(p.start, p.end) for p in command.pairs], library,
-                     [f"{command.path}, line {p.line}" for p in command.pairs])
+def command_task(command, library: TaskLibrary | None = None) -> frozenset[Atom] | None:
+    """:func:`pair_task` of a ``.bdm`` command's pairs whose layouts can be tabulated (None where none can: what
+    its pairs show cannot be read), a layout it cannot read otherwise named by file and line."""
+    pairs = [p for p in command.pairs if tabulation_refusal(p.start.layout) is None]
+    if not pairs:
+        return None
+    return pair_task([(p.start, p.end) for p in pairs], library, [f"{command.path}, line {p.line}" for p in pairs])
 
 
 def _by_relation(task: frozenset[Atom]) -> dict[str, set[tuple]]:

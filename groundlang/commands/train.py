@@ -83,6 +83,8 @@ def _pairs(args: argparse.Namespace):
     commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE, args.format == "williams2018").commands
     made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent, cache_dir=cache_option(args))
     skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
+    if not made.instances:
+        raise ValueError(f"{args.corpus}: no usable training pair (every pair was skipped: {skipped or 'none read'})")
     print(f"{len(commands)} commands, {sum(len(i.pairs) for i in made.instances)} pairs used"
           + (f"; pairs skipped: {skipped}" if skipped else ""))
     return made.instances, library
