@@ -465,12 +465,23 @@ def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys)
     outside.write_text(layout + " agent,3,8\n")  # in the blue room, room0
     capsys.readouterr()
     follow = ["--quiet", "follow", "go to the red room", "--model", str(model), "--palette", "sokoban", "--env"]
-    main([*follow, str(inside), "--json"])
-    done = json.loads(capsys.readouterr().out)["already_true"]
+    assert main([*follow, str(inside), "--json"]) == 0
+    answer = json.loads(capsys.readouterr().out)
+    done = answer["already_true"]
     assert done["goal"] == "agentInRoom(agent0, room2)" and done["probability"] > 0.9
-    main([*follow, str(inside)])
+    # as sure as acting needs: nothing is done (acting on the rest of the reading would go to another room)
+    assert answer["actions"] == [] and answer["reason"] == "already true" and answer["goal"] == done["goal"]
+    assert answer["final_state"] == inside.read_text().strip() and not answer["abstained"]
+    assert main([*follow, str(inside)]) == 0
+    out = capsys.readouterr().out
     assert re.search(r"^already true here: the agent in the red room .*agentInRoom\(agent0, room2\); the words "
-                     r"most probably ask for it \(0\.9\d of their reading", capsys.readouterr().out, re.M)
+                     r"most probably ask for it \(0\.9\d of their reading .*\): nothing to do\nplan \(0 steps\): \(none\)$",
+                     out, re.M)
+    assert "interpretations:" not in out
+    # less sure than --min-confidence asks: said, and the rest of the reading is what is weighed
+    main([*follow, str(inside), "--min-confidence", "0.9999"])
+    assert re.search(r"\), but such a goal asks nothing: the interpretations below are the rest\ninterpretations:",
+                     capsys.readouterr().out)
     # where it is not true yet, nothing is said
     assert main([*follow, str(outside), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["already_true"] is None

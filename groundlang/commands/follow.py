@@ -184,12 +184,47 @@ def _already_true(learner, command: str, state) -> tuple[tuple, float] | None:
     return (held.best_goal, held.confidence) if held.best_goal in goals_held_at_start(held) else None
 
 
-def _print_already_true(done, state, library, names, places: int) -> None:
+def _print_already_true(done, state, library, names, places: int, settled: bool) -> None:
     from groundlang.wording import labelled_goal
 
-    print(f"already true here: {labelled_goal(done[0], state, library, names)}; the words most probably "
-          f"ask for it ({_down(done[1], places)} of their reading with goals that hold at the start offered too), "
-          "but such a goal asks nothing: the interpretations below are the rest")
+    said = (f"already true here: {labelled_goal(done[0], state, library, names)}; the words most probably "
+            f"ask for it ({_down(done[1], places)} of their reading with goals that hold at the start offered too)")
+    print(f"{said}: nothing to do" if settled else
+          f"{said}, but such a goal asks nothing: the interpretations below are the rest")
+
+
+def _settled(done, args) -> bool:
+    """Whether the words ask for what already holds as surely as acting needs (``--min-confidence``, or
+    anyhow with ``--guess``): then nothing is done. Acting on the rest of their reading would do what was
+    not asked ("stay in the blue room" said in it had pushed a chair there)."""
+    return done is not None and (args.guess or done[1] >= args.min_confidence)
+
+
+def _nothing_to_do(done, state, library, names, args) -> int:
+    """What follow says and writes where the words ask for what already holds: no plan, the start kept."""
+    from groundlang.corpus import format_state_like
+    from groundlang.logic.atoms import format_goal, renamed_words
+    from groundlang.wording import goal_phrase
+
+    if args.out:
+        from groundlang.render import picture_title, save_picture
+
+        save_picture(args.out, state, trajectory=[state], title=picture_title(
+            args.command_text, renamed_words(goal_phrase(done[0], state, library), names), format_goal(done[0], names)),
+            names=names)
+    if args.json:
+        goal = {"goal": format_goal(done[0], names), "words": renamed_words(goal_phrase(done[0], state, library), names),
+                "probability": done[1]}
+        print(json_text({"interpretations": [goal], "confidence": done[1], "best_goal_probability": done[1],
+                         "margin": None, "out_of_reach": 0.0, "already_true": goal, "abstained": False,
+                         "goal": goal["goal"], "goal_words": goal["words"], "actions": [],
+                         "final_state": format_state_like(state, args.env, names), "reached": True,
+                         "reason": "already true", "habits": {}}))
+        return 0
+    print("plan (0 steps): (none)")
+    if args.out:
+        print(f"picture written to {args.out}")
+    return 0
 
 
 def _refuse(result, args) -> None:
@@ -264,7 +299,9 @@ def run(args: argparse.Namespace) -> int:
     done = _already_true(learner, args.command_text, state)
     places = _places(args.min_confidence)
     if done is not None and not args.json:  # before a question, whose choices leave it out
-        _print_already_true(done, state, learner.library, names, places)
+        _print_already_true(done, state, learner.library, names, places, _settled(done, args))
+    if _settled(done, args):
+        return _nothing_to_do(done, state, learner.library, names, args)
     answered = None
     if result.abstained and args.ask and not args.json:
         answered = _ask(learner, result, state, args.max_steps, names)
