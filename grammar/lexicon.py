@@ -107,6 +107,8 @@ class Lexicon:
         self.negating_prepositions = words["PREP_NEGATING"]
         self.source_and_comitative_prepositions = words["PREP_SOURCE"]
         self.having_verbs = words["VERB_HAVING"]
+        # Words that take or decline what a question offers (clarify's answers, never a command's words).
+        self.yes_words, self.no_words = words["YES"], words["NO"]
         # The preposition a clause of having reads as ("with"); None when no word file names one.
         self.having_preposition = min(words["PREP_HAVING"], default=None)
         # Multiword entries as a trie of their words: the tokeniser joins the longest that fits, and a walk

@@ -31,8 +31,10 @@ CATEGORIES = (
 TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP", "PREP_HAVING": "PREP"}
 # VERB_HAVING marks verb lemmas (listed under VERB) whose relative clause about a noun phrase reads as
 # "with" ("the room that has the chair"); it tags nothing itself.
+# YES and NO list the words that answer a question of one choice ("Do you mean the red room?") by taking it
+# or declining it; they tag nothing either (commands are not answers).
 FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB")) + (
-    "VERB", "IRREGULAR", "SYNONYM", *TAGGING, "VERB_HAVING",
+    "VERB", "IRREGULAR", "SYNONYM", *TAGGING, "VERB_HAVING", "YES", "NO",
 )
 # Categories whose entries pair two words, ``form=word``, and what the pair means (for error messages).
 _PAIRED = {"IRREGULAR": "form=lemma (e.g. went=go)", "SYNONYM": "form=word (e.g. east=right)"}

@@ -38,7 +38,7 @@ from groundlang.model.world import State
 from groundlang.results import FollowResult
 from groundlang.wording import choice_list, goal_phrase, object_phrase
 
-__all__ = ["AnswerError", "competing", "unknown_words", "question", "choose", "clear_choice"]
+__all__ = ["AnswerError", "Declined", "competing", "unknown_words", "question", "choose", "clear_choice"]
 
 # Tokens that end a clause of an answer, and with it what a negation in it denies.
 _CLAUSE_ENDS = frozenset({",", ".", ";", ":", "!", "?", "but"})
@@ -49,6 +49,14 @@ MAX_CHOICES = 6
 
 class AnswerError(ValueError):
     """An answer that names none of the choices, or several."""
+
+
+class Declined(AnswerError):
+    """An answer that declines every choice ("no", "none of them"): nothing is to be done."""
+
+
+# Categories of words that carry no choice of their own in an answer ("yes, that one please", "none of them").
+_FILLER = frozenset({"DET", "PRON", "ADV", "AUX", "PREP"})
 
 
 def competing(groups: Sequence[GoalGroup]) -> list[GoalGroup]:
@@ -150,11 +158,19 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
             raise AnswerError(f"answer {shown(text)}: expected a number from 1 to {len(choices)}")
         return choices[k - 1]
     named = [_words(p) for p in phrases]
-    if len(choices) == 1:  # "Do you mean ...?": its number, or words all of its phrase ("the red room", not "no")
-        if _words(text) and _words(text) <= named[0]:
+    taken = _yes_or_no(text, named[0] if len(choices) == 1 else set())
+    if len(choices) == 1 and taken is None:  # "not the red room": the words of the one choice, denied
+        said_words, denied_words = _said_and_denied(text)
+        telling = {w for w in named[0] if not Lexicon.english().listed(w) & _FILLER}
+        taken = False if denied_words & telling and not said_words & telling else None
+    if taken is False:
+        raise Declined(f"{shown(repr(text), limit=60)} declines {'the choice' if len(choices) == 1 else 'every choice'}"
+                       ": nothing is done")
+    if len(choices) == 1:  # "Do you mean ...?": its number, "yes", or words all of its phrase ("the red room")
+        if taken:
             return choices[0]
-        raise AnswerError(f"{shown(repr(text), limit=60)} does not name the choice ({phrases[0]}): answer 1, or "
-                          "its words, to act on it")
+        raise AnswerError(f"{shown(repr(text), limit=60)} does not name the choice ({phrases[0]}): answer 1, yes or "
+                          "its words to act on it, no to decline it")
     telling = set().union(*named) - set.intersection(*named)  # words some phrases have and others lack
     said_words, denied_words = _said_and_denied(text)
     words = said_words & telling
@@ -176,6 +192,25 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
         raise AnswerError(f"{shown(repr(text), limit=60)} {how} of the choices ({choice_list(phrases)}): "
                           f"answer with their number, 1 to {len(choices)}, or their words")
     return chosen
+
+
+def _yes_or_no(text: str, offered: set[str]) -> bool | None:
+    """True where the answer takes what a question of one choice offers (``offered``: its phrase's words): a
+    word of ``YES`` (grammar/english.words) or of the phrase, and nothing else but words that say no choice
+    ("yes please", "yes, the red one", "the red room"); False where it declines: a word of ``NO`` or a
+    negation and nothing else ("no", "nope", "none of them", "not that one"); None otherwise ("no, the red
+    one" is left to the words it names)."""
+    english = Lexicon.english()
+    tokens = [t for t in tokenise(text) if _words(t)]
+    if not tokens:
+        return None
+    no = {t for t in tokens if t in english.no_words or "NEG" in english.listed(t) or t.endswith("n't")}
+    words = {w for t in tokens if t not in no for w in _words(t)}
+    rest = {w for w in words if not english.listed(w) & _FILLER}
+    if no:
+        return False if not rest else None
+    yes = {w for w in words if w in english.yes_words or w in offered}
+    return True if yes and not (rest - yes) else None
 
 
 def _said_and_denied(text: str) -> tuple[set[str], set[str]]:

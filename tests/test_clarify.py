@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from groundlang.clarify import AnswerError, choose, question
+from groundlang.clarify import AnswerError, Declined, choose, question
 from groundlang.confidence import GoalGroup
 from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
 from groundlang.labels import goal_holds
@@ -110,7 +110,7 @@ def test_a_negated_answer_names_the_choices_it_leaves_out(novel_b, library):
     assert choose("not the blue room", two, novel_b, library) is two[0]
     with pytest.raises(AnswerError, match="leaves out some choices, so more than one is left"):
         choose("not the red one", rooms, novel_b, library)
-    with pytest.raises(AnswerError, match="'no' names none of the choices"):
+    with pytest.raises(Declined, match="'no' declines every choice: nothing is done"):
         choose("no", two, novel_b, library)
     with pytest.raises(AnswerError, match="leaves out every choice"):
         choose("not red or blue", two, novel_b, library)
@@ -136,14 +136,24 @@ def test_an_answer_of_unknown_words_chooses_nothing(learner, novel_b):
     for answer in ("abc", "-1", "1e9"):
         with pytest.raises(AnswerError, match="names none of the choices"):
             learner.clarify(result, answer)
-    # one choice ("Do you mean the agent in the red room?"): its number or its words, not "no" or "abc"
+    # one choice ("Do you mean the agent in the red room?"): its number, its words or a yes; a no declines it
     one = learner.follow("go to the red room", novel_b, min_confidence=1.0)
     assert one.abstained and len(one.choices) == 1
-    for answer in ("no", "abc", "not the red room"):
-        with pytest.raises(AnswerError, match="does not name the choice"):
+    for answer in ("abc", "the blue room", "no, the red one", "yes, the blue room", "that one"):
+        with pytest.raises(AnswerError, match="does not name the choice .*: answer 1, yes or its words to act on it, "
+                                              "no to decline it") as refused:
             learner.clarify(one, answer)
-    assert learner.clarify(one, "the red room").goal == one.choices[0].goal
-    assert learner.clarify(one, "1").goal == one.choices[0].goal
+        assert not isinstance(refused.value, Declined), answer
+    for answer in ("no", "Nope.", "not the red room", "no thanks", "don't", "none of them"):
+        with pytest.raises(Declined, match="declines the choice: nothing is done"):
+            learner.clarify(one, answer)
+    for answer in ("the red room", "1", "yes", "Yes please", "ok", "yeah, the red one", "sure, do it"):
+        assert learner.clarify(one, answer).goal == one.choices[0].goal, answer
+    # of several choices, a no declines them all; a yes chooses none
+    with pytest.raises(Declined, match="declines every choice"):
+        learner.clarify(result, "none of them")
+    with pytest.raises(AnswerError, match="names none of the choices"):
+        learner.clarify(result, "yes")
 
 
 def test_follow_asks_about_an_unknown_colour_and_acts_on_the_answer(learner, novel_b):
@@ -252,6 +262,24 @@ def test_cli_ask_reads_the_answer_from_stdin(model_dir, capsys, monkeypatch):
     monkeypatch.setattr("sys.stdin", io.StringIO(""))  # end of input: nothing done
     assert _follow(model_dir, "go to the purple room", "--ask") == 3
     assert capsys.readouterr().err.strip() == "groundlang follow: no answer named a choice; nothing done"
+
+
+def test_cli_ask_stops_at_an_answer_that_declines_and_acts_on_a_yes(model_dir, capsys, monkeypatch):
+    """A "no" had been answered with the question again, until the tries ran out: it declines, nothing done."""
+    import io
+
+    monkeypatch.setattr("sys.stdin", io.StringIO("none of them\nthe blue one\n"))
+    assert _follow(model_dir, "go to the purple room", "--ask") == 3
+    captured = capsys.readouterr()
+    assert "'none of them' declines every choice: nothing is done" in captured.out
+    assert captured.out.count("answer>") == 1 and "plan" not in captured.out  # not asked again
+    assert captured.err.strip() == "groundlang follow: the answer declined what was offered; nothing done"
+    # a question of one choice, taken by a yes
+    monkeypatch.setattr("sys.stdin", io.StringIO("yes please\n"))
+    assert _follow(model_dir, "go to the red room", "--ask", "--min-confidence", "1") == 0
+    out = capsys.readouterr().out
+    assert "Do you mean the agent in the red room?" in out
+    assert "goal the agent in the red room \u2014 agentInRoom(agent0, room0): reached (goal)" in out
 
 
 def test_cli_ask_with_stdin_closed_is_end_of_input(model_dir, capsys, monkeypatch):

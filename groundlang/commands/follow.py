@@ -88,8 +88,9 @@ def _print_question(result, state, library, names=None, places: int = 2) -> None
 
 
 def _ask(learner, result, state, max_steps: int, names=None):
-    """Ask on the terminal until an answer names one choice; None at end of input or after ANSWER_TRIES."""
-    from groundlang.clarify import AnswerError
+    """Ask on the terminal until an answer names one choice; None at end of input or after ANSWER_TRIES;
+    clarify.Declined where an answer declines what is offered."""
+    from groundlang.clarify import AnswerError, Declined
     from groundlang.logic.atoms import renamed_words
 
     _print_question(result, state, learner.library, names)
@@ -117,6 +118,9 @@ def _ask(learner, result, state, max_steps: int, names=None):
             with logged_by_file_names(names or {}):
                 return learner.clarify(result, renamed_words(line, {v: k for k, v in (names or {}).items()}),
                                        max_steps=max_steps)
+        except Declined as exc:  # asking again would offer what was just declined
+            print(f"  {exc}")
+            raise
         except AnswerError as exc:
             print(f"  {exc}")
     return None
@@ -304,7 +308,13 @@ def run(args: argparse.Namespace) -> int:
         return _nothing_to_do(done, state, learner.library, names, args)
     answered = None
     if result.abstained and args.ask and not args.json:
-        answered = _ask(learner, result, state, args.max_steps, names)
+        from groundlang.clarify import Declined
+
+        try:
+            answered = _ask(learner, result, state, args.max_steps, names)
+        except Declined:
+            print("groundlang follow: the answer declined what was offered; nothing done", file=sys.stderr)
+            return ASKED
         if answered is None:
             print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
             return ASKED
