@@ -102,6 +102,8 @@ def cross_validate_pairs(commands: list[Command], folds: int, library, workers: 
     if isinstance(beyond, bool) or not isinstance(beyond, numbers.Real) or not 0 <= beyond < 1:
         raise ValueError(f"cross_validate_pairs: beyond must be a fraction from 0 to below 1, got {beyond!r:.40}")
     check_pair_evaluation(library, options.get("judge"), min_confidence)
+    if "progress" in options:  # a fold's progress lines, interleaved with the others', would say nothing
+        raise TypeError("cross_validate_pairs: no progress argument (the folds report only when done)")
     if not 2 <= folds <= MAX_FOLDS:
         raise ValueError(f"--folds {folds}: expected 2 to {MAX_FOLDS} folds")
     held = fold_indices(commands, folds, beyond)

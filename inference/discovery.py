@@ -58,13 +58,7 @@ from groundlang.inference.mlirl import mlirl
 from groundlang.inference.planning import TaskSettings
 from groundlang.logic.atoms import Atom
 # lifted_key is part of discovery's public surface (tests and notebooks import it from here).
-from groundlang.inference.lifting import (  # noqa: F401
-    lift_goal,
-    lifted_key,
-    singling_out,
-    structure_key,
-    task_name,
-)
+from groundlang.inference.lifting import lift_goal, lifted_key, singling_out, structure_key, task_name  # noqa: F401
 from groundlang.logic.program import Source
 from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary
 

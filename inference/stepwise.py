@@ -40,7 +40,7 @@ from groundlang.inference.planning import TaskSettings
 from groundlang.model.features import goal_mask
 from groundlang.model.relevance import (abstract_space_uncached, abstraction_bound, announce, relevant_toys,
                                         state_space_for)
-from groundlang.model.state_search import count_text, default_max_states
+from groundlang.model.state_search import count_text, max_states_given
 from groundlang.model.statespace import state_count_bound, trajectory_indices
 from groundlang.model.world import ACTION_DELTAS
 
@@ -141,7 +141,7 @@ def approximate_likelihoods(initial, goals: Sequence[tuple], states: Sequence, a
     relevance abstraction or stepwise (module docstring), whichever is bounded smaller; ``states`` are
     the demonstration's States (first = ``initial``), ``actions`` its moves. StateSpaceError (one line)
     when a goal fits neither under ``max_states``."""
-    max_states = default_max_states() if max_states is None else max_states
+    max_states = max_states_given(max_states)
     actions = np.asarray([int(a) for a in actions], dtype=np.int64)
     demo = np.stack([s.positions for s in states]).astype(np.int64)  # [T + 1, 1 + k, 2]
     moved = relevant_toys(initial, (), [states])

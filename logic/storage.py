@@ -41,6 +41,11 @@ def as_path(value, what: str) -> Path:
     no argument, and bytes would become a path of their repr."""
     if not isinstance(value, (str, os.PathLike)):
         raise TypeError(f"{what} must be a path (a str or os.PathLike), got {type(value).__name__}")
+    try:  # a lone surrogate ("\ud800") is no file name: the first open had raised UnicodeEncodeError
+        os.fsencode(value)
+    except UnicodeEncodeError:
+        raise ValueError(f"{what}: {os.fspath(value)!r} is not a file name on this system "
+                         "(a character the file system's encoding cannot hold)") from None
     return Path(value)
 
 

@@ -42,7 +42,7 @@ import numpy as np
 from groundlang.logic.atoms import Atom, parse_atom
 
 from .pf_tables import MAX_TABULATED_CELLS
-from .state_search import MAX_STATES_VARIABLE, count_text, default_max_states, key_powers, search, state_count_bound
+from .state_search import MAX_STATES_VARIABLE, count_text, key_powers, max_states_given, search, state_count_bound
 from .statespace import StateSpace, StateSpaceError, enumerate_states
 from .world import ACTION_DELTAS, State
 
@@ -140,7 +140,7 @@ def abstraction_bound(state: State, relevant: Sequence[int]) -> int:
 
 def exact_fits(state: State, max_states: int | None = None) -> bool:
     """Whether the whole world's bound (:func:`state_count_bound`) is within ``max_states``."""
-    max_states = default_max_states() if max_states is None else max_states
+    max_states = max_states_given(max_states)
     return state_count_bound(_cells(state), len(state.toys)) <= max_states
 
 
@@ -149,7 +149,7 @@ def check_abstraction_possible(state: State, max_states: int | None = None) -> i
     ``max_states`` and so does the least abstraction (the agent alone, every toy a wall), or the layout has
     more cells than goal masks can be tabulated over. From cell counts alone: callers ask it before slow
     per-layout work (grounding a layout of 10^6 cells takes 20 s). Returns the least bound."""
-    max_states = default_max_states() if max_states is None else max_states
+    max_states = max_states_given(max_states)
     cells, toys = _cells(state), len(state.toys)
     exact = state_count_bound(cells, toys)
     if exact <= max_states:
@@ -169,7 +169,7 @@ def abstract_space(state: State, relevant: Sequence[int], max_states: int | None
     """Enumerate the abstraction in which the agent and the toys ``relevant`` move and every other toy
     is a wall; index 0 is ``state``. StateSpaceError when its bound exceeds ``max_states``. The last few
     are remembered: the candidate goals of one demonstration mostly keep the same toys."""
-    max_states = default_max_states() if max_states is None else max_states
+    max_states = max_states_given(max_states)
     return _abstract_space(state, tuple(sorted(set(int(i) for i in relevant))), max_states)
 
 
@@ -245,7 +245,7 @@ def state_space_for(state: State, goal: Iterable[Atom | str] = (), demonstration
     """
     if method not in ("auto", "exact", "abstraction"):
         raise ValueError(f"method {method!r}: expected auto, exact or abstraction")
-    max_states = default_max_states() if max_states is None else max_states
+    max_states = max_states_given(max_states)
     goal = tuple(parse_atom(a) if isinstance(a, str) else a for a in goal)
     cells, toys = _cells(state), len(state.toys)
     exact = state_count_bound(cells, toys)

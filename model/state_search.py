@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import math
+import numbers
 import os
 import re
 from collections.abc import Sequence
@@ -22,7 +23,7 @@ import numpy as np
 
 from groundlang.model.world import ACTION_DELTAS
 
-__all__ = ["StateSpaceError", "DEFAULT_MAX_STATES", "MAX_STATES_VARIABLE", "default_max_states",
+__all__ = ["StateSpaceError", "DEFAULT_MAX_STATES", "MAX_STATES_VARIABLE", "default_max_states", "max_states_given",
            "StateKeyError", "describe_positions", "key_powers", "search", "state_count_bound", "too_many_states"]
 
 logger = logging.getLogger(__name__)
@@ -52,6 +53,19 @@ def default_max_states() -> int:
     if not re.fullmatch(r"[0-9]+|[0-9]{1,3}(,[0-9]{3})+|[0-9]+(_[0-9]+)+", given) or int(given.replace(",", "")) < 1:
         raise StateSpaceError(f"{MAX_STATES_VARIABLE}={os.environ[MAX_STATES_VARIABLE]!r}: expected a positive integer")
     return int(given.replace(",", ""))
+
+
+def max_states_given(max_states) -> int | float:
+    """``max_states`` where given (a positive number), else :func:`default_max_states`: TypeError for a bool or
+    a non-number, ValueError for nan or a bound below 1 (nan compared false with every count, so it had
+    meant "no limit" in one check and "none fits" in the next)."""
+    if max_states is None:
+        return default_max_states()
+    if isinstance(max_states, bool) or not isinstance(max_states, numbers.Real):
+        raise TypeError(f"max_states must be a positive number of states, not {type(max_states).__name__}")
+    if not max_states >= 1:
+        raise ValueError(f"max_states={max_states!r}: expected a positive number of states")
+    return max_states
 
 
 class StateSpaceError(ValueError):

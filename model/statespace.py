@@ -22,6 +22,7 @@ from groundlang.model.state_search import (
     MAX_STATES_VARIABLE,
     StateSpaceError,
     default_max_states,
+    max_states_given,
     describe_positions,
     key_powers,
     search,
@@ -143,7 +144,7 @@ def check_state_count(state: State, max_states: int | None = None) -> int:
     """The bound :func:`enumerate_states` checks, from the count of walkable cells alone (milliseconds, even
     for a 1000 x 1000 room); raises the same StateSpaceError. Callers that do slow per-layout work first
     (grounding a layout's cells in clingo took 20 s there) ask this before it."""
-    max_states = default_max_states() if max_states is None else max_states
+    max_states = max_states_given(max_states)
     num_cells = int(np.count_nonzero(state.layout.walkable))
     bound = state_count_bound(num_cells, len(state.toys))
     if bound > max_states:
@@ -160,7 +161,7 @@ def enumerate_states(state: State, max_states: int | None = None) -> StateSpace:
     walkable cells and toys; pass a larger ``max_states`` to allow it; the
     default is ``$GROUNDLANG_MAX_STATES`` or 5,000,000).
     """
-    return _enumerate(state, default_max_states() if max_states is None else max_states, dense=None)
+    return _enumerate(state, max_states_given(max_states), dense=None)
 
 
 def _enumerate(state: State, max_states: int, dense: bool | None) -> StateSpace:

@@ -23,22 +23,8 @@ import numpy as np
 
 from groundlang.model.palette import Palette, WorldError, get_palette
 
-__all__ = [
-    "Action",
-    "ACTION_DELTAS",
-    "Palette",
-    "get_palette",
-    "Room",
-    "Door",
-    "Toy",
-    "Agent",
-    "Layout",
-    "State",
-    "step",
-    "replay",
-    "WorldError",
-    "MAX_LAYOUT_OBJECTS",
-]
+__all__ = ["Action", "ACTION_DELTAS", "Palette", "get_palette", "Room", "Door", "Toy", "Agent", "Layout", "State",
+           "step", "replay", "WorldError", "MAX_LAYOUT_OBJECTS"]
 
 # Rooms, doors and toys a layout may have: checking a layout costs about 0.2 ms a door and grows with the
 # square of its rooms, and a 16 MB state line could hold a million doors. Chosen on no figure: the corpora's

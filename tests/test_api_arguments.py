@@ -147,6 +147,16 @@ def test_a_path_argument_of_another_type_is_named(call, message):
         call()
 
 
+@pytest.mark.parametrize("call, what", [(lambda: Learner.load("\ud800"), "Learner.load: directory"),
+                                        (lambda: Learner().save("m\ud800"), "Learner.save: directory"),
+                                        (lambda: read_state_file("\udbff.state", "sokoban"), "read_state_file: path")])
+def test_a_path_no_file_system_can_hold_is_named(call, what):
+    """A lone surrogate is no file name: the open had raised UnicodeEncodeError (a surrogate escape, a byte
+    that was not UTF-8, is a file name and is read)."""
+    with pytest.raises(ValueError, match=f"^{what}: '.*' is not a file name on this system"):
+        call()
+
+
 def test_a_library_given_as_one_path_is_read_as_one_file(tmp_path):
     """A str is iterable: it had been read letter by letter ("no such file ... 't'")."""
     shipped = TaskLibrary.load(["williams2018"])
@@ -177,3 +187,21 @@ def test_add_words_names_what_is_wrong(trained):
                         ({"NOUN": ["\ud800"]}, "is not text (a lone surrogate)")):  # had been saved with the model
         with pytest.raises(LexiconError, match=re.escape(said)):
             trained.add_words(words)
+
+
+@pytest.mark.parametrize("bound, error", [(float("nan"), ValueError), (0, ValueError), (-5, ValueError),
+                                          (True, TypeError), ("5000", TypeError)])
+def test_a_state_bound_that_is_no_positive_number_is_refused(bound, error):
+    """nan compared false with every count: it had read as "no limit" where the exact space was sized and as
+    "nothing fits" where the abstraction was."""
+    from groundlang.corpus import read_initial_state
+    from groundlang.model.relevance import check_abstraction_possible
+    from groundlang.model.statespace import enumerate_states
+    from groundlang.pair_tasks import reachable
+
+    state = read_initial_state(Path(__file__).parent / "fixtures" / "williams2018" / "one.state", "williams2018")
+    for call in (lambda: check_abstraction_possible(state, bound), lambda: enumerate_states(state, bound),
+                 lambda: reachable(state, state, max_states=bound)):
+        with pytest.raises(error, match="max_states.*positive number of states"):
+            call()
+    assert reachable(state, state, max_states=1e6) is True  # a float bound is a bound

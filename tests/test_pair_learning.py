@@ -508,6 +508,8 @@ def test_evaluations_refuse_what_they_cannot_use_before_training(williams_comman
         cross_validate_pairs(small, 2, williams_library, beyond=None)
     with pytest.raises(TypeError, match="judge must be a TaskLibrary or None, not int"):
         cross_validate_pairs(small, 2, williams_library, judge=5)
+    with pytest.raises(TypeError, match="no progress argument"):  # documented so, and had been accepted
+        cross_validate_pairs(small, 2, williams_library, progress=True)
 
 
 def test_a_pair_of_two_layouts_shows_no_task_but_an_error(williams_commands, williams_library):
