@@ -66,18 +66,10 @@ class Learner:
     are chained (:mod:`groundlang.inference.em`; both reach the same MAP).
     """
 
-    def __init__(
-        self,
-        language_model: str | LanguageModel = "parse",
-        library: TaskLibrary | None = None,
-        steps: int = 300,
-        lr: float = 0.1,
-        seed: int = 0,
-        settings: TaskSettings | None = None,
-        cache_dir: str | Path | None = None,
-        lexicon: WordSource | Sequence[WordSource] | None = None,
-        em_acceleration: str = "squarem",
-    ):
+    def __init__(self, language_model: str | LanguageModel = "parse", library: TaskLibrary | None = None,
+                 steps: int = 300, lr: float = 0.1, seed: int = 0, settings: TaskSettings | None = None,
+                 cache_dir: str | Path | None = None, lexicon: WordSource | Sequence[WordSource] | None = None,
+                 em_acceleration: str = "squarem"):
         check_model_parts(language_model, library)
         self.lm = get_language_model(language_model) if isinstance(language_model, str) else language_model
         self.library = library if library is not None else TaskLibrary.load()
