@@ -301,6 +301,9 @@ class Learner:
         state = result.states[0]
         self._require_fitted()  # a numeric answer never reads the words, but acting is this model's
         self._check_state("clarify", result.command, state)
+        if any(a.predicate not in self.library.goal_relations for c in result.choices for a in c.goals[0]):
+            raise ValueError("clarify: the result's choices are goals of another task library than this learner's "
+                             "(answer it with the learner whose follow() made it)")
         chosen = choose(answer, result.choices, state, self.library,
                         read=lambda text, choices: clear_choice(
                             dict(self.posterior(f"{result.command}, {text}", state).goals()), choices,

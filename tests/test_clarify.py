@@ -355,3 +355,16 @@ def test_cli_guess_takes_no_threshold(model_dir, capsys):
     assert capsys.readouterr().err.strip() == ("groundlang follow: error: --guess acts however unsure, so "
                                                "--min-confidence 0.9 would do nothing: give one or the other")
     assert _follow(model_dir, "go to the purple room", "--guess") == 0
+
+
+def test_a_result_whose_choices_another_library_made_is_refused(learner, novel_b):
+    """A result of a learner with a library of other relations, answered by this one: planning its choice had
+    failed deep in tabulation (TabulationError) naming nothing the caller gave."""
+    from dataclasses import replace
+
+    asked = learner.follow("go to the purple room", novel_b, min_confidence=DEFAULT_MIN_CONFIDENCE)
+    foreign = replace(asked, choices=[GoalGroup((parse_goal("agentLeftOfToy(agent0, block0)"),), 1.0)])
+    with pytest.raises(ValueError, match="clarify: the result's choices are goals of another task library than this "
+                                         "learner's"):
+        learner.clarify(foreign, "1")
+    assert learner.clarify(asked, "1").reached  # its own result is answered as ever
