@@ -28,7 +28,8 @@ CATEGORIES = (
 )
 # Categories of a word file that tag their words with a lexical category and give them a role the
 # parser or the model reads (see english.words); VERB lists lemmas, IRREGULAR form=lemma pairs.
-TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP", "PREP_HAVING": "PREP"}
+TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP", "PREP_HAVING": "PREP",
+           "POLITE": "ADV"}
 # VERB_HAVING marks verb lemmas (listed under VERB) whose relative clause about a noun phrase reads as
 # "with" ("the room that has the chair"); it tags nothing itself.
 # YES and NO list the words that answer a question of one choice ("Do you mean the red room?") by taking it

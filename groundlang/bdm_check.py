@@ -88,8 +88,7 @@ def check_bdm(args: argparse.Namespace) -> int:
         print(f"  {c.path}, line {c.line}: {c.text!r}")
     if len(empty) > 20:
         print(f"  ... and {len(empty) - 20} more")
-    read = [(c, t) for c, t in zip(commands, tasks) if t is not None]
-    texts, shared, covered = text_agreement([c for c, _ in read], [t for _, t in read])
+    texts, shared, covered = text_agreement(commands, tasks)
     if shared:
         print(f"commands whose text another command shares: {shared} ({texts} text{'' if texts == 1 else 's'}); "
               f"one task per text does what the pairs of at most {covered} of them show "

@@ -55,8 +55,15 @@ class Declined(AnswerError):
     """An answer that declines every choice ("no", "none of them"): nothing is to be done."""
 
 
-# Categories of words that carry no choice of their own in an answer ("yes, that one please", "none of them").
-_FILLER = frozenset({"DET", "PRON", "ADV", "AUX", "PREP"})
+# Categories of words that carry no choice of their own in an answer ("yes, that one please", "none of them"):
+# a word all of whose categories are these says nothing; adverbs say something ("the one on the right"),
+# but for the POLITE ones, and so do words with another category too ("next").
+_FUNCTION = frozenset({"DET", "PRON", "AUX", "PREP", "TO", "CONJ", "REL", "SUB", "NUM", "COMMA"})
+
+
+def _says_nothing(word: str, lexicon: Lexicon) -> bool:
+    listed = lexicon.listed(word)
+    return word in lexicon.polite_words or bool(listed) and listed <= _FUNCTION
 
 
 def competing(groups: Sequence[GoalGroup]) -> list[GoalGroup]:
@@ -141,10 +148,14 @@ def answer_text(answer, result) -> str:
 
 
 def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: TaskLibrary,
-           read: Callable[[str, Sequence[GoalGroup]], GoalGroup | None] | None = None) -> GoalGroup:
+           read: Callable[[str, Sequence[GoalGroup]], GoalGroup | None] | None = None,
+           lexicon: Lexicon | None = None) -> GoalGroup:
     """The choice ``answer`` names: a number from 1, or words (see the module docstring).
-    ``read(answer, choices)`` is the model's reading, used when no phrase matches one choice.
-    Raises AnswerError naming the choices when the answer names none of them or several."""
+    ``read(answer, choices)`` is the model's reading, used when no phrase matches one choice; ``lexicon``
+    (default English) the words that take, decline or say nothing (``YES``, ``NO``, ``POLITE``).
+    Raises AnswerError naming the choices when the answer names none of them or several, Declined where
+    it declines them."""
+    lexicon = lexicon or Lexicon.english()
     text = answer.strip()
     if not text:
         raise AnswerError("empty answer: expected a number or words naming one of the choices")
@@ -158,10 +169,10 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
             raise AnswerError(f"answer {shown(text)}: expected a number from 1 to {len(choices)}")
         return choices[k - 1]
     named = [_words(p) for p in phrases]
-    taken = _yes_or_no(text, named[0] if len(choices) == 1 else set())
+    taken = _yes_or_no(text, named[0] if len(choices) == 1 else set(), lexicon)
     if len(choices) == 1 and taken is None:  # "not the red room": the words of the one choice, denied
         said_words, denied_words = _said_and_denied(text)
-        telling = {w for w in named[0] if not Lexicon.english().listed(w) & _FILLER}
+        telling = {w for w in named[0] if not _says_nothing(w, lexicon)}
         taken = False if denied_words & telling and not said_words & telling else None
     if taken is False:
         raise Declined(f"{shown(repr(text), limit=60)} declines {'the choice' if len(choices) == 1 else 'every choice'}"
@@ -171,7 +182,8 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
             return choices[0]
         raise AnswerError(f"{shown(repr(text), limit=60)} does not name the choice ({phrases[0]}): answer 1, yes or "
                           "its words to act on it, no to decline it")
-    telling = set().union(*named) - set.intersection(*named)  # words some phrases have and others lack
+    # words some phrases have and others lack, and that say something ("to" of "next to" is no side)
+    telling = {w for w in set().union(*named) - set.intersection(*named) if not _says_nothing(w, lexicon)}
     said_words, denied_words = _said_and_denied(text)
     words = said_words & telling
     denied = {k for k, n in enumerate(named) if denied_words & telling & n}
@@ -194,23 +206,25 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     return chosen
 
 
-def _yes_or_no(text: str, offered: set[str]) -> bool | None:
+def _yes_or_no(text: str, offered: set[str], lexicon: Lexicon) -> bool | None:
     """True where the answer takes what a question of one choice offers (``offered``: its phrase's words): a
-    word of ``YES`` (grammar/english.words) or of the phrase, and nothing else but words that say no choice
-    ("yes please", "yes, the red one", "the red room"); False where it declines: a word of ``NO`` or a
-    negation and nothing else ("no", "nope", "none of them", "not that one"); None otherwise ("no, the red
-    one" is left to the words it names)."""
-    english = Lexicon.english()
+    word of ``YES`` (grammar/english.words) or of the phrase, and nothing else but words that say nothing of
+    what is meant (determiners, pronouns, auxiliaries, prepositions, ``POLITE``): "yes please", "yes, the
+    red one", "the red room"; False where it declines: a word of ``NO`` or a negation and nothing else ("no",
+    "nope", "none of them", "not that one"); None otherwise ("no, the red one" is left to the words it names,
+    "the one on the right" to "right"). AnswerError for an answer that says both ("yes no")."""
     tokens = [t for t in tokenise(text) if _words(t)]
-    if not tokens:
-        return None
-    no = {t for t in tokens if t in english.no_words or "NEG" in english.listed(t) or t.endswith("n't")}
+    no = {t for t in tokens if t in lexicon.no_words or "NEG" in lexicon.listed(t) or t.endswith("n't")}
     words = {w for t in tokens if t not in no for w in _words(t)}
-    rest = {w for w in words if not english.listed(w) & _FILLER}
+    yes = words & lexicon.yes_words
+    if yes and no:
+        raise AnswerError(f"{shown(repr(text), limit=60)} says both yes ({', '.join(sorted(yes))}) and no "
+                          f"({', '.join(sorted(no))}): answer one or the other")
+    telling = {w for w in words - yes if not _says_nothing(w, lexicon)}
     if no:
-        return False if not rest else None
-    yes = {w for w in words if w in english.yes_words or w in offered}
-    return True if yes and not (rest - yes) else None
+        return False if not telling else None
+    named = {w for w in offered if not _says_nothing(w, lexicon)}
+    return True if (yes or telling & named) and telling <= named else None
 
 
 def _said_and_denied(text: str) -> tuple[set[str], set[str]]:

@@ -292,8 +292,9 @@ class Learner:
 
     def clarify(self, result: FollowResult, answer: str | int, max_steps: int = 200) -> FollowResult:
         """Act on the choice ``answer`` names among an abstained ``result``'s ``choices``: a number
-        from 1 (an int, or its digits) or words ("the green one"). Raises AnswerError when it names none
-        or several; TypeError for arguments of the wrong type."""
+        from 1 (an int, or its digits), words ("the green one") or, to a question of one choice, a yes.
+        Raises AnswerError when it names none or several, its subclass Declined where it declines ("no");
+        TypeError for arguments of the wrong type."""
         answer = answer_text(answer, result)
         check_count("clarify", "max_steps", max_steps)
         if not result.abstained:
@@ -307,7 +308,7 @@ class Learner:
         chosen = choose(answer, result.choices, state, self.library,
                         read=lambda text, choices: clear_choice(
                             dict(self.posterior(f"{result.command}, {text}", state).goals()), choices,
-                            before=dict(result.posterior.goals())))
+                            before=dict(result.posterior.goals())), lexicon=self.word_lexicon)
         return self._act(result.command, state, result.posterior, chosen.goal, max_steps)
 
     def update(self, command: str, state: State, demonstration=None, goal=None) -> "Learner":

@@ -21,6 +21,7 @@ from groundlang.inference.planning import TaskSettings
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.palette import Palette
 from groundlang.model.palette_records import checked_palettes
+from groundlang.model.pf_tables import check_table_size
 from groundlang.model.language_models import get_language_model
 from groundlang.model.vocabulary import Vocabulary
 from groundlang.model.world import State
@@ -44,7 +45,8 @@ def check_threshold(method: str, name: str, value) -> None:
 
 def check_state(palettes: list[dict] | None, method: str, command: str, state: State) -> None:
     """The checks of a command and a state a learner trained on ``palettes`` is asked to read: TypeError for
-    arguments of the wrong type; ValueError for a state of a palette not trained on."""
+    arguments of the wrong type; ValueError for a state of a palette not trained on, TabulationError for one
+    whose layout is too large to tabulate."""
     if not isinstance(command, str):
         raise TypeError(f"{method}: command must be a str, got {type(command).__name__}")
     if not isinstance(state, State):
@@ -58,6 +60,7 @@ def check_state(palettes: list[dict] | None, method: str, command: str, state: S
                      if any(p["name"] == palette.name for p in palettes) else "")
         raise ValueError(f"{method}: the state is of palette {palette.name!r}; this model was trained on "
                          f"palette {trained}{same_name} (colours and shapes must be the same to read its words)")
+    check_table_size(state.layout)  # before grounding it: a layout of 40,000 cells had run out the time limit
 
 
 def check_model_parts(language_model, library) -> None:

@@ -225,7 +225,6 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
                 continue
             except StateSpaceError as exc:  # what neither the exact space nor the abstraction can hold
                 row.update(goal=None, final_state=None, skipped=str(exc), confidence=0.0)
-                skipped += 1
                 missing, kind = task or frozenset(), "skipped"
             else:
                 names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks
@@ -238,9 +237,10 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
             if task or task is None:  # None: no layout of the command could be tabulated, all skipped (wrong)
                 row["correct"] = hit
                 if not hit:
-                    row.update(failure=kind, unmet=sorted(map(str, missing)))
-                    unmet = "+".join(sorted({a.predicate for a in missing})) or "(none)"
+                    row.update(failure=kind, unmet=None if task is None else sorted(map(str, missing)))
+                    unmet = "(unknown)" if task is None else "+".join(sorted({a.predicate for a in missing})) or "(none)"
                     failures[kind][unmet] = failures[kind].get(unmet, 0) + 1
+                skipped += kind == "skipped"  # counted only where scored: a command showing no task counts none
                 n += 1
                 correct += hit
                 per_task[_task_kind(task)][0] += hit
@@ -254,7 +254,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         if (task or task is None) and followed:
             scored += 1
             commands_correct += all_right
-        elif not task:
+        elif task is not None and not task:
             no_task += 1
         # (A task shown, yet no start state admits one: its executions are counted as not scored.)
     finished = time.perf_counter()

@@ -149,10 +149,12 @@ def text_agreement(commands, tasks) -> tuple[int, int, int]:
     ``(texts, commands, covered)`` over the texts given more than once, ``covered`` the commands that the
     best single task per text :func:`covers`. A reader of the words alone answers a text one way, so it can
     be right about at most ``covered`` of them: the rest is noise in the labels (a worker who described
-    one pair, named a wrong colour, or wrote "move to chair" for a chair pushed into a room)."""
+    one pair, named a wrong colour, or wrote "move to chair" for a chair pushed into a room). A command
+    whose task is None (:func:`command_task`: no layout of it could be tabulated) is left out."""
     by_text: dict[str, list[frozenset[Atom]]] = {}
     for command, task in zip(commands, tasks):
-        by_text.setdefault(command.text.strip().lower(), []).append(task)
+        if task is not None:
+            by_text.setdefault(command.text.strip().lower(), []).append(task)
     shared = [group for group in by_text.values() if len(group) > 1]
     covered = sum(max(sum(covers(best, t) for t in group) for best in set(group)) for group in shared)
     return len(shared), sum(map(len, shared)), covered

@@ -338,6 +338,29 @@ def test_a_layout_too_large_to_tabulate_is_set_aside_by_file_and_line_and_counte
     row, = [r for r in report["executions"] if r["command"] == "go right"]
     assert row["correct"] is False and row["failure"] == "skipped" and row["final_state"] is None
     assert row["skipped"].startswith(f"{mixed / 'big.bdm'}, line 2: this layout has 39,601 walkable cells")
+    # a command whose other pair shows no task is not scored: its skipped execution is not counted wrong either
+    (tmp_path / "no_task.bdm").write_text(f"stay\n{line}\n{line}\ntrue\n---\n{big}\n{moved}\ntrue\n")
+    assert main(["evaluate", "--corpus", str(small), "--test", str(tmp_path / "no_task.bdm"), "--json",
+                 str(tmp_path / "n.json")]) == 0
+    assert "executions skipped" not in capsys.readouterr().out
+    report = json.loads((tmp_path / "n.json").read_text())
+    assert report["executions_n"] == 0 and report["skipped_executions"] == 0 and report["no_task_commands"] == 1
+
+
+def test_follow_refuses_a_layout_too_large_to_tabulate_by_its_file_at_once(tmp_path, capsys):
+    """It had grounded the layout until the time limit ran out (10 s), then advised a longer one."""
+    from groundlang.cli import main
+
+    line = (Path(__file__).parent / "fixtures" / "williams2018" / "one.state").read_text().strip()
+    big = line.split(" , ")[0] + " , room0 (room): [top: {200} left: {0} bottom: {0} right: {200} colour: {red} ] , }"
+    (tmp_path / "big.state").write_text(big + "\n")
+    small = Path(__file__).parent / "fixtures" / "williams2018" / "small.bdm"
+    assert main(["--quiet", "train", str(small), "-o", str(tmp_path / "m")]) == 0
+    capsys.readouterr()
+    assert main(["follow", "go right", "--env", str(tmp_path / "big.state"), "--model", str(tmp_path / "m")]) == 2
+    assert capsys.readouterr().err == (f"groundlang follow: error: {tmp_path / 'big.state'}: this layout has 39,601 "
+                                       "walkable cells; PFs are tabulated for at most 4,096 (every movable object is "
+                                       "copied onto each cell)\n")
 
 
 def test_check_bounds_what_a_reader_of_words_could_get_right(tmp_path):

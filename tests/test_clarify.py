@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from groundlang.clarify import AnswerError, Declined, choose, question
@@ -368,3 +370,24 @@ def test_a_result_whose_choices_another_library_made_is_refused(learner, novel_b
                                          "learner's"):
         learner.clarify(foreign, "1")
     assert learner.clarify(asked, "1").reached  # its own result is answered as ever
+
+
+def test_answers_about_sides_are_read_by_their_side_not_as_yes_or_no():
+    """"right" had been a yes, and adverbs words that say nothing: "the one on the right" took "left of the
+    chair" offered alone, and "no, the right one" declined every choice."""
+    library = TaskLibrary.load(["williams2018"])
+    state = read_state_file(Path(__file__).parent / "fixtures" / "williams2018" / "one.state", "williams2018")
+    left, right, beside = (GoalGroup((parse_goal(f"{pf}(agent0, block0)"),), 0.3)
+                           for pf in ("agentLeftOfToy", "agentRightOfToy", "agentNextToToy"))
+    for answer in ("right", "the one on the right", "to the right", "the", "the one to the north"):
+        with pytest.raises(AnswerError, match="does not name the choice") as refused:
+            choose(answer, [left], state, library)
+        assert not isinstance(refused.value, Declined), answer
+    for answer in ("on the left", "yes, left of it", "ok thanks"):
+        assert choose(answer, [left], state, library) is left, answer
+    for answer in ("no, the right one", "the right one, not the left one", "right, not left", "nope, to the right"):
+        assert choose(answer, [right, left, beside], state, library) is right, answer
+    assert choose("not the left one", [left, right], state, library) is right
+    for answer in ("yes no", "no, yes"):  # both: asked again, never acted on
+        with pytest.raises(AnswerError, match="says both yes .* and no"):
+            choose(answer, [left, right], state, library)

@@ -247,6 +247,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.palette_files import palette_names
     from groundlang.model.interpretations import NoTaskError
     from groundlang.model.palette import Palette, get_palette
+    from groundlang.pair_tasks import tabulation_refusal
     from groundlang.wording import goal_phrase, labelled_goal
 
     if args.learn and not args.ask:
@@ -288,6 +289,8 @@ def run(args: argparse.Namespace) -> int:
         if "drawing" not in record and palette.name in palette_names() and get_palette(palette.name) == palette:
             palette = get_palette(palette.name)
     state = read_initial_state(args.env, palette)
+    if (too_large := tabulation_refusal(state.layout)) is not None:  # said of the file before anything is grounded
+        raise ValueError(f"{args.env}: {too_large}")
     names = file_names(args.env)  # goals and states are shown by the file's names of its objects
     if args.lexicon:
         learner.add_words(args.lexicon)
