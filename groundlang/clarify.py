@@ -191,8 +191,10 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
         left = [c for k, c in enumerate(choices) if k not in denied]
         if len(left) == 1:
             return left[0]
-        said = "leaves out every choice" if not left else "leaves out some choices, so more than one is left"
-        raise AnswerError(f"{shown(repr(text), limit=60)} says what is not meant and {said} ({choice_list(phrases)}): "
+        kept = [p for k, p in enumerate(phrases) if k not in denied]
+        said = ("leaves out every choice" if not left else
+                f"leaves more than one choice ({choice_list(kept)})")
+        raise AnswerError(f"{shown(repr(text), limit=60)} says what is not meant and {said}: "
                           f"answer with the number, 1 to {len(choices)}, or the words of the one meant")
     overlap = [0 if k in denied else len(words & n) for k, n in enumerate(named)]  # "red, not blue": red
     best = max(overlap)

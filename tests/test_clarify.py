@@ -110,7 +110,7 @@ def test_a_negated_answer_names_the_choices_it_leaves_out(novel_b, library):
     assert choose("not the red one", two, novel_b, library) is two[1]
     assert choose("the one that isn't red", two, novel_b, library) is two[1]
     assert choose("not the blue room", two, novel_b, library) is two[0]
-    with pytest.raises(AnswerError, match="leaves out some choices, so more than one is left"):
+    with pytest.raises(AnswerError, match=r"leaves more than one choice \(the blue room or the green room\): answer with the number"):
         choose("not the red one", rooms, novel_b, library)
     with pytest.raises(Declined, match="'no' declines every choice: nothing is done"):
         choose("no", two, novel_b, library)
@@ -298,7 +298,7 @@ def test_cli_ask_gives_up_on_an_input_with_no_line_end(model_dir, capsys, monkey
             return "\0" * (size if size > 0 else 1 << 16)
 
     monkeypatch.setattr("sys.stdin", Endless())
-    monkeypatch.setattr("groundlang.commands.follow.MAX_DROPPED_CHARS", 1 << 20)
+    monkeypatch.setattr("groundlang.commands.asking.MAX_DROPPED_CHARS", 1 << 20)
     assert _follow(model_dir, "go to the purple room", "--ask") == 3
     captured = capsys.readouterr()
     assert "no line end within 1,048,576 characters: no answer" in captured.out
@@ -320,7 +320,7 @@ def test_cli_ask_says_an_answer_is_not_utf8_and_reads_the_next(model_dir, capsys
 def test_cli_ask_refuses_an_overlong_answer_without_reading_it_whole(model_dir, capsys, monkeypatch):
     import io
 
-    from groundlang.commands.follow import MAX_ANSWER_CHARS
+    from groundlang.commands.asking import MAX_ANSWER_CHARS
 
     monkeypatch.setattr("sys.stdin", io.StringIO("x" * (50 * MAX_ANSWER_CHARS) + "\nthe blue one\n"))
     assert _follow(model_dir, "go to the purple room", "--ask") == 0
@@ -333,11 +333,11 @@ def test_cli_ask_refuses_an_overlong_answer_without_reading_it_whole(model_dir, 
 def test_confidences_are_shown_rounded_down_so_a_threshold_is_never_contradicted():
     """0.6999 shown as 0.70 had read "confidence 0.70 is below --min-confidence 0.7"; a value that is exact in
     hundredths stays itself (0.29 * 100 is 28.999... in floating point)."""
-    from groundlang.commands.follow import _down
+    from groundlang.commands.asking import down as _down
 
     assert [_down(x) for x in (0.6999, 0.7, 0.29, 0.58, 1.0, 0.0)] == ["0.69", "0.70", "0.29", "0.58", "1.00", "0.00"]
     # as many places as the threshold has: 0.996 is not shown as 0.99 against --min-confidence 0.995
-    from groundlang.commands.follow import _places
+    from groundlang.commands.asking import places_for as _places
 
     assert [_places(t) for t in (0.7, 0.995, 0.9961, 0.12345678)] == [2, 3, 4, 6]
     assert _down(0.996, _places(0.995)) == "0.996"

@@ -18,6 +18,7 @@ from groundlang.corpus import CorpusError, InconsistentDemonstration, example_co
 from groundlang.inference import likelihoods
 from groundlang.inference.likelihoods import behaviour_likelihood_table
 from groundlang.learner import Learner
+from groundlang.model.pf_tables import TabulationError
 from groundlang.model.statespace import StateSpaceError, check_state_count
 from groundlang.model.world import Agent, Layout, Room, State, Toy, get_palette
 
@@ -299,7 +300,8 @@ def test_follow_in_a_huge_room_refuses_before_grounding(learner, monkeypatch):
         raise AssertionError("the layout was grounded before its state count was checked")
 
     monkeypatch.setattr(tasks, "ground_environment", grounded)
-    with pytest.raises(StateSpaceError, match="could reach up to"):
+    # refused for its cells, which no PF table holds (learner_state.check_state), before its states are counted
+    with pytest.raises(TabulationError, match="this layout has 998,001 walkable cells; PFs are tabulated for at most"):
         learner.follow("go to the red room", _big_room())
 
 
@@ -393,12 +395,12 @@ def test_follow_takes_the_time_limit_its_timeout_message_names(learner, tmp_path
 
     model = learner.save(tmp_path / "m")
     huge = tmp_path / "huge.state"
-    huge.write_text("room,5,0,300,300,0 agent,2,2\n")
+    huge.write_text("room,5,0,63,63,0 agent,2,2\n")  # large, yet small enough to tabulate (3,844 cells)
     code = main(["follow", "go to the green room", "--env", str(huge), "--palette", "sokoban", "--model", str(model),
-                 "--time-limit", "0.5"])
+                 "--time-limit", "0.05"])
     err = capsys.readouterr().err
     assert code == 2 and len(err.splitlines()) == 1
-    assert "did not finish within 0.5 s" in err and "raise the time limit if it is just large); --time-limit" in err
+    assert "did not finish within 0.05 s" in err and "raise the time limit if it is just large); --time-limit" in err
     # the limit holds for the PF tables too (they were always grounded within the default 10 s)
     from groundlang.bdm import read_bdm
     from groundlang.bdm_check import default_library

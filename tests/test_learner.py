@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 import re
 
@@ -454,7 +455,7 @@ def test_confidence_is_how_likely_what_was_meant_holds_where_following_ends(corp
         learner.lm.success_confidence = True
 
 
-def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys):
+def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys, monkeypatch):
     """"go to the red room" said in it: following sets the goal aside (it asks nothing), and without a word
     the interpretations would leave out the room named; follow says it is already true."""
     model = tmp_path / "m"
@@ -465,23 +466,33 @@ def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys)
     outside.write_text(layout + " agent,3,8\n")  # in the blue room, room0
     capsys.readouterr()
     follow = ["--quiet", "follow", "go to the red room", "--model", str(model), "--palette", "sokoban", "--env"]
-    assert main([*follow, str(inside), "--json"]) == 0
+    assert main([*follow, str(inside), "--json"]) == 3
     answer = json.loads(capsys.readouterr().out)
     done = answer["already_true"]
     assert done["goal"] == "agentInRoom(agent0, room2)" and done["probability"] > 0.9
-    # as sure as acting needs: nothing is done (acting on the rest of the reading would go to another room)
-    assert answer["actions"] == [] and answer["reason"] == "already true" and answer["goal"] == done["goal"]
-    assert answer["final_state"] == inside.read_text().strip() and not answer["abstained"]
-    assert main([*follow, str(inside)]) == 0
-    out = capsys.readouterr().out
+    # as sure as acting needs, it is asked, never taken: the reading of goals that hold is read from words
+    # trained on none ("leave the red room" said in it reads as it too)
+    assert answer["abstained"] and answer["question"].startswith("Do you mean the agent in the red room, as it is now?")
+    assert [c["goal"] for c in answer["choices"]] == [done["goal"]] and "actions" not in answer
+    assert main([*follow, str(inside)]) == 3
+    captured = capsys.readouterr()
     assert re.search(r"^already true here: the agent in the red room .*agentInRoom\(agent0, room2\); the words "
-                     r"most probably ask for it \(0\.9\d of their reading .*\): nothing to do\nplan \(0 steps\): \(none\)$",
-                     out, re.M)
-    assert "interpretations:" not in out
-    # less sure than --min-confidence asks: said, and the rest of the reading is what is weighed
-    main([*follow, str(inside), "--min-confidence", "0.9999"])
-    assert re.search(r"\), but such a goal asks nothing: the interpretations below are the rest\ninterpretations:",
-                     capsys.readouterr().out)
+                     r"most probably ask for it \(0\.9\d of their reading .*\)\nDo you mean the agent in the red room, "
+                     r"as it is now\? \(yes: nothing to do; no: the rest of the reading\)\n  1\) the agent in the red room",
+                     captured.out, re.M)
+    assert "interpretations:" not in captured.out and "(yes: nothing to do; no: the rest of their reading)" in captured.err
+    # a yes: nothing to do; a no: the rest of the reading, here asked about in turn and answered
+    monkeypatch.setattr("sys.stdin", io.StringIO("yes\n"))
+    assert main([*follow, str(inside), "--ask"]) == 0
+    assert capsys.readouterr().out.endswith("nothing to do: plan (0 steps): (none)\n")
+    monkeypatch.setattr("sys.stdin", io.StringIO("no\nthe blue one\n"))
+    assert main([*follow, str(inside), "--ask"]) == 0
+    assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room0): reached" in capsys.readouterr().out
+    # with --guess, or less sure than --min-confidence asks: said, and the rest of the reading is weighed
+    for options in (["--guess"], ["--min-confidence", "0.9999"]):
+        main([*follow, str(inside), *options])
+        assert re.search(r"\), but such a goal asks nothing: the interpretations below are the rest\ninterpretations:",
+                         capsys.readouterr().out)
     # where it is not true yet, nothing is said
     assert main([*follow, str(outside), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["already_true"] is None

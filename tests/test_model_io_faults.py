@@ -75,13 +75,13 @@ def test_a_model_saved_over_since_it_was_loaded_is_not_replaced_by_the_loaded_on
     import groundlang.commands.follow as follow_command
 
     model = old.save(tmp_path / "cli")
-    real_ask = follow_command._ask
+    real_ask = follow_command.ask
 
     def answer_after_another_save(*args, **kwargs):
         new.save(model)  # another run, while the question waits on the terminal
         return real_ask(*args, **kwargs)
 
-    monkeypatch.setattr(follow_command, "_ask", answer_after_another_save)
+    monkeypatch.setattr(follow_command, "ask", answer_after_another_save)
     monkeypatch.setattr(sys, "stdin", io.StringIO("1\n"))
     code = main(["--quiet", "follow", "take the star to the red room", "--env", str(EXAMPLES / "novel_a.state"),
                  "--model", str(model), "--ask", "--learn", "--min-confidence", "0.9999"])

@@ -1,8 +1,9 @@
 """``groundlang follow "COMMAND" --env FILE [--palette NAME] --model MODEL_DIR [--ask [--learn] | --guess] [--out PNG] [--json]``.
 
-Exit codes: 0 the goal was reached; 1 it was not; 2 bad input; 3 the command
-was read with confidence below ``--min-confidence`` and nothing was done (the
-question is printed; ``--ask`` asks it on the terminal instead). With
+Exit codes: 0 the goal was reached (or, asked, the answer said that what already holds is meant); 1 it
+was not; 2 bad input; 3 the command was read with confidence below ``--min-confidence``, or its words
+most probably ask for what already holds, and nothing was done (the question is printed; ``--ask`` asks
+it on the terminal instead, :mod:`groundlang.commands.asking`). With
 ``--learn``, an answer is also folded into the model (``Learner.update``) and
 the model saved over ``--model``, so that the command is understood next time.
 """
@@ -10,25 +11,19 @@ the model saved over ``--model``, so that the command is understood next time.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import math
 import sys
 from pathlib import Path
 
 from groundlang.commands import (PALETTE_HELP, add_lexicon_option, add_time_limit_option, as_typed, fraction,
                                  json_text, logged_by_file_names, output_path, positive_int)
+from groundlang.commands.asking import (already_true, ask, ask_held, choices_json, down, held_choice, held_question,
+                                        learn_answer, places_for, print_question)
 
 # Exit code of a command that asked instead of acting (documented in the README).
 ASKED = 3
 # What follow's --min-confidence defaults to: groundlang.learner.DEFAULT_MIN_CONFIDENCE (not imported
 # here: building the parser stays light; a test checks they agree).
 DEFAULT_MIN_CONFIDENCE = 0.7
-ANSWER_TRIES = 3
-# An answer names one of a few choices ("the blue one", "2"); a longer line is no answer, and reading it
-# whole would hold whatever a pipe sends in memory. Its rest is dropped up to a bound: beyond it, an input that
-# never ends a line (/dev/zero) is no answer, and would be read forever.
-MAX_ANSWER_CHARS = 1000
-MAX_DROPPED_CHARS = 1 << 24
 
 
 def register(subparsers) -> None:
@@ -69,89 +64,6 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _choices_json(result, state, library, names=None) -> list[dict]:
-    from groundlang.clarify import option_phrases
-    from groundlang.logic.atoms import format_goal, renamed_words
-
-    phrases = option_phrases(result.choices, state, library)
-    return [{"number": k, "words": renamed_words(phrase, names), "goal": format_goal(c.goal, names),
-             "probability": c.probability}
-            for k, (phrase, c) in enumerate(zip(phrases, result.choices), start=1)]
-
-
-def _print_question(result, state, library, names=None, places: int = 2) -> None:
-    from groundlang.logic.atoms import renamed_words
-
-    print(renamed_words(result.question, names))
-    for row in _choices_json(result, state, library, names):
-        print(f"  {row['number']}) {row['words']}  ({_down(row['probability'], places)}; {row['goal']})")
-
-
-def _ask(learner, result, state, max_steps: int, names=None):
-    """Ask on the terminal until an answer names one choice; None at end of input or after ANSWER_TRIES;
-    clarify.Declined where an answer declines what is offered."""
-    from groundlang.clarify import AnswerError, Declined
-    from groundlang.logic.atoms import renamed_words
-
-    _print_question(result, state, learner.library, names)
-    stdin = sys.stdin  # None where the process was started with stdin closed: no answer can come
-    with contextlib.suppress(AttributeError, ValueError):  # bytes that are not UTF-8 reach the answer as lone
-        stdin.reconfigure(errors="surrogateescape")       # surrogates (said, asked again), not a decode error
-    for _ in range(ANSWER_TRIES):
-        print("answer> ", end="", flush=True)
-        line = stdin.readline(MAX_ANSWER_CHARS + 1) if stdin is not None else ""
-        if not line:
-            print()
-            return None
-        if len(line) > MAX_ANSWER_CHARS and not line.endswith("\n"):
-            dropped = 0  # the rest of the line, read in bounded pieces and dropped, up to a bound: an input
-            while (rest := stdin.readline(1 << 16)) and not rest.endswith("\n"):  # of no line end (/dev/zero)
-                dropped += len(rest)                                             # would be read forever
-                if dropped > MAX_DROPPED_CHARS:
-                    print(f"\n  no line end within {MAX_DROPPED_CHARS:,} characters: no answer")
-                    return None
-            print(f"\n  an answer is at most {MAX_ANSWER_CHARS} characters: a choice's number or its words")
-            continue
-        if not stdin.isatty():  # a piped answer is not echoed by a terminal: show what was read, as the
-            print(as_typed(line.strip()))  # command is shown
-        try:  # the choices were shown with the file's names: the answer is read with the layout's
-            with logged_by_file_names(names or {}):
-                return learner.clarify(result, renamed_words(line, {v: k for k, v in (names or {}).items()}),
-                                       max_steps=max_steps)
-        except Declined as exc:  # asking again would offer what was just declined
-            print(f"  {exc}")
-            raise
-        except AnswerError as exc:
-            print(f"  {exc}")
-    return None
-
-
-def _learn(learner, asked, answered, state, model) -> None:
-    """Fold the answer into the model and save it over ``model`` (all or nothing: model_io)."""
-    # The whole group the answer chose: goals with the same outcome in this layout are one answer.
-    chosen = next((c for c in asked.choices if answered.goal in c.goals), answered.goal)
-    before = set(learner.vocab.words)
-    learner.update(asked.command, state, goal=chosen)
-    learner.save(model)
-    new = [w for w in learner.vocab.words if w not in before]
-    said = f" (new words: {', '.join(repr(w) for w in new)})" if new else ""
-    print(f"learned that {asked.command!r} means {answered.goal_words}{said}; model saved to {model}")
-
-
-def _down(confidence: float, places: int = 2) -> str:
-    """A confidence rounded down to ``places``: 0.6999 is not said to be 0.70 and "below 0.7" at once."""
-    scale = 10 ** places
-    return f"{math.floor(round(confidence * scale, 9)) / scale:.{places}f}"  # round first: 0.29 * 100 is 28.999...
-
-
-def _places(threshold: float) -> int:
-    """As many places as the threshold needs (2 to 6): 0.99 shown against --min-confidence 0.995 said nothing."""
-    places = 2
-    while places < 6 and round(threshold, places) != threshold:
-        places += 1
-    return places
-
-
 def _habits(learner, result, state) -> dict[str, float]:
     """What following left true besides the goal because demonstrations of such goals did (end habits)."""
     if result.abstained or not result.reached or not learner.lm.end_habits or learner.habits is None:
@@ -170,43 +82,36 @@ def _out_of_reach(result, names) -> str | None:
     most = format_goal(result.posterior.out_of_reach_goal, names)
     if result.reason == "unreachable":  # conditioning had nothing to keep: the interpretations above are these
         return f"none of the words' readings can be done from here (the most probable: {most})"
-    return (f"{_down(share)} of the words' reading asks for what cannot be done from here (most: {most}); the "
+    return (f"{down(share)} of the words' reading asks for what cannot be done from here (most: {most}); the "
             "interpretations above are what can")
 
 
-def _already_true(learner, command: str, state) -> tuple[tuple, float] | None:
-    """The goal the words most probably ask for, with goals that hold at the start offered too, and its
-    probability, where that goal holds at the start: following sets such a goal aside (it asks nothing), so
-    without a word the interpretations shown would leave out what was named ("go to the blue room" said in it).
-    None for a command with a negated clause: "do not go to the blue room" is read as a task without its
-    negation (negation is no task), and what it asks for is not what it says."""
-    from groundlang.confidence import goals_held_at_start
+def _refuse(result, args, done=None) -> None:
+    # with --json nothing is asked on the terminal: the question and its choices are in the JSON printed
+    how = ("the question and its choices are in the JSON (--ask asks only without --json)" if args.ask and args.json
+           else "answer with --ask")
+    places = places_for(args.min_confidence)
+    if done is not None:
+        print(f"groundlang follow: not acting: the words most probably ask for what already holds ({down(done[1], places)}"
+              f"); {how} (yes: nothing to do; no: the rest of their reading), or act on the rest with --guess",
+              file=sys.stderr)
+        return
+    print(f"groundlang follow: not acting: confidence {down(result.confidence, places)} is below "
+          f"--min-confidence {args.min_confidence!r}; {how}, or act anyway with --guess", file=sys.stderr)
 
-    held = learner.posterior(command, state, held=True)
-    if any(c.negated for r in held.readings for c in r.logical_form.clauses):
-        return None
-    return (held.best_goal, held.confidence) if held.best_goal in goals_held_at_start(held) else None
 
-
-def _print_already_true(done, state, library, names, places: int, settled: bool) -> None:
+def _print_already_true(done, state, library, names, places: int, asked: bool) -> None:
     from groundlang.wording import labelled_goal
 
     said = (f"already true here: {labelled_goal(done[0], state, library, names)}; the words most probably "
-            f"ask for it ({_down(done[1], places)} of their reading with goals that hold at the start offered too)")
-    print(f"{said}: nothing to do" if settled else
-          f"{said}, but such a goal asks nothing: the interpretations below are the rest")
-
-
-def _settled(done, args) -> bool:
-    """Whether the words ask for what already holds as surely as acting needs (``--min-confidence``, or
-    anyhow with ``--guess``): then nothing is done. Acting on the rest of their reading would do what was
-    not asked ("stay in the blue room" said in it had pushed a chair there)."""
-    return done is not None and (args.guess or done[1] >= args.min_confidence)
+            f"ask for it ({down(done[1], places)} of their reading with goals that hold at the start offered too)")
+    # as sure as acting needs, the question comes next: the reading of goals that hold is read from words
+    # trained on none, so "leave the blue room" said in it reads as it, and it is asked, never taken
+    print(said if asked else f"{said}, but such a goal asks nothing: the interpretations below are the rest")
 
 
 def _nothing_to_do(done, state, library, names, args) -> int:
-    """What follow says and writes where the words ask for what already holds: no plan, the start kept."""
-    from groundlang.corpus import format_state_like
+    """Where the answer says that what already holds is what is meant: no plan, the start kept."""
     from groundlang.logic.atoms import format_goal, renamed_words
     from groundlang.wording import goal_phrase
 
@@ -216,39 +121,58 @@ def _nothing_to_do(done, state, library, names, args) -> int:
         save_picture(args.out, state, trajectory=[state], title=picture_title(
             args.command_text, renamed_words(goal_phrase(done[0], state, library), names), format_goal(done[0], names)),
             names=names)
-    if args.json:
-        goal = {"goal": format_goal(done[0], names), "words": renamed_words(goal_phrase(done[0], state, library), names),
-                "probability": done[1]}
-        print(json_text({"interpretations": [goal], "confidence": done[1], "best_goal_probability": done[1],
-                         "margin": None, "out_of_reach": 0.0, "already_true": goal, "abstained": False,
-                         "goal": goal["goal"], "goal_words": goal["words"], "actions": [],
-                         "final_state": format_state_like(state, args.env, names), "reached": True,
-                         "reason": "already true", "habits": {}}))
-        return 0
-    print("plan (0 steps): (none)")
+    print("nothing to do: plan (0 steps): (none)")
     if args.out:
         print(f"picture written to {args.out}")
     return 0
 
 
-def _refuse(result, args) -> None:
-    # with --json nothing is asked on the terminal: the question and its choices are in the JSON printed
-    how = ("the question and its choices are in the JSON (--ask asks only without --json)" if args.ask and args.json
-           else "answer with --ask")
-    print(f"groundlang follow: not acting: confidence {_down(result.confidence, _places(args.min_confidence))} is below "
-          f"--min-confidence {args.min_confidence!r}; {how}, or act anyway with --guess", file=sys.stderr)
+def _answer_json(learner, result, done, state, names, args, held: bool) -> dict:
+    """follow's --json answer; ``held``: the question is whether what already holds is meant."""
+    from groundlang.corpus import format_state_like
+    from groundlang.logic.atoms import format_goal, renamed_words
+    from groundlang.wording import goal_phrase
+
+    data = {
+        "interpretations": [{"goal": format_goal(g, names),
+                             "words": renamed_words(goal_phrase(g, state, learner.library), names),
+                             "probability": p} for g, p in result.posterior.goals()[: args.top]],
+        "confidence": result.confidence,
+        "best_goal_probability": result.posterior.confidence,
+        "margin": result.posterior.margin,
+        "out_of_reach": result.posterior.out_of_reach,
+        "already_true": None if done is None else {
+            "goal": format_goal(done[0], names), "words": renamed_words(goal_phrase(done[0], state, learner.library),
+                                                                        names), "probability": done[1]},
+        "abstained": result.abstained or held,
+    }
+    if held:
+        data.update(question=held_question(done, state, learner.library, names),
+                    choices=choices_json(held_choice(done), state, learner.library, names), unknown_words=[])
+    elif result.abstained:
+        data.update(question=renamed_words(result.question, names),
+                    choices=choices_json(result.choices, state, learner.library, names),
+                    unknown_words=list(result.unknown_words))
+    else:
+        data.update(goal=format_goal(result.goal, names), goal_words=renamed_words(result.goal_words, names),
+                    actions=[a.word for a in result.actions],
+                    final_state=format_state_like(result.final_state, args.env, names),
+                    reached=result.reached, reason=result.reason,
+                    habits=_habits(learner, result, state))
+    return data
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundlang.corpus import file_names, format_state_like, read_initial_state
+    from groundlang.corpus import file_names, read_initial_state
     from groundlang.inference.sweeps import plan_once
     from groundlang.learner import Learner
     from groundlang.logic.atoms import format_goal, renamed_words
     from groundlang.logic.palette_files import palette_names
     from groundlang.model.interpretations import NoTaskError
+    from groundlang.model.statespace import StateSpaceError
     from groundlang.model.palette import Palette, get_palette
     from groundlang.pair_tasks import tabulation_refusal
-    from groundlang.wording import goal_phrase, labelled_goal
+    from groundlang.wording import labelled_goal
 
     if args.learn and not args.ask:
         raise ValueError("--learn learns from the answer to a question: use it with --ask")
@@ -300,21 +224,37 @@ def run(args: argparse.Namespace) -> int:
             result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
     except NoTaskError as exc:  # the state is at fault, not the command or the model: name its file
         raise NoTaskError(f"{args.env}: {exc}") from None
+    except StateSpaceError as exc:  # a layout no method can plan in: its file, as above
+        raise StateSpaceError(f"{args.env}: {exc}") from None
     if not args.json:
         print(f"command: {as_typed(args.command_text)}")
     # what the words say of the start, from the model as it was: before an answer is asked for or learned
-    done = _already_true(learner, args.command_text, state)
-    places = _places(args.min_confidence)
+    done = already_true(learner, args.command_text, state)
+    places = places_for(args.min_confidence)
+    held = done is not None and not args.guess and done[1] >= args.min_confidence
     if done is not None and not args.json:  # before a question, whose choices leave it out
-        _print_already_true(done, state, learner.library, names, places, _settled(done, args))
-    if _settled(done, args):
-        return _nothing_to_do(done, state, learner.library, names, args)
+        _print_already_true(done, state, learner.library, names, places, held)
+    if held and (args.json or not args.ask):
+        if args.json:
+            print(json_text(_answer_json(learner, result, done, state, names, args, held=True)))
+        else:
+            print_question(held_question(done, state, learner.library, names), held_choice(done), state,
+                           learner.library, names, places)
+        _refuse(result, args, done)
+        return ASKED
+    if held:
+        taken = ask_held(learner, done, state, names)
+        if taken is None:
+            print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
+            return ASKED
+        if taken:
+            return _nothing_to_do(done, state, learner.library, names, args)
     answered = None
     if result.abstained and args.ask and not args.json:
         from groundlang.clarify import Declined
 
         try:
-            answered = _ask(learner, result, state, args.max_steps, names)
+            answered = ask(learner, result, state, args.max_steps, names)
         except Declined:
             print("groundlang follow: the answer declined what was offered; nothing done", file=sys.stderr)
             return ASKED
@@ -322,9 +262,8 @@ def run(args: argparse.Namespace) -> int:
             print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
             return ASKED
         if args.learn:
-            _learn(learner, result, answered, state, args.model)
+            learn_answer(learner, result, answered, state, args.model)
         result = answered
-    goals = result.posterior.goals()[: args.top]
     if args.out and not result.abstained:
         from groundlang.render import picture_title, save_picture
 
@@ -332,51 +271,29 @@ def run(args: argparse.Namespace) -> int:
                      title=picture_title(args.command_text, renamed_words(result.goal_words, names),
                                          format_goal(result.goal, names)), names=names)
     if args.json:
-        data = {
-            "interpretations": [{"goal": format_goal(g, names),
-                                 "words": renamed_words(goal_phrase(g, state, learner.library), names),
-                                 "probability": p} for g, p in goals],
-            "confidence": result.confidence,
-            "best_goal_probability": result.posterior.confidence,
-            "margin": result.posterior.margin,
-            "out_of_reach": result.posterior.out_of_reach,
-            "already_true": None if done is None else {
-                "goal": format_goal(done[0], names), "words": renamed_words(goal_phrase(done[0], state, learner.library),
-                                                                            names), "probability": done[1]},
-            "abstained": result.abstained,
-        }
-        if result.abstained:
-            data.update(question=renamed_words(result.question, names), choices=_choices_json(result, state, learner.library, names),
-                        unknown_words=list(result.unknown_words))
-        else:
-            data.update(goal=format_goal(result.goal, names), goal_words=renamed_words(result.goal_words, names),
-                        actions=[a.word for a in result.actions],
-                        final_state=format_state_like(result.final_state, args.env, names),
-                        reached=result.reached, reason=result.reason,
-                        habits=_habits(learner, result, state))
-        print(json_text(data))
+        print(json_text(_answer_json(learner, result, done, state, names, args, held=False)))
         if result.abstained:
             _refuse(result, args)
             return ASKED
         return 0 if result.reached else 1
     print("interpretations:")
-    for goal, p in goals:
+    for goal, p in result.posterior.goals()[: args.top]:
         print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library, names)}")
-    margin = f"margin {_down(result.posterior.margin, places)} over the next goal that differs"
+    margin = f"margin {down(result.posterior.margin, places)} over the next goal that differs"
     if answered is not None:  # what the words alone said, before the answer chose
         print(f"acting on the answer (from the words alone: the most probable goal "
-              f"{_down(result.posterior.confidence, places)}, "
+              f"{down(result.posterior.confidence, places)}, "
               f"{margin})")
     elif result.success is None:
-        print(f"confidence {_down(result.confidence, places)} ({margin})")
+        print(f"confidence {down(result.confidence, places)} ({margin})")
     else:  # the end is chosen over the whole posterior: how likely what was meant holds there
-        print(f"confidence {_down(result.confidence, places)} that what was meant holds where it "
+        print(f"confidence {down(result.confidence, places)} that what was meant holds where it "
               f"{'ends' if result.reached else 'would end'} (the most probable goal "
-              f"{_down(result.posterior.confidence, places)}, {margin})")
+              f"{down(result.posterior.confidence, places)}, {margin})")
     if (beyond := _out_of_reach(result, names)) is not None:
         print(beyond)
     if result.abstained:
-        _print_question(result, state, learner.library, names, places)
+        print_question(result.question, result.choices, state, learner.library, names, places)
         _refuse(result, args)
         return ASKED
     print(f"plan ({len(result.actions)} step{'' if len(result.actions) == 1 else 's'}): {', '.join(a.word for a in result.actions) or '(none)'}")
