@@ -100,6 +100,9 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
                 raise LexiconError(f"{where}: SYNONYM entry {word!r}: {lemma!r} is not letters, digits or apostrophes "
                                    "(the tokeniser splits at other characters)")
             out.append(f"{entry(form)}={entry(lemma)}")
+        elif category in ("YES", "NO") and "_" in said:  # answers are read a word at a time
+            raise LexiconError(f"{where}: {category} word {word!r} is more than one word (an answer's words are read "
+                               "one at a time)")
         elif "=" in word:
             raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR and SYNONYM pair words)")
         elif not all(_WORD.fullmatch(part) for part in said.split("_")):

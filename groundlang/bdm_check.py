@@ -2,7 +2,8 @@
 
 Reports commands, (start, end) pairs and distinct layouts; every pair whose end state cannot be reached
 from its start state under the project's dynamics (file and line); pairs that cannot be checked (too
-large even for the relevance abstraction, or not reached in it); commands whose pairs show no task
+large even for the relevance abstraction, or not reached in it); pairs in a layout too large to tabulate
+(file and line: training skips them, and a command's task is what its other pairs show); commands whose pairs show no task
 (nothing that changed holds in every end state: groundlang.pair_tasks); and, over the commands whose text
 is given more than once, how many one task per text could get right (``pair_tasks.text_agreement``: the
 labels' noise). Exit 1 when a pair is unreachable, unless ``--skip-inconsistent``.
@@ -18,7 +19,8 @@ from importlib.resources import files
 from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.model.relevance import STATE_SOURCE, reading_states
-from groundlang.pair_tasks import command_task, reachable, tabulation_refusal, text_agreement
+from groundlang.model.pf_tables import tabulation_refusal
+from groundlang.pair_tasks import command_task, reachable, text_agreement
 
 __all__ = ["check_bdm", "default_library", "is_corpus_library"]
 
@@ -55,11 +57,12 @@ def check_bdm(args: argparse.Namespace) -> int:
     # Everything is computed before anything is printed. A layout too large to tabulate is set aside before
     # any of its states is enumerated or it is grounded (the reachability check had taken gigabytes to get
     # there); a command's task is what its other pairs show.
-    too_large = [(c, p, why) for c, p in pairs if (why := tabulation_refusal(p.start.layout)) is not None]
+    refused = {layout: tabulation_refusal(layout) for layout in layouts}
+    too_large = [(c, p, refused[p.start.layout]) for c, p in pairs if refused[p.start.layout] is not None]
     tasks = [command_task(c, library) for c in commands]
     unreachable, unchecked = [], 0
     for command, pair in pairs:
-        if tabulation_refusal(pair.start.layout) is not None:
+        if refused[pair.start.layout] is not None:
             continue
         STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
         found = reachable(pair.start, pair.end)

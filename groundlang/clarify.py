@@ -18,7 +18,11 @@ asked for ("the tan one" in a model that learned "tan"), and counts only where
 its words are themselves evidence for one choice: the reading with them is at
 least twice as sure of it against every other choice as the reading without
 them was. Words the model never learned ("abc") leave the reading as it was,
-and so choose nothing.
+and so choose nothing. A question of one choice ("Do you mean the red room?")
+also takes a yes; an answer that only declines ("no", "none of them"; to one
+choice also "not the red room") raises :class:`Declined`. The words that take,
+decline or say nothing are the ``YES``, ``NO`` and ``POLITE`` lines of a word
+file (grammar/english.words).
 """
 
 from __future__ import annotations
@@ -62,8 +66,16 @@ _FUNCTION = frozenset({"DET", "PRON", "AUX", "PREP", "TO", "CONJ", "REL", "SUB",
 
 
 def _says_nothing(word: str, lexicon: Lexicon) -> bool:
+    """Whether a word (or a token: "thank_you", "'s") of an answer says nothing of the choice meant. An
+    auxiliary does, whatever else it is ("is" is a verb too): "yes it is"."""
     listed = lexicon.listed(word)
-    return word in lexicon.polite_words or bool(listed) and listed <= _FUNCTION
+    return word in lexicon.polite_words or bool(listed) and (listed <= _FUNCTION or "AUX" in listed)
+
+
+def _content(tokens, lexicon: Lexicon) -> set[str]:
+    """The words of ``tokens`` that say something: whole tokens first ("thank_you", "'s" say nothing), then
+    their words ("left_of": "left")."""
+    return {w for t in tokens if not _says_nothing(t, lexicon) for w in _words(t) if not _says_nothing(w, lexicon)}
 
 
 def competing(groups: Sequence[GoalGroup]) -> list[GoalGroup]:
@@ -169,11 +181,12 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
             raise AnswerError(f"answer {shown(text)}: expected a number from 1 to {len(choices)}")
         return choices[k - 1]
     named = [_words(p) for p in phrases]
-    taken = _yes_or_no(text, named[0] if len(choices) == 1 else set(), lexicon)
-    if len(choices) == 1 and taken is None:  # "not the red room": the words of the one choice, denied
-        said_words, denied_words = _said_and_denied(text)
+    taken = _yes_or_no(text, named[0] if len(choices) == 1 else None, lexicon)
+    said_words, denied_words = _said_and_denied(text, lexicon)
+    if len(choices) == 1 and taken is None:  # "not the red room": what it denies is the one choice's
         telling = {w for w in named[0] if not _says_nothing(w, lexicon)}
-        taken = False if denied_words & telling and not said_words & telling else None
+        denied = {w for w in denied_words if not _says_nothing(w, lexicon)}
+        taken = False if denied and denied <= telling and not said_words & telling else None
     if taken is False:
         raise Declined(f"{shown(repr(text), limit=60)} declines {'the choice' if len(choices) == 1 else 'every choice'}"
                        ": nothing is done")
@@ -184,7 +197,6 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
                           "its words to act on it, no to decline it")
     # words some phrases have and others lack, and that say something ("to" of "next to" is no side)
     telling = {w for w in set().union(*named) - set.intersection(*named) if not _says_nothing(w, lexicon)}
-    said_words, denied_words = _said_and_denied(text)
     words = said_words & telling
     denied = {k for k, n in enumerate(named) if denied_words & telling & n}
     if denied and not words:  # "not the red one": the choices it names are the ones left out
@@ -208,40 +220,40 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     return chosen
 
 
-def _yes_or_no(text: str, offered: set[str], lexicon: Lexicon) -> bool | None:
-    """True where the answer takes what a question of one choice offers (``offered``: its phrase's words): a
-    word of ``YES`` (grammar/english.words) or of the phrase, and nothing else but words that say nothing of
-    what is meant (determiners, pronouns, auxiliaries, prepositions, ``POLITE``): "yes please", "yes, the
-    red one", "the red room"; False where it declines: a word of ``NO`` or a negation and nothing else ("no",
-    "nope", "none of them", "not that one"); None otherwise ("no, the red one" is left to the words it names,
-    "the one on the right" to "right"). AnswerError for an answer that says both ("yes no")."""
-    tokens = [t for t in tokenise(text) if _words(t)]
-    no = {t for t in tokens if t in lexicon.no_words or "NEG" in lexicon.listed(t) or t.endswith("n't")}
-    words = {w for t in tokens if t not in no for w in _words(t)}
-    yes = words & lexicon.yes_words
-    if yes and no:
+def _yes_or_no(text: str, offered: set[str] | None, lexicon: Lexicon) -> bool | None:
+    """True where the answer takes what a question of one choice offers (``offered``: its phrase's words;
+    None for a question of several): a word of ``YES`` (grammar/english.words) or of the phrase, and nothing
+    else but words that say nothing of what is meant (:func:`_says_nothing`): "yes please", "yes, the red
+    one", "the red room". False where it declines: a word of ``NO`` ("no", "nope", "none of them") and
+    nothing else that says something; to a question of one choice also a bare negation ("not that one").
+    None otherwise: "no, the red one" is left to the words it names, "the one on the right" to "right".
+    AnswerError for an answer of a yes and a no and nothing else ("yes no")."""
+    tokens = [t for t in lexicon.join_multiword(tokenise(text)) if _words(t)]
+    declining = {t for t in tokens if t in lexicon.no_words}
+    negating = {t for t in tokens if "NEG" in lexicon.listed(t) or t.endswith("n't")} - declining
+    yes = {t for t in tokens if t in lexicon.yes_words}
+    telling = _content([t for t in tokens if t not in yes | declining | negating], lexicon)
+    if yes and (declining or negating) and not telling:
         raise AnswerError(f"{shown(repr(text), limit=60)} says both yes ({', '.join(sorted(yes))}) and no "
-                          f"({', '.join(sorted(no))}): answer one or the other")
-    telling = {w for w in words - yes if not _says_nothing(w, lexicon)}
-    if no:
-        return False if not telling else None
-    named = {w for w in offered if not _says_nothing(w, lexicon)}
+                          f"({', '.join(sorted(declining | negating))}): answer one or the other")
+    if declining or negating:
+        return False if not telling and not yes and (declining or offered is not None) else None
+    named = {w for w in offered or () if not _says_nothing(w, lexicon)}
     return True if (yes or telling & named) and telling <= named else None
 
 
-def _said_and_denied(text: str) -> tuple[set[str], set[str]]:
+def _said_and_denied(text: str, lexicon: Lexicon) -> tuple[set[str], set[str]]:
     """The answer's words said of the choice meant, and those a negation denies: a word English lists as a
     negation (``NEG`` of grammar/english.words, or one ending in the clitic n't, which the tokeniser keeps
     whole) denies the words after it up to the clause's end (a comma, a full stop, "but"): "not the red one",
     "the one that isn't red", "red, not blue"; "no, the red one" and "the red one, no?" deny nothing named."""
-    english = Lexicon.english()
     said: set[str] = set()
     denied: set[str] = set()
     negating = False
     for token in tokenise(text):
         if token in _CLAUSE_ENDS:
             negating = False
-        elif "NEG" in english.listed(token) or token.endswith("n't"):
+        elif "NEG" in lexicon.listed(token) or token.endswith("n't"):
             negating = True
         else:
             (denied if negating else said).update(_words(token))

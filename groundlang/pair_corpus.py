@@ -36,7 +36,8 @@ from groundlang.model.state_search import StateKeyError
 from groundlang.model.statespace import StateSpaceError
 from groundlang.model.tasks import candidate_tasks
 from groundlang.model.world import State, replay
-from groundlang.pair_tasks import REACHABILITY_MAX_STATES, shortest_actions, tabulation_refusal
+from groundlang.model.pf_tables import tabulation_refusal
+from groundlang.pair_tasks import REACHABILITY_MAX_STATES, shortest_actions
 
 __all__ = ["PairInstance", "PairedCommand", "PairCorpus", "LAYOUTS", "read_pair_corpus", "training_instances", "held_out_by_text",
            "text_position", "fold_of_text", "DEMONSTRATIONS"]
@@ -176,6 +177,11 @@ class TrainingPairs:
     def skipped_counts(self) -> dict[str, int]:
         """Reason -> how many pairs were skipped for it."""
         return dict(Counter(why for _, _, why in self.skipped))
+
+
+def skipped_text(counts: dict[str, int]) -> str:
+    """Skipped pairs as the CLI says them ("3 too large to tabulate, 1 unreachable"); "" for none."""
+    return ", ".join(f"{n} {why}" for why, n in sorted(counts.items()))
 
 
 @reading_states()  # each pair named in the log lines of the spaces sized for it

@@ -30,8 +30,9 @@ from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.interpretations import NoTaskError
 from groundlang.model.relevance import STATE_SOURCE, reading_states
 from groundlang.model.statespace import StateSpaceError
-from groundlang.pair_corpus import training_instances
-from groundlang.pair_tasks import REACHABILITY_MAX_STATES, command_task, lifted_facts, tabulation_refusal
+from groundlang.pair_corpus import skipped_text, training_instances
+from groundlang.model.pf_tables import tabulation_refusal
+from groundlang.pair_tasks import REACHABILITY_MAX_STATES, command_task, lifted_facts
 
 __all__ = ["PairEvaluation", "evaluate_pairs", "calibration_of_rows", "failure_kind", "FAILURE_KINDS", "PUBLISHED_F1"]
 
@@ -102,7 +103,7 @@ class PairEvaluation:
         return data
 
     def summary(self) -> str:
-        skipped = ", ".join(f"{n} {why}" for why, n in sorted(self.train_skipped.items())) or "none"
+        skipped = skipped_text(self.train_skipped) or "none"
         return "\n".join([
             f"trained on {self.train_commands} commands, {self.train_pairs} pairs ({self.demonstrations}, "
             f"layouts {self.layouts}); pairs skipped: {skipped}",
@@ -197,8 +198,8 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     made = training_instances(train, library, demonstrations, skip_inconsistent=skip_inconsistent, max_states=max_states,
                               layouts=layouts)
     if not made.instances:
-        skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
-        raise ValueError(f"no usable training pair (every pair was skipped: {skipped or 'none read'})")
+        raise ValueError(f"no usable training pair (every pair was skipped: "
+                         f"{skipped_text(made.skipped_counts()) or 'none read'})")
     learner = Learner(library=library, **(learner_options or {})).fit(made.instances, progress=progress)
     trained = time.perf_counter()
     seen = {c.text.strip().lower() for c in train}

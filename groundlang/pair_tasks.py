@@ -18,12 +18,12 @@ from groundlang.logic.program import AspError
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.logic.atoms import Atom
 from groundlang.logic.classes import domain_classes
-from groundlang.model.pf_tables import PFTables, TabulationError, check_table_size, library_pf_tables
+from groundlang.model.pf_tables import PFTables, library_pf_tables, tabulation_refusal
 from groundlang.model.relevance import AbstractStateSpace, state_space_for
 from groundlang.model.statespace import StateSpaceError
 from groundlang.model.world import State
 
-__all__ = ["lifted_facts", "pair_task", "command_task", "tabulation_refusal", "satisfies", "reachable", "covers", "text_agreement",
+__all__ = ["lifted_facts", "pair_task", "command_task", "satisfies", "reachable", "covers", "text_agreement",
            "REACHABILITY_MAX_STATES"]
 
 # Upper bound (the enumerator's estimate) on the states a reachability check may enumerate: the 8x8
@@ -107,16 +107,6 @@ def pair_task(pairs, library: TaskLibrary | None = None, where: list[str] | None
                 raise
             raise ValueError(f"{where[k]}: {exc}") from None
     return frozenset.intersection(*ends) - frozenset.intersection(*starts)
-
-
-def tabulation_refusal(layout) -> str | None:
-    """Why the layout's PF tables would be too large (``pf_tables.check_table_size``), or None where they are
-    not: asked before its states are enumerated or it is grounded."""
-    try:
-        check_table_size(layout)
-    except TabulationError as exc:
-        return str(exc)
-    return None
 
 
 def command_task(command, library: TaskLibrary | None = None) -> frozenset[Atom] | None:

@@ -34,7 +34,7 @@ from .palette import check_attribute_clash
 from .world import Layout
 
 __all__ = ["PFTables", "TabulationError", "pf_tables", "library_pf_tables", "tabulation_program", "MAX_TABLE_CELLS",
-           "MAX_TABULATED_COPIES", "check_table_size"]
+           "MAX_TABULATED_COPIES", "check_table_size", "tabulation_refusal"]
 
 # Entries of one atom's table (cells to the power of its movable arguments): two movable arguments
 # on a 32x32 grid are 10^6; three are refused here rather than grounded for minutes.
@@ -240,6 +240,16 @@ def check_table_size(layout: Layout) -> None:
         raise TabulationError(f"this layout has {moving:,} movable objects on {cells:,} walkable cells; PFs are "
                               f"tabulated for at most {MAX_TABULATED_COPIES:,} objects x cells (every movable "
                               "object is copied onto each cell)")
+
+
+def tabulation_refusal(layout: Layout) -> str | None:
+    """Why the layout's PF tables would be too large (:func:`check_table_size`'s message), or None where they
+    are not: for a reader of many layouts that sets such a layout aside rather than stop."""
+    try:
+        check_table_size(layout)
+    except TabulationError as exc:
+        return str(exc)
+    return None
 
 
 @lru_cache(maxsize=256)

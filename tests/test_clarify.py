@@ -391,3 +391,29 @@ def test_answers_about_sides_are_read_by_their_side_not_as_yes_or_no():
     for answer in ("yes no", "no, yes"):  # both: asked again, never acted on
         with pytest.raises(AnswerError, match="says both yes .* and no"):
             choose(answer, [left, right], state, library)
+
+
+def test_a_denial_declines_one_choice_only_where_it_denies_that_choice():
+    """"not the green room" to "Do you mean the agent in the red room?" had declined it (its "room" was the
+    choice's): for the question of what already holds, that acted on the rest, the green room."""
+    library = TaskLibrary.load(["williams2018"])
+    state = read_state_file(Path(__file__).parent / "fixtures" / "williams2018" / "one.state", "williams2018")
+    red, blue = (GoalGroup((parse_goal(f"agentInRoom(agent0, {room})"),), 0.3) for room in ("room1", "room0"))
+    for answer in ("not the green room", "isn't it the green room?", "that's right"):
+        with pytest.raises(AnswerError, match="does not name the choice") as refused:
+            choose(answer, [red], state, library)
+        assert not isinstance(refused.value, Declined), answer
+    for answer in ("not the red room", "not that one", "no thank you"):
+        with pytest.raises(Declined):
+            choose(answer, [red], state, library)
+    # whole tokens say nothing ("thank you", "'s"), and so does an auxiliary that is a verb too ("is")
+    for answer in ("yes thank you", "yes, thank you", "yes it is", "yes that's it", "that's correct"):
+        assert choose(answer, [red], state, library) is red, answer
+    # a yes beside a negation of one choice picks the other (it had been refused as saying both)
+    for answer in ("yes, the one that isn't red", "sure, not the red one", "ok, not red",
+                   "yeah the blue one not the green one"):
+        assert choose(answer, [red, blue], state, library) is blue, answer
+    # of several choices a bare negation declines nothing: which one is denied is asked again
+    with pytest.raises(AnswerError, match="names none of the choices") as refused:
+        choose("not that one", [red, blue], state, library)
+    assert not isinstance(refused.value, Declined)

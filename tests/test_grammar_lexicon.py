@@ -33,6 +33,8 @@ def test_the_english_file_loads_with_every_category_the_parser_reads():
     assert english.having_preposition == "with"
     assert {"yes", "ok", "sure"} <= english.yes_words and {"no", "nope", "none"} <= english.no_words
     assert english.listed("yes") == frozenset() and english.listed("none") == frozenset()  # answers' words only
+    with pytest.raises(LexiconError, match="YES word 'of course' is more than one word"):  # never read whole
+        english.extend({"YES": ["of course"]})
     assert english.listed("the") == {"DET"} and english.listed("without") == {"PREP"}
     assert english.listed("up") == {"PREP", "ADV"}  # a particle
     assert english.listed("left") == {"ADJ", "ADV"}  # not the past of "leave": a direction

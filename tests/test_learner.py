@@ -474,6 +474,7 @@ def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys,
     # trained on none ("leave the red room" said in it reads as it too)
     assert answer["abstained"] and answer["question"].startswith("Do you mean the agent in the red room, as it is now?")
     assert [c["goal"] for c in answer["choices"]] == [done["goal"]] and "actions" not in answer
+    assert answer["question_kind"] == "already true" and answer["unknown_words"] == []
     assert main([*follow, str(inside)]) == 3
     captured = capsys.readouterr()
     assert re.search(r"^already true here: the agent in the red room .*agentInRoom\(agent0, room2\); the words "
@@ -483,13 +484,16 @@ def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys,
     assert "interpretations:" not in captured.out and "(yes: nothing to do; no: the rest of their reading)" in captured.err
     # a yes: nothing to do; a no: the rest of the reading, here asked about in turn and answered
     monkeypatch.setattr("sys.stdin", io.StringIO("yes\n"))
-    assert main([*follow, str(inside), "--ask"]) == 0
-    assert capsys.readouterr().out.endswith("nothing to do: plan (0 steps): (none)\n")
+    before = (model / "model.json").read_bytes()
+    assert main([*follow, str(inside), "--ask", "--learn"]) == 0
+    assert capsys.readouterr().out.endswith(f"nothing to do: plan (0 steps): (none)\nnothing learned: the model at "
+                                            f"{model} is left as it was\n")
+    assert (model / "model.json").read_bytes() == before
     monkeypatch.setattr("sys.stdin", io.StringIO("no\nthe blue one\n"))
     assert main([*follow, str(inside), "--ask"]) == 0
     assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room0): reached" in capsys.readouterr().out
     # with --guess, or less sure than --min-confidence asks: said, and the rest of the reading is weighed
-    for options in (["--guess"], ["--min-confidence", "0.9999"]):
+    for options in (["--guess"], ["--min-confidence", "0.9999"], ["--min-confidence", "0"]):  # 0 asks nothing
         main([*follow, str(inside), *options])
         assert re.search(r"\), but such a goal asks nothing: the interpretations below are the rest\ninterpretations:",
                          capsys.readouterr().out)

@@ -3,7 +3,7 @@
 Two questions: the competing readings of a command read with too little confidence (``Learner.clarify``
 takes the answer), and, where the words most probably ask for what already holds, whether that is what is
 meant (yes: nothing to do; no: the rest of their reading is acted on or asked about). Answers are read a
-line at a time, bounded, up to ANSWER_TRIES; an answer that declines ends the asking.
+line at a time, bounded, up to ANSWER_TRIES; an answer that declines the readings ends the asking.
 """
 
 from __future__ import annotations
@@ -92,10 +92,10 @@ def read_answers(take, names=None, declined: str | None = None):
     return None
 
 
-def ask(learner, result, state, max_steps: int, names=None):
+def ask(learner, result, state, max_steps: int, names=None, places: int = 2):
     """Ask the question of an abstained ``result`` until an answer names one choice: the result of acting on
     it; None at end of input or after ANSWER_TRIES; clarify.Declined where an answer declines."""
-    print_question(result.question, result.choices, state, learner.library, names)
+    print_question(result.question, result.choices, state, learner.library, names, places)
     return read_answers(lambda answer: learner.clarify(result, answer, max_steps=max_steps), names)
 
 
@@ -140,13 +140,13 @@ def held_question(done, state, library, names=None) -> str:
             "to do; no: the rest of the reading)")
 
 
-def ask_held(learner, done, state, names=None) -> bool | None:
+def ask_held(learner, done, state, names=None, places: int = 2) -> bool | None:
     """Ask whether the goal that already holds is what is meant: True (yes), False (declined), None (no
     answer)."""
     from groundlang.clarify import Declined, choose
 
     print_question(held_question(done, state, learner.library, names), held_choice(done), state, learner.library,
-                   names)
+                   names, places)
     try:
         taken = read_answers(lambda answer: choose(answer, held_choice(done), state, learner.library,
                                                    lexicon=learner.word_lexicon), names,

@@ -31,7 +31,8 @@ def register(subparsers) -> None:
         "follow", help="interpret a command in an environment, plan and act (or ask when unsure)",
         description="Interpret COMMAND in the layout of --env with a trained model, plan to end where what it "
                     "means most probably holds, and act. Where that is less likely than --min-confidence, it does "
-                    "not act: the competing readings are printed as a question and the exit code is 3.",
+                    "not act: the competing readings are printed as a question and the exit code is 3; so it does "
+                    "where the words most probably ask for what already holds (is that what is meant?).",
     )
     p.add_argument("command_text", metavar="COMMAND", help="the command, in quotes")
     p.add_argument("--env", required=True, metavar="FILE",
@@ -53,7 +54,8 @@ def register(subparsers) -> None:
                      help="act however unsure (what --min-confidence 0 does)")
     ask.add_argument("--ask", action="store_true",
                      help="when unsure, ask on the terminal (stdin) and act on the answer: a number or words "
-                          "such as 'the green one' (up to 3 tries; with --json it reports the question instead)")
+                          "such as 'the green one', yes to a question of one choice, no to decline (up to 3 tries; "
+                          "with --json it reports the question instead)")
     p.add_argument("--learn", action="store_true",
                    help="with --ask: learn from the answer (the command means the goal chosen; words the model did "
                         "not know are learned) and save the model over --model, all or nothing (default: the model "
@@ -122,6 +124,8 @@ def _nothing_to_do(done, state, library, names, args) -> int:
             args.command_text, renamed_words(goal_phrase(done[0], state, library), names), format_goal(done[0], names)),
             names=names)
     print("nothing to do: plan (0 steps): (none)")
+    if args.learn:  # the model learns what commands ask for, and this one asks nothing
+        print(f"nothing learned: the model at {args.model} is left as it was")
     if args.out:
         print(f"picture written to {args.out}")
     return 0
@@ -147,10 +151,11 @@ def _answer_json(learner, result, done, state, names, args, held: bool) -> dict:
         "abstained": result.abstained or held,
     }
     if held:
-        data.update(question=held_question(done, state, learner.library, names),
-                    choices=choices_json(held_choice(done), state, learner.library, names), unknown_words=[])
+        data.update(question_kind="already true", question=held_question(done, state, learner.library, names),
+                    choices=choices_json(held_choice(done), state, learner.library, names),
+                    unknown_words=list(result.unknown_words))
     elif result.abstained:
-        data.update(question=renamed_words(result.question, names),
+        data.update(question_kind="readings", question=renamed_words(result.question, names),
                     choices=choices_json(result.choices, state, learner.library, names),
                     unknown_words=list(result.unknown_words))
     else:
@@ -171,7 +176,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.model.interpretations import NoTaskError
     from groundlang.model.statespace import StateSpaceError
     from groundlang.model.palette import Palette, get_palette
-    from groundlang.pair_tasks import tabulation_refusal
+    from groundlang.model.pf_tables import tabulation_refusal
     from groundlang.wording import labelled_goal
 
     if args.learn and not args.ask:
@@ -231,7 +236,8 @@ def run(args: argparse.Namespace) -> int:
     # what the words say of the start, from the model as it was: before an answer is asked for or learned
     done = already_true(learner, args.command_text, state)
     places = places_for(args.min_confidence)
-    held = done is not None and not args.guess and done[1] >= args.min_confidence
+    # asked as surely as acting needs; --min-confidence 0 asks nothing, as --guess
+    held = done is not None and not args.guess and 0 < args.min_confidence <= done[1]
     if done is not None and not args.json:  # before a question, whose choices leave it out
         _print_already_true(done, state, learner.library, names, places, held)
     if held and (args.json or not args.ask):
@@ -243,7 +249,7 @@ def run(args: argparse.Namespace) -> int:
         _refuse(result, args, done)
         return ASKED
     if held:
-        taken = ask_held(learner, done, state, names)
+        taken = ask_held(learner, done, state, names, places)
         if taken is None:
             print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
             return ASKED
@@ -254,7 +260,7 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.clarify import Declined
 
         try:
-            answered = ask(learner, result, state, args.max_steps, names)
+            answered = ask(learner, result, state, args.max_steps, names, places)
         except Declined:
             print("groundlang follow: the answer declined what was offered; nothing done", file=sys.stderr)
             return ASKED

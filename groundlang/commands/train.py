@@ -77,12 +77,12 @@ def _pairs(args: argparse.Namespace):
     library (the package's williams2018 domain unless --library)."""
     from groundlang.bdm import DEFAULT_PALETTE
     from groundlang.bdm_check import default_library
-    from groundlang.pair_corpus import read_pair_corpus, training_instances
+    from groundlang.pair_corpus import read_pair_corpus, skipped_text, training_instances
 
     library = default_library(args.library, **time_limit_given(args))
     commands = read_pair_corpus(args.corpus, args.palette or DEFAULT_PALETTE, args.format == "williams2018").commands
     made = training_instances(commands, library, skip_inconsistent=args.skip_inconsistent, cache_dir=cache_option(args))
-    skipped = ", ".join(f"{n} {why}" for why, n in sorted(made.skipped_counts().items()))
+    skipped = skipped_text(made.skipped_counts())
     if not made.instances:
         raise ValueError(f"{args.corpus}: no usable training pair (every pair was skipped: {skipped or 'none read'})")
     print(f"{len(commands)} commands, {sum(len(i.pairs) for i in made.instances)} pairs used"
