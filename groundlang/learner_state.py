@@ -31,8 +31,11 @@ __all__ = ["learner_state", "learner_from_state", "check_count", "check_training
 
 
 def check_count(method: str, name: str, value) -> None:
-    """ValueError unless ``value`` is a positive integer (``method`` and ``name`` say where)."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+    """TypeError unless ``value`` is an integer, ValueError unless it is positive (``method`` and ``name`` say
+    where)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{method}: {name} must be a positive integer, got {type(value).__name__} {value!r:.40}")
+    if value < 1:
         raise ValueError(f"{method}: {name} must be a positive integer, got {value!r:.40}")
 
 

@@ -89,8 +89,11 @@ def test_update_names_what_is_wrong_in_a_short_line(trained, novel):
 
 def test_lexicon_top_is_a_positive_count(trained):
     assert all(len(m) <= 2 for m in trained.lexicon(top=2).values())
-    for top in (-1, 0, 1.5, "3"):
+    for top in (-1, 0):
         with pytest.raises(ValueError, match="lexicon: top must be a positive integer"):
+            trained.lexicon(top=top)
+    for top in (1.5, "3", True):  # of the wrong type: TypeError, as Python's own
+        with pytest.raises(TypeError, match="lexicon: top must be a positive integer, got (float|str|bool)"):
             trained.lexicon(top=top)
 
 

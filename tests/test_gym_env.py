@@ -127,8 +127,8 @@ def test_bad_arguments_are_value_errors(state):
         CleanupEnv(state, max_steps=0)
     with pytest.raises(ValueError, match="at most"):
         command_text("x" * 2000)
-    for steps in (1.5, "10", None, float("nan"), True):
-        with pytest.raises(ValueError, match="max_steps must be a positive integer"):
+    for steps in (1.5, "10", None, float("nan"), True):  # of the wrong type: TypeError, as Python's own
+        with pytest.raises(TypeError, match="max_steps must be a positive integer"):
             CleanupEnv(state, max_steps=steps)
     with pytest.raises(TypeError, match="state must be a State"):
         CleanupEnv(state="x")
