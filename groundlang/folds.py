@@ -134,12 +134,16 @@ def run_folds(context: dict, indices: list[int], workers: int, ray_address: str 
 
         bar = tqdm(total=len(indices), desc="folds", unit="fold", leave=False)
     records = []
-    if workers <= 1:
-        _init_worker(context)
-        for i in indices:
-            records.append(_fold(i))
-            if bar is not None:
-                bar.update(1)
+    if workers <= 1:  # in this process: its signals stay the CLI's (a worker's are deaf to Ctrl-C)
+        _CONTEXT.clear()
+        _CONTEXT.update(context)
+        try:
+            for i in indices:
+                records.append(_fold(i))
+                if bar is not None:
+                    bar.update(1)
+        finally:
+            _CONTEXT.clear()
     else:
         with multiprocessing.get_context("fork").Pool(workers, _init_worker, ({**context, "parent": os.getpid()},)) as pool:
             for record in pool.imap(_fold, indices, chunksize=max(1, len(indices) // (8 * workers))):

@@ -418,3 +418,17 @@ def test_an_interruption_held_over_a_block_that_failed_is_still_an_interruption(
             os.kill(os.getpid(), signal.SIGINT)
             raise ValueError("not written")
     assert isinstance(stopped.value.__context__, ValueError)
+
+
+def test_folds_run_in_this_process_keep_its_signal_handlers(monkeypatch):
+    """With one worker (the default) the folds ran after a worker's set-up in the CLI's own process: Ctrl-C was
+    ignored for the rest of `ablate` and leave-one-out `evaluate`, and SIGTERM killed them without a word."""
+    import groundlang.folds as folds
+
+    seen = []
+    monkeypatch.setattr(folds, "_fold", lambda i: seen.append(
+        (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))) or {"index": i})
+    before = (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
+    assert folds.run_folds({}, [0, 1], workers=1, ray_address=None, progress=False) == [{"index": 0}, {"index": 1}]
+    assert seen == [before, before]
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
