@@ -234,12 +234,13 @@ def picture_format(path: str | Path) -> str:
     return fmt
 
 
-def check_picture_destination(path: str | Path, option: str = "--out") -> Path:
-    """A picture's path, refused before any work if its format is unsupported or it cannot be written."""
+def check_picture_destination(path: str | Path, option: str = "--out", reads=()) -> Path:
+    """A picture's path, refused before any work if its format is unsupported or it cannot be written, or
+    would replace what the command reads (``reads``: ``(option, path)`` pairs, as ``check_destination``)."""
     from groundlang.logic.storage import check_destination
 
     picture_format(path)
-    return check_destination(path, option)
+    return check_destination(path, option, reads)
 
 
 def save_picture(path: str | Path, state: State, trajectory=None, title: str | None = None,

@@ -257,12 +257,25 @@ def check_writable(folder: str | os.PathLike, name: str, what: str) -> Path:
     return folder
 
 
+# What a folder given as input is read for: a new file of these kinds written into it would be read as one of
+# its own by the next run (a corpus's demonstrations, pairs, states).
+READ_IN_FOLDERS = (".txt", ".bdm", ".state")
+
+
 def _check_not_read(path: Path, option: str, reads: Iterable[tuple[str, str | os.PathLike]]) -> None:
-    if not path.exists():
-        return  # a new file replaces nothing (a FIFO or device is written into, and is no input either)
+    with suppress(OSError):
+        if (path.resolve().parent / "model.json").is_file():  # a model folder holds one model's files only
+            raise ValueError(f"{option} {path}: inside a model folder ({path.resolve().parent} holds a model.json); "
+                             "write it elsewhere")
     for what, given in reads:
         source = Path(given)
         with suppress(OSError):
+            if not path.exists():  # a new file replaces nothing, but one a corpus folder reads joins the corpus
+                if (path.suffix in READ_IN_FOLDERS and source.is_dir()
+                        and path.resolve().is_relative_to(source.resolve())):
+                    raise ValueError(f"{option} {path}: inside {what} {given}, which the command reads: a "
+                                     f"{path.suffix} file there would be read as part of it next time; write it elsewhere")
+                continue
             if os.path.samefile(path, source) or (source.is_dir() and path.resolve().is_relative_to(source.resolve())):
                 raise ValueError(f"{option} {path}: the command reads it ({what} {given}); writing the result "
                                  "there would replace its input: name another file")

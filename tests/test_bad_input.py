@@ -917,3 +917,36 @@ def test_an_abstraction_of_many_objects_is_refused_before_its_positions_are_stor
                                + " , room0 (room): [top: {1000} left: {0} bottom: {0} right: {1000} colour: {red} ] , }")
     with pytest.raises(StateSpaceError, match=r"997,301 states of 701 objects each: their positions would take 2\.6 GiB"):
         abstract_space_uncached(state, (), 5_000_000)
+
+
+def test_outputs_that_would_replace_or_join_what_a_command_reads_are_refused(trained_model, tmp_path, capsys):
+    """A picture through a symlink onto its own input had replaced the corpus file; a new .txt in the corpus
+    folder had joined the corpus (the next run failed on it); a file in a model folder had made the model
+    folder one that `train -o` refuses; --plot onto --json had replaced the rows. Each is one line, nothing written."""
+    import shutil
+
+    corpus = tmp_path / "ex"
+    shutil.copytree(EXAMPLES, corpus)
+    victim = tmp_path / "victim.txt"
+    victim.write_bytes((corpus / "agent2blue_0.txt").read_bytes())
+    (tmp_path / "link.png").symlink_to(victim)
+    before = victim.read_bytes()
+    model = trained_model
+    cases = [
+        (["show", str(victim), "--palette", "sokoban", "--out", str(tmp_path / "link.png")],
+         f"--out {tmp_path / 'link.png'}: the command reads it (FILE {victim})"),
+        (["discover", str(corpus), "--palette", "sokoban", "-o", str(corpus / "new.txt")],
+         f"-o {corpus / 'new.txt'}: inside directory {corpus}, which the command reads: a .txt file there would be "
+         "read as part of it next time"),
+        (["discover", str(corpus), "--palette", "sokoban", "-o", str(model / "tasks.lp")],
+         f"-o {model / 'tasks.lp'}: inside a model folder"),
+        (["ablate", "--corpus", str(corpus), "--palette", "sokoban", "--labels", str(corpus / "labels.csv"), "--json",
+          str(tmp_path / "same.png"), "--plot", str(tmp_path / "same.png")],
+         f"--plot {tmp_path / 'same.png'}: the same file as --json"),
+    ]
+    for argv, piece in cases:
+        assert main(["--quiet", *argv]) == 2, argv
+        err = capsys.readouterr().err
+        assert piece in err and len(err.strip().splitlines()) == 1, err
+    assert victim.read_bytes() == before and not (corpus / "new.txt").exists()
+    assert not (model / "tasks.lp").exists() and not (tmp_path / "same.png").exists()

@@ -573,6 +573,6 @@ def test_follow_refuses_a_picture_inside_the_model_folder_before_acting(learners
     code = main(["--quiet", "follow", "go to the red room", "--env", str(EXAMPLES / "novel_a.state"), "--model",
                  str(model), "--guess", "--out", str(model / "pic.png")])
     err = capsys.readouterr().err.strip()
-    assert code == 2 and "inside the model folder" in err and "\n" not in err
+    assert code == 2 and f"--out {model / 'pic.png'}: inside a model folder" in err and "\n" not in err
     assert not (model / "pic.png").exists()
     learners[1].save(model)  # still a folder of one model

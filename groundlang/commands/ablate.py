@@ -139,7 +139,11 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from groundlang.render import check_picture_destination
 
-        check_picture_destination(args.plot, "--plot")
+        reads = inputs_read(args, "corpus", "labels", "libraries", "palette", "lexicon")
+        if args.json and Path(args.plot).resolve() == Path(args.json).resolve():
+            raise ValueError(f"--plot {args.plot}: the same file as --json {args.json}; the picture would replace "
+                             "the rows: name two files")
+        check_picture_destination(args.plot, "--plot", reads)
     if args.held_out_likelihood and (args.labels or args.plot or args.sizes):
         raise ValueError("--held-out-likelihood uses no --labels, --plot or --sizes")
     if not args.held_out_likelihood:

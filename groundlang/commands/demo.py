@@ -37,8 +37,8 @@ def run(args: argparse.Namespace) -> int:
     # Before the corpus check and the training, which it would otherwise follow by seconds
     if fault := command_fault(args.demo_command):
         raise ValueError(f"--command: the command {fault}; expected the command's words")
-    check_picture_destination(args.out)
     folder = example_corpus_path()
+    check_picture_destination(args.out, reads=[("the example corpus", folder)])
     corpus = read_corpus(folder, "sokoban")
     coverage = label_coverage(corpus, read_labels(folder / "labels.csv"))
     print(f"example corpus: {len(corpus)} instances, {len(corpus.commands())} distinct commands, "

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from groundlang.commands import (PALETTE_HELP, add_lexicon_option, add_time_limit_option, as_typed, fraction,
                                  json_text, logged_by_file_names, output_path, positive_int)
@@ -189,11 +188,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out:
         from groundlang.render import check_picture_destination
 
-        check_picture_destination(args.out)
-        if Path(args.model).resolve() in Path(args.out).resolve().parents:
-            # a model folder holds the model's files only: saving a model over it would be refused
-            raise ValueError(f"--out {args.out}: inside the model folder --model {args.model}, which holds one "
-                             "model only; write the picture elsewhere")
+        check_picture_destination(args.out, reads=[("--env", args.env)])  # a model folder's refused there too
     plan_once()  # one command: a compiler pays only where one solve is worth it
     learner = Learner.load(args.model)
     # the library saved in the model, read back before the limit was known: it grounds the layout of --env

@@ -23,7 +23,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.render import ascii_state, check_picture_destination, save_picture
 
     if args.out:
-        check_picture_destination(args.out)
+        check_picture_destination(args.out, reads=[("FILE", args.file)])
     path = Path(args.file)
     check_state_file(args.file, "show")
     burlap = is_burlap_state_file(args.file)
