@@ -461,3 +461,14 @@ def test_politeness_and_discourse_markers_say_nothing_of_the_task(said):
     plain = {str(r.logical_form) for r in parse("go to the red room")}
     got = [str(r.logical_form).replace("_(), ", "").replace(", _()", "") for r in parse(said)]
     assert got[0] in plain and not any("thank" in lf or "ok" in lf or "hi" in lf for lf in got)
+
+
+def test_readings_kept_are_bounded():
+    """--max-readings 100000 had grown past 1.5 GB on one 30-word command (each reading widens every node's beam)."""
+    from groundlang.grammar.parser import READING_LIMIT
+
+    assert len(parse("go to the red room", max_readings=READING_LIMIT)) >= 1
+    for many in (READING_LIMIT + 1, 10**8, 0):
+        with pytest.raises(ValueError, match=f"parse: max_readings must be 1 to {READING_LIMIT}"):
+            parse("go to the red room", max_readings=many)
+    assert main(["parse", "--max-readings", "100000", "go to the red room"]) == 2

@@ -276,3 +276,25 @@ def test_the_state_limit_from_the_environment(monkeypatch, given, expected):
             default_max_states()
     else:
         assert default_max_states() == expected
+
+
+def test_a_state_limit_no_memory_could_hold_is_refused(monkeypatch):
+    """2,000,000,000 had been taken as a limit: a run grew past 6 GB before anything was refused. A bound whose
+    tables alone (36 bytes a state, measured) would pass the machine's memory is refused, in the variable and
+    as an argument; one that fits is a limit as before."""
+    import os
+
+    from groundlang.model.state_search import SPACE_BYTES_PER_STATE, default_max_states, max_states_given
+
+    memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    too_many = memory // SPACE_BYTES_PER_STATE + 1
+    monkeypatch.setenv("GROUNDLANG_MAX_STATES", str(too_many))
+    with pytest.raises(StateSpaceError, match=rf"GROUNDLANG_MAX_STATES='{too_many}': a space that large needs at least "
+                                              rf"36 bytes a state .* at most {too_many - 1:,}$"):
+        default_max_states()
+    with pytest.raises(StateSpaceError, match=f"max_states={too_many}: a space that large"):
+        max_states_given(too_many)
+    with pytest.raises(StateSpaceError, match="max_states=inf: a space that large"):
+        max_states_given(float("inf"))
+    monkeypatch.setenv("GROUNDLANG_MAX_STATES", str(too_many - 1))
+    assert default_max_states() == too_many - 1 == max_states_given(too_many - 1)

@@ -62,8 +62,10 @@ def _commands(path: Path) -> list[tuple[str, str]]:
 def run(args: argparse.Namespace) -> int:
     if (args.text is None) == (args.file is None):
         raise ValueError("give either a COMMAND or --file FILE_OR_CORPUS_DIR (exactly one)")
-    if args.max_readings < 1:
-        raise ValueError(f"--max-readings must be >= 1, got {args.max_readings}")
+    from groundlang.grammar.parser import READING_LIMIT
+
+    if not 1 <= args.max_readings <= READING_LIMIT:  # each reading widens every node's beam: time and memory
+        raise ValueError(f"--max-readings {args.max_readings}: expected 1 to {READING_LIMIT} readings per command")
     from groundlang.model.domain_words import domain_lexicon, extra_words
 
     # the words a learner parses with: English, the Cleanup World's, the library's word files, --lexicon files
