@@ -950,3 +950,16 @@ def test_outputs_that_would_replace_or_join_what_a_command_reads_are_refused(tra
         assert piece in err and len(err.strip().splitlines()) == 1, err
     assert victim.read_bytes() == before and not (corpus / "new.txt").exists()
     assert not (model / "tasks.lp").exists() and not (tmp_path / "same.png").exists()
+
+
+def test_ablate_refuses_labels_that_miss_a_prefix_before_any_cell(tmp_path, capsys):
+    """A labels file of its header alone had run every cell of the grid (task discovery too), each failing, a row
+    each, exit 1."""
+    header = (EXAMPLES / "labels.csv").read_text().splitlines()[0]
+    (tmp_path / "labels.csv").write_text(header + "\n")
+    assert main(["ablate", "--corpus", str(EXAMPLES), "--palette", "sokoban", "--labels", str(tmp_path / "labels.csv"),
+                 "--sizes", "12"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == (
+        f"groundlang ablate: error: {tmp_path / 'labels.csv'}: no gold label for the prefixes 'agent2blue_', "
+        f"'agent2green_', 'agent2red_', 'star2blue_', 'star2green_' ... of {EXAMPLES}\n")

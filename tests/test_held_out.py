@@ -82,7 +82,10 @@ def test_cli_prints_and_writes_the_table(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("extra, message", [
-    (["--switch", "start_role", "--labels", "x.csv"], "--held-out-likelihood uses no --labels, --plot or --sizes"),
+    (["--switch", "start_role", "--labels", "x.csv"], "--held-out-likelihood uses no --labels (they are the grid's)"),
+    # read by the grid only: they had been ignored without a word (--libraries discovered showed the authored's)
+    (["--switch", "start_role", "--libraries", "discovered", "--workers", "2", "--ray", "local"],
+     "--held-out-likelihood uses no --libraries, --workers, --ray (they are the grid's)"),
     ([], "--held-out-likelihood: name at least one --switch"),
     (["--switch", "start_role", "--language-models", "bow,parse"], "name one language model, not bow,parse"),
 ])
@@ -98,3 +101,6 @@ def test_cli_grid_still_needs_labels_and_takes_no_switch(capsys):
     assert main(["ablate", "--corpus", str(EXAMPLES), "--palette", "sokoban", "--labels",
                  str(EXAMPLES / "labels.csv"), "--switch", "start_role"]) == 2
     assert "--switch needs --held-out-likelihood" in capsys.readouterr().err
+    assert main(["ablate", "--corpus", str(EXAMPLES), "--palette", "sokoban", "--labels",
+                 str(EXAMPLES / "labels.csv"), "--folds", "3"]) == 2
+    assert "--folds is --held-out-likelihood's" in capsys.readouterr().err

@@ -54,16 +54,16 @@ def register(subparsers) -> None:
     p.add_argument("--switch", action="append", default=[], metavar="NAME[=VALUE]", dest="switches",
                    help="with --held-out-likelihood: a setting of the language model to switch; NAME alone for a "
                         "true/false setting (its other value), else NAME=VALUE (repeatable)")
-    p.add_argument("--folds", type=_at_least_two, default=10,
+    p.add_argument("--folds", type=_at_least_two, default=None,
                    help="with --held-out-likelihood: folds, instance n in fold n mod FOLDS (default 10)")
-    p.add_argument("--libraries", type=_list_of("authored,discovered"), default=["authored", "discovered"], metavar="LIST",
+    p.add_argument("--libraries", type=_list_of("authored,discovered"), default=None, metavar="LIST",
                    help="comma-separated: authored,discovered (default: both)")
     p.add_argument("--sizes", type=_sizes, metavar="LIST",
                    help="training sizes, e.g. 24,60,120,240 (default: the whole corpus)")
-    p.add_argument("--protocol", default="loo", choices=["loo", "train"],
-                   help="loo: unseen commands (held-out remainder below the full size); train: training commands")
-    p.add_argument("--seed", type=seed, default=0, help="seed of the training subsets")
-    p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes; no more than the folds or the cores)")
+    p.add_argument("--protocol", default=None, choices=["loo", "train"],
+                   help="loo: unseen commands (held-out remainder below the full size); train: training commands (default loo)")
+    p.add_argument("--seed", type=seed, default=None, help="seed of the training subsets (default 0)")
+    p.add_argument("--workers", type=positive_int, default=None, help="folds in parallel (processes; no more than the folds or the cores; default 1)")
     p.add_argument("--ray", metavar="ADDRESS", help="run cells on Ray ('local', 'auto' or host:port)")
     p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations that do not replay under the dynamics instead of stopping")
     p.add_argument("--limit", type=positive_int, help="score only the first N instances of each cell")
@@ -110,9 +110,10 @@ def run_held_out(args: argparse.Namespace, words: dict) -> int:
     for switch in args.switches:
         switch_settings(models[0], switch, base)  # every switch checked before the corpus is read
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
-    rows = compare_switches(corpus.instances, args.switches, models[0], args.folds,
+    folds = args.folds or 10
+    rows = compare_switches(corpus.instances, args.switches, models[0], folds,
                             {"lexicon": words} if words else None, base)
-    print(f"{args.folds}-fold held-out log-likelihood (nats), {len(corpus.instances)} instances, "
+    print(f"{folds}-fold held-out log-likelihood (nats), {len(corpus.instances)} instances, "
           f"language model {models[0]}")
     print(format_switches(rows))
     if args.json:
@@ -122,7 +123,7 @@ def run_held_out(args: argparse.Namespace, words: dict) -> int:
                  "default_joint": r.on.joint, "value_joint": r.off.joint, "default_words": r.on.words,
                  "value_words": r.off.words, "default_demonstrations": r.on.demonstrations,
                  "value_demonstrations": r.off.demonstrations} for r in rows]
-        write_atomically(Path(args.json), json_bytes({"folds": args.folds, "n": len(corpus.instances), "rows": data}))
+        write_atomically(Path(args.json), json_bytes({"folds": folds, "n": len(corpus.instances), "rows": data}))
         print(f"rows written to {args.json}")
     return 0
 
@@ -130,7 +131,7 @@ def run_held_out(args: argparse.Namespace, words: dict) -> int:
 def run(args: argparse.Namespace) -> int:
     from groundlang.ablation import run_ablation
     from groundlang.corpus import read_corpus
-    from groundlang.labels import read_labels
+    from groundlang.labels import check_label_prefixes, read_labels
     from groundlang.model.domain_words import extra_words
     from groundlang.logic.storage import check_destination, write_atomically
 
@@ -144,11 +145,17 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--plot {args.plot}: the same file as --json {args.json}; the picture would replace "
                              "the rows: name two files")
         check_picture_destination(args.plot, "--plot", reads)
-    if args.held_out_likelihood and (args.labels or args.plot or args.sizes):
-        raise ValueError("--held-out-likelihood uses no --labels, --plot or --sizes")
+    # An option the mode does not read is refused, not ignored (--libraries discovered had shown the authored's)
+    grid_only = {"--labels": args.labels, "--plot": args.plot, "--sizes": args.sizes, "--libraries": args.libraries,
+                 "--protocol": args.protocol, "--seed": args.seed, "--workers": args.workers, "--ray": args.ray,
+                 "--limit": args.limit}
+    if args.held_out_likelihood and (given := [name for name, value in grid_only.items() if value is not None]):
+        raise ValueError(f"--held-out-likelihood uses no {', '.join(given)} (they are the grid's)")
     if not args.held_out_likelihood:
         if args.switches:
             raise ValueError("--switch needs --held-out-likelihood (the grid takes --lm-setting)")
+        if args.folds is not None:
+            raise ValueError("--folds is --held-out-likelihood's (the grid's cells are held out by --protocol)")
         if not args.labels:
             raise ValueError("--labels is required (except with --held-out-likelihood)")
     words = extra_words(args.lexicon)  # read once here: a bad file is one error line, workers get the words
@@ -156,10 +163,16 @@ def run(args: argparse.Namespace) -> int:
         return run_held_out(args, words)
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     labels = read_labels(args.labels)
+    # Once, before any cell: a bad labels file had failed every cell of the grid, a row each, exit 1
+    check_label_prefixes(corpus, labels)
+    if unlabelled := sorted({inst.prefix for inst in corpus.instances if inst.prefix not in labels}):
+        raise ValueError(f"{args.labels}: no gold label for the prefix{'es' * (len(unlabelled) > 1)} "
+                         f"{', '.join(map(repr, unlabelled[:5]))}{' ...' * (len(unlabelled) > 5)} of {args.corpus}")
     result = run_ablation(
-        corpus, labels, language_models=args.language_models or ["bow", "ibm2", "parse"], libraries=args.libraries,
+        corpus, labels, language_models=args.language_models or ["bow", "ibm2", "parse"],
+        libraries=args.libraries or ["authored", "discovered"],
         sizes=args.sizes,
-        protocol=args.protocol, seed=args.seed, workers=args.workers, ray_address=args.ray,
+        protocol=args.protocol or "loo", seed=args.seed or 0, workers=args.workers or 1, ray_address=args.ray,
         progress=args.progress, limit=args.limit, language_model_settings=language_model_settings(args.lm_settings),
         learner_options={"lexicon": words} if words else None,
     )
