@@ -963,3 +963,15 @@ def test_ablate_refuses_labels_that_miss_a_prefix_before_any_cell(tmp_path, caps
     assert captured.out == "" and captured.err == (
         f"groundlang ablate: error: {tmp_path / 'labels.csv'}: no gold label for the prefixes 'agent2blue_', "
         f"'agent2green_', 'agent2red_', 'star2blue_', 'star2green_' ... of {EXAMPLES}\n")
+
+
+@pytest.mark.parametrize("argv", [("discover", "", "--palette", "sokoban", "-o", "x.lp"), ("lexicon", ""),
+                                  ("parse", "--file", ""), ("train", "", "-o", "m"), ("check", ""),
+                                  ("show", "", "--palette", "sokoban"), ("evaluate", "--corpus", "")])
+def test_an_empty_input_path_is_refused_by_its_argument(argv, capsys):
+    """It had been read as the current folder: discover "" read whatever lay there as a corpus, parse --file ""
+    every *.txt below it."""
+    with pytest.raises(SystemExit) as stopped:
+        main(["--quiet", *argv])
+    assert stopped.value.code == 2
+    assert "an empty path; expected a file or folder to read" in capsys.readouterr().err

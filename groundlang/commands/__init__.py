@@ -43,6 +43,14 @@ def output_path(text: str) -> str:
     return text
 
 
+def input_path(text: str) -> str:
+    """An argparse type: the path of a file or folder to read; an empty one is refused (it was read as the
+    current folder: a corpus of whatever lay there)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty path; expected a file or folder to read")
+    return text
+
+
 def library_path(text: str) -> str:
     """An argparse type: a task library (a .lp file, or a library the package ships by name); an empty one
     is refused (it was taken for the current folder: "Is a directory")."""

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from groundlang.commands import (PALETTE_HELP, add_language_model_settings, add_lexicon_option, inputs_read,
+from groundlang.commands import (input_path, PALETTE_HELP, add_language_model_settings, add_lexicon_option, inputs_read,
                                  json_bytes, language_model_settings, output_path, positive_int, seed)
 
 
@@ -41,9 +41,9 @@ def _at_least_two(text: str) -> int:
 def register(subparsers) -> None:
     p = subparsers.add_parser("ablate", help="accuracy over language models x task libraries x training sizes, "
                                              "or held-out likelihood of settings switched")
-    p.add_argument("--corpus", required=True, metavar="DIR", help="folder of corpus files (*.txt)")
+    p.add_argument("--corpus", required=True, type=input_path, metavar="DIR", help="folder of corpus files (*.txt)")
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
-    p.add_argument("--labels", metavar="CSV",
+    p.add_argument("--labels", type=input_path, metavar="CSV",
                    help="gold labels (prefix,goal) the corpus is scored against (not with --held-out-likelihood)")
     p.add_argument("--language-models", type=_list_of("bow,ibm2,parse"), metavar="LIST",
                    help="comma-separated: bow,ibm2,parse (default: all three; with --held-out-likelihood one, parse)")

@@ -14,21 +14,21 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, add_time_limit_option, library_given, library_path,
+from groundlang.commands import (input_path, LIBRARY_NAMES, PALETTE_HELP, add_time_limit_option, library_given, library_path,
                                  require_palette)
 from groundlang.corpus import read_corpus
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("check", help="load a corpus folder, replay every demonstration, print a summary")
-    p.add_argument("directory", metavar="DIR", help="folder of corpus files (*.txt), or a .bdm file or folder")
+    p.add_argument("directory", type=input_path, metavar="DIR", help="folder of corpus files (*.txt), or a .bdm file or folder")
     p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
     p.add_argument("--format", choices=("commands-to-tasks", "williams2018"),
                    help="the corpus format (default: williams2018 for .bdm files, else commands-to-tasks)")
     p.add_argument("--library", metavar="LP", action="append", type=library_path,
                    help="task library .lp file (repeatable): for the tasks .bdm pairs show (default: "
                         "williams2018), or whose PFs --labels may use" + LIBRARY_NAMES)
-    p.add_argument("--labels", metavar="CSV", help="gold labels (prefix,goal) to check against final states")
+    p.add_argument("--labels", type=input_path, metavar="CSV", help="gold labels (prefix,goal) to check against final states")
     p.add_argument("--skip-inconsistent", action="store_true",
                    help="skip demonstrations that do not replay (counted) instead of failing")
     add_time_limit_option(p)

@@ -16,13 +16,13 @@ from __future__ import annotations
 import argparse
 import time
 
-from groundlang.commands import (PALETTE_HELP, add_time_limit_option, cache_option, fraction, inputs_read, json_text,
+from groundlang.commands import (input_path, PALETTE_HELP, add_time_limit_option, cache_option, fraction, inputs_read, json_text,
                                  output_path, positive_int, time_limit_given)
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("discover", help="discover lifted tasks from a corpus's demonstrations")
-    p.add_argument("directory", metavar="DIR", help="a corpus folder (one instance per *.txt file)")
+    p.add_argument("directory", type=input_path, metavar="DIR", help="a corpus folder (one instance per *.txt file)")
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("-o", "--output", required=True, type=output_path, metavar="LP", help="where to write the discovered library (.lp)")
     p.add_argument("--weight-margin", type=fraction, default=0.5, metavar="FRACTION",
@@ -36,7 +36,7 @@ def register(subparsers) -> None:
     p.add_argument("--restrict", action="store_true",
                    help="restrict each task variable by the colour/shape PFs that single out its object "
                         "in every demonstration the task explains (restrict/3 facts)")
-    p.add_argument("--pfs", metavar="LP", action="append",
+    p.add_argument("--pfs", type=input_path, metavar="LP", action="append",
                    help="an .lp file of your own PFs (pf/3, holds/2): its colour and shape families tell "
                         "objects apart in the report and for --restrict, besides pfs.lp's (repeatable; "
                         "load it beside the written library)")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
+from groundlang.commands import (input_path, LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
                                  add_language_model_settings, add_lexicon_option, fraction, inputs_read, json_bytes,
                                  language_model_settings, library_given, library_path, open_fraction, output_path,
                                  positive_int, require_palette, add_time_limit_option, time_limit_given, lexicon_beside)
@@ -15,11 +15,11 @@ from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 def register(subparsers) -> None:
     p = subparsers.add_parser("evaluate", help="accuracy: leave-one-out or train-set against gold labels (*.txt corpus), "
                                                    "or on held-out (start, end) pairs (.bdm corpus: --holdout, --test)")
-    p.add_argument("--corpus", required=True, metavar="DIR",
+    p.add_argument("--corpus", required=True, type=input_path, metavar="DIR",
                    help="training corpus: a folder of *.txt files, or a .bdm file or folder of them (Williams 2018)")
     p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
-    p.add_argument("--labels", metavar="CSV", help="gold labels of a *.txt corpus (required for it)")
-    p.add_argument("--test", metavar="BDM", help="a .bdm test file or folder: train on --corpus, follow every test "
+    p.add_argument("--labels", type=input_path, metavar="CSV", help="gold labels of a *.txt corpus (required for it)")
+    p.add_argument("--test", type=input_path, metavar="BDM", help="a .bdm test file or folder: train on --corpus, follow every test "
                    "command from each of its start states, scored by what its pairs show")
     p.add_argument("--layouts", choices=["shared", "separate"], default="shared",
                    help="a .bdm command's pairs as one instance of one lifted meaning grounded in each layout "

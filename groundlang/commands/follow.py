@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from groundlang.commands import (PALETTE_HELP, add_lexicon_option, add_time_limit_option, as_typed, fraction,
+from groundlang.commands import (input_path, PALETTE_HELP, add_lexicon_option, add_time_limit_option, as_typed, fraction,
                                  json_text, logged_by_file_names, output_path, positive_int)
 from groundlang.commands.asking import (already_true, ask, ask_held, choices_json, down, held_choice, held_question,
                                         learn_answer, places_for, print_question)
@@ -34,12 +34,12 @@ def register(subparsers) -> None:
                     "where the words most probably ask for what already holds (is that what is meant?).",
     )
     p.add_argument("command_text", metavar="COMMAND", help="the command, in quotes")
-    p.add_argument("--env", required=True, metavar="FILE",
+    p.add_argument("--env", required=True, type=input_path, metavar="FILE",
                    help="the initial state: a corpus file (*.txt: its first state), a one-line .state file, or a "
                         "one-line .bdm file (a state in the Williams et al. format)")
     p.add_argument("--palette", help=PALETTE_HELP + " (default: the model's, when it was trained on one; a palette file "
                    "of your own is read from the values the model records)")
-    p.add_argument("--model", required=True, metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
+    p.add_argument("--model", required=True, type=input_path, metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
     p.add_argument("--out", type=output_path, metavar="PNG", help="draw the executed trajectory here (.png, .svg or .pdf; default: no picture)")
     p.add_argument("--top", type=positive_int, default=5, help="how many goals to list with their probabilities (default 5)")
     p.add_argument("--max-steps", type=positive_int, default=200,

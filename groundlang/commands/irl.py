@@ -21,12 +21,12 @@ from __future__ import annotations
 import argparse
 import time
 
-from groundlang.commands import PALETTE_HELP, json_text
+from groundlang.commands import input_path, PALETTE_HELP, json_text
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("irl", help="fit reward weights over position PFs to one file's demonstration (MLIRL)")
-    p.add_argument("file", metavar="FILE", help="one corpus file (command, actions, states)")
+    p.add_argument("file", type=input_path, metavar="FILE", help="one corpus file (command, actions, states)")
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=run)

@@ -17,12 +17,12 @@ from __future__ import annotations
 import argparse
 import unicodedata
 
-from groundlang.commands import json_text, positive_int
+from groundlang.commands import input_path, json_text, positive_int
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("lexicon", help="print the learned meanings of words")
-    p.add_argument("model", metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
+    p.add_argument("model", type=input_path, metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
     p.add_argument("--top", type=positive_int, default=3, help="meanings per word (default 3)")
     p.add_argument("--words", nargs="*", metavar="WORD", help="only these words (default: every word the model knows)")
     p.add_argument("--json", action="store_true",

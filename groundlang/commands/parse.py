@@ -14,7 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from groundlang.commands import (LIBRARY_NAMES, add_lexicon_option, add_time_limit_option, as_typed, json_text,
+from groundlang.commands import (LIBRARY_NAMES, input_path, add_lexicon_option, add_time_limit_option, as_typed, json_text,
                                  library_given, library_path, positive_int)
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import ParseError, command_fault, parse, typed_words
@@ -27,7 +27,7 @@ def register(subparsers) -> None:
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     # dest "text": the CLI keeps the sub-command's name in args.command
     p.add_argument("text", nargs="?", metavar="COMMAND", help="the command to parse (quote it)")
-    p.add_argument("--file", type=Path, help="a text file (one command per line) or a corpus folder")
+    p.add_argument("--file", type=lambda text: Path(input_path(text)), help="a text file (one command per line) or a corpus folder")
     p.add_argument("--json", action="store_true", help="one JSON object per command")
     p.add_argument("--max-readings", type=positive_int, default=8, help="readings kept per command (default 8)")
     add_lexicon_option(p)

@@ -6,13 +6,13 @@ import argparse
 from pathlib import Path
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import PALETTE_HELP, check_state_file, is_burlap_state_file, output_path
+from groundlang.commands import input_path, PALETTE_HELP, check_state_file, is_burlap_state_file, output_path
 from groundlang.corpus import file_names, read_instance, read_state_file
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("show", help="draw a corpus file or a .state file (ASCII, and an image with --out)")
-    p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state or .bdm file (a state "
+    p.add_argument("file", type=input_path, metavar="FILE", help="a corpus file (*.txt) or a one-line .state or .bdm file (a state "
                    "in the corpus's format, or a BURLAP state line as Williams et al. write them)")
     p.add_argument("--palette", help=PALETTE_HELP + "; required but for a BURLAP state line (default williams2018)")
     p.add_argument("--out", type=output_path, metavar="PNG", help="also write an image (.png, .svg or .pdf) with the demonstration drawn")

@@ -9,7 +9,7 @@ import argparse
 from importlib.resources import files as resources
 
 from groundlang.bdm import DEFAULT_PALETTE
-from groundlang.commands import (LIBRARY_NAMES, PALETTE_HELP, check_state_file, is_burlap_state_file, json_text,
+from groundlang.commands import (input_path, LIBRARY_NAMES, PALETTE_HELP, check_state_file, is_burlap_state_file, json_text,
                                  library_path, positive_seconds, renumbering_note)
 from groundlang.corpus import file_names, read_initial_state
 
@@ -18,7 +18,7 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "tasks", help="list lifted tasks and their groundings and binding constraints in a file's initial state"
     )
-    p.add_argument("file", metavar="FILE", help="a corpus file (*.txt) or a one-line .state file (either "
+    p.add_argument("file", type=input_path, metavar="FILE", help="a corpus file (*.txt) or a one-line .state file (either "
                    "format: a state in the corpus's format, or a BURLAP state line as Williams et al. write them)")
     p.add_argument("--palette", help=PALETTE_HELP + "; required but for a BURLAP state line (default williams2018)")
     p.add_argument("--library", metavar="LP", action="append", type=library_path,

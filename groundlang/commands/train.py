@@ -7,7 +7,7 @@ import time
 
 from groundlang.bdm import bdm_files
 from groundlang.corpus import read_corpus
-from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option,
+from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HELP, add_em_acceleration_option, input_path,
                                  add_language_model_settings, add_lexicon_option, cache_option, check_cache_outside,
                                  language_model_settings, library_given, library_path, output_path, require_palette,
                                  seed, add_time_limit_option, time_limit_given, lexicon_beside)
@@ -15,7 +15,7 @@ from groundlang.commands import (LANGUAGE_MODEL_NAMES, LIBRARY_NAMES, PALETTE_HE
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("train", help="learn word meanings from a corpus and save the model")
-    p.add_argument("corpus", metavar="CORPUS", help="folder of corpus files (*.txt), or a .bdm file or folder of them "
+    p.add_argument("corpus", type=input_path, metavar="CORPUS", help="folder of corpus files (*.txt), or a .bdm file or folder of them "
                    "(Williams et al. 2018: (start, end) pairs, learned from as evaluate does)")
     p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
     p.add_argument("-o", "--output", required=True, type=output_path, metavar="MODEL_DIR", help="folder to write the model to")
