@@ -975,3 +975,18 @@ def test_an_empty_input_path_is_refused_by_its_argument(argv, capsys):
         main(["--quiet", *argv])
     assert stopped.value.code == 2
     assert "an empty path; expected a file or folder to read" in capsys.readouterr().err
+
+
+def test_ablate_lists_name_each_cell_once():
+    """--language-models bow,bow had made the same cells twice, row for row."""
+    from groundlang.commands.ablate import _list_of, _sizes
+
+    assert _list_of("bow,ibm2,parse")("bow, bow,parse,bow") == ["bow", "parse"]
+    assert _sizes("12,12,24") == [12, 24]
+
+
+def test_discover_refuses_a_weight_margin_of_zero_by_its_option(capsys):
+    """It had said "weight_margin must be in (0, 1], got 0.0", the Python parameter's name, after the corpus was read."""
+    assert main(["discover", str(EXAMPLES), "--palette", "sokoban", "-o", "x.lp", "--weight-margin", "0"]) == 2
+    assert capsys.readouterr().err == ("groundlang discover: error: --weight-margin 0: expected a fraction above 0, "
+                                       "up to 1 (of the largest MLIRL weight)\n")

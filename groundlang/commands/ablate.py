@@ -13,7 +13,8 @@ from groundlang.commands import (input_path, PALETTE_HELP, add_language_model_se
 def _list_of(example: str):
     """An argparse type: a comma-separated list of names, its message giving ``example``."""
     def names(text: str) -> list[str]:
-        found = [x.strip() for x in text.split(",") if x.strip()]
+        # once each, in the order given: "bow,bow" had made the same cells twice (sizes were already once each)
+        found = list(dict.fromkeys(x.strip() for x in text.split(",") if x.strip()))
         if not found:
             raise argparse.ArgumentTypeError(f"expected a comma-separated list, e.g. {example}")
         return found

@@ -26,7 +26,7 @@ def register(subparsers) -> None:
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
     p.add_argument("-o", "--output", required=True, type=output_path, metavar="LP", help="where to write the discovered library (.lp)")
     p.add_argument("--weight-margin", type=fraction, default=0.5, metavar="FRACTION",
-                   help="top features: MLIRL weight at least this fraction of the largest (default 0.5)")
+                   help="top features: MLIRL weight at least this fraction of the largest, above 0 up to 1 (default 0.5)")
     p.add_argument("--max-conjuncts", type=positive_int, default=2, metavar="N",
                    help="candidate goals: conjunctions of up to N top features (default 2)")
     p.add_argument("--max-tasks", type=positive_int, default=4, metavar="N", help="largest library considered (default 4)")
@@ -50,6 +50,9 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.inference.discovery import DiscoverySettings, discover_tasks, write_library
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.logic.storage import check_destination
+
+    if args.weight_margin == 0:  # a fraction of the largest weight: 0 would keep every feature, and is refused
+        raise ValueError("--weight-margin 0: expected a fraction above 0, up to 1 (of the largest MLIRL weight)")
 
     start = time.perf_counter()
     check_destination(args.output, "-o", inputs_read(args, "directory", "pfs", "palette", "lexicon"))
