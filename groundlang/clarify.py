@@ -72,6 +72,11 @@ def _says_nothing(word: str, lexicon: Lexicon) -> bool:
     return word in lexicon.polite_words or bool(listed) and (listed <= _FUNCTION or "AUX" in listed)
 
 
+def _negates(token: str, lexicon: Lexicon) -> bool:
+    """A negation: a word the lexicon lists as ``NEG``, or one ending in the clitic n't (kept whole)."""
+    return "NEG" in lexicon.listed(token) or token.endswith("n't")
+
+
 def _content(tokens, lexicon: Lexicon) -> set[str]:
     """The words of ``tokens`` that say something: whole tokens first ("thank_you", "'s" say nothing), then
     their words ("left_of": "left")."""
@@ -230,7 +235,7 @@ def _yes_or_no(text: str, offered: set[str] | None, lexicon: Lexicon) -> bool | 
     AnswerError for an answer of a yes and a no and nothing else ("yes no")."""
     tokens = [t for t in lexicon.join_multiword(tokenise(text)) if _words(t)]
     declining = {t for t in tokens if t in lexicon.no_words}
-    negating = {t for t in tokens if "NEG" in lexicon.listed(t) or t.endswith("n't")} - declining
+    negating = {t for t in tokens if _negates(t, lexicon)} - declining
     yes = {t for t in tokens if t in lexicon.yes_words}
     telling = _content([t for t in tokens if t not in yes | declining | negating], lexicon)
     if yes and (declining or negating) and not telling:
@@ -253,7 +258,7 @@ def _said_and_denied(text: str, lexicon: Lexicon) -> tuple[set[str], set[str]]:
     for token in tokenise(text):
         if token in _CLAUSE_ENDS:
             negating = False
-        elif "NEG" in lexicon.listed(token) or token.endswith("n't"):
+        elif _negates(token, lexicon):
             negating = True
         else:
             (denied if negating else said).update(_words(token))

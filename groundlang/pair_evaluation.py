@@ -31,7 +31,7 @@ from groundlang.model.interpretations import NoTaskError
 from groundlang.model.relevance import STATE_SOURCE, reading_states
 from groundlang.model.statespace import StateSpaceError
 from groundlang.pair_corpus import skipped_text, training_instances
-from groundlang.model.pf_tables import tabulation_refusal
+from groundlang.model.pf_tables import TabulationError
 from groundlang.pair_tasks import REACHABILITY_MAX_STATES, command_task, lifted_facts
 
 __all__ = ["PairEvaluation", "evaluate_pairs", "calibration_of_rows", "failure_kind", "FAILURE_KINDS", "PUBLISHED_F1"]
@@ -214,18 +214,17 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
         for k, pair in enumerate(command.pairs):
             STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
             row = {"index": index, "pair": k, "command": command.text}
-            too_large = tabulation_refusal(pair.start.layout)
             try:  # a layout too large to enumerate is planned in its relevance abstraction (model.relevance)
-                if too_large is not None:
-                    raise StateSpaceError(f"{command.path}, line {pair.line}: {too_large}")
                 result = learner.follow(command.text, pair.start)
             except NoTaskError as exc:  # nothing can be asked there, so no reading is right or wrong
                 row.update(goal=None, final_state=None, not_scored=f"{command.path}, line {pair.line}: {exc}")
                 unscored += 1
                 rows.append(row)
                 continue
-            except StateSpaceError as exc:  # what neither the exact space nor the abstraction can hold
-                row.update(goal=None, final_state=None, skipped=str(exc), confidence=0.0)
+            except (StateSpaceError, TabulationError) as exc:  # what neither the exact space nor the abstraction
+                # can hold, or no PF table (refused before anything is grounded: learner_state.check_state)
+                row.update(goal=None, final_state=None, skipped=f"{command.path}, line {pair.line}: {exc}",
+                           confidence=0.0)
                 missing, kind = task or frozenset(), "skipped"
             else:
                 names = dict(zip(pair.start.layout.toy_names, pair.toy_names))  # the file's names of the blocks

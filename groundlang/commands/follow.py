@@ -111,17 +111,21 @@ def _print_already_true(done, state, library, names, places: int, asked: bool) -
     print(said if asked else f"{said}, but such a goal asks nothing: the interpretations below are the rest")
 
 
+def _picture(args, state, states, goal_words: str, goal, names) -> None:
+    """--out: the states walked, titled with the command and the goal acted on."""
+    from groundlang.logic.atoms import format_goal, renamed_words
+    from groundlang.render import picture_title, save_picture
+
+    save_picture(args.out, state, trajectory=states, names=names, title=picture_title(
+        args.command_text, renamed_words(goal_words, names), format_goal(goal, names)))
+
+
 def _nothing_to_do(done, state, library, names, args) -> int:
     """Where the answer says that what already holds is what is meant: no plan, the start kept."""
-    from groundlang.logic.atoms import format_goal, renamed_words
     from groundlang.wording import goal_phrase
 
     if args.out:
-        from groundlang.render import picture_title, save_picture
-
-        save_picture(args.out, state, trajectory=[state], title=picture_title(
-            args.command_text, renamed_words(goal_phrase(done[0], state, library), names), format_goal(done[0], names)),
-            names=names)
+        _picture(args, state, [state], goal_phrase(done[0], state, library), done[0], names)
     print("nothing to do: plan (0 steps): (none)")
     if args.learn:  # the model learns what commands ask for, and this one asks nothing
         print(f"nothing learned: the model at {args.model} is left as it was")
@@ -170,12 +174,12 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import file_names, read_initial_state
     from groundlang.inference.sweeps import plan_once
     from groundlang.learner import Learner
-    from groundlang.logic.atoms import format_goal, renamed_words
+    from groundlang.logic.atoms import format_goal
     from groundlang.logic.palette_files import palette_names
     from groundlang.model.interpretations import NoTaskError
     from groundlang.model.statespace import StateSpaceError
     from groundlang.model.palette import Palette, get_palette
-    from groundlang.model.pf_tables import tabulation_refusal
+    from groundlang.model.pf_tables import TabulationError
     from groundlang.wording import labelled_goal
 
     if args.learn and not args.ask:
@@ -213,8 +217,6 @@ def run(args: argparse.Namespace) -> int:
         if "drawing" not in record and palette.name in palette_names() and get_palette(palette.name) == palette:
             palette = get_palette(palette.name)
     state = read_initial_state(args.env, palette)
-    if (too_large := tabulation_refusal(state.layout)) is not None:  # said of the file before anything is grounded
-        raise ValueError(f"{args.env}: {too_large}")
     names = file_names(args.env)  # goals and states are shown by the file's names of its objects
     if args.lexicon:
         learner.add_words(args.lexicon)
@@ -224,8 +226,8 @@ def run(args: argparse.Namespace) -> int:
             result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
     except NoTaskError as exc:  # the state is at fault, not the command or the model: name its file
         raise NoTaskError(f"{args.env}: {exc}") from None
-    except StateSpaceError as exc:  # a layout no method can plan in: its file, as above
-        raise StateSpaceError(f"{args.env}: {exc}") from None
+    except (StateSpaceError, TabulationError) as exc:  # a layout no method can plan in, or tabulate: its file
+        raise ValueError(f"{args.env}: {exc}") from None
     if not args.json:
         print(f"command: {as_typed(args.command_text)}")
     # what the words say of the start, from the model as it was: before an answer is asked for or learned
@@ -266,11 +268,7 @@ def run(args: argparse.Namespace) -> int:
             learn_answer(learner, result, answered, state, args.model)
         result = answered
     if args.out and not result.abstained:
-        from groundlang.render import picture_title, save_picture
-
-        save_picture(args.out, state, trajectory=result.states,
-                     title=picture_title(args.command_text, renamed_words(result.goal_words, names),
-                                         format_goal(result.goal, names)), names=names)
+        _picture(args, state, result.states, result.goal_words, result.goal, names)
     if args.json:
         print(json_text(_answer_json(learner, result, done, state, names, args, held=False)))
         if result.abstained:
