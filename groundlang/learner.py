@@ -18,6 +18,7 @@ import torch
 from groundlang.grammar.parser import parse
 from groundlang.clarify import AnswerError, answer_text, choose, clear_choice, competing, question, unknown_words
 from groundlang.confidence import given_achievable, group_goals, held_goals_success, out_of_reach, unachievable_goals
+from groundlang.held_question import answer_held, follow_or_ask
 from groundlang.goal_plans import WorldPlans, expected_success_states, goal_holding_at, nearest_of, success_at
 from groundlang.inference.end_habits import EndHabits, demonstrated_pairs, known_new_relations
 from groundlang.inference.joint import FitResult, fit_globals, local_posteriors, per_parser_reading
@@ -119,13 +120,9 @@ class Learner:
         if key not in self._interp_cache:
             self._interp_cache[key] = interpretations(
                 state, self.library, enumerate_constraints=self.lm.enumerates_constraints,
-                relation_words=self.lm.relation_words,
-                held_parts=self.lm.held_parts,
-                relational=self.lm.relational_descriptions,
-                demonstrated=demonstrated,
-                start_role=self.lm.start_role,
-                bystander_roles=self.lm.bystander_roles,
-            )
+                relation_words=self.lm.relation_words, held_parts=self.lm.held_parts,
+                relational=self.lm.relational_descriptions, demonstrated=demonstrated,
+                start_role=self.lm.start_role, bystander_roles=self.lm.bystander_roles)
         return self._interp_cache[key]
 
     def observe(self, instances: Sequence, progress: bool = False) -> list[Observation]:
@@ -246,13 +243,19 @@ class Learner:
         push a toy the abstraction holds still.
         With ``min_confidence`` (0 to 1), a reading less confident than that is not acted on:
         the result has ``abstained=True``, the ``question`` to ask, its ``choices`` and the
-        ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer.
-        """
+        ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer. Where the words
+        most probably ask, as surely, for what already holds, it asks whether that is meant
+        (``already_true``, :mod:`groundlang.held_question`), also where nothing else can be done."""
         check_count("follow", "max_steps", max_steps)
         check_threshold("follow", "min_confidence", min_confidence)
         self._require_fitted()
         self._check_state("follow", command, state)
         check_abstraction_possible(state)
+        held = self.posterior(command, state, held=True) if min_confidence or self.lm.held_goals_confidence else None
+        return follow_or_ask(command, state, held, min_confidence, self.library,
+                             lambda: self._follow(command, state, max_steps, min_confidence, held))
+
+    def _follow(self, command: str, state: State, max_steps: int, min_confidence, held) -> FollowResult:
         post = self.posterior(command, state)
         ending = self.ending(post, state)
         # Planned before deciding: the confidence is read where the plan ends (plans are the world's, kept).
@@ -262,8 +265,7 @@ class Learner:
         else:
             acted = self._act(command, state, post, post.best_goal, max_steps)
         if acted.success is not None and self.lm.held_goals_confidence:
-            acted.success = held_goals_success(self.posterior(command, state, held=True), acted.success,
-                                               acted.final_state, self.library)
+            acted.success = held_goals_success(held, acted.success, acted.final_state, self.library)
         # Not where nothing can be done: no reading is within reach, so no answer could help.
         if min_confidence is not None and acted.confidence < min_confidence and acted.reason != "unreachable":
             choices = competing(post.goal_groups())
@@ -305,6 +307,8 @@ class Learner:
         if any(a.predicate not in self.library.goal_relations for c in result.choices for a in c.goals[0]):
             raise ValueError("clarify: the result's choices are goals of another task library than this learner's "
                              "(answer it with the learner whose follow() made it)")
+        if result.already_true:  # a yes is nothing to do, a no the rest of the reading
+            return answer_held(result, answer, self.library, self.word_lexicon)
         chosen = choose(answer, result.choices, state, self.library,
                         read=lambda text, choices: clear_choice(
                             dict(self.posterior(f"{result.command}, {text}", state).goals()), choices,
@@ -355,12 +359,8 @@ class Learner:
         return phrase_alignments(self, command, state, interpretation)
 
     def lexicon(self, top: int = 3) -> dict[str, list[tuple[str, float]]]:
-        """Each known word's most probable meanings, ``P(token | word)``.
-
-        The prior over tokens is uniform over the tokens training actually
-        used: a token no training interpretation offered keeps its flat prior
-        distribution and is left out, so that it does not dilute the table.
-        """
+        """Each known word's most probable meanings, ``P(token | word)``: tokens no training interpretation
+        offered are left out (:func:`groundlang.model.language_model_base.word_meanings`)."""
         check_count("lexicon", "top", top)  # a slice would have taken -1 as "all but the last"
         self._require_fitted()
         return word_meanings(self.globals, self.vocab, top)

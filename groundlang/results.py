@@ -135,6 +135,10 @@ class FollowResult:
             end, when it abstained), reached or not, ``sum_g P(g | words) [s satisfies g]``; None where
             following planned for one goal alone (the language model's ``success_confidence`` or
             ``expected_success`` off, or no goal of the posterior within reach).
+        already_true: the question asks whether the goal, which holds at the start, is what is meant
+            (:mod:`groundlang.held_question`); ``posterior`` is then the words' reading with such goals offered.
+        otherwise: for such a question, the result of following the rest of the reading (acted on or
+            abstained), which a no to it takes; None where nothing else can be done.
     """
 
     command: str
@@ -150,6 +154,8 @@ class FollowResult:
     unknown_words: tuple[str, ...] = ()
     goal_words: str = ""
     success: float | None = None
+    already_true: bool = False
+    otherwise: FollowResult | None = None
 
     @property
     def final_state(self) -> State:

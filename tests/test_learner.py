@@ -506,6 +506,36 @@ def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys,
     assert json.loads(capsys.readouterr().out)["already_true"] is None
 
 
+def test_learner_follow_asks_whether_what_already_holds_is_meant(learner, tmp_path):
+    """The API asks as the CLI does: with ``min_confidence``, words that most probably ask for what already
+    holds give a result asking whether it is meant; clarify takes a yes (nothing to do) or a no (the rest)."""
+    from groundlang.clarify import AnswerError
+    from groundlang.logic.atoms import Atom
+
+    layout = (EXAMPLES / "novel_a.state").read_text().split(" agent,")[0]
+    (tmp_path / "inside.state").write_text(layout + " agent,3,3\n")  # in the red room, room2
+    inside = read_state_file(tmp_path / "inside.state", "sokoban")
+    red = (Atom("agentInRoom", ("agent0", "room2")),)
+    asked = learner.follow("go to the red room", inside, min_confidence=0.7)
+    assert asked.already_true and asked.abstained and asked.actions == [] and asked.goal == red
+    assert asked.question.startswith("Do you mean the agent in the red room, as it is now?")
+    assert [c.goal for c in asked.choices] == [red] and asked.confidence > 0.9
+    rest = learner.follow("go to the red room", inside)  # acting however unsure: the rest, as before
+    assert not rest.already_true and rest.goal != red and rest.actions
+    assert asked.otherwise.goal == rest.goal and not asked.otherwise.already_true
+    yes = learner.clarify(asked, "yes")
+    assert (yes.goal, yes.actions, yes.reached, yes.reason, yes.final_state) == (red, [], True, "goal", inside)
+    assert learner.clarify(asked, "no") is asked.otherwise
+    assert learner.clarify(asked, 1).actions == []
+    with pytest.raises(AnswerError):
+        learner.clarify(asked, "the star")
+    # not asked where the words do not ask for it as surely, nor where it does not hold
+    assert not learner.follow("go to the red room", inside, min_confidence=0.9999).already_true
+    (tmp_path / "outside.state").write_text(layout + " agent,3,8\n")
+    outside = read_state_file(tmp_path / "outside.state", "sokoban")
+    assert not learner.follow("go to the red room", outside, min_confidence=0.7).already_true
+
+
 def test_the_words_reading_of_what_holds_conditions_on_nothing(learner, tmp_path):
     """``posterior(held=True)``: what the words say, goals that hold at the start offered; a room the agent
     cannot reach keeps its share (conditioning on what can be done would hand it to the room it is in)."""
@@ -540,7 +570,9 @@ def test_the_words_share_on_what_already_holds_counts_against_following(learner,
     counting = Learner(get_language_model("parse", held_goals_confidence=True)).fit(corpus.instances)
     result = counting.follow("go to the red room", inside, min_confidence=0.7)
     held = counting.posterior("go to the red room", inside, held=True)
-    assert held.confidence > 0.9 and result.abstained and result.confidence < 0.1
+    # asked whether the red room, as it is, is meant; the rest of the reading, walking elsewhere, is not sure
+    assert held.confidence > 0.9 and result.already_true and result.abstained
+    assert result.otherwise.abstained and result.otherwise.confidence < 0.1
     # the share on the held goal counts only where following leaves it: an end still in the red room keeps it
     assert held_goals_success(held, 0.5, inside, learner.library) == pytest.approx(
         (1 - held.confidence) * 0.5 + held.confidence, abs=1e-6)

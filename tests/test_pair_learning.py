@@ -3,6 +3,7 @@ several layouts, the development split and ``evaluate --test`` (Williams et al. 
 
 from __future__ import annotations
 
+import io
 import json
 import math
 import subprocess
@@ -434,7 +435,7 @@ def test_fitting_on_a_state_that_admits_no_task_names_its_file_and_line(williams
 
 
 def test_an_execution_whose_start_admits_no_task_is_not_scored_and_follow_names_the_state_file(
-        williams_commands, williams_library, tmp_path, capsys):
+        williams_commands, williams_library, tmp_path, capsys, monkeypatch):
     from groundlang.cli import main
     from groundlang.learner import Learner
     from groundlang.pair_evaluation import evaluate_pairs
@@ -449,11 +450,23 @@ def test_an_execution_whose_start_admits_no_task_is_not_scored_and_follow_names_
     Learner(library=williams_library, cache_dir=False).fit(
         training_instances(williams_commands, williams_library, cache_dir=False).instances).save(tmp_path / "model")
     (tmp_path / "red.state").write_text(NO_TASK + "\n", encoding="utf-8")
-    assert main(["follow", "--model", str(tmp_path / "model"), "--env", str(tmp_path / "red.state"),
-                 "go to the red room"]) == 2
+    follow = ["follow", "--model", str(tmp_path / "model"), "--env", str(tmp_path / "red.state"), "go to the red room"]
+    assert main([*follow, "--guess"]) == 2  # acting on the rest of the reading: there is none
     err = capsys.readouterr().err.strip()
     assert err == (f"groundlang follow: error: {tmp_path / 'red.state'}: no task of the library can be carried out "
                    "from this state (every grounding is impossible or already true)")
+    # the words ask for the one room, where the agent is: asked whether that is meant, not "no task"
+    assert main(follow) == 3
+    out, err = capsys.readouterr()
+    assert "Do you mean the agent in the red room, as it is now?" in out
+    assert "not acting: the words most probably ask for what already holds" in err
+    monkeypatch.setattr("sys.stdin", io.StringIO("yes\n"))
+    assert main([*follow, "--ask"]) == 0
+    assert "nothing to do: plan (0 steps)" in capsys.readouterr().out
+    monkeypatch.setattr("sys.stdin", io.StringIO("no\n"))
+    assert main([*follow, "--ask"]) == 3
+    out, err = capsys.readouterr()
+    assert "nothing else can be done here" in out and "the answer declined what was offered; nothing done" in err
 
 
 def test_evaluate_judges_with_another_library_where_asked(tmp_path):

@@ -112,45 +112,23 @@ def learn_answer(learner, asked, answered, state, model) -> None:
 
 
 def already_true(learner, command: str, state) -> tuple[tuple, float] | None:
-    """The goal the words most probably ask for, with goals that hold at the start offered too, and its
-    probability, where that goal holds at the start: following sets such a goal aside (it asks nothing), so
-    without a word the interpretations shown would leave out what was named ("go to the blue room" said in it).
-    None for a command with a negated clause: "do not go to the blue room" is read as a task without its
-    negation (negation is no task), and what it asks for is not what it says."""
-    from groundlang.confidence import goals_held_at_start
+    """What the words most probably ask for where it holds at the start, with its probability
+    (:func:`groundlang.held_question.held_reading`), said beside what following does."""
+    from groundlang.held_question import held_reading
 
-    held = learner.posterior(command, state, held=True)
-    if any(c.negated for r in held.readings for c in r.logical_form.clauses):
-        return None
-    return (held.best_goal, held.confidence) if held.best_goal in goals_held_at_start(held) else None
+    return held_reading(learner.posterior(command, state, held=True))
 
 
-def held_choice(done):
-    """The one choice of the question whether the goal that already holds is what is meant."""
-    from groundlang.confidence import GoalGroup
+def ask_held(learner, held, max_steps: int, names=None, places: int = 2):
+    """Ask ``held``'s question, whether the goal that already holds is what is meant: the result of the answer
+    (:meth:`Learner.clarify`: a yes is nothing to do, a no ``held.otherwise``, the rest of the reading); None
+    where no answer named a choice; clarify.Declined where a no leaves nothing else to do (said)."""
+    print_question(held.question, held.choices, held.states[0], learner.library, names, places)
 
-    return [GoalGroup((done[0],), done[1])]
+    def take(answer):
+        taken = learner.clarify(held, answer, max_steps=max_steps)
+        if taken is held.otherwise:
+            print("  not what holds now: the rest of the reading")
+        return taken
 
-
-def held_question(done, state, library, names=None) -> str:
-    from groundlang.logic.atoms import renamed_words
-    from groundlang.wording import goal_phrase
-
-    return (f"Do you mean {renamed_words(goal_phrase(done[0], state, library), names)}, as it is now? (yes: nothing "
-            "to do; no: the rest of the reading)")
-
-
-def ask_held(learner, done, state, names=None, places: int = 2) -> bool | None:
-    """Ask whether the goal that already holds is what is meant: True (yes), False (declined), None (no
-    answer)."""
-    from groundlang.clarify import Declined, choose
-
-    print_question(held_question(done, state, learner.library, names), held_choice(done), state, learner.library,
-                   names, places)
-    try:
-        taken = read_answers(lambda answer: choose(answer, held_choice(done), state, learner.library,
-                                                   lexicon=learner.word_lexicon), names,
-                             declined="not what holds now: the rest of the reading")
-    except Declined:
-        return False
-    return None if taken is None else True
+    return read_answers(take, names)

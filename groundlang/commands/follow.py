@@ -15,8 +15,8 @@ import sys
 
 from groundlang.commands import (input_path, PALETTE_HELP, add_lexicon_option, add_time_limit_option, as_typed, fraction,
                                  json_text, logged_by_file_names, output_path, positive_int)
-from groundlang.commands.asking import (already_true, ask, ask_held, choices_json, down, held_choice, held_question,
-                                        learn_answer, places_for, print_question)
+from groundlang.commands.asking import (already_true, ask, ask_held, choices_json, down, learn_answer, places_for,
+                                        print_question)
 
 # Exit code of a command that asked instead of acting (documented in the README).
 ASKED = 3
@@ -134,8 +134,9 @@ def _nothing_to_do(done, state, library, names, args) -> int:
     return 0
 
 
-def _answer_json(learner, result, done, state, names, args, held: bool) -> dict:
-    """follow's --json answer; ``held``: the question is whether what already holds is meant."""
+def _answer_json(learner, result, done, state, names, args, held=None) -> dict:
+    """follow's --json answer; ``held``: the result that asks whether what already holds is meant (``result``
+    is then the rest of the reading, or ``held`` itself where nothing else can be done)."""
     from groundlang.corpus import format_state_like
     from groundlang.logic.atoms import format_goal, renamed_words
     from groundlang.wording import goal_phrase
@@ -151,11 +152,11 @@ def _answer_json(learner, result, done, state, names, args, held: bool) -> dict:
         "already_true": None if done is None else {
             "goal": format_goal(done[0], names), "words": renamed_words(goal_phrase(done[0], state, learner.library),
                                                                         names), "probability": done[1]},
-        "abstained": result.abstained or held,
+        "abstained": result.abstained or held is not None,
     }
-    if held:
-        data.update(question_kind="already true", question=held_question(done, state, learner.library, names),
-                    choices=choices_json(held_choice(done), state, learner.library, names),
+    if held is not None:
+        data.update(question_kind="already true", question=renamed_words(held.question, names),
+                    choices=choices_json(held.choices, state, learner.library, names),
                     unknown_words=list(result.unknown_words))
     elif result.abstained:
         data.update(question_kind="readings", question=renamed_words(result.question, names),
@@ -230,27 +231,35 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"{args.env}: {exc}") from None
     if not args.json:
         print(f"command: {as_typed(args.command_text)}")
-    # what the words say of the start, from the model as it was: before an answer is asked for or learned
-    done = already_true(learner, args.command_text, state)
+    # The words most probably ask for what already holds, as surely as acting needs (--guess and
+    # --min-confidence 0 ask nothing): Learner.follow asks whether that is meant, the rest of the reading aside.
+    held = result if result.already_true else None
+    if held is not None:
+        done, result = (held.goal, held.choices[0].probability), held.otherwise  # None: nothing else can be done
+    else:  # what the words say of the start, from the model as it was, said before acting or asking
+        done = already_true(learner, args.command_text, state)
     places = places_for(args.min_confidence)
-    # asked as surely as acting needs; --min-confidence 0 asks nothing, as --guess
-    held = done is not None and not args.guess and 0 < args.min_confidence <= done[1]
     if done is not None and not args.json:  # before a question, whose choices leave it out
-        _print_already_true(done, state, learner.library, names, places, held)
-    if held and (args.json or not args.ask):
+        _print_already_true(done, state, learner.library, names, places, held is not None)
+    if held is not None and (args.json or not args.ask):
         if args.json:
-            print(json_text(_answer_json(learner, result, done, state, names, args, held=True)))
+            print(json_text(_answer_json(learner, result or held, done, state, names, args, held=held)))
         else:
-            print_question(held_question(done, state, learner.library, names), held_choice(done), state,
-                           learner.library, names, places)
+            print_question(held.question, held.choices, state, learner.library, names, places)
         _refuse(result, args, done)
         return ASKED
-    if held:
-        taken = ask_held(learner, done, state, names, places)
+    if held is not None:
+        from groundlang.clarify import Declined
+
+        try:
+            taken = ask_held(learner, held, args.max_steps, names, places)
+        except Declined:  # a no where nothing else can be done
+            print("groundlang follow: the answer declined what was offered; nothing done", file=sys.stderr)
+            return ASKED
         if taken is None:
             print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
             return ASKED
-        if taken:
+        if taken is not result:  # taken, not declined: the rest of the reading is what a no gives
             return _nothing_to_do(done, state, learner.library, names, args)
     answered = None
     if result.abstained and args.ask and not args.json:
@@ -270,7 +279,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out and not result.abstained:
         _picture(args, state, result.states, result.goal_words, result.goal, names)
     if args.json:
-        print(json_text(_answer_json(learner, result, done, state, names, args, held=False)))
+        print(json_text(_answer_json(learner, result, done, state, names, args, )))
         if result.abstained:
             _refuse(result, args)
             return ASKED

@@ -1,0 +1,79 @@
+"""Asking whether what already holds is meant.
+
+Following sets aside goals that hold at the start: they ask nothing, so acting on one would be no plan at all.
+But words may most probably ask for one ("go to the blue room" said in it). Where they do, as surely as acting
+needs, :meth:`Learner.follow` asks instead of acting on the rest of the reading: "Do you mean the blue room, as
+it is now?". A yes is nothing to do (a plan of no steps, the goal reached); a no is the rest of the reading,
+acted on or asked about as following would have (the result's ``otherwise``). Never taken without asking: the
+reading of goals that hold is learned from words that never asked for one (demonstrations end elsewhere), so
+"leave the blue room" said in it reads as it too.
+"""
+
+from __future__ import annotations
+
+from groundlang.clarify import Declined, choose
+from groundlang.confidence import GoalGroup, goals_held_at_start
+from groundlang.logic.atoms import Atom
+from groundlang.model.interpretations import NoTaskError
+from groundlang.results import FollowResult, Posterior
+from groundlang.wording import goal_phrase
+
+__all__ = ["held_reading", "held_question", "held_result", "follow_or_ask", "answer_held"]
+
+
+def held_reading(held: Posterior) -> tuple[tuple[Atom, ...], float] | None:
+    """The goal ``held`` (``Learner.posterior(..., held=True)``) most probably reads its words as, with its
+    probability, where that goal holds at the start; None otherwise, and for a command with a negated clause:
+    "do not go to the blue room" is read as a task without its negation (negation is no task), and what it asks
+    for is not what it says."""
+    if any(c.negated for r in held.readings for c in r.logical_form.clauses):
+        return None
+    return (held.best_goal, held.confidence) if held.best_goal in goals_held_at_start(held) else None
+
+
+def held_question(goal, state, library) -> str:
+    return f"Do you mean {goal_phrase(goal, state, library)}, as it is now? (yes: nothing to do; no: the rest of the reading)"
+
+
+def held_result(command: str, state, held: Posterior, reading, otherwise: FollowResult | None,
+                library) -> FollowResult:
+    """The question whether ``reading`` (:func:`held_reading`'s) is meant, as an abstained result: its one
+    choice is that goal; ``otherwise`` is following the rest of the reading (None where nothing else can be
+    done in ``state``)."""
+    goal, p = reading
+    return FollowResult(command, held, goal, [state], [], False, "abstained", abstained=True,
+                        question=held_question(goal, state, library), choices=[GoalGroup((goal,), p)],
+                        goal_words=goal_phrase(goal, state, library), already_true=True, otherwise=otherwise)
+
+
+def follow_or_ask(command: str, state, held: Posterior | None, min_confidence: float | None, library,
+                  follow) -> FollowResult:
+    """``follow()`` (following the rest of the reading), or the question whether what already holds is meant
+    where ``held``'s words most probably ask for it at least as surely as ``min_confidence`` (None or 0: never
+    asked, as acting however unsure asks nothing). Asked also where nothing else can be done (``follow``
+    raises NoTaskError): then ``otherwise`` is None."""
+    reading = held_reading(held) if min_confidence and held is not None else None
+    if reading is not None and reading[1] < min_confidence:
+        reading = None
+    try:
+        otherwise = follow()
+    except NoTaskError:
+        if reading is None:
+            raise
+        otherwise = None
+    return otherwise if reading is None else held_result(command, state, held, reading, otherwise, library)
+
+
+def answer_held(result: FollowResult, answer: str, library, lexicon) -> FollowResult:
+    """A held question's answer: taking its choice (its number, its words or a yes) is nothing to do, a plan of
+    no steps whose goal holds; declining it is the rest of the reading (``result.otherwise``). AnswerError
+    where it names nothing; Declined where it declines and nothing else can be done."""
+    state = result.states[0]
+    try:
+        chosen = choose(answer, result.choices, state, library, lexicon=lexicon)
+    except Declined:
+        if result.otherwise is None:
+            raise Declined("nothing else can be done here: the words ask for what already holds") from None
+        return result.otherwise
+    return FollowResult(result.command, result.posterior, chosen.goal, [state], [], True, "goal",
+                        goal_words=goal_phrase(chosen.goal, state, library))
