@@ -59,7 +59,7 @@ CATEGORY_RULES: dict[str, frozenset[str]] = {
     "NEG": frozenset({"NEG"}), "ADV": frozenset({"ADV"}), "NOUN": frozenset({"NOUN", "MEASURE"}),
     "NMOD": frozenset({"ADJ", "COLOR", "NOUN", "NUM"}), "HMOD": frozenset({"ADJ", "COLOR", "NUM"}),
     "MEASURE": frozenset({"MEASURE"}), "VERB": frozenset({"VERB", "GER"}), "GER": frozenset({"GER"}),
-    "COMMA": frozenset({"COMMA"}),
+    "COMMA": frozenset({"COMMA"}), "SERIAL": frozenset({"SERIAL"}),
 }
 
 _TOKEN = re.compile(r"\w+(?:'\w+)*|\.{2,}|[^\w\s]")

@@ -35,6 +35,7 @@ DEFAULT_WEIGHTS: dict[str, float] = {
     "frag": 0.2, "frag_np": 0.2, "vp_ellipsis": 0.2, "subj_clause": 0.5, "np_headless": 0.5, "np_coord": 0.5,
     "nmods_coord": 0.5, "c_measure": 0.3, "c_adv": 1.0, "c_inf": 1.0, "c_sub": 1.0, "c_ger": 1.0, "sub_clause": 1.0,
     "np_rel": 1.0, "np_head": 1.0, "np_pron": 1.0, "pp": 1.0, "pp_coord": 1.0, "vp": 1.0, "gvp": 1.0,
+    "vhead_serial": 1.0,
 }
 
 
@@ -174,6 +175,7 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "sep": lambda vs: _SEP,
     "vpre": lambda vs: ("pre", vs[0]),
     "vhead": lambda vs: ("verb", str(vs[0])),
+    "vhead_serial": lambda vs: ("verb", str(vs[1])),
     "obj": lambda vs: ("obj", vs[0]),
     "determiner": lambda vs: ("det", str(vs[0])),
     "nmods": lambda vs: ("mods", tuple(str(v) for v in vs)),

@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import clingo
+from clingo import ast
 
 from .program import AspError, Program
 from .terms import pf_name, symbol_text, tuple_args
@@ -66,6 +67,44 @@ def check_tasks_declared_once(program: Program) -> None:
             if (first := declared.setdefault(name, source.name)) != source.name:
                 raise AspError(f"task {name} is declared in both {first} and {source.name}: its atoms would join "
                                "into one task; rename the task of one of them")
+
+
+def _name_of(term) -> tuple[str, int] | None:
+    """``(name, arity)`` of a PF written as a term (``toyInRoom``, ``roomIs(C)``); None for a variable or a
+    number, which may stand for any."""
+    if term.ast_type == ast.ASTType.SymbolicTerm and term.symbol.type == clingo.SymbolType.Function:
+        return term.symbol.name, len(term.symbol.arguments)
+    if term.ast_type == ast.ASTType.Function and term.name:
+        return term.name, len(term.arguments)
+    return None
+
+
+def check_pfs_said_to_hold(program: Program) -> None:
+    """AspError naming the file where a PF is declared (pf/3) but no rule head says where it holds (holds/2 of
+    its name): it would hold nowhere, and a task made of it could never be done (a rule written holds/3 had
+    trained without a word). A holds/2 head whose PF is a variable may say it of any, and passes all."""
+    declared: dict[tuple[str, int], tuple[str, str]] = {}
+    said, other, open_head = set(), {}, False
+    for where, term in program.head_atoms():
+        if term.ast_type != ast.ASTType.Function or not term.arguments:
+            continue
+        if term.name == "pf" and len(term.arguments) == 3 and (key := _name_of(term.arguments[1])):
+            declared.setdefault(key, (where, str(term.arguments[1])))
+        elif term.name == "holds":
+            key = _name_of(term.arguments[0])
+            if len(term.arguments) != 2:
+                other.setdefault(key, len(term.arguments))
+            elif key is None:
+                open_head = True
+            else:
+                said.add(key)
+    if open_head:
+        return
+    for key, (where, written) in declared.items():
+        if key not in said:
+            hint = (f"; a rule says holds/{other[key]} of it, but holds takes the PF and the tuple of its objects, "
+                    f"holds({written}, (A, B))" if key in other else f"; add holds({written}, (A,)) :- ... for it")
+            raise AspError(f"{where}: PF {written} is declared (pf/3) but no rule says where it holds{hint}")
 
 
 @dataclass(frozen=True)

@@ -182,6 +182,14 @@ class Program:
                 out.setdefault(str(term.arguments[position]), None)
         return list(out)
 
+    def head_atoms(self) -> Iterable[tuple[str, object]]:
+        """``(source name, atom)`` of every atom a rule head of the program may make true (AST terms), in
+        source order."""
+        for source, statements in self.statements_by_source():
+            for stm in statements:
+                if stm.ast_type == ast.ASTType.Rule:
+                    yield from ((source.name, term) for term in _head_atoms(stm.head))
+
     def definitions(self) -> dict[tuple[str, int], str]:
         """``(name, arity)`` of every predicate a rule head of the program may make true (a plain head, a
         choice, a disjunction, a head aggregate's elements) or ``#external`` declares, with the name of the

@@ -40,8 +40,13 @@ def fact(cls: str, name: str, facts) -> str:
 def palette_facts(layout: Layout) -> str:
     """``palette_A/1`` for each attribute ``A`` of the layout's palette: ``palette_colour/1``,
     ``palette_shape/1`` and one per added attribute (pfs.lp declares its families over them)."""
+    return palette_value_facts(layout.palette)
+
+
+def palette_value_facts(palette) -> str:
+    """:func:`palette_facts` of a palette, without a layout."""
     return "\n".join(f"palette_{attribute}({_constant(v, attribute)})."
-                     for attribute, values in layout.palette.all_values for v in values)
+                     for attribute, values in palette.all_values for v in values)
 
 
 def layout_facts(layout: Layout, movable: bool = True) -> str:

@@ -29,7 +29,7 @@ from groundlang.logic.atoms import Atom, canonical_predicate, parse_atom
 from groundlang.logic.program import DEFAULT_TIME_LIMIT, AspError, Program, package_source
 from groundlang.logic.tasks import pf_name
 
-from .geometry import fact, layout_facts, palette_facts
+from .geometry import fact, layout_facts, palette_facts, palette_value_facts
 from .palette import check_attribute_clash
 from .world import Layout
 
@@ -316,8 +316,12 @@ def _check_classes(name: str, objects_of: tuple[str, ...], signatures: dict[str,
     objects its pf/3 does not declare it over: its table would be read with objects of another class (a
     goal over rooms checked against doors) or not at all."""
     classes = signatures.get(name)
-    if classes is None or len(classes) != len(objects_of):
-        return  # no declaration, or another arity: groundings.lp names those (holds_of_other_arity)
+    if classes is None:
+        return  # no declaration: groundings.lp names those
+    if len(classes) != len(objects_of):  # groundings.lp names it only where it holds at the start
+        raise TabulationError(f"{where}: holds({name}, {_asp_tuple(objects_of)}) says it of {len(objects_of)} "
+                              f"object{'s' * (len(objects_of) != 1)}, but pf/3 declares {name} over "
+                              f"{_asp_tuple(classes)}")
     for obj, cls in zip(objects_of, classes):
         if objects.get(obj) != cls:
             what = _a(objects[obj]) if obj in objects else "no object of the layout"
@@ -327,6 +331,13 @@ def _check_classes(name: str, objects_of: tuple[str, ...], signatures: dict[str,
 
 def _asp_tuple(items: tuple[str, ...]) -> str:
     return "(" + ", ".join(items) + ("," if len(items) == 1 else "") + ")"
+
+
+def check_declarations(library, palette) -> None:
+    """TabulationError, naming the library's files, for what its PF declarations with ``palette``'s values
+    say before any layout: a PF of a goal class that no moving object changes (what tabulating any layout
+    would refuse)."""
+    _declarations(library.tabulation_program, palette_value_facts(palette), library.time_limit)
 
 
 def library_pf_tables(layout: Layout, library=None) -> PFTables:

@@ -472,3 +472,20 @@ def test_readings_kept_are_bounded():
         with pytest.raises(ValueError, match=f"parse: max_readings must be 1 to {READING_LIMIT}"):
             parse("go to the red room", max_readings=many)
     assert main(["parse", "--max-readings", "100000", "go to the red room"]) == 2
+
+
+@pytest.mark.parametrize("serial, plain", [("go stand next to the red chair", "stand next to the red chair"),
+                                           ("go stand in the green room", "stand in the green room"),
+                                           ("come get the star", "get the star")])
+def test_a_motion_verb_before_a_bare_verb_heads_nothing(serial, plain):
+    """Serial verbs ("go stand next to the chair"): the word file's VERB_SERIAL words, right before a bare verb,
+    leave the clause to it; the sentence had fallen back to chunks (no grammar rule took two verbs in a row)."""
+    got, want = parse(serial), parse(plain)
+    assert not got[0].logical_form.fallback
+    assert strings(got) == strings(want)
+    # a verb that is not a motion verb is no serial verb: "push block" keeps "block" the object
+    assert "push(block1" in strings(parse("push block into the red room"))[0]
+    # the words are the data: without VERB_SERIAL, the sentence falls back again
+    plain_english = {c: [w for w in ws if c != "VERB_SERIAL"] for c, ws in CLEANUP.entries.items()}
+    from groundlang.grammar.lexicon import Lexicon
+    assert parser.parse(serial, word_lexicon=Lexicon(plain_english))[0].logical_form.fallback

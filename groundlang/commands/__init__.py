@@ -178,7 +178,18 @@ def library_given(args: argparse.Namespace):
         return None
     from groundlang.logic.tasks import TaskLibrary
 
-    return TaskLibrary.load(args.library or None, **time_limit_given(args))
+    return words_beside_checked(TaskLibrary.load(args.library or None, **time_limit_given(args)))
+
+
+def words_beside_checked(library):
+    """``library``, once the word files beside its files (``mine.words`` beside ``mine.lp``) are read: a malformed
+    one is refused by file and line by every command that reads the library, not only those that parse (check
+    and domain had passed a file train then refused)."""
+    from groundlang.model.domain_words import extra_words
+    from groundlang.training_vocabulary import word_files_beside
+
+    extra_words(word_files_beside(library))
+    return library
 
 
 def add_time_limit_option(parser) -> None:

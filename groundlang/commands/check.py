@@ -57,6 +57,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"distinct layouts: {len(corpus.distinct_layouts())}")
     print(f"distinct demonstrations: {len(corpus.distinct_demonstrations())}")
     print(f"inconsistent demonstrations: {len(corpus.skipped)}")
+    if library is not None:
+        _tabulate_layouts(corpus, library)
     for _, reason in corpus.skipped:
         print(f"  {reason}")
     if corpus.skipped:
@@ -81,3 +83,18 @@ def run(args: argparse.Namespace) -> int:
         if cov.failing:
             ok = False
     return 0 if ok else 1
+
+
+def _tabulate_layouts(corpus, library) -> None:
+    """A library given is tabulated in each layout of the corpus: what its PF rules get wrong only in a layout
+    (a holds/2 of another arity, of objects of another class) is refused here, by the library's file and the
+    corpus file, as train would refuse it."""
+    from groundlang.model.pf_tables import TabulationError, library_pf_tables, tabulation_refusal
+
+    for inst in {i.initial_state.layout: i for i in corpus.instances}.values():
+        if tabulation_refusal(inst.initial_state.layout) is None:
+            try:
+                library_pf_tables(inst.initial_state.layout, library)
+            except TabulationError as exc:
+                raise TabulationError(f"{exc} (in tabulating the layout of {inst.path})") from None
+

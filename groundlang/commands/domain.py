@@ -22,12 +22,16 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.logic.tasks import TaskLibrary
+    from groundlang.commands import words_beside_checked
     from groundlang.model.palette import check_attribute_clash, get_palette
+    from groundlang.model.pf_tables import check_declarations
     from groundlang.training_vocabulary import palette_schema
 
-    library = TaskLibrary.load(args.library, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
+    library = words_beside_checked(TaskLibrary.load(args.library, allow_scripts=args.allow_scripts,
+                                                    time_limit=args.time_limit))
     palette = get_palette(args.palette)  # checked as every other command checks it
     check_attribute_clash(palette, library.grounding_program)
+    check_declarations(library, palette)  # what no layout could tabulate, refused here as train refuses it
     schema = palette_schema(library, palette)
     if args.json:
         print(json_text({

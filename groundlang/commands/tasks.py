@@ -10,7 +10,7 @@ from importlib.resources import files as resources
 
 from groundlang.bdm import DEFAULT_PALETTE
 from groundlang.commands import (input_path, LIBRARY_NAMES, PALETTE_HELP, check_state_file, is_burlap_state_file, json_text,
-                                 library_path, positive_seconds, renumbering_note)
+                                 library_path, positive_seconds, renumbering_note, words_beside_checked)
 from groundlang.corpus import file_names, read_initial_state
 
 
@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.program import AspTimeout
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
-    from groundlang.model.pf_tables import TabulationError, library_pf_tables
+    from groundlang.model.pf_tables import TabulationError, library_pf_tables, tabulation_refusal
     from groundlang.logic.classes import domain_classes
     from groundlang.model.tasks import candidate_tasks, check_position_pfs, object_descriptions, object_relations
     from groundlang.model.world import object_class
@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     state = read_initial_state(args.file, args.palette or DEFAULT_PALETTE)
     renumbered = file_names(args.file)  # the layout's name -> the file's, where they differ
     files = args.library or ([str(resources("groundlang.logic") / "domains" / "williams2018.lp")] if burlap else None)
-    library = TaskLibrary.load(files, allow_scripts=args.allow_scripts, time_limit=args.time_limit)
+    library = words_beside_checked(TaskLibrary.load(files, allow_scripts=args.allow_scripts, time_limit=args.time_limit))
     try:
         candidates = candidate_tasks(state, library)
     except AspTimeout as exc:  # a layout too large to ground in time: the file it came from is the one to look at
@@ -70,13 +70,15 @@ def run(args: argparse.Namespace) -> int:
                    and (atoms := [f"{pf}({', '.join((obj, other) if index == 0 else (other, obj))})"
                                   for pf, index, other in related[obj] if object_class(other) in describing])}
     # Relations (toyInRoom, a user's agentNextToToy, ...) as the PF tables planning uses say they hold.
-    try:
-        tables, untabulated = library_pf_tables(state.layout, library), None
-    except TabulationError as exc:  # a layout too large to tabulate still lists its tasks
-        tables, untabulated = None, str(exc)
-    holding = []
-    if tables is not None:
-        try:  # a library's mistake: refused, not listed both ways
+    # A layout too large to tabulate still lists its tasks; a library's mistake found in tabulating it is
+    # refused (it had been listed as "not listed", exit 0, as if the layout were too large).
+    untabulated, holding = tabulation_refusal(state.layout), []
+    if untabulated is None:
+        try:
+            tables = library_pf_tables(state.layout, library)
+        except TabulationError as exc:  # the library's files are named by the message
+            raise TabulationError(f"{exc} (in tabulating the layout of {args.file})") from None
+        try:
             check_position_pfs(state, library, tables)
         except TabulationError as exc:
             raise TabulationError(f"{library.program.user_names}, in {args.file}: {exc}") from None
