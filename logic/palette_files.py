@@ -38,6 +38,24 @@ def _is_path(name: str) -> bool:
     return name.endswith(".lp") or "/" in name or "\\" in name
 
 
+# The facts a palette is made of, as they are written; anything else in the file is a mistake (a value/3 fact
+# of two fields had been dropped without a word, and the value it meant refused later by a state that used it).
+_FACTS = {("value", 3): "value(Attribute, Index, Name)", ("glyph", 2): 'glyph(Shape, "text")',
+          ("rgb", 2): 'rgb(Colour, "colour")', ("attribute", 2): "attribute(Class, Attribute)",
+          ("value_class", 2): "value_class(Value, Class)"}
+
+
+def _check_facts(program: Program, where: str) -> None:
+    """PaletteError naming the file and line of a fact or rule head that is none of a palette's facts."""
+    for _, term in program.head_atoms():
+        symbol = getattr(term, "symbol", None)  # a constant atom ("red.") is a symbolic term
+        name, arity = ((term.name, len(term.arguments)) if symbol is None else
+                       (getattr(symbol, "name", str(symbol)), len(getattr(symbol, "arguments", ()))))
+        if (name, arity) not in _FACTS:
+            raise PaletteError(f"{where}, line {term.location.begin.line}: {term} is none of a palette's facts: "
+                               f"{', '.join(_FACTS.values())}")
+
+
 def read_palette(name: str) -> tuple:
     """:func:`_read_palette` of ``name``, read again when a palette file changed since it was last read (a
     notebook that edits its palette file reads the new one; the package's own are read once)."""
@@ -82,7 +100,8 @@ def _read_palette(name: str, stamp: tuple | None = None) -> tuple[str, dict[str,
     drawing: dict[str, dict[str, str]] = {"glyph": {}, "rgb": {}}
     added: set[tuple[str, str]] = set()
     classes: dict[str, set[str]] = {}
-    shown = "#show value/3. #show glyph/2. #show rgb/2. #show attribute/2. #show value_class/2."
+    _check_facts(program, source.name)
+    shown = " ".join(f"#show {name}/{arity}." for name, arity in _FACTS)
     for model in program.solve(shown, models=1):
         for sym in model:
             if sym.name == "value_class":
@@ -148,4 +167,7 @@ def _read_palette(name: str, stamp: tuple | None = None) -> tuple[str, dict[str,
     for value in sorted(classes):
         if value not in known:
             raise PaletteError(f"{source.name}: value_class({value}, ...) names a value no value/3 fact gives")
+    for kind, by_value in drawing.items():  # a misspelt value was drawn with the default, without a word
+        for value in sorted(set(by_value) - known):
+            raise PaletteError(f"{source.name}: {kind}({value}, ...) names a value no value/3 fact gives")
     return label, values, drawing, tuple(sorted(added)), tuple((v, tuple(sorted(c))) for v, c in sorted(classes.items()))

@@ -184,3 +184,63 @@ def _write(tmp_path, text: str) -> str:
     path = tmp_path / "plain.lp"
     path.write_text(text, encoding="utf-8")
     return str(path)
+
+
+def test_a_pf_said_of_fewer_objects_than_declared_is_refused_in_every_layout(tmp_path):
+    """holds(toyNextToDoor, (T,)) for a PF over (toy, door): groundings.lp names it only where it holds at the
+    start; train had stopped with "toyNextToDoor(block0) has 1 arguments", naming no file."""
+    library = _library(tmp_path, "pf(position, toyNextToDoor, (toy, door)).\n"
+                                 "holds(toyNextToDoor, (T,)) :- toy(T), at(T, X, Y), door_cell(_, X + 1, Y).\n")
+    state = read_state_file(STATE, "sokoban")
+    with pytest.raises(TabulationError, match=r"mine.lp: holds\(toyNextToDoor, \(block0,\)\) says it of 1 object, "
+                                              r"but pf/3 declares toyNextToDoor over \(toy, door\)"):
+        pf_tables(state.layout, library.tabulation_program)
+
+
+@pytest.mark.parametrize("rule, hint", [
+    ("holds(toyNearDoor, T, D) :- toy(T), door(D).", r"a rule says holds/3 of it, but holds takes the PF and the "
+                                                      r"tuple of its objects, holds\(toyNearDoor, \(A, B\)\)"),
+    ("holds(toyNearDor, (T, D)) :- toy(T), door(D).", r"add holds\(toyNearDoor, \(A,\)\) :- \.\.\. for it"),
+])
+def test_a_pf_no_rule_says_where_it_holds_is_refused_at_load(tmp_path, rule, hint):
+    """A PF written holds/3 (or misspelt) never held anywhere, and a model trained on it without a word."""
+    text = "pf(position, toyNearDoor, (toy, door)).\n" + rule + "\n"
+    with pytest.raises(AspError, match=r"mine.lp: PF toyNearDoor is declared \(pf/3\) but no rule says where it "
+                                       r"holds; " + hint):
+        _library(tmp_path, text)
+    # a PF family (roomIs(C)) and a holds/2 head whose PF is a variable are said to hold
+    _library(tmp_path, "pf(colour, toyTinted(C), (toy,)) :- palette_colour(C).\n"
+                       "holds(toyTinted(C), (T,)) :- toy(T), colour(T, C).\n")
+    _library(tmp_path, "pf(position, toyNearDoor, (toy, door)).\nholds(P, (T, D)) :- P = toyNearDoor, toy(T), door(D).\n")
+
+
+def test_the_commands_that_read_a_library_refuse_its_mistakes_as_train_does(tmp_path, capsys):
+    """check, domain and tasks had passed (exit 0) what train refused: a goal-class PF nothing moves (tasks
+    printed it as "not listed", as if the layout were too large), a PF said of too few objects, and a
+    malformed word file beside the library."""
+    from groundlang.cli import main
+
+    corpus = example_corpus_path()
+    still = tmp_path / "still.lp"
+    still.write_text("pf(position, roomIsBig, (room,)).\nholds(roomIsBig, (R,)) :- room(R).\n")
+    fewer = tmp_path / "fewer.lp"
+    fewer.write_text("pf(position, toyNextToDoor, (toy, door)).\n"
+                     "holds(toyNextToDoor, (T,)) :- toy(T), at(T, X, Y), door_cell(_, X + 1, Y).\n")
+    for argv in (["tasks", str(STATE), "--palette", "sokoban"], ["check", str(corpus), "--palette", "sokoban"],
+                 ["domain", "--palette", "sokoban"]):
+        assert main([*argv, "--library", "tasks", "--library", str(still)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith(f"groundlang {argv[0]}: error: {still}: PF roomIsBig is of a goal class") and "\n" not in err
+    for argv in (["tasks", str(STATE), "--palette", "sokoban"], ["check", str(corpus), "--palette", "sokoban"]):
+        assert main([*argv, "--library", "tasks", "--library", str(fewer)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert f"{fewer}: holds(toyNextToDoor, (block0,)) says it of 1 object" in err and "in tabulating the layout of" in err
+    words = tmp_path / "mine"
+    words.mkdir()
+    (words / "mine.lp").write_text("pf(colour, toyBright, (toy,)). holds(toyBright, (T,)) :- toy(T), colour(T, red).\n")
+    (words / "mine.words").write_text("NOUN: mug\nCOLOUR: lilac\n")
+    for argv in (["tasks", str(STATE), "--palette", "sokoban"], ["check", str(corpus), "--palette", "sokoban"],
+                 ["domain"]):
+        assert main([*argv, "--library", "tasks", "--library", str(words / "mine.lp")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "mine.words" in err and ":2: unknown category 'COLOUR'" in err, err

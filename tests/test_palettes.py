@@ -38,7 +38,14 @@ def test_a_copy_of_a_palette_file_reads_the_corpus_the_same(tmp_path):
     ("value(colour, 0, red). value(colour, 0, blue). value(shape, 0, star).", "index 0 is both"),
     ("value(colour, 0, red). value(colour, 1, red). value(shape, 0, star).", "has two indices"),
     ("value(colour, 0, red).", "no shape values"),
-    ("colour(red).", "no value(Attribute, Index, Name) facts"),
+    ("colour(red).", "line 1: colour(red) is none of a palette's facts: value(Attribute, Index, Name)"),
+    ("", "no value(Attribute, Index, Name) facts"),
+    # a fact of a palette's name with a field missing or added, or misspelt, had been dropped without a word
+    ("value(colour, 0, red). value(shape, 0, star).\nvalue(colour, violet).", "line 2: value(colour,violet) is none"),
+    ("value(colour, 0, red). value(shape, 0, star).\nvalue(colour, 1, navy, 3).", "line 2: value(colour,1,navy,3)"),
+    ("value(colour, 0, red). value(shape, 0, star).\nvalu(colour, 1, navy).", "line 2: valu(colour,1,navy) is none"),
+    ("value(colour, 0, red). value(shape, 0, star).\nattribute(toy).", "line 2: attribute(toy) is none"),
+    ('value(colour, 0, red). value(shape, 0, star).\nglyph(stra, "x").', "glyph(stra, ...) names a value no"),
     ("value(colour, 0, \"red\"). value(shape, 0, star).", "lowerCamelCase constant"),
     ("value(colour, 0, red", "syntax error"),
 ])
