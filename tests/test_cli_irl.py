@@ -70,3 +70,20 @@ def test_irl_given_a_state_file_says_it_holds_no_demonstration(capsys):
     assert main(["irl", str(example_corpus_path() / "novel_a.state"), "--palette", "sokoban"]) == 2
     err = capsys.readouterr().err
     assert "novel_a.state: a .state file holds a layout, no demonstration; expected a corpus file" in err
+
+
+def test_irl_fits_weights_over_a_librarys_own_position_pfs_too(tmp_path, capsys):
+    """--library: a user's position PF is a feature (it had fitted the package's PFs only, so a demonstration of
+    a PF of one's own was explained by another)."""
+    from groundlang.corpus import example_corpus_path
+
+    within = tmp_path / "within.lp"  # toyInRoom under another name: its weight is toyInRoom's
+    within.write_text("pf(position, toyWithin, (toy, room)).\nholds(toyWithin, (T, R)) :- holds(toyInRoom, (T, R)).\n")
+    demo = str(example_corpus_path() / "star2red_3.txt")
+    assert main(["irl", demo, "--palette", "sokoban", "--json", "--library", "tasks", "--library", str(within)]) == 0
+    weights = json.loads(capsys.readouterr().out)["weights"]
+    assert list(weights)[:2] in (["toyInRoom(block0, room1)", "toyWithin(block0, room1)"],
+                                 ["toyWithin(block0, room1)", "toyInRoom(block0, room1)"])
+    assert weights["toyWithin(block0, room1)"] == pytest.approx(weights["toyInRoom(block0, room1)"], abs=1e-3)
+    assert main(["irl", demo, "--palette", "sokoban", "--json"]) == 0
+    assert not any(a.startswith("toyWithin") for a in json.loads(capsys.readouterr().out)["weights"])

@@ -1,7 +1,8 @@
-"""``groundlang irl FILE --palette NAME [--json]``: MLIRL on one demonstration over every grounded position PF.
+"""``groundlang irl FILE --palette NAME [--library LP ...] [--json]``: MLIRL on one demonstration over every
+grounded position PF.
 
 The features are all grounded position PFs of the file's initial state
-(agentInRoom, toyInRoom, agentInDoor, toyInDoor, agentTouchingToy); the
+(agentInRoom, toyInRoom, agentInDoor, toyInDoor, agentTouchingToy, and those of ``--library`` files); the
 reward they define is paid on terminating (see
 :mod:`groundlang.inference.mlirl`), so the largest weight names the
 proposition the demonstrator most wanted to hold when it stopped. Prints the
@@ -21,19 +22,23 @@ from __future__ import annotations
 import argparse
 import time
 
-from groundlang.commands import input_path, PALETTE_HELP, json_text
+from groundlang.commands import LIBRARY_NAMES, PALETTE_HELP, input_path, json_text, library_given, library_path
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("irl", help="fit reward weights over position PFs to one file's demonstration (MLIRL)")
     p.add_argument("file", type=input_path, metavar="FILE", help="one corpus file (command, actions, states)")
     p.add_argument("--palette", required=True, help=PALETTE_HELP)
+    p.add_argument("--library", metavar="LP", action="append", type=library_path,
+                   help="task library .lp file (repeatable): its position PFs are features too (default: "
+                        "groundlang's)" + LIBRARY_NAMES)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=run)
 
 
-def fit_file(path, palette) -> dict:
-    """MLIRL on one file; returns the --json object (weights ordered largest first)."""
+def fit_file(path, palette, library=None) -> dict:
+    """MLIRL on one file over the position PFs of ``library`` (a TaskLibrary; None: the package's); returns the
+    --json object (weights ordered largest first)."""
     from groundlang.corpus import read_instance
     # The settings task discovery uses (one demonstration: non-negative weights with a sparsity prior
     # let the whole path pick the proposition; a fixed temperature keeps it from driving T to 0).
@@ -41,24 +46,25 @@ def fit_file(path, palette) -> dict:
     from groundlang.inference.mlirl import mlirl
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.features import feature_matrix, position_atoms
-    from groundlang.model.pf_tables import pf_tables
+    from groundlang.model.pf_tables import library_pf_tables
     from groundlang.model.relevance import state_space_for
     from groundlang.model.statespace import trajectory_indices
     from groundlang.wording import goal_phrase
 
     start = time.perf_counter()
+    library = library or TaskLibrary.load()  # its PFs are the features; the words of objects are read from it
     instance = read_instance(path, palette)
     space = state_space_for(instance.initial_state, demonstrations=[instance.states])
-    atoms = position_atoms(space.layout)
-    features = feature_matrix(space, atoms, pf_tables(space.layout))
+    tables = library_pf_tables(space.layout, library)
+    atoms = position_atoms(space.layout, tables)
+    features = feature_matrix(space, atoms, tables)
     states = trajectory_indices(space, list(instance.states))
     fit = mlirl(space.next_state, features, [(states, [int(a) for a in instance.actions])], **DISCOVERY_IRL)
     ranked = sorted(zip(atoms, fit.weights.tolist()), key=lambda aw: -aw[1])
-    library = TaskLibrary.load()  # the package's PFs: what the words of the objects are read from
     return {
         "weights": {str(a): round(w, 6) for a, w in ranked},
         "words": {str(a): goal_phrase((a,), instance.initial_state, library) for a, _ in ranked},
-        "ranking": [str(a) for a in _break_near_ties(space, ranked, states, instance.actions)],
+        "ranking": [str(a) for a in _break_near_ties(space, ranked, states, instance.actions, tables)],
         "log_likelihood": fit.log_likelihood,
         "temperature": fit.temperature,
         "states": space.num_states,
@@ -73,7 +79,7 @@ WEIGHT_HEADING, WORDS_HEADING, ATOM_HEADING = "weight", "proposition", "atom"
 NEAR_TIE = 0.05
 
 
-def _break_near_ties(space, ranked, states, actions) -> list:
+def _break_near_ties(space, ranked, states, actions, tables) -> list:
     """Atoms by weight, with near-ties at the top ordered by the behaviour likelihood of each as a goal.
 
     Propositions that first become true together at the end of one
@@ -84,13 +90,11 @@ def _break_near_ties(space, ranked, states, actions) -> list:
     """
     from groundlang.inference.planning import task_log_likelihood
     from groundlang.model.features import goal_mask
-    from groundlang.model.pf_tables import pf_tables
 
     top = ranked[0][1]
     tied = [a for a, w in ranked if top > 0 and w >= (1 - NEAR_TIE) * top]
     if len(tied) < 2:
         return [a for a, _ in ranked]
-    tables = pf_tables(space.layout)
     moves = [int(a) for a in actions]
     score = {a: task_log_likelihood(space, goal_mask(space, (a,), tables), states, moves) for a in tied}
     return sorted(tied, key=lambda a: -score[a]) + [a for a, _ in ranked if a not in score]
@@ -99,7 +103,7 @@ def _break_near_ties(space, ranked, states, actions) -> list:
 def run(args: argparse.Namespace) -> int:
     from groundlang.wording import DASH
 
-    result = fit_file(args.file, args.palette)
+    result = fit_file(args.file, args.palette, library_given(args))
     if args.json:
         print(json_text(result))
         return 0
