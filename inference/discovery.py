@@ -60,7 +60,7 @@ from groundlang.logic.atoms import Atom
 # lifted_key is part of discovery's public surface (tests and notebooks import it from here).
 from groundlang.inference.lifting import lift_goal, lifted_key, singling_out, structure_key, task_name  # noqa: F401
 from groundlang.logic.program import Source
-from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary
+from groundlang.logic.tasks import GroundedTask, LiftedTask, TaskLibrary, format_lifted_task
 
 __all__ = ["DISCOVERY_IRL", "DiscoverySettings", "DemonstrationReport", "Discovery", "discover_tasks",
            "lift_goal", "lifted_key", "structure_key", "task_name", "singling_out", "write_library"]
@@ -202,18 +202,20 @@ def _group(instances: Sequence) -> list[_Demo]:
     return list(groups.values())
 
 
-def _fit_top_features(demo: _Demo, settings: DiscoverySettings) -> None:
-    """MLIRL over every position PF; keep the top features true at the end as candidate goal atoms."""
+def _fit_top_features(demo: _Demo, settings: DiscoverySettings, pfs: TaskLibrary | None = None) -> None:
+    """MLIRL over every position PF (``pfs``'s too); keep the top features true at the end as candidate goal
+    atoms."""
     from groundlang.model.features import feature_matrix, position_atoms
-    from groundlang.model.pf_tables import pf_tables
+    from groundlang.model.pf_tables import library_pf_tables
     from groundlang.model.relevance import state_space_for
     from groundlang.model.statespace import trajectory_indices
 
     inst = demo.instance
     # the exact space, or where it does not fit the toys the demonstration moves (the others as walls)
     space = state_space_for(inst.initial_state, demonstrations=[inst.states])
-    atoms = position_atoms(space.layout)
-    features = feature_matrix(space, atoms, pf_tables(space.layout)).numpy()
+    tables = library_pf_tables(space.layout, pfs)
+    atoms = position_atoms(space.layout, tables)
+    features = feature_matrix(space, atoms, tables).numpy()
     states = trajectory_indices(space, list(inst.states))
     actions = [int(a) for a in inst.actions]
     fit = mlirl(space.next_state, features, [(states, actions)], **settings.irl)
@@ -264,7 +266,7 @@ def _score_table(demos: list[_Demo], library: TaskLibrary, settings: DiscoverySe
     index = {t.name: j for j, t in enumerate(library.tasks)}
     groundings = [candidate_tasks(d.instance.initial_state, library) for d in demos]
     rows = behaviour_likelihood_table([d.instance for d in demos], [[g.goal for g, _ in row] for row in groundings],
-                                      settings.task, cache_dir=cache_dir, progress=progress)
+                                      settings.task, cache_dir=cache_dir, progress=progress, library=library)
     scores = np.full((len(demos), len(library.tasks)), -math.inf)
     best: list[dict[int, tuple[float, GroundedTask]]] = []
     for i, (row, lls) in enumerate(zip(groundings, rows)):
@@ -287,8 +289,8 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
     (e.g. ``groundlang.corpus.Instance``); identical (initial state, actions) pairs count once.
     ``cache_dir``: behaviour-likelihood cache root (False: none), see inference.likelihoods.
     ``pfs``: a library whose colour and shape PFs (pfs.lp's and its own families, as clingo describes
-    each initial state) tell objects apart in the reports and the restrictions; default pfs.lp's.
-    Its tasks play no part (goals are always lifted from the position PFs).
+    each initial state) tell objects apart in the reports and the restrictions, and whose own position PFs
+    are candidate goals beside pfs.lp's; default pfs.lp's. It declares no tasks.
     Returns a :class:`Discovery`; its library is loaded back from the commented ASP text.
     Raises ValueError when there are no instances, no candidate goal, or no library of at most
     ``max_tasks`` tasks covers every demonstration that has one.
@@ -303,12 +305,13 @@ def discover_tasks(instances: Sequence, settings: DiscoverySettings = DiscoveryS
     # Before any MLIRL work: a PF file that fails on an environment is reported at once.
     attributes = [_attributes(demo, pfs) for demo in demos]
     for demo in demos:
-        _fit_top_features(demo, settings)
+        _fit_top_features(demo, settings, pfs)
     lifted = _candidate_tasks(demos)
     if not lifted:
         raise ValueError("no demonstration yields a candidate goal: nothing can be discovered")
-    candidates = TaskLibrary.from_tasks(lifted, "<discovery candidates>")
-    candidates.time_limit = pfs.time_limit if pfs is not None else candidates.time_limit  # the user's, if given
+    # beside the PF files, whose position PFs may be candidates' goals
+    candidates = TaskLibrary([Source("<discovery candidates>", "".join(format_lifted_task(t) for t in lifted)),
+                              *(pfs.sources if pfs else ())], **({"time_limit": pfs.time_limit} if pfs else {}))
     scores, best = _score_table(demos, candidates, settings, cache_dir, progress)
     sizes = np.array([len(t.goal) for t in candidates.tasks])
     usable = np.isfinite(scores).any(axis=1)

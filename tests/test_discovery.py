@@ -26,6 +26,7 @@ from groundlang.inference.discovery import (
 from groundlang.inference.library_search import select_library
 from groundlang.logic.atoms import Atom, parse_atom, parse_goal
 from groundlang.logic.tasks import AspError, TaskLibrary, Variable
+from groundlang.model.pf_tables import TabulationError
 from groundlang.model.tasks import candidate_tasks
 
 CLASSES = {"agent0": "agent", "block0": "toy", "block1": "toy", "room0": "room", "room1": "room",
@@ -338,11 +339,13 @@ def test_a_restriction_may_need_a_conjunction_shared_by_every_demonstration(tmp_
 
 def test_pfs_for_discovery_are_checked(tmp_path):
     demos = [_push_first_toy("red_star", "block,10,0,4,2 block,1,0,7,6")]
-    # A family declared for toys but written true of rooms too describes only toys.
+    # A family declared for toys but written true of rooms too is refused, as training refuses it (its position
+    # PFs are candidate goals, so the file is tabulated: it had been read as describing toys only)
     loose = tmp_path / "loose.lp"
     loose.write_text("pf(colour, anyTone(warm), (toy,)).\nholds(anyTone(warm), (O,)) :- colour(O, red).\n")
-    found = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([loose]))
-    assert ("R", "anyTone(warm)") not in found.tasks[0].restrictions
+    with pytest.raises(TabulationError, match=r"loose.lp: holds\(anyToneWarm, \(room\d,\)\): room\d is a room, but "
+                                              r"pf/3 declares anyToneWarm over \(toy,\)"):
+        discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([loose]))
     # Two PFs groundlang would name alike.
     clash = tmp_path / "clash.lp"
     clash.write_text("pf(colour, toyIsRed, (toy,)).\nholds(toyIsRed, (T,)) :- toy(T).\n")
@@ -359,15 +362,47 @@ def test_pfs_for_discovery_are_checked(tmp_path):
 
 
 def test_a_users_family_singles_out_what_pfs_lp_cannot(tmp_path):
-    """Two red stars: no colour or shape PF tells them apart, a user's family of sides does."""
+    """Two red stars: no colour or shape PF tells them apart, a user's family does (a property of each toy
+    that stays as it moves: one that read where the toy lies is refused, as training refuses it)."""
+    tag = tmp_path / "tag.lp"
+    tag.write_text("tag(first). tag(second).\npf(shape, toyTag(S), (toy,)) :- tag(S).\n"
+                   "holds(toyTag(first), (T,)) :- toy(T), T = block0.\n"
+                   "holds(toyTag(second), (T,)) :- toy(T), T != block0.\n")
+    demos = [_push_first_toy("west_star", "block,10,0,4,2 block,10,0,7,6")]
+    plain = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False)
+    assert dict(plain.demonstrations[0].singled_out)["T"] is None and _toy_restrictions(plain) == []
+    found = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([tag]))
+    assert dict(found.demonstrations[0].singled_out)["T"] == (parse_atom("toyTagFirst(block0)"),)
+    assert _toy_restrictions(found) == ["toyTag(first)"]
+    assert [t.name for t in found.library.tasks] == ["toyToRoom"]  # loaded back with tag.lp: checked
     side = tmp_path / "side.lp"
     side.write_text("side(west). side(east).\npf(shape, toySide(S), (toy,)) :- side(S).\n"
                     "holds(toySide(west), (T,)) :- toy(T), at(T, X, _), X < 5.\n"
                     "holds(toySide(east), (T,)) :- toy(T), at(T, X, _), X >= 5.\n")
-    demos = [_push_first_toy("west_star", "block,10,0,4,2 block,10,0,7,6")]
-    plain = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False)
-    assert dict(plain.demonstrations[0].singled_out)["T"] is None and _toy_restrictions(plain) == []
-    found = discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([side]))
-    assert dict(found.demonstrations[0].singled_out)["T"] == (parse_atom("toySideWest(block0)"),)
-    assert _toy_restrictions(found) == ["toySide(west)"]
-    assert [t.name for t in found.library.tasks] == ["toyToRoom"]  # loaded back with side.lp: checked
+    with pytest.raises(TabulationError, match="side.lp: PF toySideWest is of a property class"):
+        discover_tasks(demos, DiscoverySettings(restrict=True), cache_dir=False, pfs=TaskLibrary.load([side]))
+
+
+def test_a_position_pf_of_the_users_own_may_be_the_goal_discovered(tmp_path, capsys):
+    """--pfs: a file's position PFs are candidate goals (discovery had fitted pfs.lp's only, and explained
+    demonstrations of pushing the star next to a door by agentTouchingToy and toyInRoom)."""
+    from groundlang.examples.build import _state, write_tasks
+
+    near = tmp_path / "near.lp"
+    near.write_text("pf(position, toyNextToDoor, (toy, door)).\n"
+                    "holds(toyNextToDoor, (T, D)) :- toy(T), door(D), at(T, X, Y), beside(X, Y, U, V), "
+                    "door_cell(D, U, V).\n")
+    library = TaskLibrary.load(["tasks", str(near)])
+    corpus = tmp_path / "corpus"
+    corpus.mkdir()
+    write_tasks(corpus, [("door1_", "toyNextToDoor(block0, door1)", _state((3, 3), (1, 1)), ["push it by the door"]),
+                         ("door2_", "toyNextToDoor(block0, door2)", _state((8, 6), (10, 8)), ["push it by the door"])],
+                library)
+    out = tmp_path / "found.lp"
+    argv = ["discover", str(corpus), "--palette", "sokoban", "-o", str(out), "--no-cache", "--json"]
+    assert main([*argv, "--pfs", str(near)]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert [t for t in found["lifted_tasks"] if "toyNextToDoor(" in t["task"]], found["lifted_tasks"]
+    assert "toyNextToDoor" in TaskLibrary.load([str(out), str(near)]).goal_relations
+    assert main(argv) == 0  # without the file, another explanation: the PF is no candidate
+    assert not [t for t in json.loads(capsys.readouterr().out)["lifted_tasks"] if "toyNextToDoor" in t["task"]]

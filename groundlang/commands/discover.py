@@ -37,9 +37,9 @@ def register(subparsers) -> None:
                    help="restrict each task variable by the colour/shape PFs that single out its object "
                         "in every demonstration the task explains (restrict/3 facts)")
     p.add_argument("--pfs", type=input_path, metavar="LP", action="append",
-                   help="an .lp file of your own PFs (pf/3, holds/2): its colour and shape families tell "
-                        "objects apart in the report and for --restrict, besides pfs.lp's (repeatable; "
-                        "load it beside the written library)")
+                   help="an .lp file of your own PFs (pf/3, holds/2): its position PFs are candidate goals "
+                        "and its colour and shape families tell objects apart in the report and for --restrict, "
+                        "besides pfs.lp's (repeatable; load it beside the written library)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     add_time_limit_option(p)
     p.set_defaults(func=run)

@@ -80,8 +80,9 @@ NOVEL = {
 }
 
 
-def shortest_demonstration(start: State, goal) -> tuple[Action, ...]:
-    """Breadth-first search over ``step`` for the first shortest action sequence reaching ``goal``.
+def shortest_demonstration(start: State, goal, library=None) -> tuple[Action, ...]:
+    """Breadth-first search over ``step`` for the first shortest action sequence reaching ``goal`` (its PFs
+    read by ``library``'s rules; None: the package's).
 
     Raises ValueError when no reachable state satisfies the goal.
     """
@@ -90,7 +91,7 @@ def shortest_demonstration(start: State, goal) -> tuple[Action, ...]:
     frontier = deque([start])
     while frontier:
         state = frontier.popleft()
-        if goal_holds(goal, state):
+        if goal_holds(goal, state, library):
             actions = []
             k = key(state)
             while parent[k] is not None:
@@ -106,13 +107,14 @@ def shortest_demonstration(start: State, goal) -> tuple[Action, ...]:
     raise ValueError(f"no reachable state satisfies {format_goal(goal)}")
 
 
-def write_tasks(out: Path, tasks) -> list[Path]:
+def write_tasks(out: Path, tasks, library=None) -> list[Path]:
     """For each ``(prefix, goal text, initial state, commands)``: a shortest demonstration of
-    the goal and one corpus file per command; then ``labels.csv``. Returns the paths written."""
+    the goal (under ``library``'s PFs) and one corpus file per command; then ``labels.csv``. Returns the
+    paths written."""
     written = []
     labels = ["prefix,goal"]
     for prefix, goal_text, start, commands in tasks:
-        actions = shortest_demonstration(start, parse_goal(goal_text))
+        actions = shortest_demonstration(start, parse_goal(goal_text), library)
         states = replay(start, actions)
         for n, command in enumerate(commands):
             path = out / f"{prefix}{n}.txt"
