@@ -182,8 +182,8 @@ def _layout_difference(a: Layout, b: Layout) -> str:
     return "the palette changed"
 
 
-def read_instance(path: str | Path, palette: str | Palette) -> Instance:
-    """Read one corpus file and replay its demonstration.
+def read_instance(path: str | Path, palette: str | Palette, what: str = "a corpus file") -> Instance:
+    """Read one corpus file and replay its demonstration (``what``: the kind of file a refusal says is expected).
 
     Raises CorpusError (malformed file) or its subclass InconsistentDemonstration
     (a recorded state differs from the replay); OSError when the file cannot be read.
@@ -193,7 +193,7 @@ def read_instance(path: str | Path, palette: str | Palette) -> Instance:
         raise CorpusError(f"{path}: a .bdm file holds (start, end) pairs, no moves; expected a commands-to-tasks "
                           "file (command, actions, states)")
     palette = get_palette(palette)
-    lines = _read_lines(path, "a corpus file")
+    lines = _read_lines(path, what)
     if not lines:
         raise CorpusError(f"{path}: the file is empty; expected a command line, an action line and state lines")
     if len(lines) < 2:
@@ -359,7 +359,8 @@ def read_initial_state(path: str | Path, palette: str | Palette) -> State:
                           "or a corpus file")
     if as_path(path, "read_initial_state: path").suffix in (".state", ".bdm"):
         return read_state_file(path, palette)
-    return read_instance(path, palette).initial_state
+    # a device or a FIFO is refused saying what would do here: a state file as well as a corpus file
+    return read_instance(path, palette, what="a state file (.state, a one-line .bdm) or a corpus file").initial_state
 
 
 def example_corpus_path() -> Path:

@@ -224,3 +224,21 @@ def test_time_limit_acts_on_a_bdm_check_and_is_refused_where_it_would_not(capsys
     code, _, err = run(capsys, "discover", str(example_corpus_path()), "--palette", "sokoban", "-o",
                        str(tmp_path / "found.lp"), "--time-limit", "1")
     assert code == 2 and "--time-limit: discover grounds a --pfs file of yours under it" in err
+
+
+def test_check_reads_the_labels_before_the_corpus(capsys):
+    """A missing labels file had been said after half the corpus's report was printed."""
+    from groundlang.corpus import example_corpus_path
+
+    assert main(["check", str(example_corpus_path()), "--palette", "sokoban", "--labels", "no-such-labels.csv"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.strip() == "groundlang check: error: no-such-labels.csv: No such file or directory"
+
+
+def test_an_environment_that_is_a_device_is_refused_naming_what_may_be_given():
+    """follow --env takes a state file too; a device was refused as "expected a corpus file"."""
+    from groundlang.corpus import read_initial_state
+
+    with pytest.raises(ValueError, match=r"^/dev/zero: a device, not a regular file; expected a state file "
+                                         r"\(\.state, a one-line \.bdm\) or a corpus file$"):
+        read_initial_state("/dev/zero", "sokoban")

@@ -48,6 +48,10 @@ def run(args: argparse.Namespace) -> int:
         return check_bdm(args)
     require_palette(args, args.directory)
     library = library_given(args)  # a library given is checked (refused with its line) even without --labels
+    if args.labels:  # read before the corpus: a missing or bad file is said before half a report
+        from groundlang.labels import label_coverage, read_labels
+
+        labels = read_labels(args.labels)
     # Always collect every inconsistent file so the report lists them all; the flag decides the exit code.
     corpus = read_corpus(args.directory, args.palette, skip_inconsistent=True)
     ok = True
@@ -72,9 +76,6 @@ def run(args: argparse.Namespace) -> int:
             )
             ok = False
     if args.labels:
-        from groundlang.labels import label_coverage, read_labels
-
-        labels = read_labels(args.labels)
         cov = label_coverage(corpus, labels, library)  # labels may name the library's own PFs
         print(f"labelled: {cov.labelled}/{cov.total} files ({len(labels)} prefixes in {labels.path.name})")
         print(f"goal holds in final state: {cov.holding}/{cov.labelled}")
