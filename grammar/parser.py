@@ -60,6 +60,7 @@ CATEGORY_RULES: dict[str, frozenset[str]] = {
     "NMOD": frozenset({"ADJ", "COLOR", "NOUN", "NUM"}), "HMOD": frozenset({"ADJ", "COLOR", "NUM"}),
     "MEASURE": frozenset({"MEASURE"}), "VERB": frozenset({"VERB", "GER"}), "GER": frozenset({"GER"}),
     "COMMA": frozenset({"COMMA"}), "SERIAL": frozenset({"SERIAL"}),
+    "DEGREE": frozenset({"DEGREE"}),
 }
 
 _TOKEN = re.compile(r"\w+(?:'\w+)*|\.{2,}|[^\w\s]")

@@ -105,7 +105,7 @@ def _np_parts(values: list) -> tuple[str | None, list[str]]:
             det = v[1]
         elif isinstance(v, tuple) and v and v[0] == "mods":
             rest.extend(v[1])
-        else:
+        elif v is not _DEGREE:  # "the very big one": the degree grades, names nothing
             rest.append(str(v))
     return det, rest
 
@@ -167,6 +167,10 @@ def _connective(values: list) -> tuple[str, Any]:
     return " ".join(words), clause
 
 
+# A degree word before a modifier ("the very small room"): it grades the modifier and names nothing.
+_DEGREE = ("degree",)
+
+
 # Builders: rule name -> function of the children's values.
 _BUILDERS: dict[str, Callable[[list], Any]] = {
     "start": lambda vs: tuple(v for v in vs if isinstance(v, (VP, Sub))),
@@ -178,8 +182,9 @@ _BUILDERS: dict[str, Callable[[list], Any]] = {
     "vhead_serial": lambda vs: ("verb", str(vs[1])),
     "obj": lambda vs: ("obj", vs[0]),
     "determiner": lambda vs: ("det", str(vs[0])),
-    "nmods": lambda vs: ("mods", tuple(str(v) for v in vs)),
-    "nmods_coord": lambda vs: ("mods", tuple(str(v) for v in vs if v.type != "CONJ")),
+    "degree": lambda vs: _DEGREE,
+    "nmods": lambda vs: ("mods", tuple(str(v) for v in vs if v is not _DEGREE)),
+    "nmods_coord": lambda vs: ("mods", tuple(str(v) for v in vs if v is not _DEGREE and v.type != "CONJ")),
     "comps": lambda vs: _complements(vs),
     "vp": _verb_phrase,
     "gvp": lambda vs: _verb_phrase([("verb", str(vs[0]))] + list(vs[1:])),

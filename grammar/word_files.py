@@ -24,18 +24,19 @@ __all__ = [
 # Lexical categories (the grammar's terminals are sets of these).
 CATEGORIES = (
     "ADJ", "ADV", "AUX", "COLOR", "COMMA", "CONJ", "DET", "GER", "MEASURE",
-    "NEG", "NOUN", "NUM", "PREP", "PRON", "REL", "SUB", "TO", "VERB", "SERIAL",
+    "NEG", "NOUN", "NUM", "PREP", "PRON", "REL", "SUB", "TO", "VERB", "SERIAL", "DEGREE",
 )
 # Categories of a word file that tag their words with a lexical category and give them a role the
 # parser or the model reads (see english.words); VERB lists lemmas, IRREGULAR form=lemma pairs.
 TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP", "PREP_HAVING": "PREP",
-           "POLITE": "ADV", "VERB_SERIAL": "SERIAL"}
+           "POLITE": "ADV", "VERB_SERIAL": "SERIAL", "ADV_DEGREE": "DEGREE"}
 # VERB_HAVING marks verb lemmas (listed under VERB) whose relative clause about a noun phrase reads as
 # "with" ("the room that has the chair"); it tags nothing itself.
 # YES and NO list the words that answer a question of one choice ("Do you mean the red room?") by taking it
 # or declining it; they tag nothing either (commands are not answers).
-# VERB_SERIAL tags SERIAL: motion verbs that, before a bare verb, head nothing ("go stand next to the chair").
-FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB", "SERIAL")) + (
+# VERB_SERIAL tags SERIAL: motion verbs that, before a bare verb, head nothing ("go stand next to the chair");
+# ADV_DEGREE tags DEGREE: adverbs that, before a modifier, grade it ("the very small room").
+FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB", "SERIAL", "DEGREE")) + (
     "VERB", "IRREGULAR", "SYNONYM", *TAGGING, "VERB_HAVING", "YES", "NO",
 )
 # Categories whose entries pair two words, ``form=word``, and what the pair means (for error messages).

@@ -489,3 +489,15 @@ def test_a_motion_verb_before_a_bare_verb_heads_nothing(serial, plain):
     plain_english = {c: [w for w in ws if c != "VERB_SERIAL"] for c, ws in CLEANUP.entries.items()}
     from groundlang.grammar.lexicon import Lexicon
     assert parser.parse(serial, word_lexicon=Lexicon(plain_english))[0].logical_form.fallback
+
+
+@pytest.mark.parametrize("graded, plain", [("go to the very red room", "go to the red room"),
+                                           ("go next to the really small box", "go next to the small box"),
+                                           ("go to the big and extremely red room", "go to the big and red room")])
+def test_a_degree_word_before_a_modifier_grades_it_and_names_nothing(graded, plain):
+    """ADV_DEGREE words ("very", "really"): "the very red room" had fallen back to chunks, with "the" read as an
+    object of its own."""
+    got = parse(graded)
+    assert not got[0].logical_form.fallback and strings(got) == strings(parse(plain))
+    # an adverb of the verb stays one ("move very close to the chair" reads as before)
+    assert strings(parse("move very close to the chair")) == strings(parse("move close to the chair"))
