@@ -230,6 +230,7 @@ class CleanupEnv(gymnasium.Env):
         # Colour and shape indices + 1 must fit uint8.
         top = max(_largest_value(l.palette) for l in layouts)
         self.channels = channels(layouts[0].palette)  # the example corpus's layouts share one palette
+        self.palette = layouts[0].palette  # what the grid's colour and shape numbers mean
         self.action_space = spaces.Discrete(len(CleanupAction))
         self.observation_space = spaces.Dict({
             "grid": spaces.Box(0, top, shape=(*self.grid_shape, len(self.channels)), dtype=np.uint8),
@@ -293,13 +294,11 @@ class CleanupEnv(gymnasium.Env):
             raise ValueError(f"state of size {state.layout.height}x{state.layout.width} does not fit the "
                              f"observation grid {self.grid_shape[0]}x{self.grid_shape[1]} of this env")
         palette = state.layout.palette
-        if channels(palette) != self.channels:
-            raise ValueError(f"state of palette {palette.name}: its grid's channels ({', '.join(channels(palette))}) "
-                             f"are not this env's ({', '.join(self.channels)}); make the env with a state of that palette")
-        if _largest_value(palette) > self.observation_space["grid"].high.max():
-            most, values = max(palette.all_values, key=lambda item: len(item[1]))
-            raise ValueError(f"state of palette {palette.name}: its {len(values)} values of {most} do not fit the "
-                             "observation space of this env; make the env with a state of that palette")
+        # A grid's numbers are indices into the env's palette: another palette's state of as many channels had
+        # been taken, its colours then read as the env's (red as blue)
+        if (palette.all_values, palette.added) != (self.palette.all_values, self.palette.added):
+            raise ValueError(f"state of palette {palette.name}: this env's grids number the values of palette "
+                             f"{self.palette.name}; make the env with a state of that palette")
         if goal is not None:
             from groundlang.labels import check_goal_objects
 
@@ -346,8 +345,11 @@ def render_rgb(state: State, title: str | None = None, trajectory=None, dpi: int
 
     from groundlang.render import draw_state
 
+    from groundlang.render import cell_inches
+
     lay = state.layout
-    fig = Figure(figsize=(0.5 * lay.width + 1.5, 0.5 * lay.height + 1.5), dpi=dpi)
+    cell = cell_inches(state)  # half an inch a cell, less on a large grid: the picture's size is bounded as show's
+    fig = Figure(figsize=(cell * lay.width + 1.5, cell * lay.height + 1.5), dpi=dpi)
     canvas = FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
     draw_state(state, ax=ax, trajectory=trajectory, title=title, legend=False)  # an observation: the map only

@@ -12,7 +12,7 @@ from math import factorial
 import gymnasium
 import numpy as np
 
-from groundlang.gym_env import CHANNELS, CleanupAction, channels
+from groundlang.gym_env import CHANNELS, CleanupAction, _static_grid, channels
 from groundlang.model.relevance import pushes_scenery
 from groundlang.model.world import Action, State
 
@@ -98,6 +98,16 @@ def _position_candidates(grid: np.ndarray, layout, previous: np.ndarray | None =
     return out
 
 
+def _same_static(grid: np.ndarray, state: State) -> bool:
+    """Whether an observation ``grid`` shows ``state``'s layout: its walls, doors, rooms' colours and the rooms'
+    and doors' added attributes, the channels that stay put (the agent and the toys aside)."""
+    expected = _static_grid(state, grid.shape[:2])
+    pal = state.layout.palette
+    moving = {3, 4, 5} | {len(CHANNELS) + k for k, (cls, _) in enumerate(pal.added) if cls == "toy"}
+    kept = [c for c in range(expected.shape[2]) if c not in moving]
+    return bool(np.array_equal(grid[:, :, kept], expected[:, :, kept]))
+
+
 class CommandPolicy:
     """A closed-loop policy for one command: observation -> CleanupAction.
 
@@ -108,9 +118,13 @@ class CommandPolicy:
     is outside the planned space (nothing sensible to do).
     """
 
-    def __init__(self, goal, posterior, space, log_policy, mask, start: np.ndarray | None = None):
+    def __init__(self, goal, posterior, space, log_policy, mask, start: np.ndarray | None = None,
+                 start_state: State | None = None):
         self.goal = goal  # tuple[Atom, ...]
         self.previous = None if start is None else np.asarray(start)  # positions last seen: toys told apart
+        # The layout planned in: a state or grid of another (rooms recoloured, another palette) is outside the
+        # planned space, though its positions may be looked up in it (it had been acted on as the planned one).
+        self.start_state = start_state
         self.posterior = posterior
         self.space = space
         self.log_policy = np.asarray(log_policy)  # [S, 5]
@@ -119,6 +133,8 @@ class CommandPolicy:
     def state_index(self, observation) -> int:
         grid = observation.get("grid") if isinstance(observation, dict) else observation
         if isinstance(grid, State):
+            if self.start_state is not None and grid.layout != self.start_state.layout:
+                return -1
             self.previous = grid.positions
             return int(self.space.indices_of(grid.positions[None])[0])
         grid = np.asarray(grid) if isinstance(grid, np.ndarray) else None
@@ -128,6 +144,8 @@ class CommandPolicy:
                 or grid.shape[1] < lay.width:
             raise ValueError(f"observation must be an env's (a dict whose 'grid' is [H, W, {depth}], at "
                              f"least {lay.height}x{lay.width} here) or a State, got {type(observation).__name__}")
+        if self.start_state is not None and not _same_static(grid, self.start_state):
+            return -1
         candidates = _position_candidates(grid, lay, self.previous)
         if not candidates:
             return -1
@@ -184,4 +202,5 @@ def policy(learner, command: str, state) -> CommandPolicy:
         space = state_space_for(state, goal, tables=tables)
         mask = goal_mask(space, goal, tables)
     solved = solve_task(space.next_state, mask, learner.settings)
-    return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask, start=state.positions)
+    return CommandPolicy(goal, post, space, solved.log_policy.detach().cpu().numpy(), mask, start=state.positions,
+                         start_state=state)

@@ -104,8 +104,10 @@ def check_fit_arguments(instances, steps, init) -> list:
     instances = list(instances)
     if not instances:
         raise ValueError("cannot fit on an empty corpus")
-    bad = next((x for x in instances if not isinstance(getattr(x, "initial_state", None), State)), None)
+    # the index, not the instance: a None among them had been found as None, read as "nothing wrong"
+    bad = next((i for i, x in enumerate(instances) if not isinstance(getattr(x, "initial_state", None), State)), None)
     if bad is not None:
+        bad = instances[bad]
         raise TypeError(f"fit: each instance needs command, initial_state, states and actions (a corpus "
                         f"Instance); got {type(bad).__name__}")
     check_count("fit", "steps", steps)

@@ -332,6 +332,9 @@ def test_learner_checks_its_arguments(learner):
         Learner().fit(None)
     with pytest.raises(TypeError, match=r"^fit: each instance needs command, initial_state"):
         Learner().fit(["go to the red room"])
+    one = read_corpus(example_corpus_path(), "sokoban").instances[0]
+    with pytest.raises(TypeError, match=r"^fit: each instance needs command, initial_state.*; got NoneType$"):
+        Learner().fit([one, None])  # a None had been found as None, "nothing wrong", and failed inside
     with pytest.raises(TypeError, match=r"^posterior: state must be a State"):
         learner.posterior("go to the red room", None)
     with pytest.raises(TypeError, match=r"^posterior: command must be a str, got int$"):

@@ -168,14 +168,53 @@ def test_reset_options_are_checked(state):
             env.reset(options=options)
 
 
-def test_a_state_whose_palette_outgrows_the_observation_space_is_refused(state):
+def test_a_state_of_another_palette_is_refused(state):
+    """A grid numbers the env's palette's values: a state of another palette (more colours, or as many as the
+    env's in another order) had been taken when its channels fitted, its colours read as the env's."""
     from groundlang.model.palette import Palette
 
-    wide = Palette("wide", tuple(f"c{i}" for i in range(25)), state.layout.palette.shapes)
     env = CleanupEnv(state)
-    other = parse_state(STATE, wide)
-    with pytest.raises(ValueError, match="do not fit the observation space"):
-        env.reset(options={"state": other})
+    for other in (Palette("wide", tuple(f"c{i}" for i in range(25)), state.layout.palette.shapes),
+                  Palette("shuffled", state.layout.palette.colours[::-1], state.layout.palette.shapes)):
+        with pytest.raises(ValueError, match=f"state of palette {other.name}: this env's grids number the values "
+                                             "of palette sokoban"):
+            env.reset(options={"state": parse_state(STATE, other)})
+    same = Palette("copy", state.layout.palette.colours, state.layout.palette.shapes)  # its values, another name
+    env.reset(options={"state": parse_state(STATE, same)})
+
+
+def test_a_policy_ends_in_a_layout_it_did_not_plan_in(state):
+    """Rooms recoloured: the agent's and toys' positions are in the planned space, but the red room is elsewhere;
+    the policy had gone on to where the red room had been."""
+    import dataclasses
+
+    from groundlang.corpus import read_corpus
+    from groundlang.learner import Learner
+
+    learner = Learner(steps=20, cache_dir=False).fit(read_corpus(example_corpus_path(), "sokoban").instances[:6])
+    act = policy(learner, "go to the red room", state)
+    colours = [r.colour for r in state.layout.rooms]
+    rooms = tuple(dataclasses.replace(r, colour=c) for r, c in zip(state.layout.rooms, colours[1:] + colours[:1]))
+    moved = dataclasses.replace(state, layout=dataclasses.replace(state.layout, rooms=rooms))
+    assert act(state) != CleanupAction.TERMINATE
+    env = CleanupEnv(moved)
+    observation, _ = env.reset()
+    assert act(moved) == CleanupAction.TERMINATE and act(observation) == CleanupAction.TERMINATE
+    observation, _ = CleanupEnv(state).reset()
+    assert act(observation) == act(state)
+
+
+def test_a_picture_of_a_large_layout_stays_bounded():
+    """rgb_array pictures had half an inch a cell however large the layout (a 300-cell room: 9120 pixels a side,
+    7 GB); they are bounded as show's are."""
+    from groundlang.bdm import parse_bdm_state
+    from groundlang.gym_env import render_rgb
+
+    big, _ = parse_bdm_state("{agent0 (agent): [x: {2} y: {2} ] , block0 (block): [x: {5} y: {5} shape: {chair} "
+                             "colour: {red} ] , room0 (room): [top: {300} left: {0} bottom: {0} right: {300} "
+                             "colour: {red} ] , }")
+    picture = render_rgb(big)
+    assert picture.shape[2] == 3 and max(picture.shape[:2]) <= 60 * (16 + 1.5)
 
 
 def test_a_policy_refuses_what_is_not_an_observation(state):
@@ -275,7 +314,8 @@ def test_an_attribute_the_palette_adds_has_a_channel_and_tells_toys_apart():
     assert (int(after[7 - 6, 2, 6]), int(after[7 - 5, 2, 6]), int(after[7 - 5, 2, 3])) == (2, 0, 1)
     plain, _ = parse_bdm_state(line.replace(" material: {wood}", "").replace(" material: {metal}", ""),
                                "williams2018")
-    with pytest.raises(ValueError, match="its grid's channels .* are not this env's"):
+    with pytest.raises(ValueError, match="state of palette williams2018: this env's grids number the values of "
+                                         "palette materials"):
         env.reset(options={"state": plain})
 
 
