@@ -97,7 +97,8 @@ def check_bdm(args: argparse.Namespace) -> int:
               f"one task per text does what the pairs of at most {covered} of them show "
               f"({100 * covered / shared:.1f}%), a bound for any reader of the words alone")
     if unreachable and not args.skip_inconsistent:
-        print(f"groundlang check: {len(unreachable)} unreachable pairs (use --skip-inconsistent to skip them)",
+        print(f"groundlang check: {len(unreachable)} unreachable pair{'s' * (len(unreachable) != 1)} (use "
+              "--skip-inconsistent to skip them)",
               file=sys.stderr)
         return 1
     return 0

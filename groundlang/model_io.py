@@ -224,6 +224,8 @@ def _read_json(directory: Path, any_version: bool = False) -> dict:
         meta = json.loads(storage.read_limited(path, MAX_JSON_BYTES, "a model's model.json").decode("utf-8"))
     except storage.FileRefused as exc:
         raise ModelFormatError(str(exc)) from None
+    except IsADirectoryError:  # the OS names no file: an API caller saw "[Errno 21] Is a directory"
+        raise ModelFormatError(f"{path}: a folder, not a regular file; expected a model's {MODEL_JSON}") from None
     except (ValueError, RecursionError) as exc:  # JSONDecodeError, UnicodeDecodeError, an integer of 4,300+ digits
         raise ModelFormatError(f"{path}: not valid JSON ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
@@ -277,6 +279,8 @@ def _read_model(directory: Path, from_state_dict: Callable[[dict], T]) -> T:
         data = storage.read_limited(tensor_path, limit, "the tensors of a model of this vocabulary")
     except storage.FileRefused as exc:
         raise ModelFormatError(str(exc)) from None
+    except IsADirectoryError:
+        raise ModelFormatError(f"{tensor_path}: a folder, not a regular file; expected the model's tensors") from None
     if hashlib.sha256(data).hexdigest() != meta.get("globals_sha256"):
         raise ModelFormatError(
             f"{tensor_path}: contents do not match the hash recorded in {MODEL_JSON} (truncated or swapped?)"

@@ -78,7 +78,7 @@ def test_reachability(williams_commands, tmp_path):
     bad.write_text(f"push the chair up\n{format_bdm_state(start)}\n{format_bdm_state(end)}\ntrue\n", encoding="utf-8")
     done = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(bad)], capture_output=True, text=True)
     assert done.returncode == 1 and f"{bad}, line 2: 'push the chair up'" in done.stdout
-    assert "1 unreachable pairs" in done.stderr
+    assert "1 unreachable pair (use" in done.stderr
     done = subprocess.run([sys.executable, "-m", "groundlang.cli", "check", str(bad), "--skip-inconsistent"],
                           capture_output=True, text=True)
     assert done.returncode == 0

@@ -201,6 +201,22 @@ def test_a_model_json_number_too_long_to_read_is_named_as_bad_json(learners, tmp
         Learner.load(tmp_path / "m")
 
 
+def test_a_folder_where_a_model_file_should_be_is_a_model_format_error(learners, tmp_path):
+    """Learner.load is documented to raise ModelFormatError on anything amiss: a folder there had raised the
+    OS's IsADirectoryError (the CLI said it in one line; a notebook got a traceback)."""
+    learners[0].save(tmp_path / "m")
+    (tmp_path / "m" / "model.json").unlink()
+    (tmp_path / "m" / "model.json").mkdir()
+    with pytest.raises(ModelFormatError, match=r"m/model.json: a folder, not a regular file"):
+        Learner.load(tmp_path / "m")
+    learners[0].save(tmp_path / "n")
+    (tensors,) = _tensor_files(tmp_path / "n")
+    (tmp_path / "n" / tensors).unlink()
+    (tmp_path / "n" / tensors).mkdir()
+    with pytest.raises(ModelFormatError, match=rf"n/{tensors}: a folder, not a regular file"):
+        Learner.load(tmp_path / "n")
+
+
 def test_a_save_removes_temporary_files_of_interrupted_saves_and_keeps_others(learners, tmp_path):
     old, _ = learners
     model = old.save(tmp_path / "m")
