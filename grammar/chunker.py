@@ -18,7 +18,7 @@ _BREAK_CATS = frozenset({"COMMA", "CONJ", "SUB", "REL"})
 def _is_verb(cats: frozenset[str], clause_start: bool, in_np: bool) -> bool:
     if not ({"VERB", "GER"} & cats):
         return False
-    if cats <= {"VERB", "GER", "AUX", "ADJ"}:
+    if cats <= {"VERB", "GER", "AUX", "ADJ", "SERIAL"}:  # SERIAL: a verb that may stand before another
         return True
     # a word that may also be a noun ("exit", "step") is a verb only where a clause may start
     return clause_start and not in_np

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import clingo
 from clingo import ast
 
-from .program import AspError, Program
+from .program import AspError, Program, term_signature
 from .terms import pf_name, symbol_text, tuple_args
 
 __all__ = ["PFRoles", "Declarations", "declare", "declare_families", "read_pf_roles", "restriction_problem",
@@ -69,41 +69,45 @@ def check_tasks_declared_once(program: Program) -> None:
                                "into one task; rename the task of one of them")
 
 
-def _name_of(term) -> tuple[str, int] | None:
-    """``(name, arity)`` of a PF written as a term (``toyInRoom``, ``roomIs(C)``); None for a variable or a
-    number, which may stand for any."""
-    if term.ast_type == ast.ASTType.SymbolicTerm and term.symbol.type == clingo.SymbolType.Function:
-        return term.symbol.name, len(term.symbol.arguments)
-    if term.ast_type == ast.ASTType.Function and term.name:
-        return term.name, len(term.arguments)
-    return None
+def _placeholders(signature) -> str:
+    """``(A, B)`` for a pf/3 signature of two classes, as a holds/2 rule writes its objects."""
+    count = len(signature.arguments) if signature.ast_type == ast.ASTType.Function and not signature.name else 1
+    return "(" + ", ".join("ABCDEFGH"[:count]) + ("," if count == 1 else "") + ")"
 
 
 def check_pfs_said_to_hold(program: Program) -> None:
     """AspError naming the file where a PF is declared (pf/3) but no rule head says where it holds (holds/2 of
-    its name): it would hold nowhere, and a task made of it could never be done (a rule written holds/3 had
-    trained without a word). A holds/2 head whose PF is a variable may say it of any, and passes all."""
-    declared: dict[tuple[str, int], tuple[str, str]] = {}
+    its name, a ``#const`` naming it, or an ``#external``): it would hold nowhere, and a task made of it could
+    never be done (a rule written holds/3 had trained without a word). A holds/2 head whose PF is a variable or
+    a script's call may say it of any, and passes all."""
+    constants = program.constants()
+    declared: dict[tuple[str, int], tuple[str, str, object]] = {}
     said, other, open_head = set(), {}, False
     for where, term in program.head_atoms():
-        if term.ast_type != ast.ASTType.Function or not term.arguments:
+        signature = term_signature(term)
+        if term.ast_type != ast.ASTType.Function or signature is None or (signature != ("pf", 3)
+                                                                           and signature[0] != "holds"):
             continue
-        if term.name == "pf" and len(term.arguments) == 3 and (key := _name_of(term.arguments[1])):
-            declared.setdefault(key, (where, str(term.arguments[1])))
-        elif term.name == "holds":
-            key = _name_of(term.arguments[0])
-            if len(term.arguments) != 2:
-                other.setdefault(key, len(term.arguments))
-            elif key is None:
-                open_head = True
-            else:
-                said.add(key)
+        if term.arguments[0].ast_type == ast.ASTType.SymbolicTerm and str(term.arguments[0]) in constants:
+            key = term_signature(ast.SymbolicTerm(term.location, clingo.parse_term(constants[str(term.arguments[0])])))
+        else:
+            key = term_signature(term.arguments[0 if term.name == "holds" else 1])
+        if term.name == "pf":
+            if key is not None:
+                declared.setdefault(key, (where, str(term.arguments[1]), term.arguments[2]))
+        elif len(term.arguments) != 2:
+            other.setdefault(key, len(term.arguments))
+        elif key is None:
+            open_head = True
+        else:
+            said.add(key)
     if open_head:
         return
-    for key, (where, written) in declared.items():
+    for key, (where, written, signature) in declared.items():
         if key not in said:
+            objects = _placeholders(signature)
             hint = (f"; a rule says holds/{other[key]} of it, but holds takes the PF and the tuple of its objects, "
-                    f"holds({written}, (A, B))" if key in other else f"; add holds({written}, (A,)) :- ... for it")
+                    f"holds({written}, {objects})" if key in other else f"; add holds({written}, {objects}) :- ... for it")
             raise AspError(f"{where}: PF {written} is declared (pf/3) but no rule says where it holds{hint}")
 
 

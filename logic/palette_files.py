@@ -17,7 +17,7 @@ from pathlib import Path
 
 import clingo
 
-from .program import AspError, file_source, package_source, Program
+from .program import AspError, file_source, package_source, Program, term_signature
 
 __all__ = ["PaletteError", "palette_names", "read_palette"]
 
@@ -46,14 +46,14 @@ _FACTS = {("value", 3): "value(Attribute, Index, Name)", ("glyph", 2): 'glyph(Sh
 
 
 def _check_facts(program: Program, where: str) -> None:
-    """PaletteError naming the file and line of a fact or rule head that is none of a palette's facts."""
+    """PaletteError naming the file and line of a fact or rule head that is none of a palette's facts, nor a
+    helper a rule reads (``name(0, red). value(colour, I, N) :- name(I, N).``)."""
+    helpers = program.body_signatures()
     for _, term in program.head_atoms():
-        symbol = getattr(term, "symbol", None)  # a constant atom ("red.") is a symbolic term
-        name, arity = ((term.name, len(term.arguments)) if symbol is None else
-                       (getattr(symbol, "name", str(symbol)), len(getattr(symbol, "arguments", ()))))
-        if (name, arity) not in _FACTS:
-            raise PaletteError(f"{where}, line {term.location.begin.line}: {term} is none of a palette's facts: "
-                               f"{', '.join(_FACTS.values())}")
+        signature = term_signature(term)
+        if signature is None or (signature not in _FACTS and signature not in helpers):
+            raise PaletteError(f"{where}, line {term.location.begin.line}: {term} is none of a palette's facts "
+                               f"({', '.join(_FACTS.values())}) nor read by a rule")
 
 
 def read_palette(name: str) -> tuple:
@@ -167,7 +167,11 @@ def _read_palette(name: str, stamp: tuple | None = None) -> tuple[str, dict[str,
     for value in sorted(classes):
         if value not in known:
             raise PaletteError(f"{source.name}: value_class({value}, ...) names a value no value/3 fact gives")
-    for kind, by_value in drawing.items():  # a misspelt value was drawn with the default, without a word
-        for value in sorted(set(by_value) - known):
-            raise PaletteError(f"{source.name}: {kind}({value}, ...) names a value no value/3 fact gives")
+    # a misspelt value was drawn with the default, without a word: a glyph marks a shape, an rgb fills a colour
+    for kind, attribute in (("glyph", "shape"), ("rgb", "colour")):
+        for value in sorted(set(drawing[kind]) - set(values.get(attribute, ()))):
+            said = f"a value of {next(a for a, names in values.items() if value in names)}" if value in known else \
+                "a value no value/3 fact gives"
+            raise PaletteError(f"{source.name}: {kind}({value}, ...) names {said}; {'an' if kind == 'rgb' else 'a'} "
+                               f"{kind} is of a {attribute} value")
     return label, values, drawing, tuple(sorted(added)), tuple((v, tuple(sorted(c))) for v, c in sorted(classes.items()))

@@ -183,12 +183,39 @@ class Program:
         return list(out)
 
     def head_atoms(self) -> Iterable[tuple[str, object]]:
-        """``(source name, atom)`` of every atom a rule head of the program may make true (AST terms), in
-        source order."""
+        """``(source name, atom)`` of every atom a rule head of the program may make true or ``#external``
+        declares (AST terms), in source order."""
         for source, statements in self.statements_by_source():
             for stm in statements:
                 if stm.ast_type == ast.ASTType.Rule:
                     yield from ((source.name, term) for term in _head_atoms(stm.head))
+                elif stm.ast_type == ast.ASTType.External:
+                    yield source.name, getattr(stm.atom, "symbol", stm.atom)
+
+    def body_signatures(self) -> set[tuple[str, int]]:
+        """``(name, arity)`` of every atom a rule body reads (in literals, conditions and aggregates)."""
+        found: set[tuple[str, int]] = set()
+
+        def walk(node) -> None:
+            if isinstance(node, ast.AST):
+                if node.ast_type == ast.ASTType.SymbolicAtom and (signature := term_signature(node.symbol)):
+                    found.add(signature)
+                for key in node.child_keys:
+                    walk(getattr(node, key))
+            elif isinstance(node, (list, tuple, ast.ASTSequence)):
+                for item in node:
+                    walk(item)
+
+        for _, statements in self.statements_by_source():
+            for stm in statements:
+                if stm.ast_type == ast.ASTType.Rule:
+                    walk(stm.body)
+        return found
+
+    def constants(self) -> dict[str, str]:
+        """What each ``#const`` of the program names, as written (``#const near = agentNearRoom.``)."""
+        return {stm.name: str(stm.value) for _, statements in self.statements_by_source() for stm in statements
+                if stm.ast_type == ast.ASTType.Definition}
 
     def definitions(self) -> dict[tuple[str, int], str]:
         """``(name, arity)`` of every predicate a rule head of the program may make true (a plain head, a
@@ -272,6 +299,17 @@ class Program:
 
 
 _ERRORS = {c.__name__: c for c in (AspError, AspSyntaxError, AspScriptRefused, AspGroundingError, AspTimeout)}
+
+
+def term_signature(term) -> tuple[str, int] | None:
+    """``(name, arity)`` of an atom or term as written (``toyInRoom``, ``roomIs(C)``, ``holds(P, (A,))``); None
+    for a variable, a number, a string, a script call (``@f()``), a negated or computed term."""
+    symbol = getattr(term, "symbol", None) if term.ast_type == ast.ASTType.SymbolicTerm else None
+    if symbol is not None:
+        return (symbol.name, len(symbol.arguments)) if symbol.type == clingo.SymbolType.Function else None
+    if term.ast_type == ast.ASTType.Function and term.name:
+        return term.name, len(term.arguments)
+    return None
 
 
 def _head_atoms(node) -> list:

@@ -200,7 +200,7 @@ def test_a_pf_said_of_fewer_objects_than_declared_is_refused_in_every_layout(tmp
 @pytest.mark.parametrize("rule, hint", [
     ("holds(toyNearDoor, T, D) :- toy(T), door(D).", r"a rule says holds/3 of it, but holds takes the PF and the "
                                                       r"tuple of its objects, holds\(toyNearDoor, \(A, B\)\)"),
-    ("holds(toyNearDor, (T, D)) :- toy(T), door(D).", r"add holds\(toyNearDoor, \(A,\)\) :- \.\.\. for it"),
+    ("holds(toyNearDor, (T, D)) :- toy(T), door(D).", r"add holds\(toyNearDoor, \(A, B\)\) :- \.\.\. for it"),
 ])
 def test_a_pf_no_rule_says_where_it_holds_is_refused_at_load(tmp_path, rule, hint):
     """A PF written holds/3 (or misspelt) never held anywhere, and a model trained on it without a word."""
@@ -212,6 +212,10 @@ def test_a_pf_no_rule_says_where_it_holds_is_refused_at_load(tmp_path, rule, hin
     _library(tmp_path, "pf(colour, toyTinted(C), (toy,)) :- palette_colour(C).\n"
                        "holds(toyTinted(C), (T,)) :- toy(T), colour(T, C).\n")
     _library(tmp_path, "pf(position, toyNearDoor, (toy, door)).\nholds(P, (T, D)) :- P = toyNearDoor, toy(T), door(D).\n")
+    # nor are a #const naming it, or an #external
+    _library(tmp_path, "#const near = toyNearDoor.\npf(position, toyNearDoor, (toy, door)).\n"
+                       "holds(near, (T, D)) :- toy(T), door(D), at(T, X, Y), beside(X, Y, U, V), door_cell(D, U, V).\n")
+    _library(tmp_path, "pf(position, toyNearDoor, (toy, door)).\n#external holds(toyNearDoor, (block0, door0)).\n")
 
 
 def test_the_commands_that_read_a_library_refuse_its_mistakes_as_train_does(tmp_path, capsys):

@@ -38,14 +38,17 @@ def test_a_copy_of_a_palette_file_reads_the_corpus_the_same(tmp_path):
     ("value(colour, 0, red). value(colour, 0, blue). value(shape, 0, star).", "index 0 is both"),
     ("value(colour, 0, red). value(colour, 1, red). value(shape, 0, star).", "has two indices"),
     ("value(colour, 0, red).", "no shape values"),
-    ("colour(red).", "line 1: colour(red) is none of a palette's facts: value(Attribute, Index, Name)"),
+    ("colour(red).", "line 1: colour(red) is none of a palette's facts (value(Attribute, Index, Name)"),
+    ("value(colour, 0, red). value(shape, 0, star).\n-value(colour, 1, x).", "line 2: -value(colour,1,x) is none"),
+    ('value(colour, 0, red). value(shape, 0, star).\nrgb(star, "gold").',
+     "rgb(star, ...) names a value of shape; an rgb is of a colour value"),
     ("", "no value(Attribute, Index, Name) facts"),
     # a fact of a palette's name with a field missing or added, or misspelt, had been dropped without a word
     ("value(colour, 0, red). value(shape, 0, star).\nvalue(colour, violet).", "line 2: value(colour,violet) is none"),
     ("value(colour, 0, red). value(shape, 0, star).\nvalue(colour, 1, navy, 3).", "line 2: value(colour,1,navy,3)"),
     ("value(colour, 0, red). value(shape, 0, star).\nvalu(colour, 1, navy).", "line 2: valu(colour,1,navy) is none"),
     ("value(colour, 0, red). value(shape, 0, star).\nattribute(toy).", "line 2: attribute(toy) is none"),
-    ('value(colour, 0, red). value(shape, 0, star).\nglyph(stra, "x").', "glyph(stra, ...) names a value no"),
+    ('value(colour, 0, red). value(shape, 0, star).\nglyph(stra, "x").', "glyph(stra, ...) names a value no value/3 fact gives; a glyph is of a shape value"),
     ("value(colour, 0, \"red\"). value(shape, 0, star).", "lowerCamelCase constant"),
     ("value(colour, 0, red", "syntax error"),
 ])
@@ -111,3 +114,11 @@ def test_a_malformed_palette_record_is_refused_in_one_line_naming_it(change, sai
 def test_a_palette_of_the_wrong_type_is_a_type_error_naming_what_is_taken():
     with pytest.raises(TypeError, match="palette must be a name, the path of a .lp file, a Palette or a palette's"):
         get_palette([get_palette("sokoban").record()])
+
+
+def test_a_palette_may_compute_its_values_with_helpers_a_rule_reads(tmp_path):
+    """Only what is neither a palette's fact nor read by a rule is refused: a helper table is a palette's own."""
+    path = tmp_path / "computed.lp"
+    path.write_text("name(0, red). name(1, blue).\nvalue(colour, I, N) :- name(I, N).\nvalue(shape, 0, star).\n")
+    assert get_palette(str(path)).colours == ("red", "blue")
+
