@@ -79,7 +79,7 @@ class Lexicon:
         words = {c: frozenset(self.entries.get(c, ())) for c in FILE_CATEGORIES}
         # Verb forms: regular inflections of every lemma, in a fixed order, then the irregular ones.
         self.verb_forms: dict[str, str] = {}
-        for lemma in sorted(words["VERB"]):
+        for lemma in sorted(words["VERB"] | words["VERB_SERIAL"]):  # a serial verb is a verb, listed or not
             self.verb_forms.update(_inflections(lemma))
         self.verb_forms.update(pair.split("=", 1) for pair in self.entries.get("IRREGULAR", ()))
         table: dict[str, set[str]] = {}

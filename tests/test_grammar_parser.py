@@ -485,6 +485,15 @@ def test_a_motion_verb_before_a_bare_verb_heads_nothing(serial, plain):
     assert strings(got) == strings(want)
     # a verb that is not a motion verb is no serial verb: "push block" keeps "block" the object
     assert "push(block1" in strings(parse("push block into the red room"))[0]
+    # a fallback still starts a clause at a serial verb mid-sentence (its SERIAL tag had hidden it: the go-clause
+    # of "you need to go to the red room" was merged into the clause before)
+    assert "go(room1)" in strings(parse("you need to go to the red room"))[0]
+    assert "go(room1)" in strings(parse("be sure not to go into the red room"))[0]
+    # a word file's serial verb is a verb, whether or not VERB lists it too
+    dash = CLEANUP.extend({"VERB_SERIAL": ["dash"]})
+    went = [s.replace("go(", "dash(") for s in strings(parse("go to the red room"))]
+    assert strings(parser.parse("dash to the red room", word_lexicon=dash)) == went
+    assert strings(parser.parse("dash get the star", word_lexicon=dash)) == strings(parse("get the star"))
     # the words are the data: without VERB_SERIAL, the sentence falls back again
     plain_english = {c: [w for w in ws if c != "VERB_SERIAL"] for c, ws in CLEANUP.entries.items()}
     from groundlang.grammar.lexicon import Lexicon
