@@ -47,12 +47,17 @@ def check_bdm(args: argparse.Namespace) -> int:
         raise ValueError(f"{args.directory}: no .bdm file there (with --format williams2018 also a file of any "
                          "name or a folder of .txt files)")
     palette = args.palette or DEFAULT_PALETTE
-    from groundlang.commands import time_limit_given
+    from groundlang.commands import time_limit_given, words_beside_checked
 
-    library = default_library(args.library, **time_limit_given(args))
+    library = words_beside_checked(default_library(args.library, **time_limit_given(args)))
     commands = [c for path in paths for c in read_bdm(path, palette)]
     pairs = [(c, p) for c in commands for p in c.pairs]
     layouts = {p.start.layout for _, p in pairs}
+    if args.library:  # a library of the user's, checked in each layout as training meets it
+        from groundlang.model.tasks import check_library_at
+
+        for command, pair in {p.start.layout: (c, p) for c, p in pairs}.values():
+            check_library_at(pair.start, library, f"{command.path}, line {pair.line}")
     sizes = Counter((p.start.layout.width - 1, p.start.layout.height - 1, len(p.start.toys)) for _, p in pairs)
     # Everything is computed before anything is printed. A layout too large to tabulate is set aside before
     # any of its states is enumerated or it is grounded (the reachability check had taken gigabytes to get

@@ -75,6 +75,29 @@ def check_position_pfs(state: State, library: TaskLibrary, tables) -> None:
                 "read where another object is?")
 
 
+def check_library_at(state: State, library: TaskLibrary, where: str) -> None:
+    """``library``'s PF rules checked in ``state``'s layout as training meets them, for a command that reads a
+    library without training (check, tasks): its PF tables (a holds/2 of another arity, or of objects of another
+    class), its groundings (a PF of a class no object has), each goal PF against the state's own grounding.
+    The error names the library's files and, after them, ``where`` (the file of the state). A layout too large
+    to tabulate is passed over, as readers of many layouts set it aside."""
+    from groundlang.logic.program import AspError
+    from groundlang.model.pf_tables import TabulationError, library_pf_tables, tabulation_refusal
+
+    if tabulation_refusal(state.layout) is not None:
+        return
+    try:
+        tables = library_pf_tables(state.layout, library)
+    except AspError as exc:  # TabulationError too: the message names the library's files
+        raise type(exc)(f"{exc} (in the layout of {where})") from None
+    try:
+        check_position_pfs(state, library, tables)
+    except TabulationError as exc:
+        raise TabulationError(f"{library.program.user_names}: {exc} (in the layout of {where})") from None
+    except AspError as exc:  # the groundings' diagnostics, which name the library
+        raise type(exc)(f"{exc} (in the layout of {where})") from None
+
+
 def object_descriptions(state: State, library: TaskLibrary) -> Mapping[str, Mapping[str, tuple[str, ...]]]:
     """Object -> PF class -> the unary PFs of that class (every class but a goal class) true of it in
     ``state``: colours and shapes, the spatial PFs where the agent stands, and any class a user's

@@ -238,7 +238,7 @@ def test_the_commands_that_read_a_library_refuse_its_mistakes_as_train_does(tmp_
     for argv in (["tasks", str(STATE), "--palette", "sokoban"], ["check", str(corpus), "--palette", "sokoban"]):
         assert main([*argv, "--library", "tasks", "--library", str(fewer)]) == 2
         err = capsys.readouterr().err.strip()
-        assert f"{fewer}: holds(toyNextToDoor, (block0,)) says it of 1 object" in err and "in tabulating the layout of" in err
+        assert f"{fewer}: holds(toyNextToDoor, (block0,)) says it of 1 object" in err and "(in the layout of " in err
     words = tmp_path / "mine"
     words.mkdir()
     (words / "mine.lp").write_text("pf(colour, toyBright, (toy,)). holds(toyBright, (T,)) :- toy(T), colour(T, red).\n")
@@ -248,3 +248,25 @@ def test_the_commands_that_read_a_library_refuse_its_mistakes_as_train_does(tmp_
         assert main([*argv, "--library", "tasks", "--library", str(words / "mine.lp")]) == 2
         err = capsys.readouterr().err.strip()
         assert "mine.words" in err and ":2: unknown category 'COLOUR'" in err, err
+
+
+def test_check_grounds_a_library_given_in_each_layout_as_train_does(tmp_path, capsys):
+    """A PF over a class no object has passed check (a .txt corpus or a .bdm one), and a .bdm check never read
+    the word file beside a library; train refused both."""
+    from groundlang.cli import main
+
+    fixtures = Path(__file__).parent / "fixtures"
+    no_class = str(fixtures / "bad_input" / "pf_of_no_class.lp")
+    for argv in (["check", str(example_corpus_path()), "--palette", "sokoban", "--library", "tasks"],
+                 ["check", str(fixtures / "williams2018" / "small.bdm"), "--library", "williams2018"]):
+        assert main([*argv, "--library", no_class]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "PF toyHue(" in err and "is declared over class lamp, which no object has" in err, err
+        assert "(in the layout of " in err and "\n" not in err
+    words = tmp_path / "mine"
+    words.mkdir()
+    (words / "mine.lp").write_text("pf(colour, toyBright, (toy,)). holds(toyBright, (T,)) :- toy(T), colour(T, red).\n")
+    (words / "mine.words").write_text("BOGUS: x\n")
+    assert main(["check", str(fixtures / "williams2018" / "small.bdm"), "--library", "williams2018",
+                 "--library", str(words / "mine.lp")]) == 2
+    assert "mine.words:1: unknown category 'BOGUS'" in capsys.readouterr().err

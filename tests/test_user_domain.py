@@ -239,7 +239,7 @@ def test_a_position_pf_that_reads_another_objects_position_is_refused_by_tasks_a
     assert main(["tasks", str(state), "--palette", "sokoban", "--library", "tasks", "--library", str(near)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "agentNearToy(agent0, block0) does not hold in the state, but its table" in err
-    assert f"{near}, in {state}: " in err  # the library and the state it was found in
+    assert err.startswith(f"groundlang tasks: error: {near}: ") and err.rstrip().endswith(f"(in the layout of {state})")
     assert "a position PF may read the positions (at/3) of its own arguments only" in err
     # train refuses it too, naming the file of the first state in whose layout the table and grounding disagree
     # (it trained silently on tables that said otherwise than the groundings)

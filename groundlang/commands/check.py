@@ -87,15 +87,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _tabulate_layouts(corpus, library) -> None:
-    """A library given is tabulated in each layout of the corpus: what its PF rules get wrong only in a layout
-    (a holds/2 of another arity, of objects of another class) is refused here, by the library's file and the
-    corpus file, as train would refuse it."""
-    from groundlang.model.pf_tables import TabulationError, library_pf_tables, tabulation_refusal
+    """A library given is checked in each layout of the corpus as train would meet it (model.tasks.check_library_at):
+    what its PF rules get wrong only in a layout is refused here, by the library's file and the corpus file."""
+    from groundlang.model.tasks import check_library_at
 
     for inst in {i.initial_state.layout: i for i in corpus.instances}.values():
-        if tabulation_refusal(inst.initial_state.layout) is None:
-            try:
-                library_pf_tables(inst.initial_state.layout, library)
-            except TabulationError as exc:
-                raise TabulationError(f"{exc} (in tabulating the layout of {inst.path})") from None
-
+        check_library_at(inst.initial_state, library, str(inst.path))

@@ -37,9 +37,9 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.program import AspTimeout
     from groundlang.logic.tasks import TaskLibrary
     from groundlang.model.interpretations import object_names
-    from groundlang.model.pf_tables import TabulationError, library_pf_tables, tabulation_refusal
+    from groundlang.model.pf_tables import library_pf_tables, tabulation_refusal
     from groundlang.logic.classes import domain_classes
-    from groundlang.model.tasks import candidate_tasks, check_position_pfs, object_descriptions, object_relations
+    from groundlang.model.tasks import candidate_tasks, check_library_at, object_descriptions, object_relations
     from groundlang.model.world import object_class
 
     check_state_file(args.file, "tasks")
@@ -74,15 +74,8 @@ def run(args: argparse.Namespace) -> int:
     # refused (it had been listed as "not listed", exit 0, as if the layout were too large).
     untabulated, holding = tabulation_refusal(state.layout), []
     if untabulated is None:
-        try:
-            tables = library_pf_tables(state.layout, library)
-        except TabulationError as exc:  # the library's files are named by the message
-            raise TabulationError(f"{exc} (in tabulating the layout of {args.file})") from None
-        try:
-            check_position_pfs(state, library, tables)
-        except TabulationError as exc:
-            raise TabulationError(f"{library.program.user_names}, in {args.file}: {exc}") from None
-        holding = [a for a in tables.holding(state.positions) if len(a.args) > 1]
+        check_library_at(state, library, args.file)
+        holding = [a for a in library_pf_tables(state.layout, library).holding(state.positions) if len(a.args) > 1]
     relations = {obj: atoms for obj in object_names(state) if (atoms := [a for a in holding if obj in a.args])}
     if args.json:
         out = {
