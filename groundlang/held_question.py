@@ -32,6 +32,7 @@ def held_reading(held: Posterior) -> tuple[tuple[Atom, ...], float] | None:
 
 
 def held_question(goal, state, library) -> str:
+    """The question whether ``goal``, which holds in ``state``, is what is meant, in words."""
     return f"Do you mean {goal_phrase(goal, state, library)}, as it is now? (yes: nothing to do; no: the rest of the reading)"
 
 
@@ -66,8 +67,9 @@ def follow_or_ask(command: str, state, held: Posterior | None, min_confidence: f
 
 def answer_held(result: FollowResult, answer: str, library, lexicon) -> FollowResult:
     """A held question's answer: taking its choice (its number, its words or a yes) is nothing to do, a plan of
-    no steps whose goal holds; declining it is the rest of the reading (``result.otherwise``). AnswerError
-    where it names nothing; Declined where it declines and nothing else can be done."""
+    no steps whose goal holds; declining it is the rest of the reading (``result.otherwise``, as following
+    acted on it or asked, with follow's ``max_steps``). AnswerError where it names nothing; Declined where it
+    declines and nothing else can be done."""
     state = result.states[0]
     try:
         chosen = choose(answer, result.choices, state, library, lexicon=lexicon)

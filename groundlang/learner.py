@@ -295,8 +295,8 @@ class Learner:
     def clarify(self, result: FollowResult, answer: str | int, max_steps: int = 200) -> FollowResult:
         """Act on the choice ``answer`` names among an abstained ``result``'s ``choices``: a number
         from 1 (an int, or its digits), words ("the green one") or, to a question of one choice, a yes.
-        Raises AnswerError when it names none or several, its subclass Declined where it declines ("no");
-        TypeError for arguments of the wrong type."""
+        Raises AnswerError when it names none or several, its subclass Declined where it declines ("no"; to
+        whether what already holds is meant, a no returns ``result.otherwise``); TypeError for wrong types."""
         answer = answer_text(answer, result)
         check_count("clarify", "max_steps", max_steps)
         if not result.abstained:

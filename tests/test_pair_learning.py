@@ -460,6 +460,12 @@ def test_an_execution_whose_start_admits_no_task_is_not_scored_and_follow_names_
     out, err = capsys.readouterr()
     assert "Do you mean the agent in the red room, as it is now?" in out
     assert "not acting: the words most probably ask for what already holds" in err
+    assert err.rstrip().endswith("(yes: nothing to do; no: nothing else can be done here)")  # no rest to act on
+    assert main([*follow, "--json"]) == 3
+    answer = json.loads(capsys.readouterr().out)
+    # no rest of the reading to show: not the held reading in its place (it had been, at confidence 1.0)
+    assert (answer["interpretations"], answer["confidence"], answer["question_kind"]) == ([], None, "already true")
+    assert answer["abstained"] and [c["goal"] for c in answer["choices"]] == ["agentInRoom(agent0, room0)"]
     monkeypatch.setattr("sys.stdin", io.StringIO("yes\n"))
     assert main([*follow, "--ask"]) == 0
     assert "nothing to do: plan (0 steps)" in capsys.readouterr().out

@@ -329,7 +329,8 @@ def check_state_file(path: str, what: str) -> None:
     except OSError as exc:
         raise ValueError(f"{path}: {exc.strerror}") from None
     if not stat.S_ISREG(mode):
-        raise ValueError(f"{path}: {file_kind(mode)}, not a regular file; expected a state file or a corpus file")
+        raise ValueError(f"{path}: {file_kind(mode)}, not a regular file; expected a state file (.state, a one-line .bdm) "
+                         "or a corpus file")
     if Path(path).suffix in (".state", ".bdm"):
         with open(path, "rb") as handle:
             if not handle.read(1 << 16).removeprefix(_BOM).strip():

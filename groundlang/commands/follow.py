@@ -92,13 +92,29 @@ def _refuse(result, args, done=None) -> None:
     how = ("the question and its choices are in the JSON (--ask asks only without --json)" if args.ask and args.json
            else "answer with --ask")
     places = places_for(args.min_confidence)
-    if done is not None:
+    if done is not None:  # result: the rest of the reading, None where nothing else can be done
+        rest = ("no: the rest of their reading), or act on the rest with --guess" if result is not None else
+                "no: nothing else can be done here)")
         print(f"groundlang follow: not acting: the words most probably ask for what already holds ({down(done[1], places)}"
-              f"); {how} (yes: nothing to do; no: the rest of their reading), or act on the rest with --guess",
-              file=sys.stderr)
+              f"); {how} (yes: nothing to do; {rest}", file=sys.stderr)
         return
     print(f"groundlang follow: not acting: confidence {down(result.confidence, places)} is below "
           f"--min-confidence {args.min_confidence!r}; {how}, or act anyway with --guess", file=sys.stderr)
+
+
+def _answer(asking):
+    """What ``asking()`` (a question on the terminal) gave, or None, said, where the answer declined what was
+    offered or no answer named a choice: nothing is done then."""
+    from groundlang.clarify import Declined
+
+    try:
+        taken = asking()
+    except Declined:
+        print("groundlang follow: the answer declined what was offered; nothing done", file=sys.stderr)
+        return None
+    if taken is None:
+        print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
+    return taken
 
 
 def _print_already_true(done, state, library, names, places: int, asked: bool) -> None:
@@ -136,28 +152,29 @@ def _nothing_to_do(done, state, library, names, args) -> int:
 
 def _answer_json(learner, result, done, state, names, args, held=None) -> dict:
     """follow's --json answer; ``held``: the result that asks whether what already holds is meant (``result``
-    is then the rest of the reading, or ``held`` itself where nothing else can be done)."""
+    is then the rest of the reading: None where nothing else can be done, and there is none to show)."""
     from groundlang.corpus import format_state_like
     from groundlang.logic.atoms import format_goal, renamed_words
     from groundlang.wording import goal_phrase
 
+    post = None if result is None else result.posterior
     data = {
-        "interpretations": [{"goal": format_goal(g, names),
-                             "words": renamed_words(goal_phrase(g, state, learner.library), names),
-                             "probability": p} for g, p in result.posterior.goals()[: args.top]],
-        "confidence": result.confidence,
-        "best_goal_probability": result.posterior.confidence,
-        "margin": result.posterior.margin,
-        "out_of_reach": result.posterior.out_of_reach,
+        "interpretations": [] if post is None else [
+            {"goal": format_goal(g, names), "words": renamed_words(goal_phrase(g, state, learner.library), names),
+             "probability": p} for g, p in post.goals()[: args.top]],
+        "confidence": None if result is None else result.confidence,
+        "best_goal_probability": None if post is None else post.confidence,
+        "margin": None if post is None else post.margin,
+        "out_of_reach": 0.0 if post is None else post.out_of_reach,
         "already_true": None if done is None else {
             "goal": format_goal(done[0], names), "words": renamed_words(goal_phrase(done[0], state, learner.library),
                                                                         names), "probability": done[1]},
-        "abstained": result.abstained or held is not None,
+        "abstained": held is not None or result.abstained,
     }
     if held is not None:
         data.update(question_kind="already true", question=renamed_words(held.question, names),
                     choices=choices_json(held.choices, state, learner.library, names),
-                    unknown_words=list(result.unknown_words))
+                    unknown_words=list((result or held).unknown_words))
     elif result.abstained:
         data.update(question_kind="readings", question=renamed_words(result.question, names),
                     choices=choices_json(result.choices, state, learner.library, names),
@@ -243,35 +260,23 @@ def run(args: argparse.Namespace) -> int:
         _print_already_true(done, state, learner.library, names, places, held is not None)
     if held is not None and (args.json or not args.ask):
         if args.json:
-            print(json_text(_answer_json(learner, result or held, done, state, names, args, held=held)))
+            print(json_text(_answer_json(learner, result, done, state, names, args, held=held)))
         else:
             print_question(held.question, held.choices, state, learner.library, names, places)
         _refuse(result, args, done)
         return ASKED
-    if held is not None:
-        from groundlang.clarify import Declined
-
-        try:
-            taken = ask_held(learner, held, args.max_steps, names, places)
-        except Declined:  # a no where nothing else can be done
-            print("groundlang follow: the answer declined what was offered; nothing done", file=sys.stderr)
-            return ASKED
+    if held is not None:  # a no where nothing else can be done declines
+        taken = _answer(lambda: ask_held(learner, held, args.max_steps, names, places))
         if taken is None:
-            print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
             return ASKED
         if taken is not result:  # taken, not declined: the rest of the reading is what a no gives
             return _nothing_to_do(done, state, learner.library, names, args)
+        if args.learn and not result.abstained:  # acted on as read: no answer chose what it means
+            print(f"nothing learned: the answer said only what is not meant; the model at {args.model} is left as it was")
     answered = None
     if result.abstained and args.ask and not args.json:
-        from groundlang.clarify import Declined
-
-        try:
-            answered = ask(learner, result, state, args.max_steps, names, places)
-        except Declined:
-            print("groundlang follow: the answer declined what was offered; nothing done", file=sys.stderr)
-            return ASKED
+        answered = _answer(lambda: ask(learner, result, state, args.max_steps, names, places))
         if answered is None:
-            print("groundlang follow: no answer named a choice; nothing done", file=sys.stderr)
             return ASKED
         if args.learn:
             learn_answer(learner, result, answered, state, args.model)
