@@ -24,13 +24,40 @@ from groundlang.logic.storage import write_atomically
 __all__ = ["EntryFolder"]
 
 
+# Cache roots said to be unwritable in this process: the behaviour, parse and evidence entries of one run share
+# a root, and a read-only one had been said once for each.
+_UNWRITABLE: set[Path] = set()
+
+
+def warn_unwritable(logger: logging.Logger, kind: str, root, exc: OSError) -> None:
+    """The warning that the cache ``root`` cannot be written, once a root and process (later kinds' at debug
+    level); the run goes on without writing to it."""
+    said = (f"cache {root} cannot be written ({exc.filename or root}: {exc.strerror or exc}); going on without "
+            f"writing to it ({kind} entries first)")
+    if Path(root) in _UNWRITABLE:
+        logger.debug(said)
+    else:
+        _UNWRITABLE.add(Path(root))
+        logger.warning(said)
+
+
+def kind_root(root: Path | None, kind: str, logger: logging.Logger) -> Path | None:
+    """``root``, or None with one warning where its ``kind`` folder is something else than a folder (a file
+    there had been counted as every entry corrupt, one by one, and its entries were neither read nor written)."""
+    if root is not None and os.path.lexists(root / kind) and not (root / kind).is_dir():
+        logger.warning("cache %s: %s is not a folder; this run neither reads nor writes %s entries (move it away)",
+                       root, root / kind, kind)
+        return None
+    return root
+
+
 class EntryFolder:
     """The entries of one ``kind`` in the cache folder ``cache_dir`` (None: the default; False: none, when
     nothing is read or written). ``made`` names what is done to an entry that is not there or is
     damaged ("recomputed", "reparsed"); ``logger`` is the caller's."""
 
     def __init__(self, cache_dir: str | os.PathLike | None | bool, kind: str, made: str, logger: logging.Logger):
-        self.root = None if cache_dir is False else cache_directory(cache_dir)
+        self.root = None if cache_dir is False else kind_root(cache_directory(cache_dir), kind, logger)
         self.kind, self.made, self.logger = kind, made, logger
         self.new = made.removeprefix("re")  # what the count of entries made for the first time says
         self.hits = self.computed = self.damaged = 0
@@ -82,8 +109,7 @@ class EntryFolder:
         except OSError as exc:
             if only_the_entry_lost(exc, self.path(key), self.root / self.kind):
                 return  # counted as damaged when read: only it is lost
-            self.logger.warning("%s cache %s cannot be written (%s: %s); going on without writing to it", self.kind,
-                                self.root, exc.filename or self.root, exc.strerror or exc)
+            warn_unwritable(self.logger, self.kind, self.root, exc)
             self._writable = False
 
     def report(self, counted: str, hits: str = "from the cache") -> None:

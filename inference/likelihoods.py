@@ -271,7 +271,9 @@ def behaviour_likelihood_table(
         raise ValueError(f"method {method!r}: expected auto, exact or abstraction")
     if len(candidates) != len(instances):
         raise ValueError(f"{len(instances)} instances but {len(candidates)} candidate lists")
-    root = None if cache_dir is False else cache_directory(cache_dir)
+    from groundlang.inference.cache_entries import kind_root  # it reads this module's entries
+
+    root = None if cache_dir is False else kind_root(cache_directory(cache_dir), BEHAVIOUR_FOLDER, logger)
     cleaned: set = set()  # entry folders this run has cleared of a killed writer's temporary files
     goals = [[_goal(g) for g in row] for row in candidates]
     program = library.tabulation_program if library is not None else tabulation_program(())
@@ -380,8 +382,9 @@ def _store(root, key: str, value: float, goal, cleaned: set) -> Path | None:
     except OSError as exc:
         if only_the_entry_lost(exc, _entry_path(root, key), Path(root) / BEHAVIOUR_FOLDER):
             return root  # counted as damaged when read: only it is lost
-        logger.warning("behaviour cache %s cannot be written (%s: %s); going on without writing "
-                       "to it", root, exc.filename or root, exc.strerror or exc)
+        from groundlang.inference.cache_entries import warn_unwritable  # it reads this module's entries
+
+        warn_unwritable(logger, "behaviour", root, exc)
         return None
 
 

@@ -114,6 +114,17 @@ def test_an_unwritable_cache_is_one_warning_and_the_run_goes_on(instances, tmp_p
     assert len(warnings) == 1 and "cannot be written" in warnings[0] and "Read-only file system" in warnings[0]
     for a, b in zip(uncached, table):
         np.testing.assert_array_equal(a, b)
+    # the parse cache of the same root says nothing more: one warning a root (it had been one a kind)
+    from groundlang.grammar.lexicon import Lexicon
+    from groundlang.inference import cache_entries
+    from groundlang.inference.parse_cache import ParseCache
+
+    monkeypatch.setattr(cache_entries, "write_atomically", read_only)
+    caplog.clear()
+    with caplog.at_level(logging.DEBUG):
+        ParseCache(tmp_path).readings("go to the red room", None, Lexicon.english())
+    assert not [r for r in caplog.records if r.levelno >= logging.WARNING and "cannot be written" in r.getMessage()]
+    assert [r for r in caplog.records if "cannot be written" in r.getMessage()]  # said, at debug level
 
 
 def test_a_file_in_place_of_one_entry_folder_loses_only_its_entries(instances, tmp_path, caplog):
@@ -131,14 +142,16 @@ def test_a_file_in_place_of_one_entry_folder_loses_only_its_entries(instances, t
     written = sorted(p.name for p in (tmp_path / "c" / "behaviour").glob("*/*.json"))
     assert written == sorted(p.name for p in entries if p.parent.name != shard) and written
     assert not any("cannot be written" in r.getMessage() for r in caplog.records)
-    # the kind's folder itself a file: nothing can be written there, said once
+    # the kind's folder itself a file: nothing can be read or written there, said once (not as every entry
+    # corrupt, one by one)
     caplog.clear()
     (tmp_path / "d").mkdir()
     (tmp_path / "d" / "behaviour").write_text("stray")
     with caplog.at_level(logging.WARNING, logger=LOG):
         behaviour_likelihood_table(subset, goals, cache_dir=tmp_path / "d")
-    said = [r.getMessage() for r in caplog.records if "cannot be written" in r.getMessage()]
-    assert len(said) == 1 and "going on without writing to it" in said[0]
+    said = [r.getMessage() for r in caplog.records]
+    assert said == [f"cache {tmp_path / 'd'}: {tmp_path / 'd' / 'behaviour'} is not a folder; this run neither reads "
+                    "nor writes behaviour entries (move it away)"]
 
 
 def test_a_killed_writers_temporary_files_are_removed_when_their_folder_is_written(instances, tmp_path):
