@@ -85,6 +85,10 @@ def main(argv: list[str] | None = None) -> int:
         # SIGTERM (a scheduler, `kill`) stops a run the way Ctrl-C does, from the first import of torch on
         # (cache_entry_count's, seconds on a busy machine).
         with terminate_as_interrupt():
+            if os.environ.get("GROUNDLANG_MAX_STATES", "").strip():  # a bad value said first, not after a corpus
+                from groundlang.model.state_search import default_max_states  # was read (demo checked it first)
+
+                default_max_states()
             cache_entries_before = cache_entry_count(args) if caching else 0  # a bad cache folder is an error line
             return int(args.func(args) or 0)
     except BrokenPipeError:

@@ -329,6 +329,9 @@ ROWS += [
     Row("environment/GROUNDLANG_MAX_STATES not a number",
         _follow("go to the red room", NOVEL), env={"GROUNDLANG_MAX_STATES": "lots"},
         pieces=("GROUNDLANG_MAX_STATES='lots': expected a positive integer",)),
+    Row("environment/GROUNDLANG_MAX_STATES not a number, said before a corpus is read (demo had checked one first)",
+        ("check", str(NOVEL.parent), "--palette", "sokoban"), env={"GROUNDLANG_MAX_STATES": "lots"},
+        pieces=("groundlang check: error: GROUNDLANG_MAX_STATES='lots': expected a positive integer",)),
 ]
 
 # ASP task libraries (user files are solved in a child process, killed at the limit).
