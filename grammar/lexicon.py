@@ -33,6 +33,8 @@ __all__ = ["CATEGORIES", "FILE_CATEGORIES", "Lexicon", "LexiconError", "Semantic
 _NOUN_PHRASE_OPENERS = frozenset({"DET", "PREP", "TO", "ADJ", "NUM"})
 # Marks, in the trie of multiword entries, a node where an entry ends: not a string, so no word collides.
 _END = None
+# Categories of words a language does not add to: a serial verb or a degree word is none of them.
+_CLOSED_CLASS = frozenset({"DET", "PREP", "TO", "CONJ", "SUB", "REL", "PRON", "AUX", "NEG"})
 
 
 def _inflections(lemma: str) -> dict[str, str]:
@@ -93,6 +95,16 @@ class Lexicon:
             cats.add("GER" if form.endswith("ing") else "VERB")
             if form.endswith("ed"):
                 cats.add("ADJ")  # past participles modify nouns: "orange-floored room", "colored room"
+        for word in words["ADV_DEGREE"]:  # a degree word is an adverb too, listed so or not ("mighty quickly")
+            table.setdefault(word, set()).add("ADV")
+        # A closed-class word read as a serial verb or a degree word changes every command that uses it ("not" as a
+        # degree word had dropped the negation of "the not red room"; "to" as a serial verb read "go to" as "to").
+        for category in ("VERB_SERIAL", "ADV_DEGREE"):
+            for word in sorted(words[category]):
+                if closed := sorted(table.get(word, set()) & _CLOSED_CLASS):
+                    raise LexiconError(f"{category} word {word!r} is also {', '.join(closed)}, a closed class: a "
+                                       f"{'serial verb' if category == 'VERB_SERIAL' else 'degree word'} is an open "
+                                       "word")
         self._listed = {word: frozenset(cats) for word, cats in table.items()}
         self.hues = words["HUE"]
         # A compound's first hue is one of these lengths: cutting only there keeps the split linear in the

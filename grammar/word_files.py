@@ -105,6 +105,9 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
         elif category in ("YES", "NO") and "_" in said:  # answers are read a word at a time
             raise LexiconError(f"{where}: {category} word {word!r} is more than one word (an answer's words are read "
                                "one at a time)")
+        elif category in ("VERB_SERIAL", "ADV_DEGREE") and "_" in said:  # the grammar reads one word there
+            raise LexiconError(f"{where}: {category} word {word!r} is more than one word (a serial verb or a degree "
+                               "word is one)")
         elif "=" in word:
             raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR and SYNONYM pair words)")
         elif not all(_WORD.fullmatch(part) for part in said.split("_")):

@@ -16,6 +16,7 @@ from importlib.resources import files
 from pathlib import Path
 
 import clingo
+from clingo import ast
 
 from .program import AspError, file_source, package_source, Program, term_signature
 
@@ -48,6 +49,13 @@ _FACTS = {("value", 3): "value(Attribute, Index, Name)", ("glyph", 2): 'glyph(Sh
 def _check_facts(program: Program, where: str) -> None:
     """PaletteError naming the file and line of a fact or rule head that is none of a palette's facts, nor a
     helper a rule reads (``name(0, red). value(colour, I, N) :- name(I, N).``)."""
+    for _, statements in program.statements_by_source():
+        for stm in statements:  # what a palette's one solve would not read, or read as nothing
+            if stm.ast_type == ast.ASTType.Program and stm.name != "base":
+                raise PaletteError(f"{where}, line {stm.location.begin.line}: #program {stm.name}: a palette is read "
+                                   "as one program; what follows it would be left out")
+            if "@" in str(stm):
+                raise PaletteError(f"{where}, line {stm.location.begin.line}: {stm}: a palette calls no script")
     helpers = program.body_signatures()
     for _, term in program.head_atoms():
         signature = term_signature(term)
@@ -102,7 +110,11 @@ def _read_palette(name: str, stamp: tuple | None = None) -> tuple[str, dict[str,
     classes: dict[str, set[str]] = {}
     _check_facts(program, source.name)
     shown = " ".join(f"#show {name}/{arity}." for name, arity in _FACTS)
-    for model in program.solve(shown, models=1):
+    models = program.solve(shown, models=2)
+    if len(models) != 1:  # a choice or a disjunction: the values would be whichever answer clingo gave first
+        raise PaletteError(f"{source.name}: " + ("no answer set (a constraint always fails)" if not models else
+                           "more than one answer set (a choice, a disjunction): a palette says one set of values"))
+    for model in models:
         for sym in model:
             if sym.name == "value_class":
                 if not all(a.type is clingo.SymbolType.Function and not a.arguments for a in sym.arguments):

@@ -303,7 +303,11 @@ _ERRORS = {c.__name__: c for c in (AspError, AspSyntaxError, AspScriptRefused, A
 
 def term_signature(term) -> tuple[str, int] | None:
     """``(name, arity)`` of an atom or term as written (``toyInRoom``, ``roomIs(C)``, ``holds(P, (A,))``); None
-    for a variable, a number, a string, a script call (``@f()``), a negated or computed term."""
+    for a variable, a number, a string, a script call (``@f()``) or a computed term; ``-name`` for a classically
+    negated atom."""
+    if term.ast_type == ast.ASTType.UnaryOperation and term.operator_type == ast.UnaryOperator.Minus:
+        inner = term_signature(term.argument)  # a classically negated atom: -name/2, a predicate of its own
+        return None if inner is None else ("-" + inner[0], inner[1])
     symbol = getattr(term, "symbol", None) if term.ast_type == ast.ASTType.SymbolicTerm else None
     if symbol is not None:
         return (symbol.name, len(symbol.arguments)) if symbol.type == clingo.SymbolType.Function else None

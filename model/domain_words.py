@@ -54,6 +54,11 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
         where = str(source) if isinstance(source, (str, Path)) else "words given as data (a trained model's own)"
         for pair in words.get("SYNONYM", ()):
             said.add(pair, where, f"in {where}")
+        if words.get("VERB_SERIAL") or words.get("ADV_DEGREE"):  # read against English: "to" is no serial verb
+            try:
+                Lexicon.english().extend({c: words[c] for c in ("VERB_SERIAL", "ADV_DEGREE") if c in words})
+            except LexiconError as exc:
+                raise LexiconError(f"{where}: {exc}") from None
         for category, entries in words.items():
             merged.setdefault(category, {}).update(dict.fromkeys(entries))  # in order, once each
     return {category: list(entries) for category, entries in merged.items()}

@@ -508,5 +508,15 @@ def test_a_degree_word_before_a_modifier_grades_it_and_names_nothing(graded, pla
     object of its own."""
     got = parse(graded)
     assert not got[0].logical_form.fallback and strings(got) == strings(parse(plain))
+    # stacked, they grade it too
+    assert strings(parse("go to the really very red room")) == strings(parse("go to the red room"))
+    # a word file's degree word is an adverb as well, listed so or not; a closed-class word is none
+    mighty = CLEANUP.extend({"ADV_DEGREE": ["mighty"]})
+    assert not parser.parse("move the star mighty quickly to the red room", word_lexicon=mighty)[0].logical_form.fallback
+    from groundlang.grammar.lexicon import LexiconError
+    with pytest.raises(LexiconError, match="ADV_DEGREE word 'not' is also NEG, a closed class"):
+        CLEANUP.extend({"ADV_DEGREE": ["not"]})
+    with pytest.raises(LexiconError, match="VERB_SERIAL word 'to' is also PREP, TO, a closed class"):
+        CLEANUP.extend({"VERB_SERIAL": ["to"]})
     # an adverb of the verb stays one ("move very close to the chair" reads as before)
     assert strings(parse("move very close to the chair")) == strings(parse("move close to the chair"))

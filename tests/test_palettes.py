@@ -40,6 +40,12 @@ def test_a_copy_of_a_palette_file_reads_the_corpus_the_same(tmp_path):
     ("value(colour, 0, red).", "no shape values"),
     ("colour(red).", "line 1: colour(red) is none of a palette's facts (value(Attribute, Index, Name)"),
     ("value(colour, 0, red). value(shape, 0, star).\n-value(colour, 1, x).", "line 2: -value(colour,1,x) is none"),
+    # what one solve would read as nothing, or as whichever answer clingo gave first
+    ("value(colour, 0, red). value(shape, 0, star).\n{ value(colour, 1, green) }.", "more than one answer set"),
+    ("value(colour, 0, red). value(shape, 0, star).\n:- value(colour, 0, red).", "no answer set"),
+    ("value(colour, 0, red). value(shape, 0, star).\n#program other.\nvalue(colour, 1, blue).",
+     "line 2: #program other: a palette is read as one program"),
+    ("value(colour, 0, red). value(shape, 0, star).\nvalue(colour, 1, @f(x)).", "a palette calls no script"),
     ('value(colour, 0, red). value(shape, 0, star).\nrgb(star, "gold").',
      "rgb(star, ...) names a value of shape; an rgb is of a colour value"),
     ("", "no value(Attribute, Index, Name) facts"),
@@ -121,4 +127,7 @@ def test_a_palette_may_compute_its_values_with_helpers_a_rule_reads(tmp_path):
     path = tmp_path / "computed.lp"
     path.write_text("name(0, red). name(1, blue).\nvalue(colour, I, N) :- name(I, N).\nvalue(shape, 0, star).\n")
     assert get_palette(str(path)).colours == ("red", "blue")
+    negated = tmp_path / "negated.lp"  # a classically negated helper is a helper too
+    negated.write_text("-name(0, red).\nvalue(colour, I, N) :- -name(I, N).\nvalue(shape, 0, star).\n")
+    assert get_palette(str(negated)).colours == ("red",)
 
