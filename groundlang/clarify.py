@@ -72,6 +72,15 @@ def _says_nothing(word: str, lexicon: Lexicon) -> bool:
     return word in lexicon.polite_words or bool(listed) and (listed <= _FUNCTION or "AUX" in listed)
 
 
+def named_after_no(answer: str, lexicon: Lexicon) -> str | None:
+    """The words after a leading no that name something, not denied ("no, the blue room": "the blue room"), or
+    None: the answer to a question of one choice that declines it and names what is meant instead."""
+    tokens = [t for t in tokenise(answer, lexicon) if any(c.isalnum() for c in t)]
+    if not tokens or tokens[0] not in lexicon.no_words or any(_negates(t, lexicon) for t in tokens[1:]):
+        return None
+    return " ".join(tokens[1:]) if _content(tokens[1:], lexicon) else None
+
+
 def _negates(token: str, lexicon: Lexicon) -> bool:
     """A negation: a word the lexicon lists as ``NEG``, or one ending in the clitic n't (kept whole)."""
     return "NEG" in lexicon.listed(token) or token.endswith("n't")

@@ -11,7 +11,7 @@ reading of goals that hold is learned from words that never asked for one (demon
 
 from __future__ import annotations
 
-from groundlang.clarify import Declined, choose
+from groundlang.clarify import Declined, choose, named_after_no
 from groundlang.confidence import GoalGroup, goals_held_at_start
 from groundlang.logic.atoms import Atom
 from groundlang.model.interpretations import NoTaskError
@@ -65,12 +65,17 @@ def follow_or_ask(command: str, state, held: Posterior | None, min_confidence: f
     return otherwise if reading is None else held_result(command, state, held, reading, otherwise, library)
 
 
-def answer_held(result: FollowResult, answer: str, library, lexicon) -> FollowResult:
+def answer_held(result: FollowResult, answer: str, library, lexicon, answer_rest=None) -> FollowResult:
     """A held question's answer: taking its choice (its number, its words or a yes) is nothing to do, a plan of
     no steps whose goal holds; declining it is the rest of the reading (``result.otherwise``, as following
-    acted on it or asked, with follow's ``max_steps``). AnswerError where it names nothing; Declined where it
-    declines and nothing else can be done."""
+    acted on it or asked, with follow's ``max_steps``); a no that names what is meant ("no, the blue room")
+    answers the rest's question, where it asks one, with ``answer_rest(rest, words)``. AnswerError where it
+    names nothing; Declined where it declines and nothing else can be done."""
     state = result.states[0]
+    rest = result.otherwise
+    if (isinstance(answer, str) and answer_rest is not None and rest is not None and rest.abstained
+            and (named := named_after_no(answer, lexicon))):
+        return answer_rest(rest, named)
     try:
         chosen = choose(answer, result.choices, state, library, lexicon=lexicon)
     except Declined:

@@ -307,8 +307,8 @@ class Learner:
         if any(a.predicate not in self.library.goal_relations for c in result.choices for a in c.goals[0]):
             raise ValueError("clarify: the result's choices are goals of another task library than this learner's "
                              "(answer it with the learner whose follow() made it)")
-        if result.already_true:  # a yes is nothing to do, a no the rest of the reading
-            return answer_held(result, answer, self.library, self.word_lexicon)
+        if result.already_true:  # yes: nothing to do; no: the rest of the reading ("no, the blue room": its answer)
+            return answer_held(result, answer, self.library, self.word_lexicon, lambda r, w: self.clarify(r, w, max_steps))
         chosen = choose(answer, result.choices, state, self.library,
                         read=lambda text, choices: clear_choice(
                             dict(self.posterior(f"{result.command}, {text}", state).goals()), choices,

@@ -492,6 +492,10 @@ def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys,
     monkeypatch.setattr("sys.stdin", io.StringIO("no\nthe blue one\n"))
     assert main([*follow, str(inside), "--ask"]) == 0
     assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room0): reached" in capsys.readouterr().out
+    # a no that names what is meant answers the rest's question too (it had been refused as naming nothing)
+    monkeypatch.setattr("sys.stdin", io.StringIO("no, the blue one\n"))
+    assert main([*follow, str(inside), "--ask"]) == 0
+    assert "goal the agent in the blue room \u2014 agentInRoom(agent0, room0): reached" in capsys.readouterr().out
     # with --guess, or less sure than --min-confidence asks: said, and the rest of the reading is weighed
     for options in (["--guess"], ["--min-confidence", "0.9999"], ["--min-confidence", "0"]):  # 0 asks nothing
         main([*follow, str(inside), *options])
@@ -526,6 +530,9 @@ def test_learner_follow_asks_whether_what_already_holds_is_meant(learner, tmp_pa
     yes = learner.clarify(asked, "yes")
     assert (yes.goal, yes.actions, yes.reached, yes.reason, yes.final_state) == (red, [], True, "goal", inside)
     assert learner.clarify(asked, "no") is asked.otherwise
+    assert asked.otherwise.abstained  # "no, the blue room": the rest's question answered by the words after the no
+    blue = learner.clarify(asked, "no, the blue room")
+    assert blue.goal == (Atom("agentInRoom", ("agent0", "room0")),) and blue.reached
     assert learner.clarify(asked, 1).actions == []
     with pytest.raises(AnswerError):
         learner.clarify(asked, "the star")

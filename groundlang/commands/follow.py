@@ -265,16 +265,21 @@ def run(args: argparse.Namespace) -> int:
             print_question(held.question, held.choices, state, learner.library, names, places)
         _refuse(result, args, done)
         return ASKED
+    answered = None
     if held is not None:  # a no where nothing else can be done declines
         taken = _answer(lambda: ask_held(learner, held, args.max_steps, names, places))
         if taken is None:
             return ASKED
-        if taken is not result:  # taken, not declined: the rest of the reading is what a no gives
+        if taken.goal == held.goal:  # taken: nothing to do
             return _nothing_to_do(done, state, learner.library, names, args)
-        if args.learn and not result.abstained:  # acted on as read: no answer chose what it means
+        if taken is not result:  # "no, the blue room": the rest's question answered too
+            answered = taken
+            if args.learn:
+                learn_answer(learner, result, answered, state, args.model)
+            result = taken
+        elif args.learn and not result.abstained:  # acted on as read: no answer chose what it means
             print(f"nothing learned: the answer said only what is not meant; the model at {args.model} is left as it was")
-    answered = None
-    if result.abstained and args.ask and not args.json:
+    if answered is None and result.abstained and args.ask and not args.json:
         answered = _answer(lambda: ask(learner, result, state, args.max_steps, names, places))
         if answered is None:
             return ASKED
