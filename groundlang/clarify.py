@@ -72,6 +72,17 @@ def _says_nothing(word: str, lexicon: Lexicon) -> bool:
     return word in lexicon.polite_words or bool(listed) and (listed <= _FUNCTION or "AUX" in listed)
 
 
+def says_only_what_not_to_do(readings) -> bool:
+    """Whether every reading's clauses that say something are negated ("do not go to the blue room", "never
+    enter it"): a task is what to do, and negation is none, so such words were read as what they deny."""
+    return bool(readings) and all(
+        not any(not c.negated and (c.verb is not None or c.args) for c in r.logical_form.clauses) for r in readings)
+
+
+NOT_TO_DO_QUESTION = ("The words say only what not to do, and I plan for what to do: what should be done? (a "
+                      "command that says it)")
+
+
 def named_after_no(answer: str, lexicon: Lexicon) -> str | None:
     """The words after a leading no that name something, not denied ("no, the blue room": "the blue room"), or
     None: the answer to a question of one choice that declines it and names what is meant instead."""
@@ -182,6 +193,8 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     Raises AnswerError naming the choices when the answer names none of them or several, Declined where
     it declines them."""
     lexicon = lexicon or Lexicon.english()
+    if not choices:  # a question that offers none ("what should be done?"): a new command answers it
+        raise AnswerError("the question offers no choice to answer with: give the command again, saying what to do")
     text = answer.strip()
     if not text:
         raise AnswerError("empty answer: expected a number or words naming one of the choices")

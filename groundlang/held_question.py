@@ -7,11 +7,16 @@ it is now?". A yes is nothing to do (a plan of no steps, the goal reached); a no
 acted on or asked about as following would have (the result's ``otherwise``). Never taken without asking: the
 reading of goals that hold is learned from words that never asked for one (demonstrations end elsewhere), so
 "leave the blue room" said in it reads as it too.
+
+So, too, where the words say only what not to do ("do not go to the blue room"): negation is no task, so
+they are read as what they deny; following asks for a command that says what to do (no choice offered).
 """
 
 from __future__ import annotations
 
-from groundlang.clarify import Declined, choose, named_after_no
+from dataclasses import replace
+
+from groundlang.clarify import NOT_TO_DO_QUESTION, Declined, choose, named_after_no, says_only_what_not_to_do
 from groundlang.confidence import GoalGroup, goals_held_at_start
 from groundlang.logic.atoms import Atom
 from groundlang.model.interpretations import NoTaskError
@@ -23,10 +28,11 @@ __all__ = ["held_reading", "held_question", "held_result", "follow_or_ask", "ans
 
 def held_reading(held: Posterior) -> tuple[tuple[Atom, ...], float] | None:
     """The goal ``held`` (``Learner.posterior(..., held=True)``) most probably reads its words as, with its
-    probability, where that goal holds at the start; None otherwise, and for a command with a negated clause:
-    "do not go to the blue room" is read as a task without its negation (negation is no task), and what it asks
-    for is not what it says."""
-    if any(c.negated for r in held.readings for c in r.logical_form.clauses):
+    probability, where that goal holds at the start; None otherwise, and for a command that says only what not
+    to do: "do not go to the blue room" is read as a task without its negation (negation is no task), and what
+    it asks for is not what it says. A command that also says what to do ("go to the red room, do not go to the
+    blue room") is asked about."""
+    if says_only_what_not_to_do(held.readings):
         return None
     return (held.best_goal, held.confidence) if held.best_goal in goals_held_at_start(held) else None
 
@@ -62,7 +68,13 @@ def follow_or_ask(command: str, state, held: Posterior | None, min_confidence: f
         if reading is None:
             raise
         otherwise = None
-    return otherwise if reading is None else held_result(command, state, held, reading, otherwise, library)
+    if reading is not None:
+        return held_result(command, state, held, reading, otherwise, library)
+    if min_confidence and says_only_what_not_to_do(otherwise.posterior.readings):
+        # "do not go to the blue room" had walked into the blue room at 0.99: asked, never acted on
+        return replace(otherwise, goal=otherwise.posterior.best_goal, states=[state], actions=[], reached=False,
+                       reason="abstained", abstained=True, question=NOT_TO_DO_QUESTION, choices=[])
+    return otherwise
 
 
 def answer_held(result: FollowResult, answer: str, library, lexicon, answer_rest=None) -> FollowResult:

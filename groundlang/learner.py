@@ -243,9 +243,9 @@ class Learner:
         push a toy the abstraction holds still.
         With ``min_confidence`` (0 to 1), a reading less confident than that is not acted on:
         the result has ``abstained=True``, the ``question`` to ask, its ``choices`` and the
-        ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer. Where the words
-        most probably ask, as surely, for what already holds, it asks whether that is meant
-        (``already_true``, :mod:`groundlang.held_question`), also where nothing else can be done."""
+        ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer. It asks too where the
+        words most probably ask, as surely, for what already holds (``already_true``), or say only what not to
+        do (no choices): :mod:`groundlang.held_question`."""
         check_count("follow", "max_steps", max_steps)
         check_threshold("follow", "min_confidence", min_confidence)
         self._require_fitted()

@@ -504,10 +504,23 @@ def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys,
     # where it is not true yet, nothing is said
     assert main([*follow, str(outside), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["already_true"] is None
-    # nor of a negated command, read without its negation (negation is no task): it asks for no such thing
-    main(["--quiet", "follow", "do not go to the red room", "--model", str(model), "--palette", "sokoban", "--env",
-          str(inside), "--json"])
-    assert json.loads(capsys.readouterr().out)["already_true"] is None
+    # nor of a negated command, read without its negation (negation is no task): it asks for no such thing;
+    # it asks what should be done instead ("do not go to the blue room" had walked into the blue room at 0.99)
+    negated = ["--quiet", "follow", "do not go to the blue room", "--model", str(model), "--palette", "sokoban",
+               "--env", str(inside)]
+    assert main([*negated, "--json"]) == 3
+    answer = json.loads(capsys.readouterr().out)
+    assert answer["already_true"] is None and answer["abstained"] and answer["question_kind"] == "what to do"
+    assert answer["choices"] == [] and "actions" not in answer
+    assert main(negated) == 3
+    out, err = capsys.readouterr()
+    assert "The words say only what not to do" in out and "plan (" not in out
+    assert "not acting: the words say only what not to do" in err and "act on that reading with --guess" in err
+    monkeypatch.setattr("sys.stdin", io.StringIO("the red one\n"))
+    assert main([*negated, "--ask"]) == 3  # nothing to choose among: not asked on the terminal
+    assert "answer> " not in capsys.readouterr().out
+    assert main([*negated, "--guess"]) == 0  # acting however unsure: on what the words were read as
+    assert "plan (" in capsys.readouterr().out
 
 
 def test_learner_follow_asks_whether_what_already_holds_is_meant(learner, tmp_path):
@@ -541,6 +554,25 @@ def test_learner_follow_asks_whether_what_already_holds_is_meant(learner, tmp_pa
     (tmp_path / "outside.state").write_text(layout + " agent,3,8\n")
     outside = read_state_file(tmp_path / "outside.state", "sokoban")
     assert not learner.follow("go to the red room", outside, min_confidence=0.7).already_true
+
+
+def test_learner_follow_asks_what_to_do_where_the_words_say_only_what_not_to_do(learner, tmp_path):
+    """Negation is no task: "do not go to the blue room" is read as the blue room. With min_confidence the
+    learner asks for a command that says what to do (no choice to take), rather than act on it."""
+    from groundlang.clarify import NOT_TO_DO_QUESTION, AnswerError, says_only_what_not_to_do
+    from groundlang.grammar.parser import parse
+
+    layout = (EXAMPLES / "novel_a.state").read_text().split(" agent,")[0]
+    (tmp_path / "red.state").write_text(layout + " agent,3,3\n")
+    state = read_state_file(tmp_path / "red.state", "sokoban")
+    for said in ("do not go to the blue room", "never enter the blue room", "ok, don't go into the blue room"):
+        asked = learner.follow(said, state, min_confidence=0.7)
+        assert asked.abstained and asked.question == NOT_TO_DO_QUESTION and asked.choices == [] and not asked.actions
+        with pytest.raises(AnswerError):
+            learner.clarify(asked, "the green room")
+        assert learner.follow(said, state).actions  # acting however unsure: on the reading, as before
+    assert not says_only_what_not_to_do(parse("push the star without entering the blue room"))
+    assert not says_only_what_not_to_do(parse("go to the green room, do not go to the blue room"))
 
 
 def test_the_words_reading_of_what_holds_conditions_on_nothing(learner, tmp_path):

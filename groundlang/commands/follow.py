@@ -98,6 +98,11 @@ def _refuse(result, args, done=None) -> None:
         print(f"groundlang follow: not acting: the words most probably ask for what already holds ({down(done[1], places)}"
               f"); {how} (yes: nothing to do; {rest}", file=sys.stderr)
         return
+    if not result.choices:  # the words say only what not to do: nothing to choose among
+        print("groundlang follow: not acting: the words say only what not to do (negation is no task, so they "
+              "read as what they deny); give a command that says what to do, or act on that reading with --guess",
+              file=sys.stderr)
+        return
     print(f"groundlang follow: not acting: confidence {down(result.confidence, places)} is below "
           f"--min-confidence {args.min_confidence!r}; {how}, or act anyway with --guess", file=sys.stderr)
 
@@ -176,7 +181,8 @@ def _answer_json(learner, result, done, state, names, args, held=None) -> dict:
                     choices=choices_json(held.choices, state, learner.library, names),
                     unknown_words=list((result or held).unknown_words))
     elif result.abstained:
-        data.update(question_kind="readings", question=renamed_words(result.question, names),
+        data.update(question_kind="readings" if result.choices else "what to do",
+                    question=renamed_words(result.question, names),
                     choices=choices_json(result.choices, state, learner.library, names),
                     unknown_words=list(result.unknown_words))
     else:
@@ -279,7 +285,7 @@ def run(args: argparse.Namespace) -> int:
             result = taken
         elif args.learn and not result.abstained:  # acted on as read: no answer chose what it means
             print(f"nothing learned: the answer said only what is not meant; the model at {args.model} is left as it was")
-    if answered is None and result.abstained and args.ask and not args.json:
+    if answered is None and result.abstained and args.ask and not args.json and result.choices:
         answered = _answer(lambda: ask(learner, result, state, args.max_steps, names, places))
         if answered is None:
             return ASKED
