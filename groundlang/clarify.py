@@ -74,9 +74,11 @@ def _says_nothing(word: str, lexicon: Lexicon) -> bool:
 
 def says_only_what_not_to_do(readings) -> bool:
     """Whether every reading's clauses that say something are negated ("do not go to the blue room", "never
-    enter it"): a task is what to do, and negation is none, so such words were read as what they deny."""
-    return bool(readings) and all(
-        not any(not c.negated and (c.verb is not None or c.args) for c in r.logical_form.clauses) for r in readings)
+    enter it"): a task is what to do, and negation is none, so such words were read as what they deny. Not
+    for a reading the grammar did not parse whole: its chunks put a negation on the clause it happens to be in
+    ("move to the pink room no matter the location" is one negated chunk)."""
+    return bool(readings) and all(not r.logical_form.fallback and not any(
+        not c.negated and (c.verb is not None or c.args) for c in r.logical_form.clauses) for r in readings)
 
 
 NOT_TO_DO_QUESTION = ("The words say only what not to do, and I plan for what to do: what should be done? (a "

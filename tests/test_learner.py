@@ -573,6 +573,7 @@ def test_learner_follow_asks_what_to_do_where_the_words_say_only_what_not_to_do(
         assert learner.follow(said, state).actions  # acting however unsure: on the reading, as before
     assert not says_only_what_not_to_do(parse("push the star without entering the blue room"))
     assert not says_only_what_not_to_do(parse("go to the green room, do not go to the blue room"))
+    assert not says_only_what_not_to_do(parse("move to the pink room no matter the location"))  # a fallback's chunk
 
 
 def test_the_words_reading_of_what_holds_conditions_on_nothing(learner, tmp_path):
