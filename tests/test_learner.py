@@ -514,7 +514,7 @@ def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys,
     assert answer["choices"] == [] and "actions" not in answer
     assert main(negated) == 3
     out, err = capsys.readouterr()
-    assert "The words say only what not to do" in out and "plan (" not in out
+    assert "The words say only what not to do" in out and "plan (" not in out and "read as what the negation" in out
     assert "not acting: the words say only what not to do" in err and "act on that reading with --guess" in err
     monkeypatch.setattr("sys.stdin", io.StringIO("the red one\n"))
     assert main([*negated, "--ask"]) == 3  # nothing to choose among: not asked on the terminal

@@ -304,7 +304,10 @@ def run(args: argparse.Namespace) -> int:
     for goal, p in result.posterior.goals()[: args.top]:
         print(f"  {p:7.4f}  {labelled_goal(goal, state, learner.library, names)}")
     margin = f"margin {down(result.posterior.margin, places)} over the next goal that differs"
-    if answered is not None:  # what the words alone said, before the answer chose
+    if result.abstained and not result.choices:  # read as what they deny: no confidence in what was meant
+        print(f"read as what the negation denies (the most probable goal {down(result.posterior.confidence, places)}, "
+              f"{margin}): negation is no task")
+    elif answered is not None:  # what the words alone said, before the answer chose
         print(f"acting on the answer (from the words alone: the most probable goal "
               f"{down(result.posterior.confidence, places)}, "
               f"{margin})")
