@@ -17,6 +17,7 @@ import os
 import sys
 import time
 
+from groundlang.commands import report_beside
 from groundlang.interrupt import (HeldInterrupt, cache_entry_count, close_progress_bars, terminate_as_interrupt,
                                   what_was_kept)
 
@@ -90,7 +91,9 @@ def main(argv: list[str] | None = None) -> int:
 
                 default_max_states()
             cache_entries_before = cache_entry_count(args) if caching else 0  # a bad cache folder is an error line
-            return int(args.func(args) or 0)
+            json_path = getattr(args, "json", None)  # a path (evaluate, ablate) or a flag (follow, ...)
+            with report_beside(json_path if isinstance(json_path, str) else None):
+                return int(args.func(args) or 0)
     except BrokenPipeError:
         # The reader went away (`groundlang tasks ... | head`): nothing left to say, to anyone.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -29,6 +29,7 @@ from groundlang.folds import run_folds
 from groundlang.goal_translation import GoalHoldsAtStart, NovelEnvironmentError, describe_goal, translate_goal
 from groundlang.labels import label_for
 from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
+from groundlang.learner_state import check_count, check_threshold
 from groundlang.model.language_models import get_language_model
 from groundlang.model.world import State
 
@@ -178,6 +179,11 @@ def evaluate(
     ``train`` scores the training instances.
     """
     novel_states = _checked_inputs(corpus, labels, novel_states)
+    if limit is not None:  # -1 had scored all but the last, 0 all of them: silently, by slicing
+        check_count("evaluate", "limit", limit)
+    check_threshold("evaluate", "min_confidence", min_confidence)
+    if min_confidence is None:
+        raise ValueError("evaluate: min_confidence must be a number from 0 to 1, got None")
     if protocol not in ("loo", "train"):
         raise ValueError(f"unknown protocol {protocol!r}; expected loo or train")
     started = time.perf_counter()

@@ -59,8 +59,10 @@ class SwitchRow:
 
     @property
     def favours(self) -> str:
-        """``"default"`` or ``"other"``: which value the held-out likelihood of the demonstrations given
-        the words prefers (the default on a tie)."""
+        """``"default"``, ``"other"`` or ``"tie"``: which value the held-out likelihood of the demonstrations given
+        the words prefers (an exact tie had been said to favour the default)."""
+        if self.off.demonstrations == self.on.demonstrations:
+            return "tie"
         return "other" if self.off.demonstrations > self.on.demonstrations else "default"
 
 
@@ -115,6 +117,8 @@ def switch_settings(language_model: str, switch: str, base: Mapping | None = Non
         raise ValueError(f"--switch {switch!r}: {name} is not true or false (default {default!r}); "
                          f"give the other value, e.g. --switch {name}=VALUE")
     get_language_model(language_model, **{**dict(base or {}), name: value})  # refused here, before any training
+    if value == default and type(value) is type(default):  # the comparison would be of one setting with itself
+        raise ValueError(f"--switch {switch!r}: {value!r} is {name}'s default here; give another value to compare")
     return name, default, value
 
 

@@ -191,6 +191,10 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
     ``judge``: a TaskLibrary to judge what the test pairs show and whether a final state does it with, where
     not ``library`` (two domains compared under one judge: a domain's descriptions are also the judge's)."""
     check_pair_evaluation(library, judge, min_confidence)
+    if library is None:  # the corpus's own domain, as the CLI's default (its evidence cache is keyed by it)
+        from groundlang.bdm_check import default_library
+
+        library = default_library()
     started = time.perf_counter()
     judged_by = None if judge is None else judge.program.user_names
     judge = library if judge is None else judge
@@ -277,7 +281,7 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
 
 def check_pair_evaluation(library, judge, min_confidence) -> None:
     """TypeError or ValueError, before any training, for a library, judge or threshold an evaluation cannot use."""
-    for name, value in (("library", library), ("judge", judge)):  # None: the default library, the learner's
+    for name, value in (("library", library), ("judge", judge)):  # None: the corpus's domain; the library
         if not isinstance(value, (TaskLibrary, type(None))):
             raise TypeError(f"evaluate_pairs: {name} must be a TaskLibrary or None, not {type(value).__name__}")
     if min_confidence is None:

@@ -242,3 +242,18 @@ def test_an_environment_that_is_a_device_is_refused_naming_what_may_be_given():
     with pytest.raises(ValueError, match=r"^/dev/zero: a device, not a regular file; expected a state file "
                                          r"\(\.state, a one-line \.bdm\) or a corpus file$"):
         read_initial_state("/dev/zero", "sokoban")
+
+
+def test_a_json_result_on_standard_output_is_the_json_alone(tmp_path):
+    """--json /dev/stdout had printed the report first, so a reader could not parse what came through."""
+    import json
+    import subprocess
+    import sys
+
+    E = str(example_corpus_path())
+    done = subprocess.run([sys.executable, "-m", "groundlang.cli", "evaluate", "--corpus", E, "--palette", "sokoban",
+                           "--labels", f"{E}/labels.csv", "--limit", "1", "--json", "/dev/stdout"],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["n"] == 1  # the whole of stdout is the JSON
+    assert "result written to /dev/stdout" in done.stderr  # the report went beside it

@@ -156,3 +156,24 @@ def test_a_novel_layout_where_a_labels_goal_already_holds_leaves_those_execution
     assert all("agentInRoom(agent0, room1) already holds at the start" in x["not_scored"] for x in unscored)
     assert result.novel_n == 20 and "novel executions not scored (the label's goal already holds at the start): 4" \
         in result.summary()
+
+
+def test_evaluate_checks_its_limit_threshold_and_protocol_options(capsys):
+    """evaluate(limit=-1) had scored all but the last instance, limit=0 all of them, min_confidence=5 was
+    reported as a threshold; --cold-folds was taken silently by the train protocol, which has no folds."""
+    from groundlang.cli import main
+    from groundlang.corpus import example_corpus_path, read_corpus
+    from groundlang.evaluation import evaluate
+    from groundlang.labels import read_labels
+
+    E = example_corpus_path()
+    corpus, labels = read_corpus(E, "sokoban"), read_labels(E / "labels.csv")
+    for options, said in (({"limit": 0}, "limit must be a positive integer, got 0"),
+                          ({"limit": -1}, "limit must be a positive integer, got -1"),
+                          ({"min_confidence": 5}, "min_confidence must be a number from 0 to 1"),
+                          ({"min_confidence": float("nan")}, "min_confidence must be a number from 0 to 1")):
+        with pytest.raises(ValueError, match=said):
+            evaluate(corpus, labels, **options)
+    assert main(["evaluate", "--corpus", str(E), "--palette", "sokoban", "--labels", str(E / "labels.csv"),
+                 "--protocol", "train", "--cold-folds"]) == 2
+    assert "--cold-folds: the train protocol trains one model, with no folds" in capsys.readouterr().err

@@ -46,7 +46,8 @@ def test_a_switch_is_compared_with_the_defaults(examples):
     assert row.on.joint == pytest.approx(held_out_likelihood(examples, folds=3).joint)
     assert row.off.joint == pytest.approx(held_out_likelihood(examples, settings={"object_key": False}, folds=3).joint)
     assert row.off.words != pytest.approx(row.on.words)  # the keys of "take the star to ..." changed
-    assert row.favours == ("other" if row.off.demonstrations > row.on.demonstrations else "default")
+    assert row.favours == ("tie" if row.off.demonstrations == row.on.demonstrations else
+                           "other" if row.off.demonstrations > row.on.demonstrations else "default")
     assert row.on.demonstrations == pytest.approx(row.on.joint - row.on.words)
 
 
@@ -104,3 +105,18 @@ def test_cli_grid_still_needs_labels_and_takes_no_switch(capsys):
     assert main(["ablate", "--corpus", str(EXAMPLES), "--palette", "sokoban", "--labels",
                  str(EXAMPLES / "labels.csv"), "--folds", "3"]) == 2
     assert "--folds is --held-out-likelihood's" in capsys.readouterr().err
+
+
+def test_a_switch_to_its_default_is_refused_and_a_repeated_one_compared_once(capsys):
+    """--switch object_key=true compared the default with itself ("favours default"); a switch named twice
+    printed its row twice."""
+    from groundlang.cli import main
+    from groundlang.held_out import switch_settings
+
+    with pytest.raises(ValueError, match=r"--switch 'object_key=true': True is object_key's default here"):
+        switch_settings("parse", "object_key=true")
+    assert switch_settings("parse", "object_key") == ("object_key", True, False)
+    E = str(example_corpus_path())
+    assert main(["ablate", "--held-out-likelihood", "--corpus", E, "--palette", "sokoban", "--switch", "object_key",
+                 "--switch", "object_key", "--folds", "2"]) == 0
+    assert sum(line.startswith("object_key ") for line in capsys.readouterr().out.splitlines()) == 1

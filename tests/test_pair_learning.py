@@ -539,3 +539,23 @@ def test_a_pair_of_two_layouts_shows_no_task_but_an_error(williams_commands, wil
         pair_task([], williams_library)
     with pytest.raises(TypeError, match="task must be a set of Atoms"):
         satisfies(first.end, None, williams_library)
+
+
+def test_a_pairs_evaluation_records_its_model_refuses_a_judge_of_no_task_and_defaults_the_library(tmp_path, capsys):
+    """The JSON of a .bdm evaluation had no language model or settings (the *.txt protocol's has); a judge of
+    no task was run to the end and scored nothing (exit 0); evaluate_pairs(library=None) was an AttributeError."""
+    from groundlang.cli import main
+    from groundlang.pair_evaluation import evaluate_pairs
+
+    small, out = str(FIXTURE / "small.bdm"), tmp_path / "b.json"
+    assert main(["--quiet", "evaluate", "--corpus", small, "--test", small, "--language-model", "bow",
+                 "--lm-setting", "word_concentration=2", "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["language_model"] == "bow" and data["language_model_settings"]["word_concentration"] == 2
+    no_tasks = str(Path(__file__).parent / "fixtures" / "bad_input" / "no_tasks.lp")
+    capsys.readouterr()
+    assert main(["evaluate", "--corpus", small, "--test", small, "--judge", no_tasks]) == 2
+    assert capsys.readouterr().err.strip().endswith("declares no task/1; a judge reads what the pairs show through "
+                                                    "its tasks' relations")
+    commands = read_bdm(FIXTURE / "small.bdm")
+    assert evaluate_pairs(commands, commands[:1], None, learner_options={"cache_dir": False}).executions_n == 3

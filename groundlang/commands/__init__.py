@@ -13,6 +13,7 @@ import math
 import os
 import re
 import stat
+import sys
 from pathlib import Path
 
 from groundlang.logic.palette_files import palette_names
@@ -163,6 +164,17 @@ def as_typed(text: str) -> str:
     """``text`` as typed unless it holds characters a terminal would obey (an escape sequence clears the screen)
     or not show: then as a Python string literal, every character visible."""
     return text if text.isprintable() else ascii(text)
+
+
+def report_beside(json_path):
+    """A context in which the command's report goes to standard error where ``json_path`` (``--json``) is standard
+    output (``--json /dev/stdout``): the JSON alone reaches a pipe (the report had come first, and a reader
+    could not parse it). Otherwise nothing changes."""
+    try:
+        to_stdout = json_path is not None and os.path.samestat(os.stat(json_path), os.fstat(sys.stdout.fileno()))
+    except (OSError, ValueError, AttributeError):  # no such file yet, or stdout is no file (captured in tests)
+        to_stdout = False
+    return contextlib.redirect_stdout(sys.stderr) if to_stdout else contextlib.nullcontext()
 
 
 def json_bytes(data) -> bytes:

@@ -108,14 +108,16 @@ def run_held_out(args: argparse.Namespace, words: dict) -> int:
     if not args.switches:
         raise ValueError("--held-out-likelihood: name at least one --switch, e.g. --switch start_role")
     base = language_model_settings(args.lm_settings)
+    args.switches = list(dict.fromkeys(args.switches))  # one row a switch: a repeated one was compared twice
     for switch in args.switches:
         switch_settings(models[0], switch, base)  # every switch checked before the corpus is read
     corpus = read_corpus(args.corpus, args.palette, skip_inconsistent=args.skip_inconsistent)
     folds = args.folds or 10
     rows = compare_switches(corpus.instances, args.switches, models[0], folds,
                             {"lexicon": words} if words else None, base)
+    given = f" with {', '.join(f'{k}={v}' for k, v in base.items())}" if base else ""
     print(f"{folds}-fold held-out log-likelihood (nats), {len(corpus.instances)} instances, "
-          f"language model {models[0]}")
+          f"language model {models[0]}{given}")
     print(format_switches(rows))
     if args.json:
         from groundlang.logic.storage import write_atomically
@@ -124,7 +126,9 @@ def run_held_out(args: argparse.Namespace, words: dict) -> int:
                  "default_joint": r.on.joint, "value_joint": r.off.joint, "default_words": r.on.words,
                  "value_words": r.off.words, "default_demonstrations": r.on.demonstrations,
                  "value_demonstrations": r.off.demonstrations} for r in rows]
-        write_atomically(Path(args.json), json_bytes({"folds": folds, "n": len(corpus.instances), "rows": data}))
+        write_atomically(Path(args.json), json_bytes({  # what was compared, so the figures can be reproduced
+            "folds": folds, "n": len(corpus.instances), "corpus": str(args.corpus), "language_model": models[0],
+            "language_model_settings": base, "rows": data}))
         print(f"rows written to {args.json}")
     return 0
 

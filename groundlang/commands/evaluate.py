@@ -93,6 +93,8 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         check_destination(args.json, "--json", inputs_read(args, "corpus", "test", "labels", "layouts", "library",
                                                            "judge", "novel_envs", "palette", "lexicon"))
+    if args.cold_folds and args.protocol == "train":  # it trains once: there are no folds to start cold
+        raise ValueError("--cold-folds: the train protocol trains one model, with no folds; it is for loo")
     if _is_pairs(args):
         return run_pairs(args)
     if args.test:
@@ -176,6 +178,9 @@ def run_pairs(args: argparse.Namespace) -> int:
     library = default_library(args.library, **time_limit_given(args))
     lexicon_beside(args, library)
     judge = None if args.judge is None else default_library(args.judge, **time_limit_given(args))
+    if judge is not None and not judge.tasks:  # it would judge every command to show nothing, after all the work
+        raise ValueError(f"--judge {', '.join(args.judge)}: declares no task/1; a judge reads what the pairs show "
+                         "through its tasks' relations")
     any_name = args.format == "williams2018"  # said: a file is read whatever its name
     train = read_pair_corpus(args.corpus, palette, any_name).commands
     if args.tuning and args.holdout is None:
@@ -227,8 +232,12 @@ def _run_folds(args: argparse.Namespace, commands: list, library, options: dict,
 
 def _report(args: argparse.Namespace, result) -> None:
     from groundlang.logic.storage import write_atomically
+    from groundlang.model.language_models import get_language_model
 
     print(result.summary())
     if args.json:
-        write_atomically(Path(args.json), json_bytes(result.to_json()))
+        # what was trained, as the *.txt protocol's result records it: the figures can be reproduced from the file
+        model = get_language_model(args.language_model, **language_model_settings(args.lm_settings))
+        data = {**result.to_json(), "language_model": model.name, "language_model_settings": model.settings()}
+        write_atomically(Path(args.json), json_bytes(data))
         print(f"result written to {args.json}")
