@@ -121,7 +121,7 @@ def cache_entry_count(args) -> int:
 
 
 # (argument name, what it holds); a command's arguments name its outputs.
-_OUTPUTS = (("output", "output"), ("json", "result"), ("out", "picture"))
+_OUTPUTS = (("output", "output"), ("json", "result"), ("out", "picture"), ("plot", "picture"))  # plot: ablate's
 # What ``-o/--output`` holds, per command.
 _OUTPUT_KIND = {"train": "model", "discover": "task library"}
 

@@ -196,7 +196,8 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
 
         library = default_library()
     started = time.perf_counter()
-    judged_by = None if judge is None else judge.program.user_names
+    same = judge is not None and [s.text for s in judge.program.sources] == [s.text for s in library.program.sources]
+    judged_by = None if judge is None or same else judge.program.user_names  # the learner's own is no other judge
     judge = library if judge is None else judge
     tasks = [command_task(command, judge) for command in test]  # a test file's bad layout, before training
     made = training_instances(train, library, demonstrations, skip_inconsistent=skip_inconsistent, max_states=max_states,

@@ -559,3 +559,6 @@ def test_a_pairs_evaluation_records_its_model_refuses_a_judge_of_no_task_and_def
                                                     "its tasks' relations")
     commands = read_bdm(FIXTURE / "small.bdm")
     assert evaluate_pairs(commands, commands[:1], None, learner_options={"cache_dir": False}).executions_n == 3
+    # the learner's own library given as the judge is no other judge: not said to be one
+    assert main(["--quiet", "evaluate", "--corpus", small, "--test", small, "--judge", "williams2018"]) == 0
+    assert "judged with" not in capsys.readouterr().out
