@@ -618,3 +618,12 @@ def test_the_words_share_on_what_already_holds_counts_against_following(learner,
         (1 - held.confidence) * 0.5 + held.confidence, abs=1e-6)
     # off (the default), the confidence is where the end stands among the rest
     assert learner.follow("go to the red room", inside).confidence > 0.45
+
+
+def test_lexicon_reads_a_verbs_forms_as_a_command_does(learner, tmp_path, capsys):
+    """A command's verb is read as its lemma ("took" is take); lexicon --words had called the forms unknown."""
+    learner.save(tmp_path / "m")
+    assert main(["lexicon", str(tmp_path / "m"), "--words", "took", "walked", "take"]) == 0
+    rows = {line.split("  ")[0].strip(): line for line in capsys.readouterr().out.splitlines()[1:4]}
+    assert set(rows) == {"took = take", "walked = walk", "take"}
+    assert rows["took = take"].split()[3:] == rows["take"].split()[1:] and "unknown" not in rows["took = take"]

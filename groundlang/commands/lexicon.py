@@ -75,7 +75,7 @@ def _print_prepositions(prepositions: dict, learner) -> None:
 
 def _as_read(words: str, word_lexicon) -> list[tuple[str, str]]:
     """(the words as typed, the word read) for each word of ``words`` as a command reads them: "crimson" is
-    read as red, "east of" as "right of" ("next to" stays spaced). Where the tokeniser's own splits
+    read as red, "east of" as "right of" ("next to" stays spaced), "took" as take. Where the tokeniser's own splits
     (hyphens, clitics, colour compounds) leave no one-to-one line between the two, each word is its label."""
     from groundlang.grammar.parser import tokenise, typed_words
 
@@ -91,7 +91,9 @@ def _as_read(words: str, word_lexicon) -> list[tuple[str, str]]:
             return unlabelled
         i += len(parts)
         out.append((" ".join(dict.fromkeys(typed for _, typed in chunk)), " ".join(parts)))
-    return unlabelled if len({label for label, _ in out}) < len(set(out)) else out  # one typed word, two rows
+    out = unlabelled if len({label for label, _ in out}) < len(set(out)) else out  # one typed word, two rows
+    # a verb's forms are read as its lemma, as a command's verb is ("took" is take): it had been "unknown"
+    return [(label, word if " " in word else word_lexicon.lemma(word)) for label, word in out]
 
 
 def run(args: argparse.Namespace) -> int:
