@@ -621,9 +621,11 @@ def test_the_words_share_on_what_already_holds_counts_against_following(learner,
 
 
 def test_lexicon_reads_a_verbs_forms_as_a_command_does(learner, tmp_path, capsys):
-    """A command's verb is read as its lemma ("took" is take); lexicon --words had called the forms unknown."""
+    """A command's verb is read as its lemma ("took" is take), a misspelling one edit from one known word as that
+    word ("gren" is green), as following reads them; lexicon --words had called them unknown."""
     learner.save(tmp_path / "m")
-    assert main(["lexicon", str(tmp_path / "m"), "--words", "took", "walked", "take"]) == 0
-    rows = {line.split("  ")[0].strip(): line for line in capsys.readouterr().out.splitlines()[1:4]}
-    assert set(rows) == {"took = take", "walked = walk", "take"}
+    assert main(["lexicon", str(tmp_path / "m"), "--words", "took", "walked", "take", "gren", "green"]) == 0
+    rows = {line.split("  ")[0].strip(): line for line in capsys.readouterr().out.splitlines()[1:6]}
+    assert set(rows) == {"took = take", "walked = walk", "take", "gren = green", "green"}
     assert rows["took = take"].split()[3:] == rows["take"].split()[1:] and "unknown" not in rows["took = take"]
+    assert rows["gren = green"].split()[3:] == rows["green"].split()[1:]

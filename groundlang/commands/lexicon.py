@@ -96,6 +96,13 @@ def _as_read(words: str, word_lexicon) -> list[tuple[str, str]]:
     return [(label, word if " " in word else word_lexicon.lemma(word)) for label, word in out]
 
 
+def _as_known(word: str, vocab) -> str:
+    """The known word the model reads ``word`` as: itself, or the word a misspelling is one edit from ("gren" as
+    green, :meth:`Vocabulary.word_id`), as following reads it; a word it cannot place stays itself."""
+    index = vocab.word_id(word) if " " not in word else 0
+    return vocab.words[index] if index else word
+
+
 def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
     from groundlang.model.parse_aligned import preposition_tasks
@@ -112,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
             if not labelled:
                 raise ValueError(f"--words {w!r}: no word in it; give the words to show, e.g. --words red room")
             for label, token in labelled:  # a word file's synonym ("crimson", "east of") labels its word's row
-                rows.setdefault(label, token)
+                rows.setdefault(label, _as_known(token, learner.vocab))
         args.words = list(dict.fromkeys(rows.values()))
     prepositions = learned = preposition_tasks(learner.globals, learner.vocab, top=args.top)
     if args.words:  # a multiword preposition is one token: "next to" is next_to
