@@ -50,7 +50,8 @@ def held_result(command: str, state, held: Posterior, reading, otherwise: Follow
     goal, p = reading
     return FollowResult(command, held, goal, [state], [], False, "abstained", abstained=True,
                         question=held_question(goal, state, library), choices=[GoalGroup((goal,), p)],
-                        goal_words=goal_phrase(goal, state, library), already_true=True, otherwise=otherwise)
+                        goal_words=goal_phrase(goal, state, library), already_true=True, otherwise=otherwise,
+                        held_reading=reading)
 
 
 def follow_or_ask(command: str, state, held: Posterior | None, min_confidence: float | None, library,
@@ -59,9 +60,8 @@ def follow_or_ask(command: str, state, held: Posterior | None, min_confidence: f
     where ``held``'s words most probably ask for it at least as surely as ``min_confidence`` (None or 0: never
     asked, as acting however unsure asks nothing). Asked also where nothing else can be done (``follow``
     raises NoTaskError): then ``otherwise`` is None."""
-    reading = held_reading(held) if min_confidence and held is not None else None
-    if reading is not None and reading[1] < min_confidence:
-        reading = None
+    said = held_reading(held) if min_confidence and held is not None else None
+    reading = said if said is not None and said[1] >= min_confidence else None
     try:
         otherwise = follow()
     except NoTaskError:
@@ -74,7 +74,7 @@ def follow_or_ask(command: str, state, held: Posterior | None, min_confidence: f
         # "do not go to the blue room" had walked into the blue room at 0.99: asked, never acted on
         return replace(otherwise, goal=otherwise.posterior.best_goal, states=[state], actions=[], reached=False,
                        reason="abstained", abstained=True, question=NOT_TO_DO_QUESTION, choices=[])
-    return otherwise
+    return otherwise if said is None else replace(otherwise, held_reading=said)  # said by follow, not asked
 
 
 def answer_held(result: FollowResult, answer: str, library, lexicon, answer_rest=None) -> FollowResult:

@@ -139,6 +139,8 @@ class FollowResult:
             (:mod:`groundlang.held_question`); ``posterior`` is then the words' reading with such goals offered.
         otherwise: for such a question, the result of following the rest of the reading (acted on or
             abstained), which a no to it takes; None where nothing else can be done.
+        held_reading: ``(goal, probability)`` where the words most probably ask for a goal that holds at the
+            start, asked about or not (read where follow had a threshold); None otherwise.
     """
 
     command: str
@@ -156,6 +158,7 @@ class FollowResult:
     success: float | None = None
     already_true: bool = False
     otherwise: FollowResult | None = None
+    held_reading: tuple[tuple[Atom, ...], float] | None = None
 
     @property
     def final_state(self) -> State:

@@ -54,8 +54,8 @@ def _check_facts(program: Program, where: str) -> None:
             if stm.ast_type == ast.ASTType.Program and stm.name != "base":
                 raise PaletteError(f"{where}, line {stm.location.begin.line}: #program {stm.name}: a palette is read "
                                    "as one program; what follows it would be left out")
-            if "@" in str(stm):
-                raise PaletteError(f"{where}, line {stm.location.begin.line}: {stm}: a palette calls no script")
+    if (call := program.script_call()) is not None:  # a text's "@" is no call ('glyph(moon, "@")')
+        raise PaletteError(f"{where}, line {call.location.begin.line}: {call}: a palette calls no script")
     helpers = program.body_signatures()
     for _, term in program.head_atoms():
         signature = term_signature(term)

@@ -194,23 +194,14 @@ class Program:
 
     def body_signatures(self) -> set[tuple[str, int]]:
         """``(name, arity)`` of every atom a rule body reads (in literals, conditions and aggregates)."""
-        found: set[tuple[str, int]] = set()
+        return {signature for _, statements in self.statements_by_source() for stm in statements
+                if stm.ast_type == ast.ASTType.Rule for node in _nodes(stm.body)
+                if node.ast_type == ast.ASTType.SymbolicAtom and (signature := term_signature(node.symbol))}
 
-        def walk(node) -> None:
-            if isinstance(node, ast.AST):
-                if node.ast_type == ast.ASTType.SymbolicAtom and (signature := term_signature(node.symbol)):
-                    found.add(signature)
-                for key in node.child_keys:
-                    walk(getattr(node, key))
-            elif isinstance(node, (list, tuple, ast.ASTSequence)):
-                for item in node:
-                    walk(item)
-
-        for _, statements in self.statements_by_source():
-            for stm in statements:
-                if stm.ast_type == ast.ASTType.Rule:
-                    walk(stm.body)
-        return found
+    def script_call(self):
+        """The first statement that calls a script (``@f(x)``), or None."""
+        return next((stm for _, statements in self.statements_by_source() for stm in statements
+                     if any(n.ast_type == ast.ASTType.Function and n.external for n in _nodes(stm))), None)
 
     def constants(self) -> dict[str, str]:
         """What each ``#const`` of the program names, as written (``#const near = agentNearRoom.``)."""
@@ -299,6 +290,17 @@ class Program:
 
 
 _ERRORS = {c.__name__: c for c in (AspError, AspSyntaxError, AspScriptRefused, AspGroundingError, AspTimeout)}
+
+
+def _nodes(node) -> Iterable:
+    """Every AST node under ``node`` (itself first), through child nodes and sequences of them."""
+    if isinstance(node, ast.AST):
+        yield node
+        for key in node.child_keys:
+            yield from _nodes(getattr(node, key))
+    elif isinstance(node, (list, tuple, ast.ASTSequence)):
+        for item in node:
+            yield from _nodes(item)
 
 
 def term_signature(term) -> tuple[str, int] | None:

@@ -550,7 +550,9 @@ def test_learner_follow_asks_whether_what_already_holds_is_meant(learner, tmp_pa
     with pytest.raises(AnswerError):
         learner.clarify(asked, "the star")
     # not asked where the words do not ask for it as surely, nor where it does not hold
-    assert not learner.follow("go to the red room", inside, min_confidence=0.9999).already_true
+    unsure = learner.follow("go to the red room", inside, min_confidence=0.9999)
+    assert not unsure.already_true and unsure.held_reading[0] == red  # said (follow's line), not asked
+    assert asked.held_reading == (red, asked.choices[0].probability)
     (tmp_path / "outside.state").write_text(layout + " agent,3,8\n")
     outside = read_state_file(tmp_path / "outside.state", "sokoban")
     assert not learner.follow("go to the red room", outside, min_confidence=0.7).already_true

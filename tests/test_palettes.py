@@ -127,6 +127,9 @@ def test_a_palette_may_compute_its_values_with_helpers_a_rule_reads(tmp_path):
     path = tmp_path / "computed.lp"
     path.write_text("name(0, red). name(1, blue).\nvalue(colour, I, N) :- name(I, N).\nvalue(shape, 0, star).\n")
     assert get_palette(str(path)).colours == ("red", "blue")
+    at = tmp_path / "at.lp"  # an "@" in a glyph's text is no script call (a text check had refused it)
+    at.write_text('value(colour, 0, red).\nvalue(shape, 0, star).\nglyph(star, "@").\n')
+    assert get_palette(str(at)).glyphs == (("star", "@"),)
     negated = tmp_path / "negated.lp"  # a classically negated helper is a helper too
     negated.write_text("-name(0, red).\nvalue(colour, I, N) :- -name(I, N).\nvalue(shape, 0, star).\n")
     assert get_palette(str(negated)).colours == ("red",)

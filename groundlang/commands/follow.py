@@ -257,10 +257,10 @@ def run(args: argparse.Namespace) -> int:
     # The words most probably ask for what already holds, as surely as acting needs (--guess and
     # --min-confidence 0 ask nothing): Learner.follow asks whether that is meant, the rest of the reading aside.
     held = result if result.already_true else None
+    # what the words say of the start, from the model as it was: read by Learner.follow where it had a threshold
+    done = result.held_reading if threshold else already_true(learner, args.command_text, state)
     if held is not None:
-        done, result = (held.goal, held.choices[0].probability), held.otherwise  # None: nothing else can be done
-    else:  # what the words say of the start, from the model as it was, said before acting or asking
-        done = already_true(learner, args.command_text, state)
+        result = held.otherwise  # None: nothing else can be done
     places = places_for(args.min_confidence)
     if done is not None and not args.json:  # before a question, whose choices leave it out
         _print_already_true(done, state, learner.library, names, places, held is not None)
