@@ -98,10 +98,10 @@ def _position_candidates(grid: np.ndarray, layout, previous: np.ndarray | None =
     return out
 
 
-def _same_static(grid: np.ndarray, state: State) -> bool:
-    """Whether an observation ``grid`` shows ``state``'s layout: its walls, doors, rooms' colours and the rooms'
-    and doors' added attributes, the channels that stay put (the agent and the toys aside)."""
-    expected = _static_grid(state, grid.shape[:2])
+def _same_static(grid: np.ndarray, state: State, expected: np.ndarray) -> bool:
+    """Whether an observation ``grid`` shows ``state``'s layout (``expected``: its :func:`_static_grid` of the
+    grid's shape): its walls, doors, rooms' colours and the rooms' and doors' added attributes, the channels
+    that stay put (the agent and the toys aside)."""
     pal = state.layout.palette
     moving = {3, 4, 5} | {len(CHANNELS) + k for k, (cls, _) in enumerate(pal.added) if cls == "toy"}
     kept = [c for c in range(expected.shape[2]) if c not in moving]
@@ -125,6 +125,7 @@ class CommandPolicy:
         # The layout planned in: a state or grid of another (rooms recoloured, another palette) is outside the
         # planned space, though its positions may be looked up in it (it had been acted on as the planned one).
         self.start_state = start_state
+        self._static: dict[tuple[int, int], np.ndarray] = {}  # the planned layout's still channels, by grid shape
         self.posterior = posterior
         self.space = space
         self.log_policy = np.asarray(log_policy)  # [S, 5]
@@ -144,8 +145,12 @@ class CommandPolicy:
                 or grid.shape[1] < lay.width:
             raise ValueError(f"observation must be an env's (a dict whose 'grid' is [H, W, {depth}], at "
                              f"least {lay.height}x{lay.width} here) or a State, got {type(observation).__name__}")
-        if self.start_state is not None and not _same_static(grid, self.start_state):
-            return -1
+        if self.start_state is not None:  # drawn once a grid shape, not once a step
+            shape = grid.shape[:2]
+            if shape not in self._static:
+                self._static[shape] = _static_grid(self.start_state, shape)
+            if not _same_static(grid, self.start_state, self._static[shape]):
+                return -1
         candidates = _position_candidates(grid, lay, self.previous)
         if not candidates:
             return -1
