@@ -149,9 +149,13 @@ def learner_from_state(cls, state: dict, where: str):
             raise ValueError(f"{key} is {type(state[key]).__name__}, expected {expected}")
     # A model saved before habit_prior existed weighed its habits by the rule it now names "overall", and one
     # saved before success_confidence (or held_goals_confidence) was as confident as its goal (its end): it acts
-    # and asks as it did (a setting absent from older models is otherwise its default).
-    settings = {"habit_prior": "overall", "success_confidence": False, "held_goals_confidence": False,
-                **state["language_model_settings"]}
+    # and asks as it did; one saved before last_passes_over_negated learned its tables with the last phrase's key
+    # on a negated phrase, and reads words with the keys it learned (a setting absent from older models is
+    # otherwise its default).
+    before = {"habit_prior": "overall", "success_confidence": False, "held_goals_confidence": False,
+              "last_passes_over_negated": False}
+    known = get_language_model(state["language_model"]).settings()
+    settings = {**{k: v for k, v in before.items() if k in known}, **state["language_model_settings"]}
     learner = cls(
         get_language_model(state["language_model"], **settings),
         library=TaskLibrary.from_saved_text(state["task_library"], f"{where}:task_library"),

@@ -64,6 +64,7 @@ class ParseAligned(LanguageModel):
         last_passes_over_source: bool = True,
         noun_attached_key: bool = True,
         negation_key: bool = True,
+        last_passes_over_negated: bool = True,
         start_role: bool = True,
         bystander_roles: bool = True,
         largest_constraint: bool = True,
@@ -106,7 +107,7 @@ class ParseAligned(LanguageModel):
         (``interpretations.unbroken_held_parts``). ``relational_descriptions``: a bystander related to an object the task binds by a PF of two objects (a toy in the goal room)
         is offered in a role named by that relation, so "the room *with the red chair*" can say which
         room (``model.relational``). ``last_phrase_key``, ``object_key``, ``last_passes_over_source``, ``noun_attached_key``,
-        ``negation_key``: the
+        ``negation_key``, ``last_passes_over_negated``: the
         marks of a phrase's preposition key (``phrase_keys.PhraseKeys`` says the regularity each states).
         ``start_role``: the room the agent starts in has a role of its own ("go *from the orange room*");
         ``bystander_roles``: objects the task leaves alone have one role per class (``other:room``), not
@@ -150,6 +151,7 @@ class ParseAligned(LanguageModel):
         self.last_passes_over_source = last_passes_over_source
         self.noun_attached_key = noun_attached_key
         self.negation_key = negation_key
+        self.last_passes_over_negated = last_passes_over_negated
         self.start_role = start_role
         self.bystander_roles = bystander_roles
         self.enumerates_constraints = not largest_constraint
@@ -162,7 +164,7 @@ class ParseAligned(LanguageModel):
 
     def phrase_keys(self) -> PhraseKeys:
         return PhraseKeys(self.last_phrase_key, self.object_key, self.last_passes_over_source, self.noun_attached_key,
-                          self.negation_key)
+                          self.negation_key, self.last_passes_over_negated)
 
     batch_type = ParseBatch
 
@@ -177,8 +179,8 @@ class ParseAligned(LanguageModel):
                  "achievable_goals", "expected_success", "step_cost", "end_habits", "moved_toys", "habits_made_true",
                  "bound_habits", "habit_prior", "success_confidence", "held_goals_confidence",
                  "last_phrase_key", "object_key", "last_passes_over_source", "noun_attached_key", "negation_key",
-                 "start_role", "bystander_roles", "largest_constraint", "negated_verbs_frame", "mention_task_objects",
-                 "parser_weights")
+                 "last_passes_over_negated", "start_role", "bystander_roles", "largest_constraint",
+                 "negated_verbs_frame", "mention_task_objects", "parser_weights")
 
     def settings(self) -> dict:
         return {name: (not self.enumerates_constraints if name == "largest_constraint" else getattr(self, name))

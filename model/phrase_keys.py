@@ -35,6 +35,9 @@ class PhraseKeys:
     # A phrase in a negated clause ("do not enter *the green room*") says what not to do: it has a key of its
     # own (``not:``), so it may learn to align with nothing; off, the key the clause has unnegated.
     negation_key: bool = True
+    # A phrase in a negated clause says where things must not go, so it is not where a command ends ("take
+    # the star to the green room, but do not enter the green room"): ``|last`` passes over it too.
+    last_passes_over_negated: bool = True
 
 
 def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None,
@@ -87,6 +90,8 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None,
         key, modifiers, head = result[n]
         entity = lf.entities[n]
         if entity.role == "vpp" and entity.prep in passed_over:
+            continue
+        if keys.last_passes_over_negated and entity.clause in negated:
             continue
         if modifiers or head:
             result[n] = (f"{key or 'dobj'}|last", modifiers, head)
