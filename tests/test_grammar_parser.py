@@ -520,3 +520,14 @@ def test_a_degree_word_before_a_modifier_grades_it_and_names_nothing(graded, pla
         CLEANUP.extend({"VERB_SERIAL": ["to"]})
     # an adverb of the verb stays one ("move very close to the chair" reads as before)
     assert strings(parse("move very close to the chair")) == strings(parse("move close to the chair"))
+
+
+@pytest.mark.parametrize("command", ["move to one spot south of the chair, no matter the color",
+                                     "move to one spot below the chair, no matter what color it is",
+                                     "move to the pink room no matter the location"])
+def test_no_matter_opens_a_concession_and_negates_nothing(command):
+    """"no matter" (SUB, one token) says what the command leaves open; its "no" had been read as a negation,
+    and the whole command as what not to do."""
+    got = parse(command)
+    assert not any(clause.negated for clause in got[0].logical_form.clauses)
+    assert strings(got)[0].startswith("move(") and "matter" not in strings(got)[0]
