@@ -243,6 +243,9 @@ def test_cli_train_follow_lexicon(tmp_path, capsys):
     assert set(shown) == {"red", "room"} and shown["red"][0][0] == "roomIsRed"
     assert main(["--quiet", "lexicon", str(model), "--words", " "]) == 2
     assert "--words ' ': no word in it" in capsys.readouterr().err
+    # a word of bytes that are not UTF-8 is said to be so, not split where they stand into two unknown words
+    assert main(["--quiet", "lexicon", str(model), "--words", "red", "gr\udcffen"]) == 2
+    assert "--words 'gr\\xffen': it is not UTF-8 text (byte 0xff at character 3)" in capsys.readouterr().err
     assert main(["--quiet", "lexicon", str(model), "--words"]) == 2  # an empty list is not "every word"
     assert "--words: no word given" in capsys.readouterr().err
     # what a preposition says of the lifted task: P(L | preposition), every task of the library once

@@ -106,6 +106,7 @@ def _as_known(word: str, vocab) -> str:
 def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
     from groundlang.model.parse_aligned import preposition_tasks
+    from groundlang.grammar.parser import utf8_fault
     from groundlang.wording import token_meanings
 
     learner = Learner.load(args.model)
@@ -115,6 +116,9 @@ def run(args: argparse.Namespace) -> int:
                          "--words for every word)")
     if args.words is not None:  # read as a command is: "RED" is red, "chair." chair; "next to" stays spaced, as
         for w in args.words:  # a preposition's row sends it to the preposition table
+            if fault := utf8_fault(w):  # its bytes would split the word where they stand
+                typed = w.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+                raise ValueError(f"--words '{typed}': it {fault}")
             labelled = _as_read(w, learner.word_lexicon)
             if not labelled:
                 raise ValueError(f"--words {w!r}: no word in it; give the words to show, e.g. --words red room")
