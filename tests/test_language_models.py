@@ -227,7 +227,9 @@ def test_switching_the_parts_off_removes_their_globals(setting):
     ("go into the green room and push it to the blue room", ["into", None, "to+obj|last"]),
     ("take the star to the red room with you", [None, "to+obj|last", "with+obj"]),  # "you" has no words
     ("push the star", ["dobj|last"]),
-    ("do not enter the green room", ["not:dobj|last"]),
+    # what must not be done is not where a command ends: |last passes over a negated clause
+    ("do not enter the green room", ["not:dobj"]),
+    ("go to the red room, do not go to the blue room", ["to|last", "not:to"]),
     # where a motion starts or what goes along is never where it ends: |last passes over it
     ("go to the beige room with the star", ["to|last", "with"]),
     ("walk to the white room from the orange room", ["to|last", "from"]),
