@@ -531,3 +531,24 @@ def test_no_matter_opens_a_concession_and_negates_nothing(command):
     got = parse(command)
     assert not any(clause.negated for clause in got[0].logical_form.clauses)
     assert strings(got)[0].startswith("move(") and "matter" not in strings(got)[0]
+
+
+def test_cli_parse_file_reads_the_commands_of_a_bdm_file_or_one_corpus_file(tmp_path, capsys):
+    """A .bdm file's state lines, "true" and "---" had been parsed as commands (20 "commands" of a file of two),
+    and so had a corpus file's actions and states."""
+    from pathlib import Path
+
+    from groundlang.corpus import example_corpus_path
+
+    fixture = Path(__file__).parent / "fixtures" / "williams2018" / "small.bdm"
+    assert main(["parse", "--file", str(fixture)]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[-1] == "2 commands: 2 full parse, 0 fallback only" and "true()" not in out
+    assert main(["parse", "--json", "--file", str(fixture.parent)]) == 0  # a folder of .bdm files too
+    texts = [json.loads(line)["command"] for line in capsys.readouterr().out.splitlines()]
+    assert texts == [line.strip() for i, line in enumerate(fixture.read_text().splitlines())
+                     if i == 0 or (line.strip() and not fixture.read_text().splitlines()[i - 1].strip())]
+    corpus_file = example_corpus_path() / "agent2red_0.txt"
+    assert main(["parse", "--file", str(corpus_file)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == corpus_file.read_text().splitlines()[0] and out[-1] == "1 command: 1 full parse, 0 fallback only"

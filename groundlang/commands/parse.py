@@ -3,6 +3,7 @@
     groundlang parse "push the star into the green room" [--json]
     groundlang parse --file commands.txt          # every non-empty line
     groundlang parse --file CORPUS_DIR            # the first line of every *.txt file below the folder
+    groundlang parse --file part1.bdm             # the commands of a .bdm file (or a folder of them)
     groundlang parse --library williams2018 "stand left of the red chair"   # with the library's word file
 
 With ``--file`` a summary follows: how many commands got a full parse, how many only the fallback.
@@ -11,6 +12,7 @@ With ``--file`` a summary follows: how many commands got a full parse, how many 
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
@@ -44,8 +46,17 @@ def register(subparsers) -> None:
 MAX_COMMANDS_BYTES = 16 * 2**20
 
 
-def _commands(path: Path) -> list[tuple[str, str]]:
-    """(source, command) pairs: first lines of a corpus folder's files, or a file's non-empty lines."""
+# A state line of a corpus file (commands-to-tasks: "room,5,0,9,5,0 ..."): a file holding one is a corpus file.
+_STATE_LINE = re.compile(r"\s*(room|door|block|toy|agent),-?\d")
+
+
+def _commands(path: Path, palette: str | None) -> list[tuple[str, str]]:
+    """(source, command) pairs: the commands of a .bdm file or folder, first lines of a corpus folder's files
+    or of one corpus file, or a file's non-empty lines."""
+    from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
+
+    if found := bdm_files(path):  # a state line or "---" read as a command would count as one
+        return [(f"{f}:{c.line}", c.text) for f in found for c in read_bdm(f, palette or DEFAULT_PALETTE)]
     if path.is_dir():
         files = sorted(p for p in path.rglob("*.txt") if p.is_file())
         if not files:
@@ -56,6 +67,8 @@ def _commands(path: Path) -> list[tuple[str, str]]:
             out.append((str(f), text_lines(text)[0].strip()))
         return out
     lines = text_lines(utf8_text(read_limited(path, MAX_COMMANDS_BYTES, "a file of commands"), path))
+    if any(_STATE_LINE.match(line) for line in lines[1:]):  # one corpus file: its command is its first line
+        return [(f"{path}:1", lines[0].strip())]
     return [(f"{path}:{i}", line.strip()) for i, line in enumerate(lines, 1) if line.strip()]
 
 
@@ -80,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.training_vocabulary import unlisted_schema_words
 
         words = words.extend(unlisted_schema_words(library or TaskLibrary.load(), [get_palette(args.palette)], words))
-    items = [("argument", args.text)] if args.file is None else _commands(args.file)
+    items = [("argument", args.text)] if args.file is None else _commands(args.file, args.palette)
     full = fallback = empty = 0
     for source, command in items:
         fault = command_fault(command)
