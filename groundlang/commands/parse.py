@@ -29,7 +29,9 @@ def register(subparsers) -> None:
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     # dest "text": the CLI keeps the sub-command's name in args.command
     p.add_argument("text", nargs="?", metavar="COMMAND", help="the command to parse (quote it)")
-    p.add_argument("--file", type=lambda text: Path(input_path(text)), help="a text file (one command per line) or a corpus folder")
+    p.add_argument("--file", type=lambda text: Path(input_path(text)),
+                   help="a text file (one command per line), a corpus file or folder (each file's first line), "
+                        "or a .bdm file or folder (its commands)")
     p.add_argument("--json", action="store_true", help="one JSON object per command")
     p.add_argument("--max-readings", type=positive_int, default=8, help="readings kept per command (default 8)")
     add_lexicon_option(p)
