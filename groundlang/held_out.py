@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import torch
 
 from groundlang.learner import Learner
+from groundlang.model.language_model_base import FOLLOWING_SETTINGS
 from groundlang.model.language_models import get_language_model, setting_names, setting_value
 
 __all__ = ["HeldOutLikelihood", "SwitchRow", "held_out_likelihood", "switch_settings", "compare_switches",
@@ -105,6 +106,10 @@ def switch_settings(language_model: str, switch: str, base: Mapping | None = Non
     if name not in setting_names(language_model):
         raise ValueError(f"--switch {switch!r}: language model {language_model} has no setting {name!r}; "
                          f"its settings: {', '.join(setting_names(language_model))}")
+    if name in FOLLOWING_SETTINGS:  # the two columns would tie, read as "no effect on held-out data"
+        raise ValueError(f"--switch {switch!r}: {name} acts only when following (where a plan ends, how confident "
+                         "it is), so the held-out likelihood, which training alone makes, cannot tell its values "
+                         "apart; compare its values with evaluate --lm-setting on held-out commands")
     default = get_language_model(language_model, **dict(base or {})).settings()[name]
     if sep:
         try:

@@ -14,8 +14,12 @@ from groundlang.model.phrase_keys import PhraseKeys
 # What an end habit's share is shrunk towards by one pseudo-demonstration (inference.end_habits EndHabits.rate):
 # one that did not show it, or one at the relation's rate over all demonstrations.
 HABIT_PRIORS = ("absent", "overall")
+# The settings of every language model that act only when following (the posterior in a new layout, where the
+# plan ends, how confident it is): training, and so any held-out likelihood, is the same whatever they are.
+FOLLOWING_SETTINGS = ("achievable_goals", "expected_success", "step_cost", "end_habits", "moved_toys",
+                      "habits_made_true", "bound_habits", "habit_prior", "success_confidence", "held_goals_confidence")
 
-__all__ = ["LanguageModel", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
+__all__ = ["LanguageModel", "FOLLOWING_SETTINGS", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
            "token_words", "word_meanings", "LEARNED_SHARE"]
 
 

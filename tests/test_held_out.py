@@ -120,3 +120,20 @@ def test_a_switch_to_its_default_is_refused_and_a_repeated_one_compared_once(cap
     assert main(["ablate", "--held-out-likelihood", "--corpus", E, "--palette", "sokoban", "--switch", "object_key",
                  "--switch", "object_key", "--folds", "2"]) == 0
     assert sum(line.startswith("object_key ") for line in capsys.readouterr().out.splitlines()) == 1
+
+
+def test_a_setting_that_acts_only_when_following_is_refused_and_trains_as_the_default(examples):
+    """Such a switch had been trained twice and reported as a tie ("no effect on held-out data")."""
+    from groundlang.model.language_model_base import FOLLOWING_SETTINGS
+    from groundlang.model.language_models import get_language_model
+
+    other = {"step_cost": 0.5, "habit_prior": "overall"}
+    for name in FOLLOWING_SETTINGS:
+        with pytest.raises(ValueError, match=rf"^--switch '{name}[^']*': {name} acts only when following"):
+            switch_settings("parse", f"{name}=" + json.dumps(other.get(name, False)))
+    # the list is right: a model trained with each of them changed has the default's parameters
+    default = Learner("parse", steps=5).fit(examples[::3]).globals
+    for name in FOLLOWING_SETTINGS:
+        changed = get_language_model("parse", **{name: other.get(name, False)})
+        trained = Learner(changed, steps=5).fit(examples[::3]).globals
+        assert set(trained) == set(default) and all(torch.equal(trained[k], default[k]) for k in default), name
