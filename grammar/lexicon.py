@@ -25,7 +25,7 @@ from pathlib import Path
 
 from .word_files import CATEGORIES, FILE_CATEGORIES, TAGGING, LexiconError, SynonymForms, check_words, read_word_file
 
-__all__ = ["CATEGORIES", "FILE_CATEGORIES", "Lexicon", "LexiconError", "SemanticLexicon", "read_word_file"]
+__all__ = ["CATEGORIES", "CLOSED_CLASS", "FILE_CATEGORIES", "Lexicon", "LexiconError", "SemanticLexicon", "read_word_file"]
 
 # A multiword entry's first word that may head or modify a noun phrase ("left" of "left of") does,
 # rather than open the preposition, after a word of these categories: "the left of the room",
@@ -34,7 +34,7 @@ _NOUN_PHRASE_OPENERS = frozenset({"DET", "PREP", "TO", "ADJ", "NUM"})
 # Marks, in the trie of multiword entries, a node where an entry ends: not a string, so no word collides.
 _END = None
 # Categories of words a language does not add to: a serial verb or a degree word is none of them.
-_CLOSED_CLASS = frozenset({"DET", "PREP", "TO", "CONJ", "SUB", "REL", "PRON", "AUX", "NEG"})
+CLOSED_CLASS = frozenset({"DET", "PREP", "TO", "CONJ", "SUB", "REL", "PRON", "AUX", "NEG"})
 
 
 def _inflections(lemma: str) -> dict[str, str]:
@@ -101,7 +101,7 @@ class Lexicon:
         # degree word had dropped the negation of "the not red room"; "to" as a serial verb read "go to" as "to").
         for category in ("VERB_SERIAL", "ADV_DEGREE"):
             for word in sorted(words[category]):
-                if closed := sorted(table.get(word, set()) & _CLOSED_CLASS):
+                if closed := sorted(table.get(word, set()) & CLOSED_CLASS):
                     raise LexiconError(f"{category} word {word!r} is also {', '.join(closed)}, a closed class: a "
                                        f"{'serial verb' if category == 'VERB_SERIAL' else 'degree word'} is an open "
                                        "word")

@@ -13,8 +13,8 @@ from collections.abc import Iterable, Mapping
 from importlib.resources import files
 from pathlib import Path
 
-from groundlang.grammar.lexicon import Lexicon, LexiconError, read_word_file
-from groundlang.grammar.word_files import SynonymForms
+from groundlang.grammar.lexicon import CLOSED_CLASS, Lexicon, LexiconError, read_word_file
+from groundlang.grammar.word_files import TAGGING, SynonymForms
 
 __all__ = ["DOMAIN_WORD_FILE", "WordSource", "domain_lexicon", "extra_words"]
 
@@ -59,9 +59,44 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
                 Lexicon.english().extend({c: words[c] for c in ("VERB_SERIAL", "ADV_DEGREE") if c in words})
             except LexiconError as exc:
                 raise LexiconError(f"{where}: {exc}") from None
+        _check_closed_class(words, source, merged)
         for category, entries in words.items():
             merged.setdefault(category, {}).update(dict.fromkeys(entries))  # in order, once each
     return {category: list(entries) for category, entries in merged.items()}
+
+
+def _check_closed_class(words: Mapping[str, Iterable[str]], source: WordSource, merged: Mapping) -> None:
+    """A closed-class word of a word file that English or an earlier file makes a serial verb or a degree word
+    ("NEG: go"): refused here, naming the file and line, as the merged lexicon would refuse it without either
+    (and blaming the category of grammar/english.words)."""
+    open_roles = {"VERB_SERIAL": "a serial verb", "ADV_DEGREE": "a degree word"}
+    english = Lexicon.english().entries
+    for role, said in open_roles.items():  # the other way round: an earlier file's closed class
+        for word in words.get(role, ()):
+            if closed := [c for c, e in merged.items() if TAGGING.get(c, c) in CLOSED_CLASS and word in e]:
+                raise LexiconError(f"{_line_of(source, role, word)}: {role} word {word!r} is {closed[0]} in an "
+                                   f"earlier word file, a closed class: {said} is an open word")
+    for category, entries in words.items():
+        if TAGGING.get(category, category) not in CLOSED_CLASS:
+            continue
+        for word in entries:
+            for role, said in open_roles.items():
+                if word in english.get(role, ()) or word in merged.get(role, {}):
+                    where = _line_of(source, category, word)
+                    raise LexiconError(f"{where}: {category} word {word!r} is {said} ({role}) of English or an "
+                                       f"earlier word file, an open word: a closed class cannot take it")
+
+
+def _line_of(source: WordSource, category: str, word: str) -> str:
+    """``path, line N`` of the first ``category`` line listing ``word`` (the file as a whole where none does)."""
+    if not isinstance(source, (str, Path)):
+        return "words given as data"
+    with open(source, encoding="utf-8-sig", errors="replace", newline="") as handle:
+        for number, line in enumerate(handle.read().splitlines(), 1):
+            head, colon, rest = line.split("#", 1)[0].partition(":")
+            if colon and head.strip() == category and word in rest.lower().split():
+                return f"{source}, line {number}"
+    return str(source)
 
 
 def domain_lexicon(extra: Mapping[str, Iterable[str]] | None = None) -> Lexicon:

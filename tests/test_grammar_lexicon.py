@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import re
 import json
 from pathlib import Path
 
@@ -335,3 +336,23 @@ def test_a_synonym_the_domains_word_file_reads_otherwise_names_the_users_file(tm
     assert err.startswith(f"groundlang {command}: error: {words}: SYNONYM 'big' is read as huge here and as large in ")
     assert err.rstrip().endswith("williams2018.words") and "trained model" not in err
     assert not (tmp_path / "m").exists()
+
+
+def test_a_word_files_closed_class_word_that_is_a_serial_verb_or_degree_word_is_named_by_file_and_line(tmp_path, capsys):
+    """"NEG: go" in a user's file had been refused as grammar/english.words' VERB_SERIAL word, naming no file."""
+    mine = tmp_path / "mine.words"
+    mine.write_text("NOUN: mug\n# a comment\nNEG: Go\n", encoding="utf-8")
+    assert main(["--quiet", "parse", "--lexicon", str(mine), "go to the mug"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"groundlang parse: error: {mine}, line 3: NEG word 'go' is a serial verb (VERB_SERIAL) of English or an "
+        "earlier word file, an open word: a closed class cannot take it")
+    # between two files, whichever comes second is named
+    degree, closed = tmp_path / "degree.words", tmp_path / "closed.words"
+    degree.write_text("ADV_DEGREE: mighty\n", encoding="utf-8")
+    closed.write_text("DET: mighty\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(closed))}, line 1: DET word 'mighty' is a degree word"):
+        extra_words([degree, closed])
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(degree))}, line 1: ADV_DEGREE word 'mighty' is DET in "
+                                           "an earlier word file"):
+        extra_words([closed, degree])
+    assert extra_words([degree])["ADV_DEGREE"] == ["mighty"]  # alone, a degree word of one's own is fine
