@@ -16,10 +16,14 @@ from pathlib import Path
 from groundlang.grammar.lexicon import CLOSED_CLASS, Lexicon, LexiconError, read_word_file
 from groundlang.grammar.word_files import TAGGING, SynonymForms
 
-__all__ = ["DOMAIN_WORD_FILE", "WordSource", "domain_lexicon", "extra_words"]
+__all__ = ["DOMAIN_WORD_FILE", "MAX_WORDS", "WordSource", "domain_lexicon", "extra_words"]
 
 # The Cleanup World's word file, a resource of the logic package beside domain.lp.
 DOMAIN_WORD_FILE = "cleanup.words"
+
+# Entries of every word file a lexicon reads, together: a file's size is bounded, but not how many files
+# there are, and a verb is kept in all its forms. English and a domain's words are a few hundred.
+MAX_WORDS = 100_000
 
 # A word file's path, or words by category given as data.
 WordSource = str | Path | Mapping[str, Iterable[str]]
@@ -62,6 +66,9 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
         _check_closed_class(words, source, merged)
         for category, entries in words.items():
             merged.setdefault(category, {}).update(dict.fromkeys(entries))  # in order, once each
+        if (total := sum(map(len, merged.values()))) > MAX_WORDS:
+            raise LexiconError(f"{where}: word files of {total:,} entries together; at most {MAX_WORDS:,} (each verb "
+                               "is kept in all its forms)")
     return {category: list(entries) for category, entries in merged.items()}
 
 

@@ -356,3 +356,16 @@ def test_a_word_files_closed_class_word_that_is_a_serial_verb_or_degree_word_is_
                                            "an earlier word file"):
         extra_words([closed, degree])
     assert extra_words([degree])["ADV_DEGREE"] == ["mighty"]  # alone, a degree word of one's own is fine
+
+
+def test_word_files_together_are_bounded(tmp_path, monkeypatch):
+    """Each file's size was bounded, not how many files: three of 400,000 verbs each took 3.5 GB."""
+    import groundlang.model.domain_words as domain_words
+
+    monkeypatch.setattr(domain_words, "MAX_WORDS", 5)
+    first, second = tmp_path / "a.words", tmp_path / "b.words"
+    first.write_text("VERB: blick\nNOUN: mug cup\n", encoding="utf-8")
+    second.write_text("NOUN: jar pot urn\n", encoding="utf-8")
+    assert extra_words([first, first])["NOUN"] == ["mug", "cup"]  # the same words again count once
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(second))}: word files of 6 entries together; at most 5"):
+        extra_words([first, second])
