@@ -16,7 +16,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from groundlang.clarify import NOT_TO_DO_QUESTION, Declined, choose, named_after_no, says_only_what_not_to_do
+from groundlang.clarify import (NOT_TO_DO_QUESTION, Declined, choose, competing, named_after_no,
+                               says_only_what_not_to_do)
 from groundlang.confidence import GoalGroup, goals_held_at_start
 from groundlang.logic.atoms import Atom
 from groundlang.model.interpretations import NoTaskError
@@ -81,13 +82,21 @@ def answer_held(result: FollowResult, answer: str, library, lexicon, answer_rest
     """A held question's answer: taking its choice (its number, its words or a yes) is nothing to do, a plan of
     no steps whose goal holds; declining it is the rest of the reading (``result.otherwise``, as following
     acted on it or asked, with follow's ``max_steps``); a no that names what is meant ("no, the blue room")
-    answers the rest's question, where it asks one, with ``answer_rest(rest, words)``. AnswerError where it
+    answers the rest's question with ``answer_rest(rest, words)``: the one it asks, or, where it acted, the one
+    it would have asked (its competing goals). AnswerError where it
     names nothing; Declined where it declines and nothing else can be done."""
     state = result.states[0]
     rest = result.otherwise
-    if (isinstance(answer, str) and answer_rest is not None and rest is not None and rest.abstained
+    if (isinstance(answer, str) and answer_rest is not None and rest is not None
             and (named := named_after_no(answer, lexicon))):
-        return answer_rest(rest, named)
+        if rest.abstained:
+            return answer_rest(rest, named)
+        # The rest acted, so it asked nothing: the words after the no choose among what it would have asked
+        # about ("no, the green room" had been refused for not naming the held choice, though a bare no acts on
+        # the green room).
+        asked = replace(rest, states=[state], actions=[], reached=False, reason="abstained", abstained=True,
+                        choices=competing(rest.posterior.goal_groups()))
+        return answer_rest(asked, named)
     try:
         chosen = choose(answer, result.choices, state, library, lexicon=lexicon)
     except Declined:

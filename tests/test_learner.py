@@ -561,6 +561,26 @@ def test_learner_follow_asks_whether_what_already_holds_is_meant(learner, tmp_pa
     assert not learner.follow("go to the red room", outside, min_confidence=0.7).already_true
 
 
+def test_a_no_that_names_what_is_meant_answers_a_held_question_whose_rest_acts(learner, tmp_path):
+    """Two rooms, the agent in the blue one: "go to the blue room" asks whether it is meant, and the rest (the
+    green room) is sure enough to act on. "no, the green room" had been refused as not naming the held choice,
+    though a bare no acted on the green room."""
+    from groundlang.clarify import AnswerError
+    from groundlang.logic.atoms import Atom
+
+    (tmp_path / "two.state").write_text("room,1,0,4,4,0 room,5,4,4,8,0 door,4,2,4,2 block,12,0,2,2 agent,1,1\n")
+    state = read_state_file(tmp_path / "two.state", "sokoban")
+    asked = learner.follow("go to the blue room", state, min_confidence=0.7)
+    assert asked.already_true and not asked.otherwise.abstained
+    green = (Atom("agentInRoom", ("agent0", "room1")),)
+    assert asked.otherwise.goal == green
+    named = learner.clarify(asked, "no, the green room")
+    assert named.goal == green and named.reached and named.actions
+    assert learner.clarify(asked, "no") is asked.otherwise
+    with pytest.raises(AnswerError, match="'the red room' does not name the choice"):
+        learner.clarify(asked, "no, the red room")
+
+
 def test_learner_follow_asks_what_to_do_where_the_words_say_only_what_not_to_do(learner, tmp_path):
     """Negation is no task: "do not go to the blue room" is read as the blue room. With min_confidence the
     learner asks for a command that says what to do (no choice to take), rather than act on it."""
