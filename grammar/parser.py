@@ -109,10 +109,10 @@ def _without_format(text: str) -> str:
 
 def _normalised(command: str) -> str:
     """A command as the tokeniser reads it, before any word file: control characters as spaces, invisible
-    format characters dropped, Unicode NFC (a letter typed as a base and a combining accent, "te\u0301le\u0301",
-    is the word its precomposed spelling is; split at the accent, it would be two words and a sign), lower
-    case, typographic apostrophes as "'"."""
-    text = unicodedata.normalize("NFC", _without_format(_without_control(command))).lower()
+    format characters dropped, Unicode NFKC (a letter typed as a base and a combining accent, "te\u0301le\u0301",
+    is the word its precomposed spelling is; split at the accent, it would be two words and a sign; a full-width
+    "\uff52\uff45\uff44", as an East Asian keyboard types it, is "red"), lower case, typographic apostrophes as "'"."""
+    text = unicodedata.normalize("NFKC", _without_format(_without_control(command))).lower()
     return text.replace("\u2019", "'").replace("\u2018", "'")
 
 

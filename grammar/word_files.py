@@ -61,7 +61,7 @@ _WORD = re.compile(r"'?[^\W_]+(?:'[^\W_]+)*|[^\w\s]")
 def entry(word: str) -> str:
     """A word as the tokeniser produces it: lowercase, and the words of a multiword entry (written
     with ``_``, spaces or hyphens, which the tokeniser splits at) joined with ``_``."""
-    return "_".join(_HYPHEN.sub(" ", unicodedata.normalize("NFC", word).strip().lower()).replace("_", " ").split())
+    return "_".join(_HYPHEN.sub(" ", unicodedata.normalize("NFKC", word).strip().lower()).replace("_", " ").split())
 
 
 def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, ...]:

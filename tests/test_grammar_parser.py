@@ -140,6 +140,10 @@ def test_a_word_typed_with_combining_accents_is_the_word_its_precomposed_spellin
     words = tmp_path / "accents.words"
     words.write_text(f"NOUN: {decomposed}\n", encoding="utf-8")
     assert read_word_file(words) == {"NOUN": (composed,)}
+    # full-width letters, as an East Asian keyboard types them, are the letters (every word had been unknown)
+    assert tokenise("\uff27\uff2f to the \uff52\uff45\uff44 room") == ["go", "to", "the", "red", "room"]
+    words.write_text("NOUN: \uff4d\uff55\uff47\n", encoding="utf-8")
+    assert read_word_file(words) == {"NOUN": ("mug",)}
 
 
 def test_tokeniser_keeps_every_word_and_splits_hyphens_and_clitics():
