@@ -203,7 +203,7 @@ def evaluate(
             # Named by the layout and by the instance whose label it is: the label's goal carried over fails.
             try:
                 translate_goal(gold, inst.initial_state, state,
-                               f"{name} (the label of {inst.prefix!r}, {inst.path.name})", library)
+                               f"{name} (the label of {inst.prefix!r}, {inst.path})", library)
             except GoalHoldsAtStart:  # that execution is not scored (counted); the layout serves the others
                 pass
 

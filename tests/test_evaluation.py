@@ -106,6 +106,20 @@ def test_cli_evaluate_writes_the_documented_json(tmp_path, capsys):
     assert "accuracy 100.00%" in capsys.readouterr().out
 
 
+
+def test_a_novel_layout_a_label_cannot_be_carried_to_is_named_by_its_path(tmp_path, capsys):
+    """The error had named the layout's file name alone (and the instance's), not where either is."""
+    layouts = tmp_path / "layouts"
+    layouts.mkdir()
+    (layouts / "grey.state").write_text("room,0,0,10,6,5 room,0,6,10,12,5 room,0,0,5,12,0 door,6,8,6,8 door,3,5,3,5 "
+                                        "door,9,5,9,5 block,12,0,6,8 agent,9,5\n", encoding="utf-8")
+    assert main(["--quiet", "evaluate", "--corpus", str(EXAMPLES), "--palette", "sokoban",
+                 "--labels", str(EXAMPLES / "labels.csv"), "--novel-envs", str(layouts)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"groundlang evaluate: error: {layouts / 'grey.state'} (the label of 'agent2blue_', "
+                          f"{EXAMPLES / 'agent2blue_0.txt'}): the goal's room2 (room blue) has 0 counterparts")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     "folder, measured, measured_novel",

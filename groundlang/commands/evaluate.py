@@ -79,7 +79,7 @@ def read_novel_states(directory: str, palette: str) -> list:
     paths = sorted(Path(directory).glob("*.state"))
     if not paths:
         raise ValueError(f"{directory}: no *.state files for --novel-envs")
-    return [(p.name, read_state_file(p, palette)) for p in paths]
+    return [(str(p), read_state_file(p, palette)) for p in paths]  # named as a path: errors say which file
 
 
 def run(args: argparse.Namespace) -> int:
