@@ -122,6 +122,9 @@ class Lexicon:
         # Words that take or decline what a question offers (clarify's answers, never a command's words).
         self.yes_words, self.no_words = words["YES"], words["NO"]
         self.polite_words = words["POLITE"]  # saying nothing of what is meant, in a command or an answer
+        # An answer's number of a choice in words ("the third one", "option two"): read in answers only.
+        self.ordinals = dict(pair.split("=", 1) for pair in self.entries.get("ORDINAL", ()))
+        self.choice_nouns = words["CHOICE_NOUN"]
         # The preposition a clause of having reads as ("with"); None when no word file names one.
         self.having_preposition = min(words["PREP_HAVING"], default=None)
         # Multiword entries as a trie of their words: the tokeniser joins the longest that fits, and a walk

@@ -36,11 +36,16 @@ TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOU
 # or declining it; they tag nothing either (commands are not answers).
 # VERB_SERIAL tags SERIAL: motion verbs that, before a bare verb, head nothing ("go stand next to the chair");
 # ADV_DEGREE tags DEGREE: adverbs that, before a modifier, grade it ("the very small room").
+# ORDINAL pairs the words an answer names a choice's number by with the number ("third=3"), CHOICE_NOUN lists
+# the nouns such an answer may say it with ("option two", "number 2"); they tag nothing either.
 FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB", "SERIAL", "DEGREE")) + (
-    "VERB", "IRREGULAR", "SYNONYM", *TAGGING, "VERB_HAVING", "YES", "NO",
+    "VERB", "IRREGULAR", "SYNONYM", *TAGGING, "VERB_HAVING", "YES", "NO", "ORDINAL", "CHOICE_NOUN",
 )
 # Categories whose entries pair two words, ``form=word``, and what the pair means (for error messages).
-_PAIRED = {"IRREGULAR": "form=lemma (e.g. went=go)", "SYNONYM": "form=word (e.g. east=right)"}
+_PAIRED = {"IRREGULAR": "form=lemma (e.g. went=go)", "SYNONYM": "form=word (e.g. east=right)",
+           "ORDINAL": "word=number (e.g. third=3)"}
+# A choice's number: the questions offer a few choices.
+_ORDINAL_NUMBER = re.compile(r"[1-9][0-9]?")
 _CATEGORY_LINE = re.compile(r"^([A-Za-z_]+)\s*:(.*)$")
 _HYPHEN = re.compile(r"(?<=\w)-(?=\w)")
 # A synonym's word replaces one word of a command: a multiword entry's few words, not a text.
@@ -92,6 +97,9 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
                 # letters and digits, or one ending in n't, which stays whole.
                 raise LexiconError(f"{where}: SYNONYM entry {word!r}: the form {form!r} must be one word "
                                    "(letters and digits, or a negation such as don't)")
+            if category == "ORDINAL" and not (_WORD.fullmatch(entry(form)) and _ORDINAL_NUMBER.fullmatch(lemma.strip())):
+                raise LexiconError(f"{where}: ORDINAL entry {word!r}: expected one word and a number from 1 to 99 "
+                                   "(e.g. third=3)")
             parts = entry(lemma).split("_")
             if category == "SYNONYM" and (len(parts) > MAX_SYNONYM_PARTS or not any(_LETTER.search(p) for p in parts)):
                 # a word read in place of one: a few words, one of them a word (not only signs, which
@@ -102,14 +110,15 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
                 raise LexiconError(f"{where}: SYNONYM entry {word!r}: {lemma!r} is not letters, digits or apostrophes "
                                    "(the tokeniser splits at other characters)")
             out.append(f"{entry(form)}={entry(lemma)}")
-        elif category in ("YES", "NO") and "_" in said:  # answers are read a word at a time
+        elif category in ("YES", "NO", "CHOICE_NOUN") and "_" in said:  # answers are read a word at a time
             raise LexiconError(f"{where}: {category} word {word!r} is more than one word (an answer's words are read "
                                "one at a time)")
         elif category in ("VERB_SERIAL", "ADV_DEGREE") and "_" in said:  # the grammar reads one word there
             raise LexiconError(f"{where}: {category} word {word!r} is more than one word (a serial verb or a degree "
                                "word is one)")
         elif "=" in word:
-            raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR and SYNONYM pair words)")
+            raise LexiconError(f"{where}: {category} entry {word!r} has '=' (only IRREGULAR, SYNONYM and ORDINAL pair "
+                               "words)")
         elif not all(_WORD.fullmatch(part) for part in said.split("_")):
             # the tokeniser splits at any other character, so such an entry would never be read
             raise LexiconError(f"{where}: {category} word {word!r} is not a word the tokeniser reads (letters, "

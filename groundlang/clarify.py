@@ -203,6 +203,7 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     if fault := utf8_fault(answer):  # read after the command, it was blamed on the command
         raise AnswerError(f"the answer {fault}: expected a number or words naming one of the choices")
     phrases = option_phrases(choices, state, library)
+    text = _number_said(text, lexicon) or text
     if text.isdecimal():  # int() reads every decimal digit ("٣"), not every digit ("²")
         # int() refuses more than 4300 digits with its own error; no choice has a number that long
         k = int(text) if len(text) <= 18 else None
@@ -269,6 +270,22 @@ def _yes_or_no(text: str, offered: set[str] | None, lexicon: Lexicon) -> bool | 
         return False if not telling and not yes and (declining or offered is not None) else None
     named = {w for w in offered or () if not _says_nothing(w, lexicon)}
     return True if (yes or telling & named) and telling <= named else None
+
+
+def _number_said(text: str, lexicon: Lexicon) -> str | None:
+    """The number an answer names a choice by, in digits, where that is all it says: "the third one", "option
+    two", "number 2", "2nd please" (``ORDINAL`` and ``CHOICE_NOUN`` of the word files; determiners and polite
+    words say nothing); None otherwise ("the red one", "two rooms")."""
+    typed = tokenise(text)
+    if any(not _words(t) and t not in ".,!?" for t in typed):  # "-1" is no choice's number
+        return None
+    said = [t for t in typed if _words(t) and t not in lexicon.polite_words and t not in lexicon.choice_nouns]
+    tokens = [t for t in said if "DET" not in lexicon.listed(t)]
+    if len(tokens) == 2 and tokens[1] == "one" and tokens[0] != "one":  # "the second one": one, the pronoun
+        tokens = tokens[:1]
+    if len(tokens) != 1 or (tokens == ["one"] and len(said) > 1):  # "the one" names no number
+        return None
+    return tokens[0] if tokens[0].isdecimal() else lexicon.ordinals.get(tokens[0])
 
 
 def _said_and_denied(text: str, lexicon: Lexicon) -> tuple[set[str], set[str]]:

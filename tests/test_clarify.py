@@ -75,9 +75,17 @@ def test_answers_by_number_and_by_words(novel_b, library):
     with pytest.raises(AnswerError, match="expected a number from 1 to 3"):
         choose("4", rooms, novel_b, library)
     assert choose("\u0663", rooms, novel_b, library) is rooms[2]  # an Arabic-Indic three is a number
-    for digit in ("\u00b2", "\u2460"):  # a superscript two, a circled one: digits, yet no number int() reads
-        with pytest.raises(AnswerError, match="names none of the choices"):
-            choose(digit, rooms, novel_b, library)
+    # a superscript two, a circled one: read as the digits they are written for (Unicode NFKC, as a command is)
+    assert choose("\u00b2", rooms, novel_b, library) is rooms[1] and choose("\u2460", rooms, novel_b, library) is rooms[0]
+    # a number in words: ORDINAL and CHOICE_NOUN of grammar/english.words
+    for said, k in (("the third one", 2), ("option two", 1), ("number 2", 1), ("2nd please", 1), ("one", 0),
+                    ("the first", 0), ("Choice 3.", 2)):
+        assert choose(said, rooms, novel_b, library) is rooms[k], said
+    with pytest.raises(AnswerError, match="expected a number from 1 to 3"):
+        choose("the fourth one", rooms, novel_b, library)
+    with pytest.raises(AnswerError, match="names none of the choices"):
+        choose("the one", rooms, novel_b, library)  # no number
+    assert choose("the green one", rooms, novel_b, library) is rooms[2]  # "one", the pronoun, is no number there
     with pytest.raises(AnswerError, match="names none of the choices"):
         choose("the room", rooms, novel_b, library)  # "room" is in every choice: it tells none apart
     assert choose("the mauve one", rooms, novel_b, library, read=lambda text, c: c[1]) is rooms[1]

@@ -29,7 +29,13 @@ def test_the_english_file_loads_with_every_category_the_parser_reads():
     entries = read_word_file(GRAMMAR / "english.words")
     # hues are the domain's colour names; synonyms a domain's (its layouts' "east" is "right")
     assert set(entries) == set(FILE_CATEGORIES) - {"HUE", "SYNONYM"}
-    assert sum(map(len, entries.values())) == 565  # entries of the file (a word may sit in several categories)
+    assert sum(map(len, entries.values())) == 598  # entries of the file (a word may sit in several categories)
+    assert english.ordinals["third"] == english.ordinals["3rd"] == "3" and english.choice_nouns == {"number", "option",
+                                                                                                  "choice"}
+    with pytest.raises(LexiconError, match="ORDINAL entry 'zillionth=0': expected one word and a number from 1 to 99"):
+        english.extend({"ORDINAL": ["zillionth=0"]})
+    with pytest.raises(LexiconError, match="ORDINAL entry 'twelfth' is not word=number"):
+        english.extend({"ORDINAL": ["twelfth"]})
     assert english.having_verbs == {"have", "contain", "hold", "include"} <= set(english.entries["VERB"])
     assert english.having_preposition == "with"
     assert english.listed("go") == frozenset({"VERB", "SERIAL"}) and english.listed("going") == frozenset({"GER"})
@@ -128,7 +134,7 @@ def test_a_users_word_file_adds_a_noun_and_a_multiword_preposition(tmp_path):
     ("# fine\n\nNOUNS: mug\n", 3, "unknown category 'NOUNS'"),
     ("NOUN:\n", 1, "no words after NOUN:"),
     ("IRREGULAR: went\n", 1, "IRREGULAR entry 'went' is not form=lemma"),
-    ("VERB: go=went\n", 1, "only IRREGULAR and SYNONYM pair words"),
+    ("VERB: go=went\n", 1, "only IRREGULAR, SYNONYM and ORDINAL pair words"),
     # an entry the tokeniser would split at a sign can never be read; a word, a clitic or one sign can
     ("NOUN: mug o'clock 're &\nNOUN: !!!\n", 2, "NOUN word '!!!' is not a word the tokeniser reads"),
     ("NOUN: a_b c-d e.f\n", 1, "NOUN word 'e.f' is not a word the tokeniser reads"),
@@ -260,7 +266,7 @@ def test_a_users_synonym_may_stand_for_a_multiword_entry_and_is_read_once(tmp_pa
     ("SYNONYM: east\n", "SYNONYM entry 'east' is not form=word"),
     ("SYNONYM: north_east=up\n", "the form 'north_east' must be one word"),
     ("SYNONYM: east=a.b\n", "'a.b' is not letters, digits or apostrophes"),
-    ("NOUN: east=right\n", "only IRREGULAR and SYNONYM pair words"),
+    ("NOUN: east=right\n", "only IRREGULAR, SYNONYM and ORDINAL pair words"),
     ("SYNONYM: east=right east=left\n", "SYNONYM 'east' is read as left here and as right on line 2"),
     # a word read in place of one is a few words: a million would multiply a command's tokens without bound
     ("SYNONYM: x=" + "_".join(["red"] * 9) + "\n", "the word must be at most 8 words"),
