@@ -155,7 +155,7 @@ class ParseCache:
 
     def report(self) -> None:
         """One warning for damaged entries (how many, the first and why), one info line of counts."""
-        self.entries.report("readings", "commands' from the parse cache")
+        self.entries.report("commands' readings", "from the parse cache")
 
 
 def _restore_entry(data: dict, key: str, tokens: list[str]) -> tuple[Reading, ...]:
