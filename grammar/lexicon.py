@@ -81,7 +81,8 @@ class Lexicon:
         words = {c: frozenset(self.entries.get(c, ())) for c in FILE_CATEGORIES}
         # Verb forms: regular inflections of every lemma, in a fixed order, then the irregular ones.
         self.verb_forms: dict[str, str] = {}
-        for lemma in sorted(words["VERB"] | words["VERB_SERIAL"]):  # a serial verb is a verb, listed or not
+        # a serial verb or a verb of having is a verb, listed so or not (else its clauses would go unread)
+        for lemma in sorted(words["VERB"] | words["VERB_SERIAL"] | words["VERB_HAVING"]):
             self.verb_forms.update(_inflections(lemma))
         self.verb_forms.update(pair.split("=", 1) for pair in self.entries.get("IRREGULAR", ()))
         table: dict[str, set[str]] = {}
@@ -125,7 +126,12 @@ class Lexicon:
         # An answer's number of a choice in words ("the third one", "option two"): read in answers only.
         self.ordinals = dict(pair.split("=", 1) for pair in self.entries.get("ORDINAL", ()))
         self.choice_nouns = words["CHOICE_NOUN"]
+        self.definite_determiners = words["DET_DEFINITE"]
         # The preposition a clause of having reads as ("with"); None when no word file names one.
+        if len(words["PREP_HAVING"]) > 1:  # one preposition a clause of having reads as; which would be a guess
+            raise LexiconError(f"PREP_HAVING lists {len(words['PREP_HAVING'])} words "
+                               f"({', '.join(sorted(words['PREP_HAVING']))}); expected one, the preposition a clause "
+                               "of having reads as (e.g. with)")
         self.having_preposition = min(words["PREP_HAVING"], default=None)
         # Multiword entries as a trie of their words: the tokeniser joins the longest that fits, and a walk
         # down the trie finds it in as many steps as the entry has words, however many entries share a first

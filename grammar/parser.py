@@ -87,7 +87,7 @@ def command_fault(command: str) -> str | None:
     """Why ``command`` cannot be read as a command, or None: text without a word says nothing to read."""
     if fault := utf8_fault(command):
         return fault
-    text = _without_control(command)
+    text = _normalised(command)  # as the tokeniser reads it: NFKC makes some signs combining marks ("\u037a")
     if not text.strip():
         return "is empty or only whitespace"
     if not re.search(r"[^\W_]", text):  # a letter or a digit: "____" is no more a word than "----"

@@ -29,7 +29,7 @@ CATEGORIES = (
 # Categories of a word file that tag their words with a lexical category and give them a role the
 # parser or the model reads (see english.words); VERB lists lemmas, IRREGULAR form=lemma pairs.
 TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOURCE": "PREP", "PREP_HAVING": "PREP",
-           "POLITE": "ADV", "VERB_SERIAL": "SERIAL", "ADV_DEGREE": "DEGREE"}
+           "POLITE": "ADV", "VERB_SERIAL": "SERIAL", "ADV_DEGREE": "DEGREE", "DET_DEFINITE": "DET"}
 # VERB_HAVING marks verb lemmas (listed under VERB) whose relative clause about a noun phrase reads as
 # "with" ("the room that has the chair"); it tags nothing itself.
 # YES and NO list the words that answer a question of one choice ("Do you mean the red room?") by taking it
@@ -37,7 +37,8 @@ TAGGING = {"HUE": "COLOR", "PARTICLE": "ADV", "PREP_NEGATING": "PREP", "PREP_SOU
 # VERB_SERIAL tags SERIAL: motion verbs that, before a bare verb, head nothing ("go stand next to the chair");
 # ADV_DEGREE tags DEGREE: adverbs that, before a modifier, grade it ("the very small room").
 # ORDINAL pairs the words an answer names a choice's number by with the number ("third=3"), CHOICE_NOUN lists
-# the nouns such an answer may say it with ("option two", "number 2"); they tag nothing either.
+# the nouns such an answer may say it with ("option two", "number 2"); they tag nothing either. DET_DEFINITE
+# tags DET: the determiners such an answer may have ("the third one"; "all three", "no two" name no number).
 FILE_CATEGORIES = tuple(c for c in CATEGORIES if c not in ("GER", "VERB", "SERIAL", "DEGREE")) + (
     "VERB", "IRREGULAR", "SYNONYM", *TAGGING, "VERB_HAVING", "YES", "NO", "ORDINAL", "CHOICE_NOUN",
 )

@@ -42,7 +42,7 @@ from groundlang.model.world import State
 from groundlang.results import FollowResult
 from groundlang.wording import choice_list, goal_phrase, object_phrase
 
-__all__ = ["AnswerError", "Declined", "competing", "unknown_words", "question", "choose", "clear_choice"]
+__all__ = ["AnswerError", "Declined", "competing", "unknown_words", "question", "choose", "clear_choice", "number_said"]
 
 # Tokens that end a clause of an answer, and with it what a negation in it denies.
 _CLAUSE_ENDS = frozenset({",", ".", ";", ":", "!", "?", "but"})
@@ -203,7 +203,7 @@ def choose(answer: str, choices: Sequence[GoalGroup], state: State, library: Tas
     if fault := utf8_fault(answer):  # read after the command, it was blamed on the command
         raise AnswerError(f"the answer {fault}: expected a number or words naming one of the choices")
     phrases = option_phrases(choices, state, library)
-    text = _number_said(text, lexicon) or text
+    text = number_said(text, lexicon) or text
     if text.isdecimal():  # int() reads every decimal digit ("٣"), not every digit ("²")
         # int() refuses more than 4300 digits with its own error; no choice has a number that long
         k = int(text) if len(text) <= 18 else None
@@ -272,15 +272,15 @@ def _yes_or_no(text: str, offered: set[str] | None, lexicon: Lexicon) -> bool | 
     return True if (yes or telling & named) and telling <= named else None
 
 
-def _number_said(text: str, lexicon: Lexicon) -> str | None:
+def number_said(text: str, lexicon: Lexicon) -> str | None:
     """The number an answer names a choice by, in digits, where that is all it says: "the third one", "option
-    two", "number 2", "2nd please" (``ORDINAL`` and ``CHOICE_NOUN`` of the word files; determiners and polite
-    words say nothing); None otherwise ("the red one", "two rooms")."""
+    two", "number 2", "2nd please" (``ORDINAL``, ``CHOICE_NOUN`` and ``DET_DEFINITE`` of the word files; polite
+    words say nothing); None otherwise ("the red one", "two rooms", "all three", "no 2")."""
     typed = tokenise(text)
     if any(not _words(t) and t not in ".,!?" for t in typed):  # "-1" is no choice's number
         return None
     said = [t for t in typed if _words(t) and t not in lexicon.polite_words and t not in lexicon.choice_nouns]
-    tokens = [t for t in said if "DET" not in lexicon.listed(t)]
+    tokens = [t for t in said if t not in lexicon.definite_determiners]
     if len(tokens) == 2 and tokens[1] == "one" and tokens[0] != "one":  # "the second one": one, the pronoun
         tokens = tokens[:1]
     if len(tokens) != 1 or (tokens == ["one"] and len(said) > 1):  # "the one" names no number

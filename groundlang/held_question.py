@@ -16,10 +16,11 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from groundlang.clarify import (NOT_TO_DO_QUESTION, Declined, choose, competing, named_after_no,
-                               says_only_what_not_to_do)
+from groundlang.clarify import (NOT_TO_DO_QUESTION, AnswerError, Declined, choose, competing, named_after_no,
+                               number_said, option_phrases, says_only_what_not_to_do)
+from groundlang.wording import choice_list
 from groundlang.confidence import GoalGroup, goals_held_at_start
-from groundlang.logic.atoms import Atom
+from groundlang.logic.atoms import Atom, shown
 from groundlang.model.interpretations import NoTaskError
 from groundlang.results import FollowResult, Posterior
 from groundlang.wording import goal_phrase
@@ -96,7 +97,18 @@ def answer_held(result: FollowResult, answer: str, library, lexicon, answer_rest
         # the green room).
         asked = replace(rest, states=[state], actions=[], reached=False, reason="abstained", abstained=True,
                         choices=competing(rest.posterior.goal_groups()))
-        return answer_rest(asked, named)
+        phrases = option_phrases(asked.choices, state, library)
+        if number_said(named, lexicon) is not None or named.strip().isdecimal():  # of a list never shown
+            raise AnswerError(f"after a no, say in words what is meant (e.g. no, {phrases[0]}), or answer no alone "
+                              f"to act on {phrases[0]}")
+        try:
+            return answer_rest(asked, named)
+        except Declined:
+            raise
+        except AnswerError:  # its message would name a list, and answers ("1", "yes") of a question not asked
+            raise AnswerError(f"{shown(repr(named), limit=60)} names nothing else the words could mean here "
+                              f"({choice_list(phrases)}): answer no alone to act on {phrases[0]}, yes to leave "
+                              "things as they are") from None
     try:
         chosen = choose(answer, result.choices, state, library, lexicon=lexicon)
     except Declined:

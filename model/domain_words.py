@@ -63,7 +63,7 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
                 Lexicon.english().extend({c: words[c] for c in ("VERB_SERIAL", "ADV_DEGREE") if c in words})
             except LexiconError as exc:
                 raise LexiconError(f"{where}: {exc}") from None
-        _check_closed_class(words, source, merged)
+        _check_word_roles(words, source, merged)
         for category, entries in words.items():
             merged.setdefault(category, {}).update(dict.fromkeys(entries))  # in order, once each
         if (total := sum(map(len, merged.values()))) > MAX_WORDS:
@@ -72,12 +72,17 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
     return {category: list(entries) for category, entries in merged.items()}
 
 
-def _check_closed_class(words: Mapping[str, Iterable[str]], source: WordSource, merged: Mapping) -> None:
-    """A closed-class word of a word file that English or an earlier file makes a serial verb or a degree word
-    ("NEG: go"): refused here, naming the file and line, as the merged lexicon would refuse it without either
-    (and blaming the category of grammar/english.words)."""
+def _check_word_roles(words: Mapping[str, Iterable[str]], source: WordSource, merged: Mapping) -> None:
+    """A word file's word in a role English or an earlier file gives another: a closed-class word that is a serial
+    verb or a degree word there ("NEG: go"), or the other way round, or a second preposition a clause of having
+    reads as ("PREP_HAVING: near"). Refused here, naming the file and line, as the merged lexicon would refuse
+    it without either (and blaming the category of grammar/english.words)."""
     open_roles = {"VERB_SERIAL": "a serial verb", "ADV_DEGREE": "a degree word"}
     english = Lexicon.english().entries
+    for word in words.get("PREP_HAVING", ()):  # one preposition a clause of having reads as
+        if other := sorted({*english.get("PREP_HAVING", ()), *merged.get("PREP_HAVING", {})} - {word}):
+            raise LexiconError(f"{_line_of(source, 'PREP_HAVING', word)}: PREP_HAVING word {word!r}: a clause of having "
+                               f"reads as one preposition, and English or an earlier word file says {other[0]!r}")
     for role, said in open_roles.items():  # the other way round: an earlier file's closed class
         for word in words.get(role, ()):
             if closed := [c for c, e in merged.items() if TAGGING.get(c, c) in CLOSED_CLASS and word in e]:

@@ -85,6 +85,10 @@ def test_answers_by_number_and_by_words(novel_b, library):
         choose("the fourth one", rooms, novel_b, library)
     with pytest.raises(AnswerError, match="names none of the choices"):
         choose("the one", rooms, novel_b, library)  # no number
+    # a quantifier or a negation makes it no choice's number ("all three" had taken the third, "no 2" the second)
+    for said in ("all three", "no two", "no 2", "any two", "these two", "neither 1"):
+        with pytest.raises(AnswerError):
+            choose(said, rooms, novel_b, library)
     assert choose("the green one", rooms, novel_b, library) is rooms[2]  # "one", the pronoun, is no number there
     with pytest.raises(AnswerError, match="names none of the choices"):
         choose("the room", rooms, novel_b, library)  # "room" is in every choice: it tells none apart
@@ -149,7 +153,8 @@ def test_an_answer_of_unknown_words_chooses_nothing(learner, novel_b):
     # one choice ("Do you mean the agent in the red room?"): its number, its words or a yes; a no declines it
     one = learner.follow("go to the red room", novel_b, min_confidence=1.0)
     assert one.abstained and len(one.choices) == 1
-    for answer in ("abc", "the blue room", "no, the red one", "yes, the blue room", "that one"):
+    for answer in ("abc", "the blue room", "no, the red one", "yes, the blue room", "that one", "no, the first one",
+                   "no 1"):
         with pytest.raises(AnswerError, match="does not name the choice .*: answer 1, yes or its words to act on it, "
                                               "no to decline it") as refused:
             learner.clarify(one, answer)

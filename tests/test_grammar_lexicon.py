@@ -375,3 +375,20 @@ def test_word_files_together_are_bounded(tmp_path, monkeypatch):
     assert extra_words([first, first])["NOUN"] == ["mug", "cup"]  # the same words again count once
     with pytest.raises(LexiconError, match=rf"^{re.escape(str(second))}: word files of 6 entries together; at most 5"):
         extra_words([first, second])
+
+
+def test_a_verb_of_having_is_a_verb_and_one_preposition_reads_such_a_clause(tmp_path):
+    """VERB_HAVING words not listed under VERB were no verbs (their clauses went unread), and a second PREP_HAVING
+    word was dropped for the alphabetically first."""
+    own = Lexicon.english().extend({"VERB_HAVING": ["own"]})
+    assert own.listed("owns") == {"VERB"} and "own" in own.having_verbs
+    with pytest.raises(LexiconError, match=r"^PREP_HAVING lists 2 words \(near, with\); expected one"):
+        Lexicon.english().extend({"PREP_HAVING": ["near"]})
+    mine = tmp_path / "mine.words"
+    mine.write_text("NOUN: mug\nPREP_HAVING: near\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(mine))}, line 2: PREP_HAVING word 'near': a clause of "
+                                           "having reads as one preposition, and English or an earlier word file says "
+                                           "'with'"):
+        extra_words([mine])
+    mine.write_text("PREP_HAVING: with\n", encoding="utf-8")  # the same one again is no conflict
+    assert extra_words([mine]) == {"PREP_HAVING": ["with"]}

@@ -577,8 +577,13 @@ def test_a_no_that_names_what_is_meant_answers_a_held_question_whose_rest_acts(l
     named = learner.clarify(asked, "no, the green room")
     assert named.goal == green and named.reached and named.actions
     assert learner.clarify(asked, "no") is asked.otherwise
-    with pytest.raises(AnswerError, match="'the red room' does not name the choice"):
+    # said of the question asked, not of a list never shown ("answer 1 or yes" would have taken the held choice)
+    with pytest.raises(AnswerError, match=r"^'the red room' names nothing else the words could mean here \(the agent in "
+                                          r"the green room\): answer no alone to act on the agent in the green room"):
         learner.clarify(asked, "no, the red room")
+    for numbered in ("no, 2", "no, option two"):
+        with pytest.raises(AnswerError, match="^after a no, say in words what is meant"):
+            learner.clarify(asked, numbered)
 
 
 def test_learner_follow_asks_what_to_do_where_the_words_say_only_what_not_to_do(learner, tmp_path):
