@@ -9,21 +9,25 @@ class names and palette values of a domain schema.
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Iterable, Mapping
 from importlib.resources import files
 from pathlib import Path
 
 from groundlang.grammar.lexicon import CLOSED_CLASS, Lexicon, LexiconError, read_word_file
-from groundlang.grammar.word_files import TAGGING, SynonymForms
+from groundlang.grammar.word_files import TAGGING, SynonymForms, entry
 
 __all__ = ["DOMAIN_WORD_FILE", "MAX_WORDS", "WordSource", "domain_lexicon", "extra_words"]
 
 # The Cleanup World's word file, a resource of the logic package beside domain.lp.
 DOMAIN_WORD_FILE = "cleanup.words"
 
-# Entries of every word file a lexicon reads, together: a file's size is bounded, but not how many files
-# there are, and a verb is kept in all its forms. English and a domain's words are a few hundred.
-MAX_WORDS = 100_000
+# Words of every word file a lexicon reads, together, a verb lemma counted as the VERB_FORMS forms it is kept
+# in: a file's size is bounded, but not how many files there are (three files of 400,000 verbs took 3.5 GB;
+# 500,000 nouns take about half a GB). English and a domain's words are a few hundred.
+MAX_WORDS = 500_000
+VERB_FORMS = 4
+_LEMMAS = ("VERB", "VERB_SERIAL", "VERB_HAVING")
 
 # A word file's path, or words by category given as data.
 WordSource = str | Path | Mapping[str, Iterable[str]]
@@ -43,11 +47,17 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
     if isinstance(sources, (str, Path, Mapping)):
         sources = [sources]
     merged: dict[str, dict[str, None]] = {}
+    sources_seen: list = []
     said = SynonymForms()  # merged below, a form's second word would name no source
     for source in sources:
         if isinstance(source, (str, Path)):
             words = read_word_file(source)
         elif isinstance(source, Mapping):
+            source = {c: list(w) if isinstance(w, (list, tuple, set, frozenset)) else w for c, w in source.items()}
+            if (weight := _weight({c: w for c, w in source.items() if isinstance(w, list)})) > MAX_WORDS:
+                # before any lexicon is built of them: a saved model's words are read this way
+                raise LexiconError(f"words given as data: {weight:,} words, a verb counted as its {VERB_FORMS} "
+                                   f"forms; at most {MAX_WORDS:,}")
             try:
                 words = Lexicon().extend(source).entries  # checked and normalised as a file's would be
             except LexiconError as exc:  # a form given two words within the mapping: named as such
@@ -66,10 +76,17 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
         _check_word_roles(words, source, merged)
         for category, entries in words.items():
             merged.setdefault(category, {}).update(dict.fromkeys(entries))  # in order, once each
-        if (total := sum(map(len, merged.values()))) > MAX_WORDS:
-            raise LexiconError(f"{where}: word files of {total:,} entries together; at most {MAX_WORDS:,} (each verb "
-                               "is kept in all its forms)")
+        if (total := _weight(merged)) > MAX_WORDS:
+            said = "word files of" if len(sources_read := [*sources_seen, source]) > 1 else "a word file of"
+            raise LexiconError(f"{where}: {said} {total:,} words{' together' * (len(sources_read) > 1)}, a verb "
+                               f"counted as its {VERB_FORMS} forms; at most {MAX_WORDS:,}")
+        sources_seen.append(source)
     return {category: list(entries) for category, entries in merged.items()}
+
+
+def _weight(words: Mapping[str, Mapping]) -> int:
+    """What ``words`` will take in a lexicon: an entry each, a verb lemma its forms."""
+    return sum(len(entries) * (VERB_FORMS if category in _LEMMAS else 1) for category, entries in words.items())
 
 
 def _check_word_roles(words: Mapping[str, Iterable[str]], source: WordSource, merged: Mapping) -> None:
@@ -100,14 +117,16 @@ def _check_word_roles(words: Mapping[str, Iterable[str]], source: WordSource, me
 
 
 def _line_of(source: WordSource, category: str, word: str) -> str:
-    """``path, line N`` of the first ``category`` line listing ``word`` (the file as a whole where none does)."""
+    """``path:N`` of the first ``category`` line listing ``word``, lines numbered and words read as
+    :func:`~groundlang.grammar.word_files.read_word_file` numbers and reads them (the file as a whole where
+    none does)."""
     if not isinstance(source, (str, Path)):
         return "words given as data"
     with open(source, encoding="utf-8-sig", errors="replace", newline="") as handle:
-        for number, line in enumerate(handle.read().splitlines(), 1):
+        for number, line in enumerate(re.split(r"\r\n|\r|\n", handle.read()), 1):
             head, colon, rest = line.split("#", 1)[0].partition(":")
-            if colon and head.strip() == category and word in rest.lower().split():
-                return f"{source}, line {number}"
+            if colon and head.strip() == category and word in (entry(w) for w in rest.split()):
+                return f"{source}:{number}"
     return str(source)
 
 

@@ -347,18 +347,19 @@ def test_a_synonym_the_domains_word_file_reads_otherwise_names_the_users_file(tm
 def test_a_word_files_closed_class_word_that_is_a_serial_verb_or_degree_word_is_named_by_file_and_line(tmp_path, capsys):
     """"NEG: go" in a user's file had been refused as grammar/english.words' VERB_SERIAL word, naming no file."""
     mine = tmp_path / "mine.words"
-    mine.write_text("NOUN: mug\n# a comment\nNEG: Go\n", encoding="utf-8")
+    # lines numbered as the file's reader numbers them: a form feed or U+2028 in a comment ends no line
+    mine.write_text("NOUN: mug\n# a comment \u2028 \x0c here\nNEG: Go\n", encoding="utf-8")
     assert main(["--quiet", "parse", "--lexicon", str(mine), "go to the mug"]) == 2
     assert capsys.readouterr().err.strip() == (
-        f"groundlang parse: error: {mine}, line 3: NEG word 'go' is a serial verb (VERB_SERIAL) of English or an "
+        f"groundlang parse: error: {mine}:3: NEG word 'go' is a serial verb (VERB_SERIAL) of English or an "
         "earlier word file, an open word: a closed class cannot take it")
     # between two files, whichever comes second is named
     degree, closed = tmp_path / "degree.words", tmp_path / "closed.words"
     degree.write_text("ADV_DEGREE: mighty\n", encoding="utf-8")
     closed.write_text("DET: mighty\n", encoding="utf-8")
-    with pytest.raises(LexiconError, match=rf"^{re.escape(str(closed))}, line 1: DET word 'mighty' is a degree word"):
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(closed))}:1: DET word 'mighty' is a degree word"):
         extra_words([degree, closed])
-    with pytest.raises(LexiconError, match=rf"^{re.escape(str(degree))}, line 1: ADV_DEGREE word 'mighty' is DET in "
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(degree))}:1: ADV_DEGREE word 'mighty' is DET in "
                                            "an earlier word file"):
         extra_words([closed, degree])
     assert extra_words([degree])["ADV_DEGREE"] == ["mighty"]  # alone, a degree word of one's own is fine
@@ -368,13 +369,20 @@ def test_word_files_together_are_bounded(tmp_path, monkeypatch):
     """Each file's size was bounded, not how many files: three of 400,000 verbs each took 3.5 GB."""
     import groundlang.model.domain_words as domain_words
 
-    monkeypatch.setattr(domain_words, "MAX_WORDS", 5)
+    monkeypatch.setattr(domain_words, "MAX_WORDS", 8)
     first, second = tmp_path / "a.words", tmp_path / "b.words"
-    first.write_text("VERB: blick\nNOUN: mug cup\n", encoding="utf-8")
+    first.write_text("VERB: blick\nNOUN: mug cup\n", encoding="utf-8")  # a verb weighs its four forms: 6
     second.write_text("NOUN: jar pot urn\n", encoding="utf-8")
     assert extra_words([first, first])["NOUN"] == ["mug", "cup"]  # the same words again count once
-    with pytest.raises(LexiconError, match=rf"^{re.escape(str(second))}: word files of 6 entries together; at most 5"):
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(second))}: word files of 9 words together, a verb "
+                                           "counted as its 4 forms; at most 8"):
         extra_words([first, second])
+    second.write_text("VERB: glorp frob\nNOUN: jar\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(second))}: a word file of 9 words, a verb"):
+        extra_words([second])
+    # a saved model's words (data) are weighed before a lexicon is built of them
+    with pytest.raises(LexiconError, match=r"^words given as data: 12 words, a verb counted as its 4 forms; at most 8"):
+        extra_words([{"VERB": ["a", "b", "c"]}])
 
 
 def test_a_verb_of_having_is_a_verb_and_one_preposition_reads_such_a_clause(tmp_path):
@@ -386,7 +394,7 @@ def test_a_verb_of_having_is_a_verb_and_one_preposition_reads_such_a_clause(tmp_
         Lexicon.english().extend({"PREP_HAVING": ["near"]})
     mine = tmp_path / "mine.words"
     mine.write_text("NOUN: mug\nPREP_HAVING: near\n", encoding="utf-8")
-    with pytest.raises(LexiconError, match=rf"^{re.escape(str(mine))}, line 2: PREP_HAVING word 'near': a clause of "
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(mine))}:2: PREP_HAVING word 'near': a clause of "
                                            "having reads as one preposition, and English or an earlier word file says "
                                            "'with'"):
         extra_words([mine])
