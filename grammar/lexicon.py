@@ -124,7 +124,12 @@ class Lexicon:
         self.yes_words, self.no_words = words["YES"], words["NO"]
         self.polite_words = words["POLITE"]  # saying nothing of what is meant, in a command or an answer
         # An answer's number of a choice in words ("the third one", "option two"): read in answers only.
-        self.ordinals = dict(pair.split("=", 1) for pair in self.entries.get("ORDINAL", ()))
+        self.ordinals: dict[str, str] = {}
+        for pair in self.entries.get("ORDINAL", ()):  # as a synonym has one word, a word one number
+            form, number = pair.split("=", 1)
+            if self.ordinals.setdefault(form, number) != number:
+                raise LexiconError(f"ORDINAL {form!r} is the number {self.ordinals[form]} and {number}: "
+                                   "a word names one number")
         self.choice_nouns = words["CHOICE_NOUN"]
         self.definite_determiners = words["DET_DEFINITE"]
         # The preposition a clause of having reads as ("with"); None when no word file names one.

@@ -98,7 +98,7 @@ def check_words(category: str, words: Iterable[str], where: str) -> tuple[str, .
                 # letters and digits, or one ending in n't, which stays whole.
                 raise LexiconError(f"{where}: SYNONYM entry {word!r}: the form {form!r} must be one word "
                                    "(letters and digits, or a negation such as don't)")
-            if category == "ORDINAL" and not (_WORD.fullmatch(entry(form)) and _ORDINAL_NUMBER.fullmatch(lemma.strip())):
+            if category == "ORDINAL" and not (_WORD.fullmatch(entry(form)) and _ORDINAL_NUMBER.fullmatch(entry(lemma))):
                 raise LexiconError(f"{where}: ORDINAL entry {word!r}: expected one word and a number from 1 to 99 "
                                    "(e.g. third=3)")
             parts = entry(lemma).split("_")

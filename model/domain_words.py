@@ -96,6 +96,12 @@ def _check_word_roles(words: Mapping[str, Iterable[str]], source: WordSource, me
     it without either (and blaming the category of grammar/english.words)."""
     open_roles = {"VERB_SERIAL": "a serial verb", "ADV_DEGREE": "a degree word"}
     english = Lexicon.english().entries
+    numbers = dict(pair.split("=", 1) for pair in [*english.get("ORDINAL", ()), *merged.get("ORDINAL", {})])
+    for pair in words.get("ORDINAL", ()):  # a word names one number
+        form, number = pair.split("=", 1)
+        if numbers.get(form, number) != number:
+            raise LexiconError(f"{_line_of(source, 'ORDINAL', pair)}: ORDINAL {form!r} is the number {number} here and "
+                               f"{numbers[form]} in English or an earlier word file: a word names one number")
     for word in words.get("PREP_HAVING", ()):  # one preposition a clause of having reads as
         if other := sorted({*english.get("PREP_HAVING", ()), *merged.get("PREP_HAVING", {})} - {word}):
             raise LexiconError(f"{_line_of(source, 'PREP_HAVING', word)}: PREP_HAVING word {word!r}: a clause of having "

@@ -36,6 +36,10 @@ def test_the_english_file_loads_with_every_category_the_parser_reads():
         english.extend({"ORDINAL": ["zillionth=0"]})
     with pytest.raises(LexiconError, match="ORDINAL entry 'twelfth' is not word=number"):
         english.extend({"ORDINAL": ["twelfth"]})
+    # a word names one number (a second had been taken or not by sort order); full-width digits are digits
+    with pytest.raises(LexiconError, match="ORDINAL 'third' is the number 3 and 4: a word names one number"):
+        english.extend({"ORDINAL": ["third=4"]})
+    assert english.extend({"ORDINAL": ["dritte=\uff13"]}).ordinals["dritte"] == "3"
     assert english.having_verbs == {"have", "contain", "hold", "include"} <= set(english.entries["VERB"])
     assert english.having_preposition == "with"
     assert english.listed("go") == frozenset({"VERB", "SERIAL"}) and english.listed("going") == frozenset({"GER"})
@@ -400,3 +404,11 @@ def test_a_verb_of_having_is_a_verb_and_one_preposition_reads_such_a_clause(tmp_
         extra_words([mine])
     mine.write_text("PREP_HAVING: with\n", encoding="utf-8")  # the same one again is no conflict
     assert extra_words([mine]) == {"PREP_HAVING": ["with"]}
+
+
+def test_a_word_files_ordinal_of_another_number_is_named_by_file_and_line(tmp_path):
+    mine = tmp_path / "mine.words"
+    mine.write_text("NOUN: mug\nORDINAL: third=4\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(mine))}:2: ORDINAL 'third' is the number 4 here and 3 in "
+                                           "English or an earlier word file"):
+        extra_words([mine])
