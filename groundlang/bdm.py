@@ -256,6 +256,29 @@ def format_bdm_state(state: State, toy_names: tuple[str, ...] | None = None,
 def read_bdm(path: str | Path, palette: str | Palette = DEFAULT_PALETTE) -> list[Command]:
     """Every command of a ``.bdm`` file with its pairs; raises CorpusError naming the file and line."""
     path = as_path(path, "read_bdm: path")
+    # The corpus shows one demonstration to several workers: of the Williams training file's 9714 state
+    # lines, a few hundred are distinct, so each distinct line is parsed once (a file's lines bound it).
+    states: dict[str, tuple[State, tuple[str, ...]]] = {}
+    commands = [_command(path, start_line, block, palette, states) for start_line, block in _blocks(path)]
+    if not commands:
+        raise CorpusError(f"{path}: no command in the file; expected blocks of a command and (start, end) pairs")
+    return commands
+
+
+def command_texts(path: str | Path) -> list[tuple[int, str]]:
+    """(line, text) of every command of a ``.bdm`` file, its states left unread (``groundlang parse --file``
+    needs the words alone, in whatever palette the states are); CorpusError as :func:`read_bdm`'s."""
+    path = as_path(path, "command_texts: path")
+    texts = [block[0] for _, block in _blocks(path)]
+    if bad := next(((line, text) for line, text in texts if text.startswith("{") or text in ("true", "---")), None):
+        raise CorpusError(f"{path}, line {bad[0]}: expected a command to start the block, got {bad[1][:40]!r}")
+    if not texts:
+        raise CorpusError(f"{path}: no command in the file; expected blocks of a command and (start, end) pairs")
+    return texts
+
+
+def _blocks(path: Path) -> list[tuple[int, list[tuple[int, str]]]]:
+    """The file's blocks, each its first line's number and its (line, text) lines, the file read bounded."""
     try:  # regular files only, of a bounded size: a FIFO or /dev/zero is refused by name
         data = read_limited(path, MAX_FILE_BYTES, "a .bdm corpus file")
     except FileRefused as exc:
@@ -268,10 +291,7 @@ def read_bdm(path: str | Path, palette: str | Palette = DEFAULT_PALETTE) -> list
         line = data.count(b"\n", 0, exc.start) + 1
         raise CorpusError(f"{path}, line {line}: not UTF-8 text") from None
     lines = text_lines(text)
-    commands: list[Command] = []
-    # The corpus shows one demonstration to several workers: of the Williams training file's 9714 state
-    # lines, a few hundred are distinct, so each distinct line is parsed once (a file's lines bound it).
-    states: dict[str, tuple[State, tuple[str, ...]]] = {}
+    blocks = []
     i = 0
     while i < len(lines):
         if not lines[i].strip():
@@ -288,10 +308,8 @@ def read_bdm(path: str | Path, palette: str | Palette = DEFAULT_PALETTE) -> list
                 raise CorpusError(f"{path}, line {i + 1}: a line of {len(lines[i])} characters; expected at most {_MAX_LINE}")
             block.append((i + 1, lines[i].strip()))
             i += 1
-        commands.append(_command(path, start_line, block, palette, states))
-    if not commands:
-        raise CorpusError(f"{path}: no command in the file; expected blocks of a command and (start, end) pairs")
-    return commands
+        blocks.append((start_line, block))
+    return blocks
 
 
 def _past_blank_beside_separator(lines: list[str], i: int, block: list[tuple[int, str]]) -> int:

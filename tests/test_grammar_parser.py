@@ -552,6 +552,13 @@ def test_cli_parse_file_reads_the_commands_of_a_bdm_file_or_one_corpus_file(tmp_
     texts = [json.loads(line)["command"] for line in capsys.readouterr().out.splitlines()]
     assert texts == [line.strip() for i, line in enumerate(fixture.read_text().splitlines())
                      if i == 0 or (line.strip() and not fixture.read_text().splitlines()[i - 1].strip())]
+    # the states are not read: a .bdm file parses whatever palette its states are in, as --palette only adds words
+    assert main(["parse", "--palette", "sokoban", "--file", str(fixture)]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == "2 commands: 2 full parse, 0 fallback only"
+    broken = tmp_path / "broken.bdm"
+    broken.write_text("true\n{agent0 (agent): [x: {1} y: {1} ] , }\n", encoding="utf-8")
+    assert main(["parse", "--file", str(broken)]) == 2
+    assert f"{broken}, line 1: expected a command to start the block, got 'true'" in capsys.readouterr().err
     corpus_file = example_corpus_path() / "agent2red_0.txt"
     assert main(["parse", "--file", str(corpus_file)]) == 0
     out = capsys.readouterr().out.splitlines()

@@ -52,13 +52,13 @@ MAX_COMMANDS_BYTES = 16 * 2**20
 _STATE_LINE = re.compile(r"\s*(room|door|block|toy|agent),-?\d")
 
 
-def _commands(path: Path, palette: str | None) -> list[tuple[str, str]]:
+def _commands(path: Path) -> list[tuple[str, str]]:
     """(source, command) pairs: the commands of a .bdm file or folder, first lines of a corpus folder's files
     or of one corpus file, or a file's non-empty lines."""
-    from groundlang.bdm import DEFAULT_PALETTE, bdm_files, read_bdm
+    from groundlang.bdm import bdm_files, command_texts
 
     if found := bdm_files(path):  # a state line or "---" read as a command would count as one
-        return [(f"{f}:{c.line}", c.text) for f in found for c in read_bdm(f, palette or DEFAULT_PALETTE)]
+        return [(f"{f}:{line}", text) for f in found for line, text in command_texts(f)]
     if path.is_dir():
         files = sorted(p for p in path.rglob("*.txt") if p.is_file())
         if not files:
@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
         from groundlang.training_vocabulary import unlisted_schema_words
 
         words = words.extend(unlisted_schema_words(library or TaskLibrary.load(), [get_palette(args.palette)], words))
-    items = [("argument", args.text)] if args.file is None else _commands(args.file, args.palette)
+    items = [("argument", args.text)] if args.file is None else _commands(args.file)
     full = fallback = empty = 0
     for source, command in items:
         fault = command_fault(command)
