@@ -127,13 +127,16 @@ def test_a_setting_that_acts_only_when_following_is_refused_and_trains_as_the_de
     from groundlang.model.language_model_base import FOLLOWING_SETTINGS
     from groundlang.model.language_models import get_language_model
 
-    other = {"step_cost": 0.5, "habit_prior": "overall"}
+    defaults = get_language_model("parse").settings()
+    other = {name: not value if isinstance(value, bool) else {"step_cost": 0.5, "habit_prior": "overall"}[name]
+             for name, value in defaults.items() if name in FOLLOWING_SETTINGS}
+    assert all(other[name] != defaults[name] for name in FOLLOWING_SETTINGS)  # each compared with another value
     for name in FOLLOWING_SETTINGS:
         with pytest.raises(ValueError, match=rf"^--switch '{name}[^']*': {name} acts only when following"):
-            switch_settings("parse", f"{name}=" + json.dumps(other.get(name, False)))
+            switch_settings("parse", f"{name}=" + json.dumps(other[name]))
     # the list is right: a model trained with each of them changed has the default's parameters
     default = Learner("parse", steps=5).fit(examples[::3]).globals
     for name in FOLLOWING_SETTINGS:
-        changed = get_language_model("parse", **{name: other.get(name, False)})
+        changed = get_language_model("parse", **{name: other[name]})
         trained = Learner(changed, steps=5).fit(examples[::3]).globals
         assert set(trained) == set(default) and all(torch.equal(trained[k], default[k]) for k in default), name

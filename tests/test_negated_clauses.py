@@ -29,6 +29,8 @@ def in_red_room(tmp_path_factory):
     return read_state_file(path, "sokoban")
 
 
+# The second asks with the switch off too (its held reading 0.87 then): it states what following does, and
+# the switched-off test below is the first's.
 @pytest.mark.parametrize("command", ["go to the red room, do not go to the blue room",
                                      "go to the red room without going through the blue room"])
 def test_a_negated_phrase_after_the_goal_does_not_take_its_place(shared_corpus, in_red_room, command):

@@ -117,7 +117,10 @@ def run(args: argparse.Namespace) -> int:
     if args.words is not None:  # read as a command is: "RED" is red, "chair." chair; "next to" stays spaced, as
         for w in args.words:  # a preposition's row sends it to the preposition table
             if fault := utf8_fault(w):  # its bytes would split the word where they stand
-                typed = w.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+                try:  # the bytes as typed; a lone surrogate (from Python, not a shell) as its escape
+                    typed = w.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+                except UnicodeEncodeError:
+                    typed = w.encode("utf-8", "backslashreplace").decode("utf-8")
                 raise ValueError(f"--words '{typed}': it {fault}")
             labelled = _as_read(w, learner.word_lexicon)
             if not labelled:
