@@ -558,7 +558,7 @@ def test_cli_parse_file_reads_the_commands_of_a_bdm_file_or_one_corpus_file(tmp_
     broken = tmp_path / "broken.bdm"
     broken.write_text("true\n{agent0 (agent): [x: {1} y: {1} ] , }\n", encoding="utf-8")
     assert main(["parse", "--file", str(broken)]) == 2
-    assert f"{broken}, line 1: expected a command to start the block, got 'true'" in capsys.readouterr().err
+    assert f"{broken}, line 1: a block starts with the word true; expected the command first" in capsys.readouterr().err
     corpus_file = example_corpus_path() / "agent2red_0.txt"
     assert main(["parse", "--file", str(corpus_file)]) == 0
     out = capsys.readouterr().out.splitlines()
