@@ -36,8 +36,8 @@ class PhraseKeys:
     # own (``not:``), so it may learn to align with nothing; off, the key the clause has unnegated.
     negation_key: bool = True
     # A phrase in a negated clause says where things must not go, so it is not where a command ends ("take
-    # the star to the green room, but do not enter the green room"): ``|last`` passes over it too, where the
-    # grammar parsed the command whole (a fallback chunk's negation may belong to another phrase).
+    # the star to the green room, but do not enter the green room"): ``|last`` passes over it too, in a fallback
+    # chunk as well (ABLATIONS.md, thirty-eighth session: held-out likelihood against trusting only whole parses).
     last_passes_over_negated: bool = True
 
 
@@ -92,8 +92,8 @@ def entity_words(lf: LogicalForm, lexicon: Lexicon | None = None,
         entity = lf.entities[n]
         if entity.role == "vpp" and entity.prep in passed_over:
             continue
-        if keys.last_passes_over_negated and entity.clause in negated and not lf.fallback:
-            continue  # a chunk the grammar did not parse may carry a stray "not" (clarify.says_only_what_not_to_do)
+        if keys.last_passes_over_negated and entity.clause in negated:
+            continue
         if modifiers or head:
             result[n] = (f"{key or 'dobj'}|last", modifiers, head)
             break
