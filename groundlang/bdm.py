@@ -11,13 +11,8 @@ A ``.bdm`` file holds blocks separated by blank lines::
 
 Blank lines beside a ``---`` do not end the command: a ``---`` promises another pair of the same one.
 
-A state is ``{agent0 (agent): [x: {5} y: {6} direction: {south} ] , room0 (room): [top: {4} left: {0}
-bottom: {0} right: {8} colour: {red} ] , block0 (block): [x: {6} y: {6} shape: {chair} colour: {blue} ]
-, ... , }``: objects ``NAME (CLASS): [attribute: {value} ...]``; colours and shapes are names of the
-palette (``logic/palettes/williams2018.lp`` by default), not indices. Attributes that play no part in the
-dynamics (an agent's ``direction``, a door's ``locked`` and ``canbelocked``) are read and ignored.
-Toys are renamed ``block0, block1, ...`` in the order of their names' numbers (the corpus skips numbers:
-``block0, block1, block3``); :attr:`Pair.toy_names` keeps the file's names. Every problem is a
+Each state line is read by :mod:`groundlang.bdm_state` (its format is said there); toys are renamed
+``block0, block1, ...`` and :attr:`Pair.toy_names` keeps the file's names. Every problem is a
 :class:`~groundlang.state_line.CorpusError` naming the file, the line and the object.
 """
 

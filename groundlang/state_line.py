@@ -36,6 +36,13 @@ _FIELDS = {
 _KIND_ALIASES = {"toy": "block"}
 
 
+def is_state_line(line: str) -> bool:
+    """Whether ``line`` starts as a state line does (``room,5,0,...``), not as a command: a file holding one is
+    a corpus file, whose command is its first line."""
+    kind, comma, rest = line.strip().partition(",")
+    return bool(comma) and (kind in _FIELDS or kind in _KIND_ALIASES) and bool(_INTEGER.match(rest))
+
+
 class CorpusError(ValueError):
     """A corpus file, folder or labels file that cannot be used; the message says where and why."""
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sized
 from importlib.resources import files
 from pathlib import Path
 
@@ -47,15 +47,14 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
     if isinstance(sources, (str, Path, Mapping)):
         sources = [sources]
     merged: dict[str, dict[str, None]] = {}
-    sources_seen: list = []
     said = SynonymForms()  # merged below, a form's second word would name no source
-    for source in sources:
+    for read, source in enumerate(sources, 1):
         if isinstance(source, (str, Path)):
             words = read_word_file(source)
         elif isinstance(source, Mapping):
-            source = {c: list(w) if isinstance(w, (list, tuple, set, frozenset)) else w for c, w in source.items()}
-            if (weight := _weight({c: w for c, w in source.items() if isinstance(w, list)})) > MAX_WORDS:
-                # before any lexicon is built of them: a saved model's words are read this way
+            # weighed before any lexicon is built of them: a saved model's words are read this way
+            sized = {c: w for c, w in source.items() if isinstance(w, Sized) and not isinstance(w, str)}
+            if (weight := _weight(sized)) > MAX_WORDS:
                 raise LexiconError(f"words given as data: {weight:,} words, a verb counted as its {VERB_FORMS} "
                                    f"forms; at most {MAX_WORDS:,}")
             try:
@@ -68,19 +67,13 @@ def extra_words(sources: WordSource | Iterable[WordSource] | None) -> dict[str, 
         where = str(source) if isinstance(source, (str, Path)) else "words given as data (a trained model's own)"
         for pair in words.get("SYNONYM", ()):
             said.add(pair, where, f"in {where}")
-        if words.get("VERB_SERIAL") or words.get("ADV_DEGREE"):  # read against English: "to" is no serial verb
-            try:
-                Lexicon.english().extend({c: words[c] for c in ("VERB_SERIAL", "ADV_DEGREE") if c in words})
-            except LexiconError as exc:
-                raise LexiconError(f"{where}: {exc}") from None
         _check_word_roles(words, source, merged)
         for category, entries in words.items():
             merged.setdefault(category, {}).update(dict.fromkeys(entries))  # in order, once each
         if (total := _weight(merged)) > MAX_WORDS:
-            said = "word files of" if len(sources_read := [*sources_seen, source]) > 1 else "a word file of"
-            raise LexiconError(f"{where}: {said} {total:,} words{' together' * (len(sources_read) > 1)}, a verb "
-                               f"counted as its {VERB_FORMS} forms; at most {MAX_WORDS:,}")
-        sources_seen.append(source)
+            files_said = "word files of" if read > 1 else "a word file of"
+            raise LexiconError(f"{where}: {files_said} {total:,} words{' together' * (read > 1)}, a verb counted as "
+                               f"its {VERB_FORMS} forms; at most {MAX_WORDS:,}")
     return {category: list(entries) for category, entries in merged.items()}
 
 
@@ -106,11 +99,13 @@ def _check_word_roles(words: Mapping[str, Iterable[str]], source: WordSource, me
         if other := sorted({*english.get("PREP_HAVING", ()), *merged.get("PREP_HAVING", {})} - {word}):
             raise LexiconError(f"{_line_of(source, 'PREP_HAVING', word)}: PREP_HAVING word {word!r}: a clause of having "
                                f"reads as one preposition, and English or an earlier word file says {other[0]!r}")
-    for role, said in open_roles.items():  # the other way round: an earlier file's closed class
+    for role, said in open_roles.items():  # the other way round: a closed-class word of English or an earlier file
         for word in words.get(role, ()):
-            if closed := [c for c, e in merged.items() if TAGGING.get(c, c) in CLOSED_CLASS and word in e]:
-                raise LexiconError(f"{_line_of(source, role, word)}: {role} word {word!r} is {closed[0]} in an "
-                                   f"earlier word file, a closed class: {said} is an open word")
+            closed = sorted(Lexicon.english().listed(word) & CLOSED_CLASS) or [
+                c for c, e in merged.items() if TAGGING.get(c, c) in CLOSED_CLASS and word in e]
+            if closed:
+                raise LexiconError(f"{_line_of(source, role, word)}: {role} word {word!r} is {', '.join(closed)} in "
+                                   f"English or an earlier word file, a closed class: {said} is an open word")
     for category, entries in words.items():
         if TAGGING.get(category, category) not in CLOSED_CLASS:
             continue

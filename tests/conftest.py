@@ -18,6 +18,23 @@ def fixtures() -> Path:
     return FIXTURES
 
 
+@pytest.fixture(scope="module")
+def corpus():
+    """The example corpus the package ships (24 commands with demonstrations); a module may define its own."""
+    from groundlang.corpus import example_corpus_path, read_corpus
+
+    return read_corpus(example_corpus_path(), "sokoban")
+
+
+@pytest.fixture(scope="module")
+def learner(corpus):
+    """The default model trained on the example corpus, once per module (a test may change its settings and put
+    them back); a module may define its own."""
+    from groundlang.learner import Learner
+
+    return Learner("parse").fit(corpus.instances)
+
+
 @pytest.fixture
 def shared_corpus() -> Path:
     """The crowd-sourced corpus in ../shared (or $GROUNDLANG_CORPUS); tests using it skip where it is absent."""

@@ -8,20 +8,15 @@ import pytest
 
 from groundlang.clarify import AnswerError, Declined, choose, question
 from groundlang.confidence import GoalGroup
-from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
+from groundlang.corpus import example_corpus_path, read_state_file
 from groundlang.labels import goal_holds
-from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
+from groundlang.learner import DEFAULT_MIN_CONFIDENCE
 from groundlang.logic.atoms import parse_goal
 from groundlang.logic.tasks import TaskLibrary
 from groundlang.wording import goal_phrase, labelled_goal, object_phrase
 
 EXAMPLES = example_corpus_path()
 FIXTURES = __import__("pathlib").Path(__file__).parent / "fixtures"
-
-
-@pytest.fixture(scope="module")
-def learner():
-    return Learner("parse").fit(read_corpus(EXAMPLES, "sokoban").instances)
 
 
 @pytest.fixture(scope="module")

@@ -5,15 +5,10 @@ from __future__ import annotations
 
 import pytest
 
-from groundlang.corpus import example_corpus_path, read_corpus
-from groundlang.learner import DEFAULT_MIN_CONFIDENCE, Learner
+from groundlang.corpus import example_corpus_path
+from groundlang.learner import DEFAULT_MIN_CONFIDENCE
 
 EXAMPLES = example_corpus_path()
-
-
-@pytest.fixture(scope="module")
-def learner():
-    return Learner("parse").fit(read_corpus(EXAMPLES, "sokoban").instances)
 
 
 @pytest.fixture(scope="module")

@@ -27,11 +27,6 @@ def test_wilson_interval_matches_reference_values():
     assert wilson_interval(10, 10)[1] == 1.0
 
 
-@pytest.fixture(scope="module")
-def corpus():
-    return read_corpus(EXAMPLES, "sokoban")
-
-
 def test_arguments_of_another_type_are_named(corpus):
     """Each had failed deep inside: AttributeError ('list' object has no attribute 'instances', 'NoneType'
     object has no attribute 'get') or "cannot unpack non-iterable State object"."""
@@ -104,7 +99,6 @@ def test_cli_evaluate_writes_the_documented_json(tmp_path, capsys):
             "novel_accuracy", "novel_n", "skipped"} <= set(data)
     assert data["n"] == 24 and data["novel_n"] == 72
     assert "accuracy 100.00%" in capsys.readouterr().out
-
 
 
 def test_a_novel_layout_a_label_cannot_be_carried_to_is_named_by_its_path(tmp_path, capsys):

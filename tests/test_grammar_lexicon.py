@@ -364,9 +364,15 @@ def test_a_word_files_closed_class_word_that_is_a_serial_verb_or_degree_word_is_
     with pytest.raises(LexiconError, match=rf"^{re.escape(str(closed))}:1: DET word 'mighty' is a degree word"):
         extra_words([degree, closed])
     with pytest.raises(LexiconError, match=rf"^{re.escape(str(degree))}:1: ADV_DEGREE word 'mighty' is DET in "
-                                           "an earlier word file"):
+                                           "English or an earlier word file"):
         extra_words([closed, degree])
     assert extra_words([degree])["ADV_DEGREE"] == ["mighty"]  # alone, a degree word of one's own is fine
+    # and against English's closed classes, named by the file's line: "to" is no serial verb
+    serial = tmp_path / "serial.words"
+    serial.write_text("NOUN: mug\nVERB_SERIAL: dash to\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(serial))}:2: VERB_SERIAL word 'to' is PREP, TO in "
+                                           "English or an earlier word file, a closed class: a serial verb is an open"):
+        extra_words([serial])
 
 
 def test_word_files_together_are_bounded(tmp_path, monkeypatch):

@@ -11,21 +11,11 @@ import re
 import pytest
 
 from groundlang.cli import main
-from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
+from groundlang.corpus import example_corpus_path, read_state_file
 from groundlang.learner import Learner
 from groundlang.model.language_models import get_language_model
 
 EXAMPLES = example_corpus_path()
-
-
-@pytest.fixture(scope="module")
-def corpus():
-    return read_corpus(EXAMPLES, "sokoban")
-
-
-@pytest.fixture(scope="module")
-def learner(corpus):
-    return Learner("parse").fit(corpus.instances)
 
 
 def test_follow_says_when_the_words_ask_for_what_already_holds(tmp_path, capsys, monkeypatch):

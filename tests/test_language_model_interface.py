@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import pytest
 import torch
 
-from groundlang.corpus import example_corpus_path, read_corpus, read_state_file
+from groundlang.corpus import example_corpus_path, read_state_file
 from groundlang.learner import Learner
 from groundlang.model.encoding import Batch, Encoder
 from groundlang.model.language_model_base import LanguageModel, gather_mixtures, mixture_log_emissions
@@ -47,11 +47,6 @@ def registered():
     register_language_model(PredicateUnigram)
     yield PredicateUnigram
     LANGUAGE_MODELS.pop(PredicateUnigram.name)
-
-
-@pytest.fixture(scope="module")
-def corpus():
-    return read_corpus(example_corpus_path(), "sokoban")
 
 
 def test_a_new_language_model_trains_reads_and_round_trips_by_name(registered, corpus, tmp_path):

@@ -18,16 +18,6 @@ from groundlang.model_io import ModelFormatError
 EXAMPLES = example_corpus_path()
 
 
-@pytest.fixture(scope="module")
-def corpus():
-    return read_corpus(EXAMPLES, "sokoban")
-
-
-@pytest.fixture(scope="module")
-def learner(corpus):
-    return Learner("parse").fit(corpus.instances)
-
-
 def test_every_training_command_is_followed_to_its_gold_goal(corpus, learner):
     labels = read_labels(EXAMPLES / "labels.csv")
     for inst in corpus.instances:
@@ -243,7 +233,7 @@ def test_cli_train_follow_lexicon(tmp_path, capsys):
     assert "--words ' ': no word in it" in capsys.readouterr().err
     # a word of bytes that are not UTF-8 is said to be so, not split where they stand into two unknown words
     assert main(["--quiet", "lexicon", str(model), "--words", "red", "gr\udcffen"]) == 2
-    assert "--words 'gr\\xffen': it is not UTF-8 text (byte 0xff at character 3)" in capsys.readouterr().err
+    assert "--words 'gr\\udcffen': it is not UTF-8 text (byte 0xff at character 3)" in capsys.readouterr().err
     assert main(["--quiet", "lexicon", str(model), "--words"]) == 2  # an empty list is not "every word"
     assert "--words: no word given" in capsys.readouterr().err
     # what a preposition says of the lifted task: P(L | preposition), every task of the library once

@@ -8,22 +8,7 @@ import pytest
 
 from groundlang.grammar import parser
 from groundlang.grammar.parser import ParseError
-from groundlang.model.domain_words import domain_lexicon
-
-# Read with the Cleanup World's words (logic/cleanup.words), as a learner reads them.
-CLEANUP = domain_lexicon()
-
-
-def parse(command, **options):
-    return parser.parse(command, word_lexicon=CLEANUP, **options)
-
-
-def tokenise(command):
-    return parser.tokenise(command, CLEANUP)
-
-
-def tag(tokens):
-    return parser.tag(tokens, CLEANUP)
+from test_grammar_parser import parse, tag, tokenise  # read with the Cleanup World's words, as a learner reads
 
 
 def test_a_word_typed_with_combining_accents_is_the_word_its_precomposed_spelling_is(tmp_path):
@@ -53,8 +38,7 @@ def test_tokeniser_keeps_every_word_and_splits_hyphens_and_clitics():
 
 
 def test_tokeniser_splits_colour_compounds_written_solid_as_it_does_hyphenated_ones():
-    # "bluegreen" was <unk> to a model trained without it; split, its hues name the blue room. Measured on
-    # the crowd corpus (original commands): leave-one-out 227 against 226 of 240, novel layouts 639 against 637.
+    # "bluegreen" was <unk> to a model trained without it; split, its hues name the blue room (ABLATIONS.md).
     assert tokenise("walk into the bluegreen room") == tokenise("walk into the blue-green room") == [
         "walk", "into", "the", "blue", "green", "room"]
     # Only hue + hue: a word that merely starts with a hue, or a hue with a suffix, stays whole.

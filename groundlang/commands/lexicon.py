@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import unicodedata
 
-from groundlang.commands import input_path, json_text, positive_int
+from groundlang.commands import as_typed, input_path, json_text, positive_int
 
 
 def register(subparsers) -> None:
@@ -117,11 +117,7 @@ def run(args: argparse.Namespace) -> int:
     if args.words is not None:  # read as a command is: "RED" is red, "chair." chair; "next to" stays spaced, as
         for w in args.words:  # a preposition's row sends it to the preposition table
             if fault := utf8_fault(w):  # its bytes would split the word where they stand
-                try:  # the bytes as typed; a lone surrogate (from Python, not a shell) as its escape
-                    typed = w.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
-                except UnicodeEncodeError:
-                    typed = w.encode("utf-8", "backslashreplace").decode("utf-8")
-                raise ValueError(f"--words '{typed}': it {fault}")
+                raise ValueError(f"--words {as_typed(w)}: it {fault}")
             labelled = _as_read(w, learner.word_lexicon)
             if not labelled:
                 raise ValueError(f"--words {w!r}: no word in it; give the words to show, e.g. --words red room")

@@ -12,7 +12,6 @@ With ``--file`` a summary follows: how many commands got a full parse, how many 
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from pathlib import Path
 
@@ -21,7 +20,7 @@ from groundlang.commands import (LIBRARY_NAMES, input_path, add_lexicon_option, 
 from groundlang.corpus import MAX_FILE_BYTES as MAX_CORPUS_FILE_BYTES
 from groundlang.grammar.parser import ParseError, command_fault, parse, typed_words
 from groundlang.logic.storage import read_limited
-from groundlang.state_line import text_lines, utf8_text
+from groundlang.state_line import is_state_line, text_lines, utf8_text
 
 
 def register(subparsers) -> None:
@@ -48,10 +47,6 @@ def register(subparsers) -> None:
 MAX_COMMANDS_BYTES = 16 * 2**20
 
 
-# A state line of a corpus file (commands-to-tasks: "room,5,0,9,5,0 ..."): a file holding one is a corpus file.
-_STATE_LINE = re.compile(r"\s*(room|door|block|toy|agent),-?\d")
-
-
 def _commands(path: Path) -> list[tuple[str, str]]:
     """(source, command) pairs: the commands of a .bdm file or folder, first lines of a corpus folder's files
     or of one corpus file, or a file's non-empty lines."""
@@ -69,7 +64,7 @@ def _commands(path: Path) -> list[tuple[str, str]]:
             out.append((str(f), text_lines(text)[0].strip()))
         return out
     lines = text_lines(utf8_text(read_limited(path, MAX_COMMANDS_BYTES, "a file of commands"), path))
-    if any(_STATE_LINE.match(line) for line in lines[1:]):  # one corpus file: its command is its first line
+    if any(map(is_state_line, lines[1:])):  # one corpus file: its command is its first line
         return [(f"{path}:1", lines[0].strip())]
     return [(f"{path}:{i}", line.strip()) for i, line in enumerate(lines, 1) if line.strip()]
 
