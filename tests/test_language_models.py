@@ -221,37 +221,6 @@ def test_switching_the_parts_off_removes_their_globals(setting):
     assert not {"mention", "arity"} & set(bare)
 
 
-@pytest.mark.parametrize("command, keys", [
-    ("take the star to the red room", [None, "to+obj|last"]),  # where the object goes
-    ("go to the red room", ["to|last"]),  # where the agent goes
-    ("go into the green room and push it to the blue room", ["into", None, "to+obj|last"]),
-    ("take the star to the red room with you", [None, "to+obj|last", "with+obj"]),  # "you" has no words
-    ("push the star", ["dobj|last"]),
-    # what must not be done is not where a command ends: |last passes over a negated clause
-    ("do not enter the green room", ["not:dobj"]),
-    ("go to the red room, do not go to the blue room", ["to|last", "not:to"]),
-    # where a motion starts or what goes along is never where it ends: |last passes over it
-    ("go to the beige room with the star", ["to|last", "with"]),
-    ("walk to the white room from the orange room", ["to|last", "from"]),
-    ("push the star into the red room from the blue room", [None, "into+obj|last", "from+obj"]),
-])
-def test_preposition_keys_tell_transitive_clauses_apart(command, keys):
-    from groundlang.grammar.parser import parse
-    from groundlang.model.phrase_keys import entity_words
-
-    assert [key for key, _, _ in entity_words(parse(command)[0].logical_form)] == keys
-
-
-def test_a_noun_attached_with_phrase_may_say_where_things_end():
-    """Only a verb-attached "with" is comitative; in "the room with the green floor" it names the room."""
-    from groundlang.grammar.parser import parse
-    from groundlang.model.phrase_keys import entity_words
-
-    readings = {tuple(key for key, _, _ in entity_words(r.logical_form)) for r in parse("enter the room with the green floor")}
-    assert (None, "with@np|last") in readings  # the floor is the room's
-    assert ("dobj|last", "with+obj") in readings  # "with" attached to the verb: passed over
-
-
 def test_doors_are_described_by_their_side_of_the_agent(setting):
     from groundlang.model.tasks import spatial_descriptions
 
@@ -337,16 +306,6 @@ def test_mention_factor_is_the_same_summed_one_subset_at_a_time(setting, monkeyp
     assert torch.allclose(learner.lm.reading_table(g, batch)[1], whole, atol=1e-6)
 
 
-@pytest.mark.parametrize("key, base", [
-    ("from+obj|last", "from"), ("to+obj", "to"), ("to|last", "to"), ("dobj|last", "<dobj>"), ("<dobj>", "<dobj>"),
-    ("not:dobj|last", "not:dobj"), ("to@np|last", "to@np"), ("into", "into"),
-])
-def test_a_key_backs_off_to_its_preposition(key, base):
-    from groundlang.model.phrase_keys import backoff_key
-
-    assert backoff_key(key) == base
-
-
 def test_with_back_off_each_context_mixes_its_table_with_its_base_keys(setting):
     """Weights (1, 0) read every key by its own table; (0, 1) by its base key's table."""
     learner, _, batch, g = setting
@@ -369,32 +328,6 @@ def test_with_back_off_each_context_mixes_its_table_with_its_base_keys(setting):
         assert backing.sample_globals(**global_sizes(vocab))["backoff"].shape == (C, 2)
 
 
-def test_em_with_back_off_never_lowers_the_objective():
-    """EM's M step (weights * gradient = expected counts) holds for the mixture: every step climbs, and
-    the weights of a key that backs off to another ("to|last" to "to") move away from their start."""
-    import dataclasses
-
-    from groundlang.corpus import example_corpus_path, read_corpus
-    from groundlang.model.phrase_keys import backoff_key
-
-    instances = {i.name: i for i in read_corpus(example_corpus_path(), "sokoban").instances}
-    train = []
-    for colour in ("red", "green", "blue"):
-        for n, command in enumerate((f"go to the {colour} room", f"walk to the {colour} room",
-                                     f"go to the {colour} room and stop in the middle",
-                                     f"walk to the {colour} room and wait by the door")):
-            train.append(dataclasses.replace(instances[f"agent2{colour}_{n % 4}"], command=command))
-    learner = Learner(ParseAligned(align_backoff=True)).fit(train)
-    losses = learner.fit_result.losses
-    assert len(losses) > 3 and all(b <= a + 1e-6 * abs(a) for a, b in zip(losses, losses[1:]))
-    assert learner.fit_result.converged
-    vocab, weights = learner.vocab, learner.globals["backoff"]
-    assert torch.allclose(weights.sum(-1), torch.ones(1))
-    assert backoff_key("to|last") == "to" and {"to", "to|last"} <= set(vocab.preps)
-    row = vocab.task_id("agentToRoom") * len(vocab.preps) + vocab.preps.index("to|last")
-    assert abs(float(weights[row, 0]) - 0.5) > 0.05, weights[row]
-
-
 def test_the_verb_of_a_negated_clause_is_a_frame_word_not_the_tasks(setting):
     """"do not *walk* into the red room" says what not to do: "walk" is generated as a frame word."""
     learner, _, _, _ = setting
@@ -407,35 +340,6 @@ def test_the_verb_of_a_negated_clause_is_a_frame_word_not_the_tasks(setting):
         verbs = {w for u, w in enumerate(words) if batch.verb_counts[0, r, u] > 0}
         frame = {w for u, w in enumerate(words) if batch.frame_counts[0, r, u] > 0}
         assert verbs == {"push"} and "walk" in frame, r
-
-
-def test_the_room_the_agent_starts_in_has_a_role_of_its_own():
-    """Inside a room: that room is the start room and nothing else. On a door cell (the novel layouts):
-    every room not bound may be the start room or another room."""
-    from groundlang.corpus import example_corpus_path, read_corpus
-    from groundlang.model.interpretations import START_ROLE, interpretations, start_rooms
-
-    library = Learner("parse").library
-    from groundlang.logic.atoms import Atom
-    from groundlang.model.features import atoms_hold
-    from groundlang.model.pf_tables import pf_tables
-
-    inside = read_corpus(example_corpus_path(), "sokoban").instances[0].initial_state
-    (room,), known = start_rooms(inside)
-    assert known and atoms_hold(inside, [Atom("agentInRoom", ("agent0", room))], pf_tables(inside.layout)).all()
-    for interp in interpretations(inside, library, enumerate_constraints=False):
-        roles = {(rb.role, rb.obj) for rb in interp.roles if rb.cls == "room"}
-        bound = {rb.obj for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:")}
-        assert ((START_ROLE, room) in roles) == (room not in bound)
-        assert ("other:room", room) not in roles
-    door = read_state_file(Path(__file__).parent / "fixtures" / "novel_envs" / "novel_a.state", "sokoban")
-    starts, known = start_rooms(door)
-    assert not known and starts == set(door.layout.room_names)
-    for interp in interpretations(door, library, enumerate_constraints=False):
-        bound = {rb.obj for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:")}
-        free = set(door.layout.room_names) - bound
-        assert {rb.obj for rb in interp.roles if rb.role == START_ROLE} == free
-        assert {rb.obj for rb in interp.roles if rb.role == "other:room"} == free
 
 
 def test_alignment_posterior_equals_summing_over_every_alignment(setting):

@@ -1,11 +1,15 @@
-"""Vocabularies: indices, and misspellings read as the word meant (model.vocabulary)."""
+"""Vocabularies: indices, misspellings read as the word meant (model.vocabulary), and the roles an
+interpretation offers the objects of a layout."""
 
 from __future__ import annotations
 
 from collections import Counter
+from pathlib import Path
 
 import pytest
 
+from groundlang.corpus import read_state_file
+from groundlang.learner import Learner
 from groundlang.model.vocabulary import UNK, Vocabulary
 
 WORDS = ["orange", "white", "through", "room", "peach", "reach", "right", "light", "star"]
@@ -97,3 +101,32 @@ def test_lifted_tasks_are_indexed_apart_from_tokens_and_survive_json():
     assert again.tasks == vocab.tasks and again.task_id("toyToRoom") == 1
     with pytest.raises(ValueError, match="agentToDoor.*not in the vocabulary.*agentToRoom, toyToRoom"):
         vocab.task_id("agentToDoor")
+
+
+def test_the_room_the_agent_starts_in_has_a_role_of_its_own():
+    """Inside a room: that room is the start room and nothing else. On a door cell (the novel layouts):
+    every room not bound may be the start room or another room."""
+    from groundlang.corpus import example_corpus_path, read_corpus
+    from groundlang.model.interpretations import START_ROLE, interpretations, start_rooms
+
+    library = Learner("parse").library
+    from groundlang.logic.atoms import Atom
+    from groundlang.model.features import atoms_hold
+    from groundlang.model.pf_tables import pf_tables
+
+    inside = read_corpus(example_corpus_path(), "sokoban").instances[0].initial_state
+    (room,), known = start_rooms(inside)
+    assert known and atoms_hold(inside, [Atom("agentInRoom", ("agent0", room))], pf_tables(inside.layout)).all()
+    for interp in interpretations(inside, library, enumerate_constraints=False):
+        roles = {(rb.role, rb.obj) for rb in interp.roles if rb.cls == "room"}
+        bound = {rb.obj for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:")}
+        assert ((START_ROLE, room) in roles) == (room not in bound)
+        assert ("other:room", room) not in roles
+    door = read_state_file(Path(__file__).parent / "fixtures" / "novel_envs" / "novel_a.state", "sokoban")
+    starts, known = start_rooms(door)
+    assert not known and starts == set(door.layout.room_names)
+    for interp in interpretations(door, library, enumerate_constraints=False):
+        bound = {rb.obj for rb in interp.roles if rb.cls == "room" and not rb.role.startswith("other:")}
+        free = set(door.layout.room_names) - bound
+        assert {rb.obj for rb in interp.roles if rb.role == START_ROLE} == free
+        assert {rb.obj for rb in interp.roles if rb.role == "other:room"} == free
