@@ -59,11 +59,12 @@ ax = posterior_bar_chart(post, kind="readings")
 ax.figure
 
 # %% [markdown]
-# The third command ties: no training command of the example corpus says "from", and none shows the agent and
-# the star ending in two rooms, so the two ways of placing them are equally likely (the crowd corpus's model reads
-# it as the star's task, 0.70). `follow` asks there rather than acting: its end would satisfy 0.49 of the posterior
-# (the most probable goal's 0.48 and a little more), below its `--min-confidence` of 0.7 ("Knowing when it does
-# not know" in the README).
+# The third command ties: no training command of the example corpus says "from", and none shows the agent and the
+# star ending in two rooms, so the two ways of placing them are equally likely (the crowd corpus's model reads it as
+# the star's task, 1.00, and pushes the star into the room this palette names blue: that corpus's workers saw the
+# palette's blue room drawn teal and often called it green: its model reads "green" as `roomIsBlue`, 0.97). `follow`
+# asks there rather than acting: its end would satisfy 0.49 of the posterior (the most probable goal's 0.48 and a
+# little more), below its `--min-confidence` of 0.7 ("Knowing when it does not know" in the README).
 #
 # Which object each noun phrase of the most probable reading names, under the most probable interpretation
 # (`Learner.alignments`: exact with the mention model).

@@ -127,3 +127,15 @@ def test_parse_names_an_unknown_grammar_rule_in_its_weights():
 def test_quiet_and_verbose_may_come_before_or_after_the_command(argv, quiet, verbose):
     args = build_parser().parse_args(argv)
     assert (args.quiet, args.verbose) == (quiet, verbose)
+
+
+def test_help_is_plain_text_not_docstring_markup():
+    """A command's help is read in a terminal: no reST ``literals`` (parse's description is its docstring)."""
+    marked = []
+    parser = build_parser()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                if "``" in sub.format_help():
+                    marked.append(name)
+    assert "``" not in parser.format_help() and marked == []

@@ -25,7 +25,7 @@ from groundlang.state_line import is_state_line, text_lines, utf8_text
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("parse", help="parse commands into logical forms with probabilities",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                              description=__doc__.replace("``", ""), formatter_class=argparse.RawDescriptionHelpFormatter)
     # dest "text": the CLI keeps the sub-command's name in args.command
     p.add_argument("text", nargs="?", metavar="COMMAND", help="the command to parse (quote it)")
     p.add_argument("--file", type=lambda text: Path(input_path(text)),
