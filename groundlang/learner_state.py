@@ -150,10 +150,10 @@ def learner_from_state(cls, state: dict, where: str):
     # A model saved before habit_prior existed weighed its habits by the rule it now names "overall", and one
     # saved before success_confidence (or held_goals_confidence) was as confident as its goal (its end): it acts
     # and asks as it did; one saved before last_passes_over_negated learned its tables with the last phrase's key
-    # on a negated phrase, and reads words with the keys it learned (a setting absent from older models is
-    # otherwise its default).
+    # on a negated phrase, and reads words with the keys it learned; one saved before negated_phrases_unbiased
+    # learned (and updates) under the prior it had (a setting absent from older models is otherwise its default).
     before = {"habit_prior": "overall", "success_confidence": False, "held_goals_confidence": False,
-              "last_passes_over_negated": False}
+              "last_passes_over_negated": False, "negated_phrases_unbiased": False}
     known = get_language_model(state["language_model"]).settings()
     settings = {**{k: v for k, v in before.items() if k in known}, **state["language_model_settings"]}
     learner = cls(

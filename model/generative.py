@@ -35,6 +35,7 @@ def global_sizes(vocab: Vocabulary) -> dict:
         "num_words": len(vocab.words),
         "num_roles": len(vocab.roles),
         "num_preps": len(vocab.preps),
+        "prep_names": tuple(vocab.preps),
         "role_names": tuple(vocab.roles),
         "name_families": len(vocab.families),
         # offered[t][v]: whether lifted task t can offer role v (Vocabulary.offers_role)

@@ -62,7 +62,7 @@ class IBMModel2(LanguageModel):
                 "machine": machine, "machine_mask": machine_mask}
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=(),
-                       name_families=0):
+                       name_families=0, prep_names=()):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps, name_families=name_families)
         contexts = POSITION_BINS * (MAX_MACHINE + 1)
         with pyro.plate("distortion_contexts", contexts, dim=-1):

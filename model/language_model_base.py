@@ -127,6 +127,7 @@ class LanguageModel:
     def sample_globals(
         self, num_tokens: int, num_words: int, num_roles: int, num_preps: int, role_names: tuple[str, ...] = (),
         num_tasks: int = 0, offered: tuple[tuple[bool, ...], ...] = (), name_families: int = 0,
+        prep_names: tuple[str, ...] = (),
     ) -> dict:
         with pyro.plate("tokens", num_tokens, dim=-1):
             phi = pyro.sample(

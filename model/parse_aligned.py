@@ -29,15 +29,15 @@ import torch
 
 from groundlang.grammar.parser import checked_weights
 from groundlang.model.encoding import PAD_LOGIT, Encoder
-from groundlang.model.language_model_base import (LEARNED_SHARE, NULL_MIXTURE, LanguageModel, gather_mixtures,
+from groundlang.model.language_model_base import (NULL_MIXTURE, LanguageModel, gather_mixtures,
                                                   mixture_log_emissions, require_positive)
 from groundlang.model.mentions import mention_factor
 from groundlang.model.parse_encoding import CLAUSE_ARITY_BINS, ParseBatch, encode_parse_fields
-from groundlang.model.phrase_keys import PhraseKeys, bare_preposition
+from groundlang.model.phrase_keys import PhraseKeys, is_negated_key
 from groundlang.model.relational import is_relational_role
 from groundlang.model.vocabulary import is_task_role
 
-__all__ = ["ParseAligned", "preposition_table", "preposition_tasks"]
+__all__ = ["ParseAligned"]
 
 
 class ParseAligned(LanguageModel):
@@ -65,6 +65,7 @@ class ParseAligned(LanguageModel):
         noun_attached_key: bool = True,
         negation_key: bool = True,
         last_passes_over_negated: bool = True,
+        negated_phrases_unbiased: bool = True,
         start_role: bool = True,
         bystander_roles: bool = True,
         largest_constraint: bool = True,
@@ -109,6 +110,8 @@ class ParseAligned(LanguageModel):
         room (``model.relational``). ``last_phrase_key``, ``object_key``, ``last_passes_over_source``, ``noun_attached_key``,
         ``negation_key``, ``last_passes_over_negated``: the
         marks of a phrase's preposition key (``phrase_keys.PhraseKeys`` says the regularity each states).
+        ``negated_phrases_unbiased``: the alignment prior of a negated clause's phrases (``not:to``) gives the
+        task's own roles no argument bonus.
         ``start_role``: the room the agent starts in has a role of its own ("go *from the orange room*");
         ``bystander_roles``: objects the task leaves alone have one role per class (``other:room``), not
         one for all (``interpretations.interpretations``). ``largest_constraint``: each grounding is offered once,
@@ -152,6 +155,7 @@ class ParseAligned(LanguageModel):
         self.noun_attached_key = noun_attached_key
         self.negation_key = negation_key
         self.last_passes_over_negated = last_passes_over_negated
+        self.negated_phrases_unbiased = negated_phrases_unbiased
         self.start_role = start_role
         self.bystander_roles = bystander_roles
         self.enumerates_constraints = not largest_constraint
@@ -179,7 +183,7 @@ class ParseAligned(LanguageModel):
                  "achievable_goals", "expected_success", "step_cost", "end_habits", "moved_toys", "habits_made_true",
                  "bound_habits", "habit_prior", "success_confidence", "held_goals_confidence",
                  "last_phrase_key", "object_key", "last_passes_over_source", "noun_attached_key", "negation_key",
-                 "last_passes_over_negated", "start_role", "bystander_roles", "largest_constraint",
+                 "last_passes_over_negated", "negated_phrases_unbiased", "start_role", "bystander_roles", "largest_constraint",
                  "negated_verbs_frame", "mention_task_objects", "parser_weights")
 
     def settings(self) -> dict:
@@ -187,7 +191,7 @@ class ParseAligned(LanguageModel):
                 for name in self._SETTINGS}
 
     def sample_globals(self, num_tokens, num_words, num_roles, num_preps, role_names=(), num_tasks=0, offered=(),
-                       name_families=0):
+                       name_families=0, prep_names=()):
         g = super().sample_globals(num_tokens, num_words, num_roles, num_preps, name_families=name_families)
         if num_tasks < 1:
             raise ValueError("the parse model needs the lifted tasks of the vocabulary (Vocabulary.add_tasks)")
@@ -195,6 +199,11 @@ class ParseAligned(LanguageModel):
         if task_role.numel() != num_roles:  # no names given: every role is a bystander's
             task_role = torch.zeros(num_roles, dtype=torch.bool)
         concentration = torch.full((num_roles,), self.align_concentration) + self.argument_bonus * task_role
+        by_prep = concentration.expand(num_preps, num_roles).clone()  # [preps, roles]
+        if self.negated_phrases_unbiased and len(prep_names) == num_preps:
+            # What a negated phrase names may be the task's ("push the star into the teal room without walking
+            # into the teal room") or not ("... do not go through the orange room"): no bonus either way.
+            by_prep[torch.tensor([is_negated_key(k) for k in prep_names], dtype=torch.bool)] = self.align_concentration
         share = torch.full((2,), self.align_concentration)
         g["frame_source"] = pyro.sample("frame_source", dist.Dirichlet(share))
         g["verb_source"] = pyro.sample("verb_source", dist.Dirichlet(share))
@@ -207,9 +216,11 @@ class ParseAligned(LanguageModel):
             # roles in every table, a "go somewhere" table kept a third of its mass for the toy's
             # roles, and in a layout with a toy an agent command read cheaper as moving it.
             own = torch.tensor(offered, dtype=torch.bool) if offered else torch.ones(num_tasks, num_roles, dtype=torch.bool)
-            per_task = torch.where(own, concentration, torch.ones(()))  # [tasks, roles]
-            concentration = per_task[:, None, :].expand(num_tasks, num_preps, num_roles).reshape(-1, num_roles)
-        contexts = concentration.shape[0] if self.align_by_task else num_preps
+            per_task = torch.where(own[:, None, :], by_prep[None], torch.ones(()))  # [tasks, preps, roles]
+            concentration = per_task.reshape(-1, num_roles)
+        else:
+            concentration = by_prep
+        contexts = concentration.shape[0]
         with pyro.plate("align_contexts", contexts, dim=-1):
             g["align"] = pyro.sample("align", dist.Dirichlet(concentration))
             if self.align_backoff:
@@ -368,30 +379,3 @@ def per_role(per_mixture: torch.Tensor, at: torch.Tensor) -> torch.Tensor:
     K = per_mixture.shape[-1]
     out = per_mixture.gather(1, at.reshape(I, J * V, 1).expand(I, J * V, K))
     return out.reshape(I, J, V, K)
-
-
-def preposition_table(g: dict, vocab) -> tuple[list[str], list[str], torch.Tensor]:
-    """``(lifted tasks, prepositions, P(L | preposition) [tasks, prepositions])`` from the parse model's
-    table ``P(preposition | L)`` under a uniform prior over L: what "left of" was learned to say.
-
-    The prepositions are those training gave mass to (the rule :func:`word_meanings` uses for words);
-    the unseen and direct-object keys are left out (neither is a word, and a direct object generates no
-    key), and so are the keys the alignment table uses (``to|last``): this table is indexed by the bare
-    preposition. Empty for globals without the table (``preposition_concentration`` None, another model)."""
-    if "preposition" not in g or not vocab.tasks:
-        return [], [], torch.zeros(0, 0)
-    by_task = g["preposition"].detach().double()  # [L, P]
-    learned = by_task.max(0).values > LEARNED_SHARE / by_task.shape[1]
-    shown = [k for k, prep in enumerate(vocab.preps) if k >= 2 and learned[k] and bare_preposition(prep) == prep]
-    given = by_task / by_task.sum(0, keepdim=True).clamp_min(1e-300)
-    return list(vocab.tasks), [vocab.preps[k] for k in shown], given[:, shown]
-
-
-def preposition_tasks(g: dict, vocab, top: int = 3) -> dict[str, list[tuple[str, float]]]:
-    """Each preposition of :func:`preposition_table` with its ``top`` most probable lifted tasks."""
-    tasks, preps, given = preposition_table(g, vocab)
-    out = {}
-    for j, prep in enumerate(preps):
-        order = torch.argsort(given[:, j], descending=True)[:top]
-        out[prep] = [(tasks[int(t)], float(given[t, j])) for t in order]
-    return out

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from groundlang.grammar.lexicon import Lexicon
 from groundlang.grammar.logical_form import LogicalForm
 from groundlang.model.domain_words import domain_lexicon
-from groundlang.model.vocabulary import DIRECT_OBJECT, Vocabulary
+from groundlang.model.vocabulary import DIRECT_OBJECT, NEGATED_PREP, Vocabulary
 
 __all__ = ["PhraseKeys", "entity_words", "backoff_key", "bare_preposition", "backoff_prep_ids", "is_referring"]
 
@@ -117,6 +117,12 @@ def backoff_key(key: str) -> str:
     ``<dobj>``); a negated or noun-attached phrase keeps its mark (``not:to``, ``to@np``)."""
     base = key.removesuffix("|last").replace("+obj", "")
     return DIRECT_OBJECT if base == "dobj" else base
+
+
+def is_negated_key(key: str) -> bool:
+    """Whether a preposition key is a phrase of a negated clause (``not:to``, ``not:dobj|last``, or one
+    training never saw: ``NEGATED_PREP``)."""
+    return key.startswith("not:") or key == NEGATED_PREP
 
 
 def bare_preposition(key: str) -> str | None:

@@ -19,13 +19,16 @@ from dataclasses import dataclass, field
 from groundlang.grammar.lexicon import Lexicon
 from groundlang.model.domain_words import domain_lexicon
 
-__all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "OTHER_PREP", "DIRECT_OBJECT", "class_token", "is_task_role"]
+__all__ = ["Vocabulary", "NULL", "UNK", "NO_ROLE", "OTHER_PREP", "DIRECT_OBJECT", "NEGATED_PREP", "class_token", "is_task_role"]
 
 NULL = "NULL"
 UNK = "<unk>"
 NO_ROLE = "none"
 OTHER_PREP = "<other>"
 DIRECT_OBJECT = "<dobj>"
+# The key of a phrase of a negated clause whose own key (``not:onto``) training never saw: a negated phrase
+# training never saw is read as one, not as any unseen preposition (``prep_id``).
+NEGATED_PREP = "<not>"
 
 
 def class_token(cls: str) -> str:
@@ -89,7 +92,7 @@ class Vocabulary:
     # What a noun phrase may align with (index 0: nothing) and the prepositions
     # that introduce noun phrases (index 0: unseen preposition, 1: direct object).
     roles: list[str] = field(default_factory=lambda: [NO_ROLE])
-    preps: list[str] = field(default_factory=lambda: [OTHER_PREP, DIRECT_OBJECT])
+    preps: list[str] = field(default_factory=lambda: [OTHER_PREP, DIRECT_OBJECT, NEGATED_PREP])
     # Misspellings read as another word of the vocabulary ("whlite" -> "white").
     aliases: dict[str, str] = field(default_factory=dict)
     # The lifted tasks, in library order: what the parse model's per-task tables are indexed by.
@@ -210,6 +213,8 @@ class Vocabulary:
     def prep_id(self, prep: str | None) -> int:
         if prep is None:
             return 1
+        if prep not in self._prep_index and prep.startswith("not:"):
+            return self._prep_index.get(NEGATED_PREP, 0)  # a vocabulary saved before it existed: unseen
         return self._prep_index.get(prep, 0)
 
     def word_id(self, word: str) -> int:

@@ -106,10 +106,10 @@ ax.set_title("P(meaning | word), top 3 per word"); fig.tight_layout()
 # %% [markdown]
 # ### What the prepositions say
 #
-# A relation is said by a preposition: the grammar reads "to the left of", "left of" and "next to" as one preposition each (`grammar/english.words`), so the relation is said by the preposition, not by "left": an entry of "left" above, where there is one, comes from its other uses ("the top left room", "on your left side"), and one of "next" from readings that split "next to". The parse model generates each phrase's preposition given the lifted task, `P(preposition | L)` (`preposition_concentration`, `model/parse_aligned.py`). Its learned table is the `preposition` entry of `Learner.globals` (`[lifted tasks, prepositions]`, in the order of `Learner.vocab.tasks` and `Learner.vocab.preps`). The model's prior over lifted tasks is uniform, so `P(L | preposition)` is that table normalised over tasks (`preposition_table`; `groundlang lexicon MODEL --prepositions` prints it). Shown: the prepositions training gave mass to (the rule `Learner.lexicon` uses for words).
+# A relation is said by a preposition: the grammar reads "to the left of", "left of" and "next to" as one preposition each (`grammar/english.words`), so the relation is said by the preposition, not by "left": an entry of "left" above, where there is one, comes from its other uses ("the top left room", "on your left side"), and one of "next" from readings that split "next to". The parse model generates each phrase's preposition given the lifted task, `P(preposition | L)` (`preposition_concentration`, `model/parse_aligned.py`). Its learned table is the `preposition` entry of `Learner.globals` (`[lifted tasks, prepositions]`, in the order of `Learner.vocab.tasks` and `Learner.vocab.preps`). The model's prior over lifted tasks is uniform, so `P(L | preposition)` is that table normalised over tasks (`preposition_table` of `model/prepositions.py`; `groundlang lexicon MODEL --prepositions` prints it). Shown: the prepositions training gave mass to (the rule `Learner.lexicon` uses for words).
 
 # %%
-from groundlang.model.parse_aligned import preposition_table
+from groundlang.model.prepositions import preposition_table
 
 tasks, preps, given = preposition_table(learner.globals, learner.vocab)  # given: P(L | preposition) [tasks, preps]
 print(f"{'preposition':22s}", "  ".join(f"{t:>15s}" for t in tasks))

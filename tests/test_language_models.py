@@ -171,8 +171,16 @@ def test_prior_favours_the_tasks_own_roles_and_unnamed_bystanders(setting):
 
     align_c = concentration("align").reshape(len(vocab.tasks), len(vocab.preps), -1)
     mention_c = concentration("mention")
+    from groundlang.model.phrase_keys import is_negated_key
+
+    negated = [is_negated_key(p) for p in vocab.preps]
+    assert any(negated) and not negated[0]  # the unseen negated key, "<not>", is always there
     for t, task in enumerate(vocab.tasks):
-        assert torch.equal(align_c[t], align_c[t, :1].expand_as(align_c[t]))  # the same prior for every preposition
+        said = align_c[t][[not n for n in negated]]
+        assert torch.equal(said, said[:1].expand_as(said))  # the same prior for every unnegated preposition
+        for r, name in enumerate(vocab.roles):
+            if name in vocab.task_roles[task]:  # a negated phrase: no bonus for the task's own roles
+                assert float(align_c[t][negated][:, r].max()) == pytest.approx(lm.align_concentration)
         for r, name in enumerate(vocab.roles):
             if name not in vocab.task_roles[task]:  # another task's variable, or the agent: never offered
                 assert float(align_c[t, 0, r]) == 1.0  # no pseudo-count, so the MAP gives it nothing

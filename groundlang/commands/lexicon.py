@@ -9,7 +9,7 @@ the names. ``--json`` prints ``{word: [[token, probability], ...]}`` only.
 A relation is learned by the parse model as what its preposition says of the lifted task
 (``P(preposition | L)``), not as a preposition word's token: the table ends with each preposition's
 most probable lifted tasks, ``P(L | preposition)`` under a uniform prior over L
-(:func:`groundlang.model.parse_aligned.preposition_tasks`); ``--prepositions`` prints that table alone.
+(:func:`groundlang.model.prepositions.preposition_tasks`); ``--prepositions`` prints that table alone.
 """
 
 from __future__ import annotations
@@ -105,7 +105,7 @@ def _as_known(word: str, vocab) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from groundlang.learner import Learner
-    from groundlang.model.parse_aligned import preposition_tasks
+    from groundlang.model.prepositions import preposition_tasks
     from groundlang.grammar.parser import utf8_fault
     from groundlang.wording import token_meanings
 
