@@ -136,7 +136,18 @@ _LIBRARY_SHOW = Source("groundlang.logic.tasks", "#show task/1. #show var/3. #sh
                        "#show goal_class/1. #show viewpoint_class/1. #show phrase/2.")
 
 
-def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
+def _read_lifted_tasks(program: Program, time_limit: float | None):
+    """:func:`_lifted_tasks_read`, every error naming the library's files (a PF's name is checked where no file
+    is known)."""
+    try:
+        return _lifted_tasks_read(program, time_limit)
+    except AspError as exc:
+        if str(exc).startswith(program.user_names):
+            raise
+        raise AspError(f"{program.user_names}: {exc}") from None
+
+
+def _lifted_tasks_read(program: Program, time_limit: float | None) -> tuple[
         tuple[LiftedTask, ...], tuple[str, ...], tuple[tuple[str, tuple[str, str]], ...], PFRoles,
         tuple[tuple[str, str], ...]]:
     """Solve the library without an environment: the lifted tasks (task/1, var/3, goal/3,
@@ -157,6 +168,8 @@ def _read_lifted_tasks(program: Program, time_limit: float | None) -> tuple[
     for sym in models[0]:
         by_signature.setdefault((sym.name, len(sym.arguments)), []).append(sym)
     roles = read_pf_roles(by_signature, program.user_names)
+    if negated := next((a for a in by_signature.get(("task", 1), []) if a.arguments[0].type is clingo.SymbolType.Function and a.arguments[0].negative), None):
+        raise AspError(f"{program.user_names}: {negated}: a task's name is negated; name it without '-'")
     names = sorted(symbol_text(a.arguments[0]) for a in by_signature.get(("task", 1), []))
     if twice := next((n for n, m in zip(names, names[1:]) if n == m), None):
         # task(t) and task("t") are two atoms of one name: their var/3 and goal/3 atoms would be mixed.

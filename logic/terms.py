@@ -19,6 +19,9 @@ def pf_name(term: clingo.Symbol) -> str:
     """groundlang's name for a PF term: ``toyInRoom`` stays, ``roomIs(darkGray)`` -> ``roomIsDarkGray``."""
     if term.type is not clingo.SymbolType.Function or not term.name:
         raise AspError(f"PF name {term} must be a constant or a term like roomIs(green)")
+    if term.negative:  # clingo's classical negation: -agentInRoom would otherwise read as agentInRoom
+        raise AspError(f"PF name {term} is negated; a goal or description names a PF without '-' (what must not "
+                       "hold is a PF of its own)")
     name = term.name
     for arg in term.arguments:
         name = attribute_pf(name, arg.string if arg.type is clingo.SymbolType.String else str(arg))

@@ -270,3 +270,16 @@ def test_check_grounds_a_library_given_in_each_layout_as_train_does(tmp_path, ca
     assert main(["check", str(fixtures / "williams2018" / "small.bdm"), "--library", "williams2018",
                  "--library", str(words / "mine.lp")]) == 2
     assert "mine.words:1: unknown category 'BOGUS'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text, message", [
+    # classical negation: -agentInRoom had been read as agentInRoom, a task meaning the opposite of what was written
+    ('task(t1). var(t1, "A", agent). var(t1, "R", room). goal(t1, -agentInRoom, ("A", "R")).\n',
+     r"mine.lp: PF name -agentInRoom is negated"),
+    ('task(-t1). var(-t1, "A", agent). var(-t1, "R", room). goal(-t1, agentInRoom, ("A", "R")).\n',
+     r"mine.lp: task\(-t1\): a task's name is negated"),
+    ('pf(position, "AgentIn", (agent, room)).\n', r'mine.lp: PF name "AgentIn" must be a constant'),  # named its file
+])
+def test_a_negated_or_malformed_name_is_refused_naming_the_file(tmp_path, text, message):
+    with pytest.raises(AspError, match=message):
+        _library(tmp_path, text)
