@@ -84,7 +84,13 @@ class Lexicon:
         # a serial verb or a verb of having is a verb, listed so or not (else its clauses would go unread)
         for lemma in sorted(words["VERB"] | words["VERB_SERIAL"] | words["VERB_HAVING"]):
             self.verb_forms.update(_inflections(lemma))
-        self.verb_forms.update(pair.split("=", 1) for pair in self.entries.get("IRREGULAR", ()))
+        irregular: dict[str, str] = {}
+        for pair in self.entries.get("IRREGULAR", ()):  # a form is of one verb (entries are sorted: no order decides)
+            form, lemma = pair.split("=", 1)
+            if irregular.setdefault(form, lemma) != lemma:
+                raise LexiconError(f"IRREGULAR {form!r} is a form of {irregular[form]!r} and of {lemma!r}: "
+                                   "a form is of one verb")
+        self.verb_forms.update(irregular)
         table: dict[str, set[str]] = {}
         for category in FILE_CATEGORIES:
             tag = TAGGING.get(category, category)

@@ -95,6 +95,12 @@ def _check_word_roles(words: Mapping[str, Iterable[str]], source: WordSource, me
         if numbers.get(form, number) != number:
             raise LexiconError(f"{_line_of(source, 'ORDINAL', pair)}: ORDINAL {form!r} is the number {number} here and "
                                f"{numbers[form]} in English or an earlier word file: a word names one number")
+    lemmas = dict(pair.split("=", 1) for pair in [*english.get("IRREGULAR", ()), *merged.get("IRREGULAR", {})])
+    for pair in words.get("IRREGULAR", ()):  # a form is of one verb
+        form, lemma = pair.split("=", 1)
+        if lemmas.setdefault(form, lemma) != lemma:
+            raise LexiconError(f"{_line_of(source, 'IRREGULAR', pair)}: IRREGULAR {form!r} is a form of {lemma!r} here "
+                               f"and of {lemmas[form]!r} in English or this or an earlier word file: a form is of one verb")
     for word in words.get("PREP_HAVING", ()):  # one preposition a clause of having reads as
         if other := sorted({*english.get("PREP_HAVING", ()), *merged.get("PREP_HAVING", {})} - {word}):
             raise LexiconError(f"{_line_of(source, 'PREP_HAVING', word)}: PREP_HAVING word {word!r}: a clause of having "

@@ -418,3 +418,25 @@ def test_a_word_files_ordinal_of_another_number_is_named_by_file_and_line(tmp_pa
     with pytest.raises(LexiconError, match=rf"^{re.escape(str(mine))}:2: ORDINAL 'third' is the number 4 here and 3 in "
                                            "English or an earlier word file"):
         extra_words([mine])
+
+
+def test_a_form_of_two_verbs_is_refused_in_a_file_across_files_and_against_english(tmp_path):
+    """IRREGULAR entries were sorted and the last kept: "zoomt=go zoomt=push" read "zoomt" as push, whatever the
+    order written, and a user's "went=come" lost to English's "went=go" without a word."""
+    mine, other = tmp_path / "mine.words", tmp_path / "other.words"
+    mine.write_text("NOUN: mug\nIRREGULAR: zoomt=go zoomt=push\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(mine))}:2: IRREGULAR 'zoomt' is a form of 'push' here and "
+                                           "of 'go'"):
+        extra_words([mine])
+    mine.write_text("IRREGULAR: zoomt=go\n", encoding="utf-8")
+    other.write_text("IRREGULAR: zoomt=push\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(other))}:1: IRREGULAR 'zoomt'"):
+        extra_words([mine, other])
+    other.write_text("IRREGULAR: went=come\n", encoding="utf-8")
+    with pytest.raises(LexiconError, match=rf"^{re.escape(str(other))}:1: IRREGULAR 'went' is a form of 'come' here "
+                                           "and of 'go'"):
+        extra_words([other])
+    with pytest.raises(LexiconError, match="IRREGULAR 'zoomt' is a form of 'go' and of 'push': a form is of one verb"):
+        Lexicon.english().extend({"IRREGULAR": ["zoomt=push", "zoomt=go"]})
+    assert extra_words([mine]) == {"IRREGULAR": ["zoomt=go"]} and Lexicon.english().extend(
+        {"IRREGULAR": ["zoomt=go", "went=go"]}).lemma("zoomt") == "go"  # the same pair again is no conflict
