@@ -32,6 +32,10 @@ def read_phrases(atoms: Sequence[clingo.Symbol], declared: "Declarations", where
         if term.type is not clingo.SymbolType.Function or text.type is not clingo.SymbolType.String \
                 or not text.string.strip():
             raise AspError(f'{where}: {atom} is not phrase(PF, "words") with a PF and words in quotes')
+        if any(ord(c) < 32 or 127 <= ord(c) < 160 for c in text.string):
+            # printed in every goal line and saved in models: a newline or an escape would forge output
+            raise AspError(f"{where}: {atom}: the words hold a control character (a line break, a tab, an escape); "
+                           "a phrase is one line of plain text")
         name = pf_name(term)
         if term not in declared:  # a family's member (toyIs(wood)) was declared with its values: declare_families
             spelled = next((t for t in declared if pf_name(t) == name), None)
