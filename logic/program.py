@@ -69,6 +69,9 @@ DEFAULT_TIME_LIMIT = 10.0
 CHILD_MEMORY_LIMIT = 2 << 30
 # Extra seconds the parent waits for the child's own timeout report before killing it.
 _CHILD_GRACE = 5.0
+# Shown atoms a child may send back, over all its answer sets: the parent reads them all into memory. The package's
+# libraries show at most about 7,500 (a Williams layout's PF tables); "task(t(1..3000000))." would show millions.
+MAX_REPLY_ATOMS = 200_000
 
 
 class AspGroundingError(AspError):
@@ -384,6 +387,11 @@ def _child_main() -> None:
     try:
         program = Program(tuple(Source(n, t) for n, t in request["sources"]), request["allow_scripts"])
         found = program.solve(request["facts"], models=request["models"], time_limit=request["time_limit"])
+        shown = sum(len(model) for model in found)
+        if shown > MAX_REPLY_ATOMS:  # counted before any is written out: the parent's memory stays bounded
+            raise AspGroundingError(f"{program.user_names}: the program shows {shown:,} atoms, more than the "
+                                    f"{MAX_REPLY_ATOMS:,} a task library's answer may (a rule that makes an atom "
+                                    "per number of a large range?)")
         reply = {"models": [[str(sym) for sym in model] for model in found]}
     except AspError as exc:
         reply = {"error": [type(exc).__name__, str(exc)]}

@@ -162,3 +162,15 @@ def test_isolated_infinite_grounding_is_stopped():
     with pytest.raises(AspTimeout, match=r"forever\.lp did not finish within 0\.5 s"):
         program.solve(time_limit=0.5)
     assert time.perf_counter() - start < 5.0
+
+
+def test_an_isolated_answer_of_too_many_atoms_is_refused_before_the_parent_reads_it():
+    """"task(t(1..3000000))." took 2 GB and a minute in the parent, reading the child's reply, past the limit."""
+    from groundlang.logic.program import MAX_REPLY_ATOMS
+
+    program = Program((Source("many.lp", f"task(t(1..{MAX_REPLY_ATOMS + 1})).\n"),), isolated=True)
+    with pytest.raises(AspGroundingError, match=rf"many\.lp: the program shows {MAX_REPLY_ATOMS + 1:,} atoms, more "
+                                                rf"than the {MAX_REPLY_ATOMS:,}"):
+        program.solve(models=1)
+    assert len(Program((Source("some.lp", f"a(1..{MAX_REPLY_ATOMS})."),), isolated=True).solve(models=1)[0]) \
+        == MAX_REPLY_ATOMS
