@@ -15,7 +15,7 @@ from .program import AspError, Program, term_signature
 from .terms import pf_name, symbol_text, tuple_args
 
 __all__ = ["PFRoles", "Declarations", "declare", "declare_families", "read_pf_roles", "restriction_problem",
-           "check_tasks_declared_once", "read_phrases"]
+           "check_tasks_declared_once", "check_pfs_declared_once", "read_phrases"]
 
 _PLACE = re.compile(r"\{(\d+)\}")  # "{1}": a phrase's place for a PF's first argument
 
@@ -71,6 +71,27 @@ def check_tasks_declared_once(program: Program) -> None:
             if (first := declared.setdefault(name, source.name)) != source.name:
                 raise AspError(f"task {name} is declared in both {first} and {source.name}: its atoms would join "
                                "into one task; rename the task of one of them")
+
+
+_PF_FACT = re.compile(r'pf\(\s*([^,()]+?)\s*,\s*([^,()"]+?)\s*,\s*\(([^()]*)\)\s*\)\.')
+
+
+def check_pfs_declared_once(program: Program) -> None:
+    """AspError naming both files (or one, twice) where a PF of one name is declared with two classes or signatures
+    (``pf(position, agentInRoom, (agent, toy)).`` beside ``domain.lp``'s ``(agent, room)``): its holds/2 rules would
+    answer for both, and the error came later, blaming a task of another file for its arguments' classes."""
+    declared: dict[str, tuple[str, str, str]] = {}
+    for source, statements in program.statements_by_source():
+        for stm in statements:
+            if not (m := _PF_FACT.fullmatch(str(stm))):
+                continue
+            classes = [c.strip() for c in m.group(3).split(",") if c.strip()]
+            cls, name, signature = m.group(1), m.group(2), ", ".join(classes) + ("," if len(classes) == 1 else "")
+            first = declared.setdefault(name, (cls, signature, source.name))
+            if first[:2] != (cls, signature):
+                raise AspError(f"PF {name} is declared as pf({first[0]}, {name}, ({first[1]})) in {first[2]} and as "
+                               f"pf({cls}, {name}, ({signature})) in {source.name}: a PF has one class and one "
+                               "signature; give one of them another name")
 
 
 def _placeholders(signature) -> str:

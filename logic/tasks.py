@@ -27,7 +27,8 @@ import clingo
 
 from .atoms import Atom, format_goal
 from .classes import domain_classes
-from .library_checks import (Declarations, PFRoles, check_pfs_said_to_hold, check_tasks_declared_once, declare,
+from .library_checks import (Declarations, PFRoles, check_pfs_declared_once, check_pfs_said_to_hold,
+                             check_tasks_declared_once, declare,
                              declare_families, read_pf_roles, read_phrases, restriction_problem)
 from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, package_source
 from .terms import natural_key, pf_name, symbol_text, tuple_args
@@ -293,6 +294,7 @@ class TaskLibrary:
         isolated = not all(s.name.startswith("groundlang.logic/") for s in self.sources)
         self.program = Program(domain + self.sources + (_LIBRARY_SHOW,), allow_scripts, isolated)
         check_tasks_declared_once(self.program)
+        check_pfs_declared_once(self.program)
         check_pfs_said_to_hold(self.program)
         self.grounding_program = Program(
             domain + self.sources + (package_source("groundings.lp"),), allow_scripts, isolated

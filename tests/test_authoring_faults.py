@@ -283,3 +283,15 @@ def test_check_grounds_a_library_given_in_each_layout_as_train_does(tmp_path, ca
 def test_a_negated_or_malformed_name_is_refused_naming_the_file(tmp_path, text, message):
     with pytest.raises(AspError, match=message):
         _library(tmp_path, text)
+
+
+def test_a_pf_declared_again_with_other_classes_is_refused_naming_both_files(tmp_path):
+    """It loaded, and a later error blamed a task of tasks.lp for its goal's classes."""
+    path = tmp_path / "mine.lp"
+    path.write_text("pf(position, agentInRoom, (agent, toy)).\n", encoding="utf-8")
+    with pytest.raises(AspError, match=r"^PF agentInRoom is declared as pf\(position, agentInRoom, \(agent, room\)\) in "
+                                       r"groundlang.logic/pfs.lp and as pf\(position, agentInRoom, \(agent, toy\)\) in "
+                                       r".*mine.lp"):
+        TaskLibrary.load(["tasks", path])
+    path.write_text("pf(position, agentInRoom, (agent, room)).\n", encoding="utf-8")  # the same again: no conflict
+    assert "agentToRoom" in TaskLibrary.load(["tasks", path]).names
