@@ -86,6 +86,8 @@ class EvaluationResult:
     per_goal_size: dict = field(default_factory=dict)
     # novel executions whose label's goal, carried over, already holds at the start (nothing to ask there)
     novel_not_scored: int = 0
+    # novel executions in a layout the model could not read or plan in (too many objects, too large): counted wrong
+    novel_unfollowed: list = field(default_factory=list)
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -98,6 +100,9 @@ class EvaluationResult:
         ]
         if self.novel_n:
             lines.append(f"novel environments: {self.novel_accuracy:.2%} ({self.novel_correct}/{self.novel_n})")
+        if self.novel_unfollowed:
+            lines.append(f"novel executions that could not be followed (counted wrong): {len(self.novel_unfollowed)}; "
+                         f"first: {self.novel_unfollowed[0]}")
         if self.novel_not_scored:
             lines.append(f"novel executions not scored (the label's goal already holds at the start): "
                          f"{self.novel_not_scored}")
@@ -297,6 +302,7 @@ def evaluate(
         novel_n=len(novel),
         novel_correct=sum(novel),
         failed_folds=failed,
+        novel_unfollowed=[x["unfollowed"] for x in novel_scored if "unfollowed" in x],
         records=records,
         calibration=calibration,
         novel_calibration=novel_calibration,

@@ -12,6 +12,9 @@ from groundlang.goal_translation import GoalHoldsAtStart, describe_goal, transla
 from groundlang.labels import goal_holds
 from groundlang.learner import Learner
 from groundlang.logic.atoms import format_goal
+from groundlang.model.mentions import MentionLimitError
+from groundlang.model.pf_tables import TabulationError
+from groundlang.model.state_search import StateSpaceError
 from groundlang.wording import goal_phrase
 
 __all__ = ["run_folds", "prepare_worker", "usable_workers"]
@@ -42,7 +45,12 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
         except GoalHoldsAtStart as exc:  # counted apart, as an execution whose start admits no task
             record["novel"].append({"environment": name, "not_scored": str(exc)})
             continue
-        novel = learner.follow(instance.command, state)
+        try:
+            novel = learner.follow(instance.command, state)
+        except (StateSpaceError, TabulationError, MentionLimitError) as exc:  # the layout, not the command: wrong
+            record["novel"].append({"environment": name, "gold": format_goal(translated), "correct": False,
+                                    "confidence": 0.0, "unfollowed": f"{name}: {exc}"})
+            continue
         record["novel"].append(
             {
                 "environment": name,

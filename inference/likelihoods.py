@@ -55,6 +55,7 @@ from groundlang.inference.planning import (TaskSettings, as_transitions, demonst
                                           threads_for)
 from groundlang.logic.atoms import Atom, parse_atom
 from groundlang.logic.storage import FileRefused, check_folder, read_limited, write_atomically
+from groundlang.model.state_search import StateSpaceError
 
 __all__ = ["CACHE_FOLDERS", "CACHE_VERSION", "DamagedEntry", "behaviour_likelihood_table", "cache_directory",
            "check_cache_dir", "environment_cache", "entry_key", "layout_description",
@@ -314,32 +315,36 @@ def behaviour_likelihood_table(
         from tqdm import tqdm
 
         bar = tqdm(total=solves, desc="behaviour likelihoods", unit="solve")
-    for initial, by_goal in todo.items():
-        tables = pf_tables(initial.layout, program, *(() if library is None else (library.time_limit,)))
-        if method == "exact" or (method == "auto" and exact_fits(initial)):
-            for goal, entries in _exact_rows(initial, by_goal, instances, tables, settings):
-                for (i, k), value in entries:
-                    table[i][k] = value
-                    root = _store(root, keys[i][k], value, goal, cleaned)
+    try:
+        for initial, by_goal in todo.items():
+            tables = pf_tables(initial.layout, program, *(() if library is None else (library.time_limit,)))
+            if method == "exact" or (method == "auto" and exact_fits(initial)):
+                for goal, entries in _exact_rows(initial, by_goal, instances, tables, settings):
+                    for (i, k), value in entries:
+                        table[i][k] = value
+                        root = _store(root, keys[i][k], value, goal, cleaned)
+                    if bar is not None:
+                        bar.update(1)
+                continue
+            # Where the whole world does not fit: per demonstration, every goal in a relevance abstraction or
+            # stepwise (inference/stepwise.py), all solved together.
+            by_demo: dict = {}  # actions -> [(goal, i, k)]
+            for goal, entries in by_goal.items():
+                for i, k in entries:
+                    by_demo.setdefault(tuple(int(a) for a in instances[i].actions), []).append((goal, i, k))
+            for rows in by_demo.values():
+                goals = list(dict.fromkeys(g for g, _, _ in rows))
+                inst = instances[rows[0][1]]
+                values = dict(zip(goals, approximate_likelihoods(initial, goals, list(inst.states), inst.actions,
+                                                                 tables, settings)))
+                for goal, i, k in rows:
+                    table[i][k] = float(values[goal])
+                    root = _store(root, keys[i][k], table[i][k], goal, cleaned)
                 if bar is not None:
-                    bar.update(1)
-            continue
-        # Where the whole world does not fit: per demonstration, every goal in a relevance abstraction or
-        # stepwise (inference/stepwise.py), all solved together.
-        by_demo: dict = {}  # actions -> [(goal, i, k)]
-        for goal, entries in by_goal.items():
-            for i, k in entries:
-                by_demo.setdefault(tuple(int(a) for a in instances[i].actions), []).append((goal, i, k))
-        for rows in by_demo.values():
-            goals = list(dict.fromkeys(g for g, _, _ in rows))
-            inst = instances[rows[0][1]]
-            values = dict(zip(goals, approximate_likelihoods(initial, goals, list(inst.states), inst.actions,
-                                                             tables, settings)))
-            for goal, i, k in rows:
-                table[i][k] = float(values[goal])
-                root = _store(root, keys[i][k], table[i][k], goal, cleaned)
-            if bar is not None:
-                bar.update(len(goals))
+                    bar.update(len(goals))
+    except StateSpaceError as exc:  # a layout too large to key or plan in: the file of a demonstration in it
+        where = getattr(instances[next(iter(by_goal.values()))[0][0]], "path", None)
+        raise exc if where is None else type(exc)(f"{where}: {exc}") from None
     if bar is not None:
         bar.close()
     return table

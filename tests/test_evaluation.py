@@ -185,3 +185,22 @@ def test_evaluate_checks_its_limit_threshold_and_protocol_options(capsys):
     assert main(["evaluate", "--corpus", str(E), "--palette", "sokoban", "--labels", str(E / "labels.csv"),
                  "--protocol", "train", "--cold-folds"]) == 2
     assert "--cold-folds: the train protocol trains one model, with no folds" in capsys.readouterr().err
+
+
+def test_a_novel_layout_the_model_cannot_read_is_counted_wrong_and_named(corpus, tmp_path):
+    """Seventeen more blocks: more objects than the mention model reads. Every fold had failed (accuracy 0/0), the
+    layout never named; its executions are now wrong, named, and the other layout is scored."""
+    labels = read_labels(EXAMPLES / "labels.csv")
+    base = (EXAMPLES / "novel_a.state").read_text().strip()
+    crowded = tmp_path / "crowded.state"
+    cells = [(x, y) for y in (1, 2, 3) for x in (1, 2, 3, 6, 7, 8)][:17]  # in the red room, clear of its doors
+    crowded.write_text(base + "".join(f" block,1,1,{x},{y}" for x, y in cells) + "\n")
+    novel = [("novel_a.state", read_state_file(EXAMPLES / "novel_a.state", "sokoban")),
+             (str(crowded), read_state_file(crowded, "sokoban"))]
+    result = evaluate(corpus, labels, protocol="train", novel_states=novel)
+    assert not result.failed_folds and result.n == 24
+    assert len(result.novel_unfollowed) == 24 and result.novel_n == 48
+    assert all(u.startswith(f"{crowded}: ") and "objects a command could name" in u for u in result.novel_unfollowed)
+    assert result.novel_correct == sum(x["correct"] for r in result.records for x in r["novel"]
+                                       if x["environment"] == "novel_a.state") >= 20
+    assert f"novel executions that could not be followed (counted wrong): 24; first: {crowded}: " in result.summary()

@@ -202,6 +202,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.logic.palette_files import palette_names
     from groundlang.model.interpretations import NoTaskError
     from groundlang.model.statespace import StateSpaceError
+    from groundlang.model.mentions import MentionLimitError
     from groundlang.model.palette import Palette, get_palette
     from groundlang.model.pf_tables import TabulationError
     from groundlang.wording import labelled_goal
@@ -250,7 +251,7 @@ def run(args: argparse.Namespace) -> int:
             result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
     except NoTaskError as exc:  # the state is at fault, not the command or the model: name its file
         raise NoTaskError(f"{args.env}: {exc}") from None
-    except (StateSpaceError, TabulationError) as exc:  # a layout no method can plan in, or tabulate: its file
+    except (StateSpaceError, TabulationError, MentionLimitError) as exc:  # a layout no method plans, tabulates or reads
         raise ValueError(f"{args.env}: {exc}") from None
     if not args.json:
         print(f"command: {as_typed(args.command_text)}")
