@@ -24,12 +24,16 @@ import numpy as np
 from groundlang.model.palette import Palette, WorldError, get_palette
 
 __all__ = ["Action", "ACTION_DELTAS", "Palette", "get_palette", "Room", "Door", "Toy", "Agent", "Layout", "State",
-           "step", "replay", "WorldError", "MAX_LAYOUT_OBJECTS"]
+           "step", "replay", "WorldError", "MAX_LAYOUT_OBJECTS", "MAX_LAYOUT_ROOMS"]
 
 # Rooms, doors and toys a layout may have: checking a layout costs about 0.2 ms a door and grows with the
 # square of its rooms, and a 16 MB state line could hold a million doors. Chosen on no figure: the corpora's
 # layouts have at most a dozen, and 4,000 doors are checked in about a second.
 MAX_LAYOUT_OBJECTS = 4096
+# Rooms a layout may have: a task library's groundings and the roles of their bystanders grow with a power of the
+# rooms (1,600 rooms of one cell each took 75 s and 2.5 GB to follow one command; 256, 3.7 s and 320 MB).
+# Chosen on no figure: the corpora's layouts have three rooms.
+MAX_LAYOUT_ROOMS = 256
 
 
 # The world's kinds of object, as the classes of logic/domain.lp (class/1) call them, and the prefix of
@@ -219,6 +223,9 @@ class Layout:
         if count > MAX_LAYOUT_OBJECTS:  # checking them costs time in their number (rooms: its square)
             raise WorldError(f"the layout has {count:,} rooms, doors and toys ({len(self.rooms):,}, {len(self.doors):,}, "
                              f"{len(self.toy_attributes):,}); at most {MAX_LAYOUT_OBJECTS:,} are read")
+        if len(self.rooms) > MAX_LAYOUT_ROOMS:
+            raise WorldError(f"the layout has {len(self.rooms):,} rooms; at most {MAX_LAYOUT_ROOMS} are read (what "
+                             "following reads grows with a power of the rooms)")
         self._validate_added_attributes()
         self.palette.check_values(self.objects[1:])
         for i, r in enumerate(self.rooms):

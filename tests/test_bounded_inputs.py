@@ -163,3 +163,22 @@ def test_a_layout_of_more_objects_than_are_read_is_refused_before_they_are_check
     doors = [f"door,{4 * k},{y},{4 * k},{y}" for k in range(1, 6) for y in range(1, 1000)][: MAX_LAYOUT_OBJECTS - 6]
     fine.write_text(f"{rooms} {' '.join(doors)} agent,2,2\n")
     assert len(read_state_file(fine, "sokoban").layout.doors) == MAX_LAYOUT_OBJECTS - 6
+
+
+def test_a_layout_of_more_rooms_than_are_read_is_refused_naming_its_file(tmp_path):
+    """1,600 rooms of one cell each in a 30 KB state line took 75 s and 2.5 GB to follow one command."""
+    from groundlang.corpus import read_state_file
+    from groundlang.model.world import MAX_LAYOUT_ROOMS
+    from groundlang.state_line import CorpusError
+
+    def grid(n: int) -> str:
+        return " ".join(f"room,1,{2 * i},{2 * j + 2},{2 * i + 2},{2 * j}" for i in range(n) for j in range(n)) + \
+            " agent,1,1\n"
+
+    path = tmp_path / "rooms.state"
+    path.write_text(grid(17))
+    with pytest.raises(CorpusError, match=rf"rooms.state.*: the layout has 289 rooms; at most {MAX_LAYOUT_ROOMS} are "
+                                          "read"):
+        read_state_file(path, "sokoban")
+    path.write_text(grid(16))  # as many as are read
+    assert len(read_state_file(path, "sokoban").layout.rooms) == MAX_LAYOUT_ROOMS == 256
