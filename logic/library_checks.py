@@ -15,7 +15,7 @@ from .program import AspError, Program, term_signature
 from .terms import pf_name, symbol_text, tuple_args
 
 __all__ = ["PFRoles", "Declarations", "declare", "declare_families", "read_pf_roles", "restriction_problem",
-           "check_tasks_declared_once", "check_pfs_declared_once", "read_phrases"]
+           "check_tasks_declared_once", "check_pfs_declared_once", "check_domain_left_alone", "read_phrases"]
 
 _PLACE = re.compile(r"\{(\d+)\}")  # "{1}": a phrase's place for a PF's first argument
 
@@ -98,6 +98,17 @@ def _placeholders(signature) -> str:
     """``(A, B)`` for a pf/3 signature of two classes, as a holds/2 rule writes its objects."""
     count = len(signature.arguments) if signature.ast_type == ast.ASTType.Function and not signature.name else 1
     return "(" + ", ".join("ABCDEFGH"[:count]) + ("," if count == 1 else "") + ")"
+
+
+def check_domain_left_alone(program: Program, domain: str = "groundlang.logic/domain.lp") -> None:
+    """AspError naming the file and atom where a user's rule makes true a predicate ``domain`` defines (its rule
+    heads: ``movable/1``, ``walkable/2``, ``class/1`` ...): the world's dynamics (walls, doors, pushing) are
+    code that reads the layout, not these atoms, so the PF tables and the moves would silently disagree."""
+    own = {term_signature(term) for where, term in program.head_atoms() if where == domain} - {None}
+    for where, term in program.head_atoms():
+        if not where.startswith("groundlang.") and (signature := term_signature(term)) in own:
+            raise AspError(f"{where}: {term}: {signature[0]}/{signature[1]} is the domain's own ({domain}), which "
+                           "the world's moves follow without reading it; a library adds PFs and tasks, not to it")
 
 
 def check_pfs_said_to_hold(program: Program) -> None:

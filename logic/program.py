@@ -326,7 +326,10 @@ def _head_atoms(node) -> list:
     or a head aggregate's elements' (their literals, not their conditions)."""
     kind = node.ast_type
     if kind == ast.ASTType.Literal:
-        return [node.atom.symbol] if node.atom.ast_type == ast.ASTType.SymbolicAtom else []
+        if node.atom.ast_type != ast.ASTType.SymbolicAtom:
+            return []
+        symbol = node.atom.symbol  # "movable(agent; toy)" is a pool of movable(agent) and movable(toy)
+        return list(symbol.arguments) if symbol.ast_type == ast.ASTType.Pool else [symbol]
     if kind == ast.ASTType.ConditionalLiteral:
         return _head_atoms(node.literal)
     if kind in (ast.ASTType.Aggregate, ast.ASTType.Disjunction):

@@ -27,7 +27,8 @@ import clingo
 
 from .atoms import Atom, format_goal
 from .classes import domain_classes
-from .library_checks import (Declarations, PFRoles, check_pfs_declared_once, check_pfs_said_to_hold,
+from .library_checks import (Declarations, PFRoles, check_domain_left_alone, check_pfs_declared_once,
+                             check_pfs_said_to_hold,
                              check_tasks_declared_once, declare,
                              declare_families, read_pf_roles, read_phrases, restriction_problem)
 from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, package_source
@@ -295,6 +296,7 @@ class TaskLibrary:
         self.program = Program(domain + self.sources + (_LIBRARY_SHOW,), allow_scripts, isolated)
         check_tasks_declared_once(self.program)
         check_pfs_declared_once(self.program)
+        check_domain_left_alone(self.program)
         check_pfs_said_to_hold(self.program)
         self.grounding_program = Program(
             domain + self.sources + (package_source("groundings.lp"),), allow_scripts, isolated

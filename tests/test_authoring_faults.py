@@ -3,6 +3,7 @@ and what is wrong, before it can train a model on something else than was meant.
 
 from __future__ import annotations
 
+import re
 from importlib.resources import files
 from pathlib import Path
 
@@ -295,3 +296,15 @@ def test_a_pf_declared_again_with_other_classes_is_refused_naming_both_files(tmp
         TaskLibrary.load(["tasks", path])
     path.write_text("pf(position, agentInRoom, (agent, room)).\n", encoding="utf-8")  # the same again: no conflict
     assert "agentToRoom" in TaskLibrary.load(["tasks", path]).names
+
+
+@pytest.mark.parametrize("text, atom", [
+    ("movable(room).\n", "movable(room): movable/1"),  # domain.lp writes movable(agent; toy): a pool, read as two
+    ("walkable(X, Y) :- X = 0..3, Y = 0..3.\n", "walkable(X,Y): walkable/2"),
+    ("class(ghost).\n", "class(ghost): class/1"),
+])
+def test_a_library_that_adds_to_the_domains_own_predicates_is_refused(tmp_path, text, atom):
+    """The world's moves are code that reads the layout: a room made movable or cells made walkable in ASP had
+    trained without a word, its PF tables disagreeing with the moves."""
+    with pytest.raises(AspError, match=rf"mine.lp: {re.escape(atom)} is the domain's own \(groundlang.logic/domain.lp\)"):
+        _library(tmp_path, text)
