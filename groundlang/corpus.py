@@ -319,17 +319,21 @@ def read_state_file(path: str | Path, palette: str | Palette | dict) -> State:
     """Read a one-line ``.state`` file (a state in the corpus format, or a BURLAP line). ``palette``: a name,
     a ``.lp`` file, a Palette, or a record of one as a trained model keeps it (``learner.palettes[0]``)."""
     path = as_path(path, "read_state_file: path")
-    lines = _read_lines(path, "a state file")
-    if not lines:
+    numbered = [(n, line) for n, line in enumerate(_read_lines(path, "a state file"), start=1) if line.strip()]
+    if not numbered:
         raise CorpusError(f"{path}: the file is empty; expected one state line")
-    if len(lines) > 1 and path.suffix == ".bdm" and not lines[0].lstrip().startswith("{"):
-        raise CorpusError(f"{path}: a .bdm file of commands (line 1 is not a state line); expected one state "
+    (n, line), more = numbered[0], numbered[1:]
+    if more and path.suffix == ".bdm" and not line.lstrip().startswith("{"):
+        raise CorpusError(f"{path}: a .bdm file of commands (line {n} is not a state line); expected one state "
                           "line: a .state file or a one-line .bdm file")
-    if len(lines) > 1:
-        raise CorpusError(f"{path}, line 2: extra line; expected exactly one state line")
-    if lines[0].lstrip().startswith("{"):  # a BURLAP state string, as the Williams et al. corpus writes them
-        return parse_bdm_state(lines[0], palette, where=f"{path}, line 1")[0]
-    return parse_state(lines[0], palette, where=f"{path}, line 1")
+    if line.lstrip().startswith("#"):
+        raise CorpusError(f"{path}, line {n}: a comment; a state file holds its state line alone")
+    if more:
+        raise CorpusError(f"{path}, line {more[0][0]}: a second line (line {n} is the state); expected exactly one "
+                          "state line")
+    if line.lstrip().startswith("{"):  # a BURLAP state string, as the Williams et al. corpus writes them
+        return parse_bdm_state(line, palette, where=f"{path}, line {n}")[0]
+    return parse_state(line, palette, where=f"{path}, line {n}")
 
 
 def format_state_like(state: State, path: str | Path, names: dict[str, str] | None = None) -> str:

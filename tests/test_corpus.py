@@ -189,13 +189,23 @@ def test_toy_keyword_is_accepted():
     assert format_state(state) == "room,5,0,4,4,0 block,12,0,2,2 agent,1,1"
 
 
-def test_state_files(fixtures):
+def test_state_files(fixtures, tmp_path):
     state = read_state_file(fixtures / "small.state", "sokoban")
     assert (state.agent.x, state.agent.y, len(state.layout.rooms)) == (2, 2, 2)
     two = read_state_file(fixtures / "two_toys.state", "sokoban2")
     assert len(two.toys) == 2
-    with pytest.raises(CorpusError, match=r"two_lines.state, line 2: extra line; expected exactly one state line"):
+    with pytest.raises(CorpusError, match=r"two_lines.state, line 2: a second line \(line 1 is the state\); expected "
+                                          "exactly one state line"):
         read_state_file(fixtures / "two_lines.state", "sokoban")
+    line = (fixtures / "small.state").read_text(encoding="utf-8").strip()
+    (tmp_path / "blank_first.state").write_text(f"\n\n{line}\n", encoding="utf-8")  # blank lines before it are no lines
+    assert read_state_file(tmp_path / "blank_first.state", "sokoban") == state
+    (tmp_path / "blank_first.state").write_text(f"\n\n{line.replace('agent,2,2', 'agent,4,1')}\n", encoding="utf-8")
+    with pytest.raises(CorpusError, match=r"blank_first.state, line 3: agent0 at \(4,1\)"):  # its own line, not 1
+        read_state_file(tmp_path / "blank_first.state", "sokoban")
+    (tmp_path / "comment.state").write_text(f"# my layout\n{line}\n", encoding="utf-8")  # it had blamed line 2
+    with pytest.raises(CorpusError, match=r"comment.state, line 1: a comment; a state file holds its state line alone"):
+        read_state_file(tmp_path / "comment.state", "sokoban")
     with pytest.raises(CorpusError, match=r"empty.state: the file is empty; expected one state line"):
         read_state_file(fixtures / "empty.state", "sokoban")
     with pytest.raises(CorpusError, match=r"in_wall.state, line 1: agent0 at \(4,1\) is inside a wall"):
