@@ -99,7 +99,7 @@ def _read_objects(line: str, where: str) -> dict[str, dict[str, dict[str, str]]]
         raise CorpusError(f"{where}: a state is {{object , object , ... , }}; this line does not start with {{ "
                           "and end with }")
     objects: dict[str, dict[str, dict[str, str]]] = {c: {} for c in _NEEDED}
-    for chunk in filter(str.strip, text[1:-1].split(" , ")):
+    for chunk in filter(str.strip, re.split(r"\s+,\s+", text[1:-1])):  # a tab or a no-break space around it as well
         chunk = chunk.strip().rstrip(",").strip()
         if not chunk:
             continue

@@ -36,6 +36,13 @@ def test_a_state_string_round_trips(williams_commands):
     assert again == pair.start and names == pair.toy_names
 
 
+@pytest.mark.parametrize("separator", ["\t,\t", "\u00a0,\u00a0", "  ,  "])
+def test_objects_are_separated_by_a_comma_with_any_white_space_around_it(williams_commands, separator):
+    """A tab or a no-break space around the comma had been read as an object running into the one before it."""
+    line = format_bdm_state(williams_commands[0].pairs[0].start)
+    assert parse_bdm_state(line.replace(" , ", separator)) == parse_bdm_state(line)
+
+
 def test_a_one_line_bdm_state_file_is_a_state_file():
     state = read_initial_state(FIXTURE / "one.state", "williams2018")
     assert state.layout.toy_attributes == (("green", "chair"),) and (state.agent.x, state.agent.y) == (2, 2)
