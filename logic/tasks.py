@@ -144,9 +144,9 @@ def _read_lifted_tasks(program: Program, time_limit: float | None):
     try:
         return _lifted_tasks_read(program, time_limit)
     except AspError as exc:
-        if str(exc).startswith(program.user_names):
+        if program.user_names in str(exc):
             raise
-        raise AspError(f"{program.user_names}: {exc}") from None
+        raise type(exc)(f"{program.user_names}: {exc}") from None  # its class kept: a timeout says how to raise it
 
 
 def _lifted_tasks_read(program: Program, time_limit: float | None) -> tuple[

@@ -108,9 +108,9 @@ def test_folds_in_two_processes_give_the_rows_of_one(tmp_path):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--folds", "1"], "--folds 1: expected 2 to 20 folds"),
-    (["--folds", "21"], "expected 2 to 20 folds"),
-    (["--folds", "0"], "--folds"),
+    (["--folds", "1"], "argument --folds: expected a whole number of folds from 2 to 20, not '1'"),
+    (["--folds", "21"], "expected a whole number of folds from 2 to 20, not '21'"),
+    (["--folds", "0"], "expected a whole number of folds from 2 to 20, not '0'"),  # it had said "1 or more"
     (["--folds", "2", "--holdout", "0.2"], "pass one of --test TEST.bdm, --holdout F and --folds K"),
     (["--folds", "2", "--test", str(SMALL)], "pass one of --test TEST.bdm, --holdout F and --folds K"),
     (["--folds", "2", "--tuning"], "--tuning splits the training side of --holdout F"),
