@@ -363,7 +363,8 @@ ROWS += [
                 "agentNear with 1",)),
     Row("asp/a PF declared with two arities (a library redeclaring one of pfs.lp)",
         (*_TASKS, str(BAD / "pf_two_arities.lp")),
-        pieces=(f"{BAD / 'pf_two_arities.lp'}: PF agentInRoom is declared with 1 and with 2 arguments",)),
+        pieces=("PF agentInRoom is declared as pf(position, agentInRoom, (agent, room)) in groundlang.logic/pfs.lp and "
+                f"as pf(position, agentInRoom, (agent,)) in {BAD / 'pf_two_arities.lp'}",)),
     Row("asp/colour PF of two arguments, through discover --pfs",
         ("discover", str(FIXTURES / "sokoban"), "--palette", "sokoban", "--restrict",
          "--pfs", str(BAD / "colour_pf_binary.lp"), "-o", "{tmp}/x.lp"),
