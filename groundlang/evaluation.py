@@ -278,8 +278,10 @@ def evaluate(
         goal_words.setdefault(r["predicted_task"], r["predicted_words"])
     calibration = calibration_report([r["confidence"] for r in scored], [r["correct"] for r in scored],
                                      threshold=min_confidence) if scored else {}
-    novel_calibration = calibration_report([x["confidence"] for x in novel_scored], novel,
-                                           threshold=min_confidence) if novel else {}
+    # an execution that could not be followed had no confidence to calibrate (it is counted wrong above)
+    followed = [x for x in novel_scored if "unfollowed" not in x]
+    novel_calibration = calibration_report([x["confidence"] for x in followed], [x["correct"] for x in followed],
+                                           threshold=min_confidence) if followed else {}
     low, high = wilson_interval(correct, n)
     if scored:
         slowest = max(scored, key=lambda r: r["seconds"])

@@ -49,7 +49,7 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
             novel = learner.follow(instance.command, state)
         except (StateSpaceError, TabulationError, MentionLimitError) as exc:  # the layout, not the command: wrong
             record["novel"].append({"environment": name, "gold": format_goal(translated), "correct": False,
-                                    "confidence": 0.0, "unfollowed": f"{name}: {exc}"})
+                                    "confidence": None, "unfollowed": f"{name}: {exc}"})
             continue
         record["novel"].append(
             {

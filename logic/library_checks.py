@@ -5,6 +5,7 @@ a restriction names a property PF of its variable's class."""
 from __future__ import annotations
 
 import re
+import unicodedata
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -32,7 +33,7 @@ def read_phrases(atoms: Sequence[clingo.Symbol], declared: "Declarations", where
         if term.type is not clingo.SymbolType.Function or text.type is not clingo.SymbolType.String \
                 or not text.string.strip():
             raise AspError(f'{where}: {atom} is not phrase(PF, "words") with a PF and words in quotes')
-        if any(ord(c) < 32 or 127 <= ord(c) < 160 for c in text.string):
+        if any(unicodedata.category(c) in ("Cc", "Zl", "Zp") for c in text.string):
             # printed in every goal line and saved in models: a newline or an escape would forge output
             raise AspError(f"{where}: {atom}: the words hold a control character (a line break, a tab, an escape); "
                            "a phrase is one line of plain text")

@@ -23,12 +23,8 @@ Safety and errors (all ``AspError``, a ``ValueError``, so the CLI prints one lin
 from __future__ import annotations
 
 import functools
-import json
 import logging
 import numbers
-import os
-import subprocess
-import sys
 import threading
 from dataclasses import dataclass, field
 from typing import Iterable, Sequence
@@ -65,13 +61,6 @@ log = logging.getLogger(__name__)
 
 # Seconds; generous for the Cleanup World (milliseconds), short enough to notice a runaway program.
 DEFAULT_TIME_LIMIT = 10.0
-# Address-space cap of the child process that solves user programs.
-CHILD_MEMORY_LIMIT = 2 << 30
-# Extra seconds the parent waits for the child's own timeout report before killing it.
-_CHILD_GRACE = 5.0
-# Shown atoms a child may send back, over all its answer sets: the parent reads them all into memory. The package's
-# libraries show at most about 7,500 (a Williams layout's PF tables); "task(t(1..3000000))." would show millions.
-MAX_REPLY_ATOMS = 200_000
 
 
 class AspGroundingError(AspError):
@@ -279,7 +268,9 @@ class Program:
         """
         time_limit = _checked_time_limit(time_limit)
         if self.isolated:
-            return _solve_in_child(self, facts, models, time_limit)
+            from groundlang.logic.child_process import solve_in_child
+
+            return solve_in_child(self, facts, models, time_limit)
         ctl = self.control(facts, time_limit=time_limit, arguments=[f"--models={models}"])
         found: list[list[clingo.Symbol]] = []
         with ctl.solve(on_model=lambda m: found.append(m.symbols(shown=True)), async_=True) as handle:
@@ -292,7 +283,6 @@ class Program:
         return found
 
 
-_ERRORS = {c.__name__: c for c in (AspError, AspSyntaxError, AspScriptRefused, AspGroundingError, AspTimeout)}
 
 
 def _nodes(node) -> Iterable:
@@ -339,36 +329,6 @@ def _head_atoms(node) -> list:
     return []
 
 
-def _solve_in_child(program: Program, facts: str, models: int, time_limit: float | None) -> list:
-    request = {
-        "sources": [[s.name, s.text] for s in program.sources],
-        "allow_scripts": program.allow_scripts,
-        "facts": facts,
-        "models": models,
-        "time_limit": time_limit,
-    }
-    try:
-        done = subprocess.run(
-            [sys.executable, "-m", "groundlang.logic.program"],
-            input=json.dumps(request), capture_output=True, text=True,
-            timeout=None if time_limit is None else time_limit + _CHILD_GRACE,
-        )
-    except subprocess.TimeoutExpired:
-        raise AspTimeout(f"solving {program.names} did not finish within {time_limit:g} s "
-                         "(child process killed)") from None
-    try:
-        reply = json.loads(done.stdout)
-    except ValueError:
-        reason = (one_line(done.stderr)[-300:] or f"exit code {done.returncode}")
-        if done.returncode < 0 or "MemoryError" in reason or "bad_alloc" in reason:
-            reason = f"it ran out of memory ({CHILD_MEMORY_LIMIT >> 30} GiB) or crashed: {reason}"
-        raise AspGroundingError(f"grounding {program.names} failed: {reason}") from None
-    if "error" in reply:
-        kind, message = reply["error"]
-        raise _ERRORS.get(kind, AspError)(message)
-    return [[clingo.parse_term(t) for t in model] for model in reply["models"]]
-
-
 @functools.cache
 def _enable_python_scripts() -> None:
     """Let clingo run ``#script (python)`` blocks of a program allowed them: the clingo module leaves
@@ -376,36 +336,3 @@ def _enable_python_scripts() -> None:
     import clingo.script
 
     clingo.script.enable_python()
-
-
-def _child_main() -> None:
-    """Child side of ``isolated`` solving: JSON request on stdin, JSON reply on stdout."""
-    try:
-        import resource
-
-        resource.setrlimit(resource.RLIMIT_AS, (CHILD_MEMORY_LIMIT, CHILD_MEMORY_LIMIT))
-    except (ImportError, ValueError, OSError):  # pragma: no cover - not on every platform
-        pass
-    request = json.loads(sys.stdin.read())
-    try:
-        program = Program(tuple(Source(n, t) for n, t in request["sources"]), request["allow_scripts"])
-        found = program.solve(request["facts"], models=request["models"], time_limit=request["time_limit"])
-        shown = sum(len(model) for model in found)
-        if shown > MAX_REPLY_ATOMS:  # counted before any is written out: the parent's memory stays bounded
-            raise AspGroundingError(f"{program.user_names}: the program shows {shown:,} atoms, more than the "
-                                    f"{MAX_REPLY_ATOMS:,} a task library's answer may (a rule that makes an atom "
-                                    "per number of a large range?)")
-        reply = {"models": [[str(sym) for sym in model] for model in found]}
-    except AspError as exc:
-        reply = {"error": [type(exc).__name__, str(exc)]}
-    except MemoryError:
-        reply = {"error": ["AspGroundingError",
-                           f"grounding ran out of memory ({CHILD_MEMORY_LIMIT >> 30} GiB)"]}
-    sys.stdout.write(json.dumps(reply))
-    sys.stdout.flush()
-    # A runaway grounding may still be running in a thread; leave without finalising it.
-    os._exit(0)
-
-
-if __name__ == "__main__":
-    _child_main()

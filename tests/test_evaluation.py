@@ -204,3 +204,4 @@ def test_a_novel_layout_the_model_cannot_read_is_counted_wrong_and_named(corpus,
     assert result.novel_correct == sum(x["correct"] for r in result.records for x in r["novel"]
                                        if x["environment"] == "novel_a.state") >= 20
     assert f"novel executions that could not be followed (counted wrong): 24; first: {crowded}: " in result.summary()
+    assert result.novel_calibration["n"] == 24  # what was followed: the others had no confidence to calibrate

@@ -166,7 +166,7 @@ def test_isolated_infinite_grounding_is_stopped():
 
 def test_an_isolated_answer_of_too_many_atoms_is_refused_before_the_parent_reads_it():
     """"task(t(1..3000000))." took 2 GB and a minute in the parent, reading the child's reply, past the limit."""
-    from groundlang.logic.program import MAX_REPLY_ATOMS
+    from groundlang.logic.child_process import MAX_REPLY_ATOMS
 
     program = Program((Source("many.lp", f"task(t(1..{MAX_REPLY_ATOMS + 1})).\n"),), isolated=True)
     with pytest.raises(AspGroundingError, match=rf"many\.lp: the program shows {MAX_REPLY_ATOMS + 1:,} atoms, more "
@@ -174,3 +174,8 @@ def test_an_isolated_answer_of_too_many_atoms_is_refused_before_the_parent_reads
         program.solve(models=1)
     assert len(Program((Source("some.lp", f"a(1..{MAX_REPLY_ATOMS})."),), isolated=True).solve(models=1)[0]) \
         == MAX_REPLY_ATOMS
+    # in a layout (its facts given): the layout is said to be what is large, not the library's rules
+    pairs = Program((Source("pairs.lp", "near(A, B) :- room(A), room(B).\n"),), isolated=True)
+    with pytest.raises(AspGroundingError, match=r"pairs\.lp: grounded in this layout it shows [\d,]+ atoms in 1 answer "
+                                                r"set, more than .*: a layout of many rooms or toys"):
+        pairs.solve("room(1..500).", models=0)

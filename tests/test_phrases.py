@@ -76,6 +76,7 @@ def test_goals_and_objects_read_in_the_librarys_words(tmp_path):
     # printed in every goal line and saved in the model: a line break or an escape forged output
     ('phrase(agentInRoom, "{1} in {2}\\nFAKE LINE").', "the words hold a control character"),
     ('phrase(agentInRoom, "{1} in \x1b[31m{2}").', "the words hold a control character"),
+    ('phrase(agentInRoom, "{1} in\u2028{2}").', "the words hold a control character"),  # a line separator
 ])
 def test_a_phrase_that_cannot_be_read_is_refused_when_the_library_loads(tmp_path, text, message):
     with pytest.raises(AspError, match=message.replace("(", r"\(").replace(")", r"\)").replace("{", r"\{")
