@@ -74,25 +74,22 @@ def check_tasks_declared_once(program: Program) -> None:
                                "into one task; rename the task of one of them")
 
 
-_PF_FACT = re.compile(r'pf\(\s*([^,()]+?)\s*,\s*([^,()"]+?)\s*,\s*\(([^()]*)\)\s*\)\.')
-
-
 def check_pfs_declared_once(program: Program) -> None:
     """AspError naming both files (or one, twice) where a PF of one name is declared with two classes or signatures
-    (``pf(position, agentInRoom, (agent, toy)).`` beside ``domain.lp``'s ``(agent, room)``): its holds/2 rules would
-    answer for both, and the error came later, blaming a task of another file for its arguments' classes."""
+    (``pf(position, agentInRoom, (agent, toy)).`` beside ``pfs.lp``'s ``(agent, room)``), in a fact or a rule's
+    head: its holds/2 rules would answer for both, and the error came later, blaming a task of another file for
+    its arguments' classes."""
     declared: dict[str, tuple[str, str, str]] = {}
-    for source, statements in program.statements_by_source():
-        for stm in statements:
-            if not (m := _PF_FACT.fullmatch(str(stm))):
-                continue
-            classes = [c.strip() for c in m.group(3).split(",") if c.strip()]
-            cls, name, signature = m.group(1), m.group(2), ", ".join(classes) + ("," if len(classes) == 1 else "")
-            first = declared.setdefault(name, (cls, signature, source.name))
-            if first[:2] != (cls, signature):
-                raise AspError(f"PF {name} is declared as pf({first[0]}, {name}, ({first[1]})) in {first[2]} and as "
-                               f"pf({cls}, {name}, ({signature})) in {source.name}: a PF has one class and one "
-                               "signature; give one of them another name")
+    for where, term in program.head_atoms():
+        if term_signature(term) != ("pf", 3) or term.ast_type != ast.ASTType.Function:
+            continue
+        cls, name, signature = (re.sub(r"\s+", "", str(a)).replace(",", ", ").replace(", )", ",)")
+                                for a in term.arguments)
+        first = declared.setdefault(name, (cls, signature, where))
+        if first[:2] != (cls, signature):
+            raise AspError(f"PF {name} is declared as pf({first[0]}, {name}, {first[1]}) in {first[2]} and as "
+                           f"pf({cls}, {name}, {signature}) in {where}: a PF has one class and one signature; give "
+                           "one of them another name")
 
 
 def _placeholders(signature) -> str:

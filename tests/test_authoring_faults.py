@@ -294,6 +294,10 @@ def test_a_pf_declared_again_with_other_classes_is_refused_naming_both_files(tmp
                                        r"groundlang.logic/pfs.lp and as pf\(position, agentInRoom, \(agent, toy\)\) in "
                                        r".*mine.lp"):
         TaskLibrary.load(["tasks", path])
+    path.write_text("pf(position, agentInRoom, (agent, toy)) :- #true.\n", encoding="utf-8")  # a rule's head too
+    with pytest.raises(AspError, match=r"^PF agentInRoom is declared as .* and as pf\(position, agentInRoom, "
+                                       r"\(agent, toy\)\) in .*mine.lp"):
+        TaskLibrary.load(["tasks", path])
     path.write_text("pf(position, agentInRoom, (agent, room)).\n", encoding="utf-8")  # the same again: no conflict
     assert "agentToRoom" in TaskLibrary.load(["tasks", path]).names
 
