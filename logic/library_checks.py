@@ -98,15 +98,23 @@ def _placeholders(signature) -> str:
     return "(" + ", ".join("ABCDEFGH"[:count]) + ("," if count == 1 else "") + ")"
 
 
-def check_domain_left_alone(program: Program, domain: str = "groundlang.logic/domain.lp") -> None:
+def check_domain_left_alone(program: Program, domain: str = "groundlang.logic/domain.lp",
+                            reads: tuple[str, ...] = ("groundlang.logic/domain.lp", "groundlang.logic/pfs.lp")) -> None:
     """AspError naming the file and atom where a user's rule makes true a predicate ``domain`` defines (its rule
-    heads: ``movable/1``, ``walkable/2``, ``class/1`` ...): the world's dynamics (walls, doors, pushing) are
-    code that reads the layout, not these atoms, so the PF tables and the moves would silently disagree."""
-    own = {term_signature(term) for where, term in program.head_atoms() if where == domain} - {None}
-    for where, term in program.head_atoms():
-        if not where.startswith("groundlang.") and (signature := term_signature(term)) in own:
-            raise AspError(f"{where}: {term}: {signature[0]}/{signature[1]} is the domain's own ({domain}), which "
-                           "the world's moves follow without reading it; a library adds PFs and tasks, not to it")
+    heads: ``movable/1``, ``walkable/2``, ``class/1`` ...) or one of the layout's facts (what the ``reads`` files
+    read and no file of the package defines: ``room/1``, ``at/3``, ``rect/5`` ...; a palette's ``palette_*`` values
+    aside): the world's dynamics (walls, doors, pushing) are code that reads the layout, not these atoms, so the PF
+    tables and the moves would silently disagree."""
+    heads = [(where, term, term_signature(term)) for where, term in program.head_atoms()]
+    own = {sig for where, _, sig in heads if where == domain} - {None}
+    package = {sig for where, _, sig in heads if where.startswith("groundlang.")}
+    facts = {sig for sig in program.body_signatures(reads) - package if not sig[0].startswith("palette_")}
+    for where, term, signature in heads:
+        if not where.startswith("groundlang.") and signature in own | facts:
+            whose = (f"the domain's own ({domain}), which the world's moves follow without reading it" if signature
+                     in own else "a fact of the layout, given with each state, which the world's moves read from it")
+            raise AspError(f"{where}: {term}: {signature[0]}/{signature[1]} is {whose}; a library adds PFs and tasks, "
+                           "not to it")
 
 
 def check_pfs_said_to_hold(program: Program) -> None:

@@ -184,9 +184,11 @@ class Program:
                 elif stm.ast_type == ast.ASTType.External:
                     yield source.name, getattr(stm.atom, "symbol", stm.atom)
 
-    def body_signatures(self) -> set[tuple[str, int]]:
-        """``(name, arity)`` of every atom a rule body reads (in literals, conditions and aggregates)."""
-        return {signature for _, statements in self.statements_by_source() for stm in statements
+    def body_signatures(self, sources: Sequence[str] | None = None) -> set[tuple[str, int]]:
+        """``(name, arity)`` of every atom a rule body reads (in literals, conditions and aggregates), of the
+        sources named ``sources`` (default: all)."""
+        return {signature for source, statements in self.statements_by_source()
+                if sources is None or source.name in sources for stm in statements
                 if stm.ast_type == ast.ASTType.Rule for node in _nodes(stm.body)
                 if node.ast_type == ast.ASTType.SymbolicAtom and (signature := term_signature(node.symbol))}
 
