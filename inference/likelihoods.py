@@ -343,6 +343,8 @@ def behaviour_likelihood_table(
                 if bar is not None:
                     bar.update(len(goals))
     except StateSpaceError as exc:  # a layout too large to key or plan in: the file of a demonstration in it
+        if bar is not None:
+            bar.close()
         where = getattr(instances[next(iter(by_goal.values()))[0][0]], "path", None)
         raise exc if where is None else type(exc)(f"{where}: {exc}") from None
     if bar is not None:

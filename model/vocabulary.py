@@ -90,7 +90,8 @@ class Vocabulary:
     words: list[str] = field(default_factory=lambda: [UNK])
     tokens: list[str] = field(default_factory=lambda: [NULL])
     # What a noun phrase may align with (index 0: nothing) and the prepositions
-    # that introduce noun phrases (index 0: unseen preposition, 1: direct object).
+    # that introduce noun phrases (index 0: unseen preposition, 1: direct object, 2: an unseen negated one in a
+    # vocabulary built since it existed).
     roles: list[str] = field(default_factory=lambda: [NO_ROLE])
     preps: list[str] = field(default_factory=lambda: [OTHER_PREP, DIRECT_OBJECT, NEGATED_PREP])
     # Misspellings read as another word of the vocabulary ("whlite" -> "white").

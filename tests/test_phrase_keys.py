@@ -76,3 +76,20 @@ def test_em_with_back_off_never_lowers_the_objective():
     assert backoff_key("to|last") == "to" and {"to", "to|last"} <= set(vocab.preps)
     row = vocab.task_id("agentToRoom") * len(vocab.preps) + vocab.preps.index("to|last")
     assert abs(float(weights[row, 0]) - 0.5) > 0.05, weights[row]
+
+
+def test_the_reserved_keys_are_never_shown_as_prepositions_learned():
+    """``<other>``, ``<dobj>`` and ``<not>`` are keys of the vocabulary, not prepositions anyone says: even with
+    mass on them (a table learned otherwise) ``lexicon --prepositions`` lists only said ones."""
+    from groundlang.model.prepositions import preposition_table
+    from groundlang.model.vocabulary import NEGATED_PREP, Vocabulary
+
+    vocab = Vocabulary()
+    vocab.add_tasks(["agentToRoom", "toyToRoom", "both"])
+    vocab.add_preps(["to", "into"])
+    table = torch.full((3, len(vocab.preps)), 0.001)
+    for task, keys in enumerate([(NEGATED_PREP,), ("to",), ("<other>", "<dobj>")]):
+        for key in keys:  # each well above the share that counts as learned
+            table[task, vocab.preps.index(key)] = 1.0
+    tasks, preps, given = preposition_table({"preposition": table / table.sum(-1, keepdim=True)}, vocab)
+    assert preps == ["to"] and tasks == ["agentToRoom", "toyToRoom", "both"] and given.shape == (3, 1)

@@ -65,6 +65,18 @@ def positive_int(text: str) -> int:
     return _whole(text, 1, "a whole number of 1 or more")
 
 
+def fold_count(text: str) -> int:
+    """An argparse type: 2 to MAX_FOLDS folds of a pair corpus ("--folds 0" had been told 1 or more, and 1 was
+    then refused)."""
+    from groundlang.pair_folds import MAX_FOLDS
+
+    what = f"a whole number of folds from 2 to {MAX_FOLDS}"
+    value = _whole(text, 2, what)
+    if value > MAX_FOLDS:
+        raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}")
+    return value
+
+
 def seed(text: str) -> int:
     """An argparse type: a random seed, 0 to 2**32 - 1 (what numpy and torch accept)."""
     value = _whole(text, 0, "a seed from 0 to 4294967295")

@@ -10,7 +10,7 @@ from groundlang.commands import (input_path, LANGUAGE_MODEL_NAMES, LIBRARY_NAMES
                                  add_language_model_settings, add_lexicon_option, fraction, inputs_read, json_bytes,
                                  language_model_settings, library_given, library_path, open_fraction, output_path,
                                  positive_int, require_palette, add_time_limit_option, time_limit_given, lexicon_beside,
-                                 _whole)
+                                 fold_count)
 from groundlang.commands.follow import DEFAULT_MIN_CONFIDENCE
 
 
@@ -29,7 +29,7 @@ def register(subparsers) -> None:
     p.add_argument("--holdout", type=open_fraction, metavar="F",
                    help="instead of --test: hold out the .bdm corpus's commands whose text hashes into a fraction "
                         "F (a development split disjoint by text, the same on every machine)")
-    p.add_argument("--folds", type=_fold_count, metavar="K",
+    p.add_argument("--folds", type=fold_count, metavar="K",
                    help="instead of --test or --holdout: K folds by text (fold k holds out the texts hashing into "
                         "its K-th of the range, so with 5 fold 0 is --holdout 0.2's split), each trained on the "
                         "others; prints each fold's figures and the pooled ones (--workers folds at once)")
@@ -70,17 +70,6 @@ def register(subparsers) -> None:
     p.add_argument("--json", type=output_path, metavar="OUT", help="write the result as JSON here (with the calibration report: "
                                                  "reliability bins, risk-coverage curve, per-command confidence)")
     p.set_defaults(func=run)
-
-
-def _fold_count(text: str) -> int:
-    """An argparse type: 2 to MAX_FOLDS folds ("--folds 0" had been told 1 or more, and 1 was then refused)."""
-    from groundlang.pair_folds import MAX_FOLDS
-
-    what = f"a whole number of folds from 2 to {MAX_FOLDS}"
-    value = _whole(text, 2, what)
-    if value > MAX_FOLDS:
-        raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}")
-    return value
 
 
 def read_novel_states(directory: str, palette: str) -> list:
