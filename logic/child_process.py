@@ -16,15 +16,17 @@ from groundlang.logic.program import (AspError, AspGroundingError, AspScriptRefu
                                       Program, Source)
 from groundlang.logic.sources import one_line
 
-__all__ = ["solve_in_child", "CHILD_MEMORY_LIMIT", "MAX_REPLY_ATOMS"]
+__all__ = ["solve_in_child", "CHILD_MEMORY_LIMIT", "MAX_REPLY_ATOMS", "MAX_REPLY_SHOWN"]
 
 # Address-space cap of the child process that solves user programs.
 CHILD_MEMORY_LIMIT = 2 << 30
 # Extra seconds the parent waits for the child's own timeout report before killing it.
 _CHILD_GRACE = 5.0
-# Shown atoms a child may send back, over all its answer sets: the parent reads them all into memory. The package's
-# libraries show at most about 7,500 (a Williams layout's PF tables); "task(t(1..3000000))." would show millions.
+# What a child may send back, which the parent reads into memory: each distinct shown atom once (the package's
+# libraries show at most about 7,500: a Williams layout's PF tables; "task(t(1..3000000))." would show millions),
+# and each answer set as the indices of its atoms (a layout's groundings repeat most atoms in every answer set).
 MAX_REPLY_ATOMS = 200_000
+MAX_REPLY_SHOWN = 5_000_000
 _ERRORS = {c.__name__: c for c in (AspError, AspSyntaxError, AspScriptRefused, AspGroundingError, AspTimeout)}
 
 
@@ -55,7 +57,30 @@ def solve_in_child(program: Program, facts: str, models: int, time_limit: float 
     if "error" in reply:
         kind, message = reply["error"]
         raise _ERRORS.get(kind, AspError)(message)
-    return [[clingo.parse_term(t) for t in model] for model in reply["models"]]
+    atoms = [clingo.parse_term(t) for t in reply["atoms"]]
+    return [[atoms[k] for k in model] for model in reply["models"]]
+
+
+def _reply(found: list, where: str, in_layout: bool) -> dict:
+    """The answer sets as each distinct atom once and each set as its atoms' indices; AspGroundingError, before
+    anything is written out, where they are more than the parent may read (its memory stays bounded)."""
+    shown = sum(len(model) for model in found)
+    index: dict = {}
+    models: list[list[int]] = []
+    for model in found if shown <= MAX_REPLY_SHOWN else ():
+        models.append([index.setdefault(sym, len(index)) for sym in model])
+        if len(index) > MAX_REPLY_ATOMS:  # stop counting: a runaway range would take its time to index
+            break
+    if shown > MAX_REPLY_SHOWN or len(index) > MAX_REPLY_ATOMS:
+        counted = (f"{len(found):,} answer set{'s' * (len(found) != 1)} of {shown:,} atoms in all, more than "
+                   f"{MAX_REPLY_ATOMS:,} distinct" if shown <= MAX_REPLY_SHOWN else
+                   f"{shown:,} atoms in {len(found):,} answer sets")
+        limits = f"at most {MAX_REPLY_ATOMS:,} distinct and {MAX_REPLY_SHOWN:,} in all are read"
+        why = (f"grounded in this layout it shows {counted}; {limits} from a library of your own (solved in a child "
+               "process): a layout of many rooms or toys" if in_layout else
+               f"the program shows {counted}; {limits} (a rule that makes an atom per number of a large range?)")
+        raise AspGroundingError(f"{where}: {why}")
+    return {"atoms": [str(sym) for sym in index], "models": models}
 
 
 def _child_main() -> None:
@@ -70,15 +95,7 @@ def _child_main() -> None:
     try:
         program = Program(tuple(Source(n, t) for n, t in request["sources"]), request["allow_scripts"])
         found = program.solve(request["facts"], models=request["models"], time_limit=request["time_limit"])
-        shown = sum(len(model) for model in found)
-        if shown > MAX_REPLY_ATOMS:  # counted before any is written out: the parent's memory stays bounded
-            why = (f"grounded in this layout it shows {shown:,} atoms in {len(found):,} answer set{'s' * (len(found) != 1)}, more than the "
-                   f"{MAX_REPLY_ATOMS:,} read from a library of your own (solved in a child process): a layout of "
-                   "many rooms or toys" if request["facts"].strip() else
-                   f"the program shows {shown:,} atoms, more than the {MAX_REPLY_ATOMS:,} a task library's answer "
-                   "may (a rule that makes an atom per number of a large range?)")
-            raise AspGroundingError(f"{program.user_names}: {why}")
-        reply = {"models": [[str(sym) for sym in model] for model in found]}
+        reply = _reply(found, program.user_names, bool(request["facts"].strip()))
     except AspError as exc:
         reply = {"error": [type(exc).__name__, str(exc)]}
     except MemoryError:
