@@ -51,8 +51,8 @@ from pathlib import Path
 
 import numpy as np
 
-from groundlang.inference.planning import (TaskSettings, as_transitions, demonstration_log_likelihood, solve_task,
-                                          threads_for)
+from groundlang.inference.layout_rows import layout_rows
+from groundlang.inference.planning import TaskSettings
 from groundlang.logic.atoms import Atom, parse_atom
 from groundlang.logic.storage import FileRefused, check_folder, read_limited, write_atomically
 from groundlang.model.state_search import StateSpaceError
@@ -264,7 +264,6 @@ def behaviour_likelihood_table(
     Returns a list of float64 arrays, ``result[i][k]`` for candidate ``k`` of instance ``i``.
     Raises ValueError when the lists differ in length or a goal names an unknown object.
     """
-    from groundlang.inference.stepwise import approximate_likelihoods
     from groundlang.model.pf_tables import pf_tables, program_digest, tabulation_program
     from groundlang.model.relevance import exact_fits
 
@@ -315,66 +314,23 @@ def behaviour_likelihood_table(
         from tqdm import tqdm
 
         bar = tqdm(total=solves, desc="behaviour likelihoods", unit="solve")
-    try:
-        for initial, by_goal in todo.items():
-            tables = pf_tables(initial.layout, program, *(() if library is None else (library.time_limit,)))
-            if method == "exact" or (method == "auto" and exact_fits(initial)):
-                for goal, entries in _exact_rows(initial, by_goal, instances, tables, settings):
-                    for (i, k), value in entries:
-                        table[i][k] = value
-                        root = _store(root, keys[i][k], value, goal, cleaned)
-                    if bar is not None:
-                        bar.update(1)
-                continue
-            # Where the whole world does not fit: per demonstration, every goal in a relevance abstraction or
-            # stepwise (inference/stepwise.py), all solved together.
-            by_demo: dict = {}  # actions -> [(goal, i, k)]
-            for goal, entries in by_goal.items():
-                for i, k in entries:
-                    by_demo.setdefault(tuple(int(a) for a in instances[i].actions), []).append((goal, i, k))
-            for rows in by_demo.values():
-                goals = list(dict.fromkeys(g for g, _, _ in rows))
-                inst = instances[rows[0][1]]
-                values = dict(zip(goals, approximate_likelihoods(initial, goals, list(inst.states), inst.actions,
-                                                                 tables, settings)))
-                for goal, i, k in rows:
-                    table[i][k] = float(values[goal])
-                    root = _store(root, keys[i][k], table[i][k], goal, cleaned)
+    for initial, by_goal in todo.items():
+        tables = pf_tables(initial.layout, program, *(() if library is None else (library.time_limit,)))
+        try:
+            for goal, entries in layout_rows(initial, by_goal, instances, tables, settings, method):
+                for (i, k), value in entries:
+                    table[i][k] = value
+                    root = _store(root, keys[i][k], value, goal, cleaned)
                 if bar is not None:
-                    bar.update(len(goals))
-    except StateSpaceError as exc:  # a layout too large to key or plan in: the file of a demonstration in it
-        if bar is not None:
-            bar.close()
-        where = getattr(instances[next(iter(by_goal.values()))[0][0]], "path", None)
-        raise exc if where is None else type(exc)(f"{where}: {exc}") from None
+                    bar.update(1)
+        except StateSpaceError as exc:  # a layout too large to key or plan in: the file of a demonstration in it
+            if bar is not None:
+                bar.close()
+            where = getattr(instances[next(iter(by_goal.values()))[0][0]], "path", None)
+            raise exc if where is None else type(exc)(f"{where}: {exc}") from None
     if bar is not None:
         bar.close()
     return table
-
-
-def _exact_rows(initial, by_goal: dict, instances, tables, settings):
-    """``(goal, [((i, k), value)])`` per goal: the whole state space, enumerated once, solved per goal."""
-    from groundlang.model.features import goal_mask
-    from groundlang.model.relevance import state_space_for
-    from groundlang.model.statespace import trajectory_indices
-
-    space = state_space_for(initial, method="exact")
-    with threads_for(space.num_states):  # small spaces: one thread (others may share the cores)
-        transitions = as_transitions(space.next_state)
-    paths: dict[int, np.ndarray] = {}
-    for goal, entries in by_goal.items():
-        with threads_for(space.num_states):
-            result = solve_task(transitions, goal_mask(space, goal, tables), settings)
-        if not result.converged:
-            logger.warning("goal %s: soft value iteration stopped after %d sweeps (residual %.3g)",
-                           " ".join(map(str, goal)), result.sweeps, result.residual)
-        out = []
-        for i, k in entries:
-            if i not in paths:
-                paths[i] = trajectory_indices(space, list(instances[i].states))
-            actions = [int(a) for a in instances[i].actions]
-            out.append(((i, k), float(demonstration_log_likelihood(result.log_policy, paths[i], actions))))
-        yield goal, out
 
 
 def _store(root, key: str, value: float, goal, cleaned: set) -> Path | None:
