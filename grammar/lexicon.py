@@ -37,6 +37,17 @@ _END = None
 CLOSED_CLASS = frozenset({"DET", "PREP", "TO", "CONJ", "SUB", "REL", "PRON", "AUX", "NEG"})
 
 
+def _one_each(entries: dict, category: str, conflict: str) -> dict[str, str]:
+    """A paired category's ``form=value`` entries as ``{form: value}``; LexiconError where a form has two values
+    (``conflict`` formatted with the first and the second)."""
+    out: dict[str, str] = {}
+    for pair in entries.get(category, ()):
+        form, value = pair.split("=", 1)
+        if out.setdefault(form, value) != value:
+            raise LexiconError(f"{category} {form!r} {conflict.format(out[form], value)}")
+    return out
+
+
 def _inflections(lemma: str) -> dict[str, str]:
     """Regular forms of a verb lemma: -s, -ed, -ing, with the usual spelling changes."""
     forms = {lemma: lemma}
@@ -84,13 +95,9 @@ class Lexicon:
         # a serial verb or a verb of having is a verb, listed so or not (else its clauses would go unread)
         for lemma in sorted(words["VERB"] | words["VERB_SERIAL"] | words["VERB_HAVING"]):
             self.verb_forms.update(_inflections(lemma))
-        irregular: dict[str, str] = {}
-        for pair in self.entries.get("IRREGULAR", ()):  # a form is of one verb (entries are sorted: no order decides)
-            form, lemma = pair.split("=", 1)
-            if irregular.setdefault(form, lemma) != lemma:
-                raise LexiconError(f"IRREGULAR {form!r} is a form of {irregular[form]!r} and of {lemma!r}: "
-                                   "a form is of one verb")
-        self.verb_forms.update(irregular)
+        # a form is of one verb (entries are sorted: no order decides)
+        self.verb_forms.update(_one_each(self.entries, "IRREGULAR",
+                                         "is a form of {0!r} and of {1!r}: a form is of one verb"))
         table: dict[str, set[str]] = {}
         for category in FILE_CATEGORIES:
             tag = TAGGING.get(category, category)
@@ -130,12 +137,7 @@ class Lexicon:
         self.yes_words, self.no_words = words["YES"], words["NO"]
         self.polite_words = words["POLITE"]  # saying nothing of what is meant, in a command or an answer
         # An answer's number of a choice in words ("the third one", "option two"): read in answers only.
-        self.ordinals: dict[str, str] = {}
-        for pair in self.entries.get("ORDINAL", ()):  # as a synonym has one word, a word one number
-            form, number = pair.split("=", 1)
-            if self.ordinals.setdefault(form, number) != number:
-                raise LexiconError(f"ORDINAL {form!r} is the number {self.ordinals[form]} and {number}: "
-                                   "a word names one number")
+        self.ordinals = _one_each(self.entries, "ORDINAL", "is the number {0} and {1}: a word names one number")
         self.choice_nouns = words["CHOICE_NOUN"]
         self.definite_determiners = words["DET_DEFINITE"]
         # The preposition a clause of having reads as ("with"); None when no word file names one.

@@ -11,10 +11,8 @@ from groundlang.corpus import Instance
 from groundlang.goal_translation import GoalHoldsAtStart, describe_goal, translate_goal
 from groundlang.labels import goal_holds
 from groundlang.learner import Learner
+from groundlang.results import LAYOUT_ERRORS
 from groundlang.logic.atoms import format_goal
-from groundlang.model.mentions import MentionLimitError
-from groundlang.model.pf_tables import TabulationError
-from groundlang.model.state_search import StateSpaceError
 from groundlang.wording import goal_phrase
 
 __all__ = ["run_folds", "prepare_worker", "usable_workers"]
@@ -47,7 +45,7 @@ def _score(learner: Learner, instance: Instance, gold, novel_states) -> dict:
             continue
         try:
             novel = learner.follow(instance.command, state)
-        except (StateSpaceError, TabulationError, MentionLimitError) as exc:  # the layout, not the command: wrong
+        except LAYOUT_ERRORS as exc:  # the layout, not the command: counted wrong
             record["novel"].append({"environment": name, "gold": format_goal(translated), "correct": False,
                                     "confidence": None, "unfollowed": f"{name}: {exc}"})
             continue

@@ -9,9 +9,16 @@ import numpy as np
 from groundlang.confidence import GoalGroup, most_probable_first
 from groundlang.logic.atoms import Atom, format_goal
 from groundlang.model.interpretations import Interpretation
+from groundlang.model.mentions import MentionLimitError
+from groundlang.model.pf_tables import TabulationError
+from groundlang.model.state_search import StateSpaceError
 from groundlang.model.world import Action, State
 
-__all__ = ["Posterior", "FollowResult"]
+__all__ = ["Posterior", "FollowResult", "LAYOUT_ERRORS"]
+
+# What following raises for the layout rather than the command: more objects than the mention model reads, a state
+# space no method builds, PF tables too large. Whoever read the layout names its file.
+LAYOUT_ERRORS = (MentionLimitError, StateSpaceError, TabulationError)
 
 
 @dataclass

@@ -109,8 +109,9 @@ def check_domain_left_alone(program: Program, domain: str = "groundlang.logic/do
     own = {sig for where, _, sig in heads if where == domain} - {None}
     package = {sig for where, _, sig in heads if where.startswith("groundlang.")}
     facts = {sig for sig in program.body_signatures(reads) - package if not sig[0].startswith("palette_")}
+    theirs = own | facts
     for where, term, signature in heads:
-        if not where.startswith("groundlang.") and signature in own | facts:
+        if not where.startswith("groundlang.") and signature in theirs:
             whose = (f"the domain's own ({domain}), which the world's moves follow without reading it" if signature
                      in own else "a fact of the layout, given with each state, which the world's moves read from it")
             raise AspError(f"{where}: {term}: {signature[0]}/{signature[1]} is {whose}; a library adds PFs and tasks, "

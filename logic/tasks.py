@@ -28,9 +28,8 @@ import clingo
 from .atoms import Atom, format_goal
 from .classes import domain_classes
 from .library_checks import (Declarations, PFRoles, check_domain_left_alone, check_pfs_declared_once,
-                             check_pfs_said_to_hold,
-                             check_tasks_declared_once, declare,
-                             declare_families, read_pf_roles, read_phrases, restriction_problem)
+                             check_pfs_said_to_hold, check_tasks_declared_once, declare, declare_families,
+                             read_pf_roles, read_phrases, restriction_problem)
 from .program import DEFAULT_TIME_LIMIT, AspError, Program, Source, package_source
 from .terms import natural_key, pf_name, symbol_text, tuple_args
 from . import sources as _sources
@@ -170,9 +169,11 @@ def _lifted_tasks_read(program: Program, time_limit: float | None) -> tuple[
     for sym in models[0]:
         by_signature.setdefault((sym.name, len(sym.arguments)), []).append(sym)
     roles = read_pf_roles(by_signature, program.user_names)
-    if negated := next((a for a in by_signature.get(("task", 1), []) if a.arguments[0].type is clingo.SymbolType.Function and a.arguments[0].negative), None):
+    task_atoms = by_signature.get(("task", 1), [])
+    if negated := next((a for a in task_atoms if a.arguments[0].type is clingo.SymbolType.Function
+                        and a.arguments[0].negative), None):
         raise AspError(f"{program.user_names}: {negated}: a task's name is negated; name it without '-'")
-    names = sorted(symbol_text(a.arguments[0]) for a in by_signature.get(("task", 1), []))
+    names = sorted(symbol_text(a.arguments[0]) for a in task_atoms)
     if twice := next((n for n, m in zip(names, names[1:]) if n == m), None):
         # task(t) and task("t") are two atoms of one name: their var/3 and goal/3 atoms would be mixed.
         raise AspError(f'{program.user_names}: task {twice} is declared twice, as task({twice}) and task("{twice}"); '

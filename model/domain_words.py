@@ -82,6 +82,11 @@ def _weight(words: Mapping[str, Mapping]) -> int:
     return sum(len(entries) * (VERB_FORMS if category in _LEMMAS else 1) for category, entries in words.items())
 
 
+# Paired categories whose form has one value (``third=3``, ``went=go``): how two values read, and the rule.
+_ONE_EACH = {"ORDINAL": ("is the number {here} here and {there}", "a word names one number"),
+             "IRREGULAR": ("is a form of {here!r} here and of {there!r}", "a form is of one verb")}
+
+
 def _check_word_roles(words: Mapping[str, Iterable[str]], source: WordSource, merged: Mapping) -> None:
     """A word file's word in a role English or an earlier file gives another: a closed-class word that is a serial
     verb or a degree word there ("NEG: go"), or the other way round, or a second preposition a clause of having
@@ -89,18 +94,14 @@ def _check_word_roles(words: Mapping[str, Iterable[str]], source: WordSource, me
     it without either (and blaming the category of grammar/english.words)."""
     open_roles = {"VERB_SERIAL": "a serial verb", "ADV_DEGREE": "a degree word"}
     english = Lexicon.english().entries
-    numbers = dict(pair.split("=", 1) for pair in [*english.get("ORDINAL", ()), *merged.get("ORDINAL", {})])
-    for pair in words.get("ORDINAL", ()):  # a word names one number
-        form, number = pair.split("=", 1)
-        if numbers.get(form, number) != number:
-            raise LexiconError(f"{_line_of(source, 'ORDINAL', pair)}: ORDINAL {form!r} is the number {number} here and "
-                               f"{numbers[form]} in English or an earlier word file: a word names one number")
-    lemmas = dict(pair.split("=", 1) for pair in [*english.get("IRREGULAR", ()), *merged.get("IRREGULAR", {})])
-    for pair in words.get("IRREGULAR", ()):  # a form is of one verb
-        form, lemma = pair.split("=", 1)
-        if lemmas.setdefault(form, lemma) != lemma:
-            raise LexiconError(f"{_line_of(source, 'IRREGULAR', pair)}: IRREGULAR {form!r} is a form of {lemma!r} here "
-                               f"and of {lemmas[form]!r} in English or this or an earlier word file: a form is of one verb")
+    for category, (says, rule) in _ONE_EACH.items():  # a word names one number, a form is of one verb
+        given = dict(pair.split("=", 1) for pair in [*english.get(category, ()), *merged.get(category, {})])
+        for pair in words.get(category, ()):
+            form, value = pair.split("=", 1)
+            if given.setdefault(form, value) != value:
+                raise LexiconError(f"{_line_of(source, category, pair)}: {category} {form!r} "
+                                   f"{says.format(here=value, there=given[form])} in English or an earlier word file "
+                                   f"(or this one): {rule}")
     for word in words.get("PREP_HAVING", ()):  # one preposition a clause of having reads as
         if other := sorted({*english.get("PREP_HAVING", ()), *merged.get("PREP_HAVING", {})} - {word}):
             raise LexiconError(f"{_line_of(source, 'PREP_HAVING', word)}: PREP_HAVING word {word!r}: a clause of having "

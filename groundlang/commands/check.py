@@ -20,7 +20,8 @@ from groundlang.corpus import read_corpus
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("check", help="load a corpus folder and replay every demonstration, or a .bdm file or folder and search each pair's end from its start; print a summary")
+    p = subparsers.add_parser("check", help="load a corpus folder and replay every demonstration, or a .bdm file or folder "
+                                             "and search each pair's end from its start; print a summary")
     p.add_argument("directory", type=input_path, metavar="DIR", help="folder of corpus files (*.txt), or a .bdm file or folder")
     p.add_argument("--palette", help=PALETTE_HELP + " (required but for .bdm, whose default is williams2018)")
     p.add_argument("--format", choices=("commands-to-tasks", "williams2018"),

@@ -198,13 +198,11 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import file_names, read_initial_state
     from groundlang.inference.sweeps import plan_once
     from groundlang.learner import Learner
+    from groundlang.results import LAYOUT_ERRORS
     from groundlang.logic.atoms import format_goal
     from groundlang.logic.palette_files import palette_names
     from groundlang.model.interpretations import NoTaskError
-    from groundlang.model.statespace import StateSpaceError
-    from groundlang.model.mentions import MentionLimitError
     from groundlang.model.palette import Palette, get_palette
-    from groundlang.model.pf_tables import TabulationError
     from groundlang.wording import labelled_goal
 
     if args.learn and not args.ask:
@@ -251,7 +249,7 @@ def run(args: argparse.Namespace) -> int:
             result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
     except NoTaskError as exc:  # the state is at fault, not the command or the model: name its file
         raise NoTaskError(f"{args.env}: {exc}") from None
-    except (StateSpaceError, TabulationError, MentionLimitError) as exc:  # a layout no method plans, tabulates or reads
+    except LAYOUT_ERRORS as exc:  # a layout no method plans in, tabulates or reads: its file
         raise ValueError(f"{args.env}: {exc}") from None
     if not args.json:
         print(f"command: {as_typed(args.command_text)}")
