@@ -31,15 +31,38 @@ def test_follow_names_the_state_file_of_too_many_objects_to_read(tmp_path, capsy
     assert err.count("\n") == 1
 
 
-def test_train_names_the_demonstration_file_whose_layout_cannot_be_keyed(tmp_path, capsys):
-    """It said "19 moving objects in a layout of 59 cells: ..." and no file."""
+def _corpus_with_a_crowded_layout(tmp_path) -> tuple[Path, Path]:
+    """A corpus folder of one example file whose states carry 17 more blocks, and that file."""
     source = EXAMPLES / "agent2blue_0.txt"
     lines = source.read_text(encoding="utf-8").splitlines()
     folder = tmp_path / "corpus"
     folder.mkdir()
     (folder / source.name).write_text("\n".join(lines[:2] + [_crowded(line, IN_EXAMPLES) for line in lines[2:] if line.strip()])
                                       + "\n", encoding="utf-8")
+    (folder / "agent2red_0.txt").write_text((EXAMPLES / "agent2red_0.txt").read_text(encoding="utf-8"), encoding="utf-8")
+    return folder, folder / source.name
+
+
+def test_train_names_the_demonstration_file_whose_layout_cannot_be_keyed(tmp_path, capsys):
+    """It said "19 moving objects in a layout of 59 cells: ..." and no file."""
+    folder, source = _corpus_with_a_crowded_layout(tmp_path)
     assert main(["--quiet", "train", str(folder), "--palette", "sokoban", "-o", str(tmp_path / "m")]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"groundlang train: error: {folder / source.name}: ") and "cannot be keyed in 64 bits" in err
+    assert err.startswith(f"groundlang train: error: {source}: ") and "cannot be keyed in 64 bits" in err
     assert not Path(tmp_path / "m").exists()
+
+
+def test_check_lists_the_layouts_train_could_not_key_and_fails(tmp_path, capsys):
+    """check said nothing of such a layout and exited 0; train then stopped at it."""
+    folder, source = _corpus_with_a_crowded_layout(tmp_path)
+    assert main(["--quiet", "check", str(folder), "--palette", "sokoban"]) == 1
+    out, err = capsys.readouterr()
+    assert "layouts whose states cannot be keyed: 1\n" in out
+    listed = [line.strip() for line in out.splitlines() if "cannot be keyed in 64 bits" in line]
+    assert len(listed) == 1 and listed[0].startswith(f"{source}: 19 moving objects")
+    assert err.strip() == "groundlang check: 1 layouts whose states cannot be keyed (train refuses them)"
+
+
+def test_check_of_layouts_that_can_be_keyed_says_nothing_of_keys(capsys):
+    assert main(["--quiet", "check", str(EXAMPLES), "--palette", "sokoban"]) == 0
+    assert "keyed" not in capsys.readouterr().out
