@@ -37,6 +37,7 @@ from groundlang.model.world import State
 from groundlang.learner_state import (check_count, check_fit_arguments, check_model_parts, check_state, check_threshold,
                                        word_sources, check_training_options, learner_from_state, learner_state)
 from groundlang.model_io import check_parameter_bound, read_model, write_model
+from groundlang.other_starts import check_other_starts, given_other_starts, held_shares
 from groundlang.results import FollowResult, Posterior
 from groundlang.training_vocabulary import build_vocabulary, word_files_beside
 from groundlang.wording import goal_phrase
@@ -195,12 +196,15 @@ class Learner:
         """TypeError for arguments of the wrong type; ValueError for a state of a palette not trained on."""
         check_state(self.palettes, method, command, state)
 
-    def posterior(self, command: str, state: State, held: bool = False) -> Posterior:
+    def posterior(self, command: str, state: State, held: bool = False, other_starts: Sequence[State] = ()) -> Posterior:
         """Posterior over interpretations of ``command`` in ``state`` from the words, given (with the
         language model's ``achievable_goals``, the default) that the goal can be reached from ``state``.
         With ``held`` goals that already hold in ``state`` are offered too, as for a demonstration that
         leaves and comes back, and nothing is conditioned on what can be done: what the words say ("go to
         the blue room" said in it), of which following sets such goals aside (they ask nothing).
+        ``other_starts``: the other states the command was given in (a Williams et al. command's other
+        layouts); with the language model's ``other_starts``, a reading whose lifted task already holds in
+        one of them is weighed down as the words there say it does (:mod:`groundlang.other_starts`).
 
         TypeError for a non-string command or a non-State state; ValueError when the state's palette
         is not one the model was trained on."""
@@ -208,6 +212,7 @@ class Learner:
         self._check_state("posterior", command, state)
         if not isinstance(held, bool):
             raise TypeError(f"posterior: held must be True or False, not {type(held).__name__}")
+        other_starts = check_other_starts("posterior", other_starts)
         obs = self._command_observation(command, state, held)
         batch = self.lm.encode([obs], self.vocab)
         # The interpretation and the reading: the two sites the model enumerates per command.
@@ -225,13 +230,16 @@ class Learner:
             out = unachievable_goals(set(goals), space, masks=masks)  # once, for both
             reach = out_of_reach(probs, goals, out)
             probs = given_achievable(probs, goals, masks, out)
+        if self.lm.other_starts and other_starts and not held:
+            probs = given_other_starts(probs, obs.interpretations,
+                                       [held_shares(self, command, other) for other in other_starts])
         post = Posterior(command, list(obs.interpretations), probs, list(obs.readings), reading_probs,
                          out_of_reach=reach[0], out_of_reach_goal=reach[1])
         post.groups = group_goals(post.goals(), space, self.library, masks)
         return post
 
     def follow(self, command: str, state: State, max_steps: int = 200,
-               min_confidence: float | None = None) -> FollowResult:
+               min_confidence: float | None = None, other_starts: Sequence[State] = ()) -> FollowResult:
         """Interpret ``command`` in ``state``, plan for the most probable grounded goal and act; with the
         language model's ``expected_success`` (the default), plan to end where the goals of the whole
         posterior most probably hold (:func:`groundlang.goal_plans.expected_success_states`).
@@ -245,18 +253,21 @@ class Learner:
         the result has ``abstained=True``, the ``question`` to ask, its ``choices`` and the
         ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer. It asks too where the
         words most probably ask, as surely, for what already holds (``already_true``), or say only what not to
-        do (no choices): :mod:`groundlang.held_question`."""
+        do (no choices): :mod:`groundlang.held_question`. ``other_starts``: the other states the command
+        was given in (see :meth:`posterior`)."""
         check_count("follow", "max_steps", max_steps)
         check_threshold("follow", "min_confidence", min_confidence)
         self._require_fitted()
         self._check_state("follow", command, state)
         check_abstraction_possible(state)
+        other_starts = check_other_starts("follow", other_starts)
         held = self.posterior(command, state, held=True) if min_confidence or self.lm.held_goals_confidence else None
         return follow_or_ask(command, state, held, min_confidence, self.library,
-                             lambda: self._follow(command, state, max_steps, min_confidence, held))
+                             lambda: self._follow(command, state, max_steps, min_confidence, held, other_starts))
 
-    def _follow(self, command: str, state: State, max_steps: int, min_confidence, held) -> FollowResult:
-        post = self.posterior(command, state)
+    def _follow(self, command: str, state: State, max_steps: int, min_confidence, held,
+                other_starts: tuple[State, ...] = ()) -> FollowResult:
+        post = self.posterior(command, state, other_starts=other_starts)
         ending = self.ending(post, state)
         # Planned before deciding: the confidence is read where the plan ends (plans are the world's, kept).
         if ending:  # where what was meant most probably holds, and the goal the nearest such state satisfies

@@ -151,9 +151,10 @@ def learner_from_state(cls, state: dict, where: str):
     # saved before success_confidence (or held_goals_confidence) was as confident as its goal (its end): it acts
     # and asks as it did; one saved before last_passes_over_negated learned its tables with the last phrase's key
     # on a negated phrase, and reads words with the keys it learned; one saved before negated_phrases_unbiased
-    # learned (and updates) under the prior it had (a setting absent from older models is otherwise its default).
+    # learned (and updates) under the prior it had; one saved before other_starts follows a command given in several
+    # start states as it did (a setting absent from older models is otherwise its default).
     before = {"habit_prior": "overall", "success_confidence": False, "held_goals_confidence": False,
-              "last_passes_over_negated": False, "negated_phrases_unbiased": False}
+              "last_passes_over_negated": False, "negated_phrases_unbiased": False, "other_starts": False}
     known = get_language_model(state["language_model"]).settings()
     settings = {**{k: v for k, v in before.items() if k in known}, **state["language_model_settings"]}
     learner = cls(

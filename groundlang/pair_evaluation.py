@@ -1,7 +1,8 @@
 """Evaluation on a corpus of (start, end) pairs with a test file (Williams et al. 2018).
 
 Train on every usable pair of the training commands (``pair_corpus``), then follow every test command
-from each of its start states. An execution is correct when its final state satisfies the task the
+from each of its start states, the others given as the states it was also given in (the language model's
+``other_starts``: a task already holding in one of them is not what it asks). An execution is correct when its final state satisfies the task the
 test command's pairs show (``pair_tasks.pair_task``: the relations that hold in all its end states and
 not in all its start states, the data README's rule); a command is correct when all its executions
 are. A test command whose pairs show no task cannot be scored and is counted apart, and so is an
@@ -220,7 +221,8 @@ def evaluate_pairs(train: list[Command], test: list[Command], library, demonstra
             STATE_SOURCE.set(f"{command.path}, line {pair.line}")  # for the log lines of the spaces it sizes
             row = {"index": index, "pair": k, "command": command.text}
             try:  # a layout too large to enumerate is planned in its relevance abstraction (model.relevance)
-                result = learner.follow(command.text, pair.start)
+                result = learner.follow(command.text, pair.start,
+                                        other_starts=[p.start for j, p in enumerate(command.pairs) if j != k])
             except NoTaskError as exc:  # nothing can be asked there, so no reading is right or wrong
                 row.update(goal=None, final_state=None, not_scored=f"{command.path}, line {pair.line}: {exc}")
                 unscored += 1

@@ -17,7 +17,8 @@ HABIT_PRIORS = ("absent", "overall")
 # The settings of every language model that act only when following (the posterior in a new layout, where the
 # plan ends, how confident it is): training, and so any held-out likelihood, is the same whatever they are.
 FOLLOWING_SETTINGS = ("achievable_goals", "expected_success", "step_cost", "end_habits", "moved_toys",
-                      "habits_made_true", "bound_habits", "habit_prior", "success_confidence", "held_goals_confidence")
+                      "habits_made_true", "bound_habits", "habit_prior", "success_confidence", "held_goals_confidence",
+                      "other_starts")
 
 __all__ = ["LanguageModel", "FOLLOWING_SETTINGS", "NULL_MIXTURE", "mixture_log_emissions", "gather_mixtures", "require_positive",
            "token_words", "word_meanings", "LEARNED_SHARE"]
@@ -47,7 +48,7 @@ class LanguageModel:
                  achievable_goals: bool = True, expected_success: bool = True, step_cost: float = 0.005,
                  end_habits: bool = True, moved_toys: bool = False, habits_made_true: bool = False,
                  bound_habits: bool = True, habit_prior: str = "absent", success_confidence: bool = True,
-                 held_goals_confidence: bool = False):
+                 held_goals_confidence: bool = False, other_starts: bool = True):
         """``schema_names``: a token says the word the domain's schema names it by (a class's name,
         "door"; an attribute value's, "chair", "red"; ``Vocabulary.names``) with a learned share
         ``name_share``, and its learned words otherwise: the names a domain's author gives are words
@@ -75,7 +76,9 @@ class LanguageModel:
         ``held_goals_confidence`` (off: ABLATIONS.md): with ``success_confidence``, the words' share on goals that already hold at
         the start (which following sets aside: they ask nothing) counts against that confidence, each such
         goal for where following ends only if it still holds there ("go to the blue room" said in it is not
-        sure of walking to the only other room)."""
+        sure of walking to the only other room). ``other_starts``: a command given in several start states at
+        once (``Learner.follow(..., other_starts=...)``, a Williams et al. command's other layouts) asks for
+        a task that holds in none of them (:mod:`groundlang.other_starts`)."""
         # Dirichlet(1 + eps) MAP == EM with add-eps smoothing (Model 0's epsilon).
         require_positive(self.name, "word_concentration", word_concentration)
         self.word_concentration = word_concentration
@@ -97,6 +100,7 @@ class LanguageModel:
         self.habit_prior = habit_prior
         self.success_confidence = success_confidence
         self.held_goals_confidence = held_goals_confidence
+        self.other_starts = other_starts
 
     def settings(self) -> dict:
         return {"word_concentration": self.word_concentration, "null_token": self.null_token,
@@ -105,7 +109,7 @@ class LanguageModel:
                 "end_habits": self.end_habits, "moved_toys": self.moved_toys,
                 "habits_made_true": self.habits_made_true, "bound_habits": self.bound_habits,
                 "habit_prior": self.habit_prior, "success_confidence": self.success_confidence,
-                "held_goals_confidence": self.held_goals_confidence}
+                "held_goals_confidence": self.held_goals_confidence, "other_starts": self.other_starts}
 
     def phrase_keys(self) -> PhraseKeys:
         """The marks of the noun phrases' preposition keys this model's batches are encoded with."""

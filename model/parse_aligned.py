@@ -82,6 +82,7 @@ class ParseAligned(LanguageModel):
         habit_prior: str = "absent",
         success_confidence: bool = True,
         held_goals_confidence: bool = False,
+        other_starts: bool = True,
     ):
         """``argument_bonus`` is added to the alignment prior's concentration of
         the task's own roles (a phrase names an argument of the task more often
@@ -137,7 +138,7 @@ class ParseAligned(LanguageModel):
                          expected_success=expected_success, step_cost=step_cost, end_habits=end_habits,
                          moved_toys=moved_toys, habits_made_true=habits_made_true, bound_habits=bound_habits,
                          habit_prior=habit_prior, success_confidence=success_confidence,
-                         held_goals_confidence=held_goals_confidence)
+                         held_goals_confidence=held_goals_confidence, other_starts=other_starts)
         self.align_concentration = align_concentration
         self.argument_bonus = argument_bonus
         self.mention_concentration = mention_concentration
@@ -181,7 +182,7 @@ class ParseAligned(LanguageModel):
                  "arity_concentration", "align_by_task", "mention_phrases", "align_backoff", "relation_words",
                  "preposition_concentration", "held_parts", "relational_descriptions", "schema_names",
                  "achievable_goals", "expected_success", "step_cost", "end_habits", "moved_toys", "habits_made_true",
-                 "bound_habits", "habit_prior", "success_confidence", "held_goals_confidence",
+                 "bound_habits", "habit_prior", "success_confidence", "held_goals_confidence", "other_starts",
                  "last_phrase_key", "object_key", "last_passes_over_source", "noun_attached_key", "negation_key",
                  "last_passes_over_negated", "negated_phrases_unbiased", "start_role", "bystander_roles", "largest_constraint",
                  "negated_verbs_frame", "mention_task_objects", "parser_weights")

@@ -25,7 +25,8 @@ def test_settings_make_the_model_they_name():
                                                                         "end_habits": True, "moved_toys": False,
                                                                         "habits_made_true": False, "bound_habits": True,
                                                                         "habit_prior": "absent", "success_confidence": True,
-                                                                        "held_goals_confidence": False}
+                                                                        "held_goals_confidence": False,
+                                                                        "other_starts": True}
 
 
 @pytest.mark.parametrize("name, settings, message", [

@@ -1,4 +1,4 @@
-"""``groundlang follow "COMMAND" --env FILE [--palette NAME] --model MODEL_DIR [--ask [--learn] | --guess] [--out PNG] [--json]``.
+"""``groundlang follow "COMMAND" --env FILE [--other-start FILE ...] [--palette NAME] --model MODEL_DIR [--ask [--learn] | --guess] [--out PNG] [--json]``.
 
 Exit codes: 0 the goal was reached (or, asked, the answer said that what already holds is meant); 1 it
 was not; 2 bad input; 3 the command was read with confidence below ``--min-confidence``, or its words
@@ -37,6 +37,9 @@ def register(subparsers) -> None:
     p.add_argument("--env", required=True, type=input_path, metavar="FILE",
                    help="the initial state: a corpus file (*.txt: its first state), a one-line .state file, or a "
                         "one-line .bdm file (a state in the Williams et al. format)")
+    p.add_argument("--other-start", action="append", default=[], type=input_path, metavar="FILE", dest="other_starts",
+                   help="another initial state the command was given in, read as --env is (repeatable; a Williams et "
+                        "al. command's other layouts): a task that already holds in one of them is not what it asks")
     p.add_argument("--palette", help=PALETTE_HELP + " (default: the model's, when it was trained on one; a palette file "
                    "of your own is read from the values the model records)")
     p.add_argument("--model", required=True, type=input_path, metavar="MODEL_DIR", help="a folder written by 'groundlang train'")
@@ -240,13 +243,15 @@ def run(args: argparse.Namespace) -> int:
         if "drawing" not in record and palette.name in palette_names() and get_palette(palette.name) == palette:
             palette = get_palette(palette.name)
     state = read_initial_state(args.env, palette)
+    other_starts = [read_initial_state(path, palette) for path in args.other_starts]
     names = file_names(args.env)  # goals and states are shown by the file's names of its objects
     if args.lexicon:
         learner.add_words(args.lexicon)
     threshold = None if args.guess else args.min_confidence
     try:
         with logged_by_file_names(names):
-            result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold)
+            result = learner.follow(args.command_text, state, max_steps=args.max_steps, min_confidence=threshold,
+                                    other_starts=other_starts)
     except NoTaskError as exc:  # the state is at fault, not the command or the model: name its file
         raise NoTaskError(f"{args.env}: {exc}") from None
     except LAYOUT_ERRORS as exc:  # a layout no method plans in, tabulates or reads: its file

@@ -1,0 +1,83 @@
+"""A command given in several start states at once asks for what holds in none of them.
+
+Following sets aside a goal that already holds where the command is given: it asks for nothing. A
+command may come with more than one start state (Williams et al. 2018 give each command three
+layouts, the demonstrations it was written for); what it asks for then holds in none of them, so a
+reading whose lifted task already holds in another of its start states is not what it asks either.
+In the training pairs of that corpus a task's side of a block ("left of the chair") never holds in
+any of the command's start states, while the other side does in 97 of the 161 commands showing left
+of: a worker's side-less "next to the red chair" was written for demonstrations that ended left of
+it, from starts of which one stood right of it.
+
+Which object a lifted task binds is the words' business in each layout ("the red chair" is block1 in
+one, block0 in the next), so the rule is read through the posterior there: in each other start state
+``s_j``, the probability under the words that a reading of lifted task ``T`` already holds,
+
+    h_j(T) = sum_{i of task T, goal holding in s_j} P(i | words, s_j) / sum_{i of task T} P(i | words, s_j),
+
+and each reading of task ``T`` where the command is followed is weighed by ``prod_j (1 - h_j(T))``
+(renormalised; unchanged where every reading would be ruled out). The language model's
+``other_starts`` setting turns it off.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from groundlang.inference.joint import local_posteriors
+from groundlang.model.interpretations import Interpretation, NoTaskError
+from groundlang.model.world import State
+from groundlang.results import LAYOUT_ERRORS
+
+__all__ = ["held_shares", "given_other_starts", "check_other_starts"]
+
+
+def check_other_starts(method: str, other_starts) -> tuple[State, ...]:
+    """``other_starts`` as a tuple of States; TypeError for anything else (a single State, a string)."""
+    if isinstance(other_starts, (State, str, bytes)) or not isinstance(other_starts, Sequence):
+        raise TypeError(f"{method}: other_starts must be a sequence of States (the command's other start states), "
+                        f"not {type(other_starts).__name__}")
+    for state in other_starts:
+        if not isinstance(state, State):
+            raise TypeError(f"{method}: other_starts holds a {type(state).__name__}, expected States")
+    return tuple(other_starts)
+
+
+def held_shares(learner, command: str, state: State) -> dict[str, float]:
+    """``{lifted task: h(T)}`` for ``command`` said in ``state``: the share of each lifted task's posterior
+    mass, from the words alone, on readings whose goal already holds there (the module docstring). Empty
+    where the state admits no reading or its layout cannot be read (too large to tabulate): it then says
+    nothing. ValueError for a state of a palette the learner was not trained on."""
+    try:
+        learner._check_state("other_starts", command, state)  # a layout too large to tabulate: before grounding
+        obs = learner._command_observation(command, state, held=True)
+        batch = learner.lm.encode([obs], learner.vocab)
+        probs, _ = local_posteriors(batch, learner.lm, learner.globals, use_behaviour=False)
+    except (NoTaskError, *LAYOUT_ERRORS):
+        return {}
+    p = probs[0][: len(obs.interpretations)].double().numpy()
+    held: dict[str, float] = {}
+    total: dict[str, float] = {}
+    for interp, share in zip(obs.interpretations, p):
+        total[interp.lifted] = total.get(interp.lifted, 0.0) + float(share)
+        if len(interp.task.holding) == len(interp.task.goal):
+            held[interp.lifted] = held.get(interp.lifted, 0.0) + float(share)
+    return {task: min(1.0, mass / total[task]) for task, mass in held.items() if total[task] > 0}
+
+
+def given_other_starts(probabilities: np.ndarray, interps: Sequence[Interpretation],
+                       shares: Sequence[dict[str, float]]) -> np.ndarray:
+    """``probabilities`` (one per reading of ``interps``) weighed by the chance that each reading's lifted task
+    holds in none of the other start states (``shares``: :func:`held_shares` of each), renormalised;
+    unchanged where nothing is ruled out or everything would be."""
+    weight = np.ones(len(interps))
+    for share in shares:
+        if share:
+            weight *= np.array([1.0 - share.get(interp.lifted, 0.0) for interp in interps])
+    weighed = np.asarray(probabilities, dtype=float)[: len(interps)] * weight
+    total = float(weighed.sum())
+    if total <= 0 or np.all(weight == 1.0):
+        return probabilities
+    return weighed / total
