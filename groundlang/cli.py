@@ -18,8 +18,8 @@ import sys
 import time
 
 from groundlang.commands import report_beside
-from groundlang.interrupt import (HeldInterrupt, cache_entry_count, close_progress_bars, terminate_as_interrupt,
-                                  what_was_kept)
+from groundlang.interrupt import (HeldInterrupt, cache_entry_count, close_progress_bars, interrupts_ignored,
+                                  terminate_as_interrupt, what_was_kept)
 
 # Order is the order of ``groundlang --help``.
 COMMANDS = ["demo", "check", "show", "parse", "domain", "tasks", "irl", "discover", "train", "follow", "lexicon", "evaluate", "ablate"]
@@ -105,10 +105,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"groundlang {args.command}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        close_progress_bars()
-        kept = what_was_kept(args, started, uses_cache=caching, cache_entries_before=cache_entries_before,
-                             held=isinstance(exc, HeldInterrupt))
-        print(f"groundlang {args.command}: interrupted; {kept}", file=sys.stderr)
+        with interrupts_ignored():
+            close_progress_bars()
+            kept = what_was_kept(args, started, uses_cache=caching, cache_entries_before=cache_entries_before,
+                                 held=isinstance(exc, HeldInterrupt))
+            print(f"groundlang {args.command}: interrupted; {kept}", file=sys.stderr)
         return 130
 
 

@@ -147,8 +147,8 @@ def format_switches(rows: Sequence[SwitchRow]) -> str:
     lines = [f"{'setting':<26} {'default':>9} {'other':>9} {'demo|words, default':>20} {'other':>9} "
              f"{'joint, default':>15} {'other':>9} {'words, default':>15} {'other':>9}  favours"]
     for r in rows:
-        lines.append(f"{r.setting:<26} {_text(r.default):>9} {_text(r.value):>9} {r.on.demonstrations:>20.1f} "
-                     f"{r.off.demonstrations:>9.1f} {r.on.joint:>15.1f} {r.off.joint:>9.1f} {r.on.words:>15.1f} "
+        lines.append(f"{r.setting:<26} {_text(r.default):>9} {_text(r.value):>9} {r.on.demonstrations:>20.2f} "
+                     f"{r.off.demonstrations:>9.2f} {r.on.joint:>15.1f} {r.off.joint:>9.1f} {r.on.words:>15.1f} "
                      f"{r.off.words:>9.1f}  {r.favours}")
     return "\n".join(lines)
 

@@ -24,7 +24,8 @@ import threading
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["terminate_as_interrupt", "deferred_interrupts", "HeldInterrupt", "what_was_kept", "close_progress_bars"]
+__all__ = ["terminate_as_interrupt", "deferred_interrupts", "interrupts_ignored", "HeldInterrupt", "what_was_kept",
+           "close_progress_bars"]
 
 
 class HeldInterrupt(KeyboardInterrupt):
@@ -82,6 +83,22 @@ def deferred_interrupts() -> Iterator[None]:
             signal.signal(sig, handler)
         if received:  # also when the block failed (a save refused): the user asked to stop, and is told so
             raise HeldInterrupt(signal.Signals(received[0]).name)
+
+
+@contextlib.contextmanager
+def interrupts_ignored() -> Iterator[None]:
+    """SIGINT/SIGTERM ignored within the block (main thread only): the report of an interruption is made once,
+    whole, however often Ctrl-C is pressed again while it counts the cache and prints (a second press had
+    printed a second traceback from inside the first's report)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {sig: signal.signal(sig, signal.SIG_IGN) for sig in _SIGNALS}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 def close_progress_bars() -> None:

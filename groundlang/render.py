@@ -170,7 +170,7 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None,
     # Each room's id in its upper-left corner: titles and printed goals name rooms by id.
     for name, r in zip(lay.room_names, lay.rooms):
         ax.text(r.left + 0.55, r.top - 0.55, _named(names)(name), ha="left", va="top", fontsize=max(4.0, 12 * cell),
-                color=(0.15, 0.15, 0.15), alpha=0.75, zorder=2)
+                color=(0.15, 0.15, 0.15), alpha=0.75, zorder=2, parse_math=False)
     outline = [pe.withStroke(linewidth=2.5, foreground="black")]
     pos = trajectory_positions(trajectory)
     moved: list[int] = []
@@ -184,7 +184,7 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None,
             ax.text(pos[-1, k, 0] + END_OFFSET, pos[-1, k, 1] + END_OFFSET, glyph(toy.shape, palette),
                     ha="center", va="center", fontsize=glyph_size * END_SCALE, color=_rgb(toy.colour, palette),
                     family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1, foreground="black")],
-                    zorder=_Z_TOY_END)
+                    zorder=_Z_TOY_END, parse_math=False)  # a palette's glyph is drawn as written ("$x$")
         # Above every start marker: the agent often ends where a toy started (it pushed the toy on).
         ax.plot(pos[-1, 0, 0] - END_OFFSET, pos[-1, 0, 1] - END_OFFSET, "X", ms=marker_size * AGENT_END_SCALE,
                 mfc="black", mec="white",
@@ -192,7 +192,8 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None,
     for toy in state.toys:
         ax.text(toy.x, toy.y, glyph(toy.shape, palette), ha="center", va="center", fontsize=glyph_size,
                 color=_rgb(toy.colour, palette),
-                family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1.5, foreground="black")], zorder=_Z_TOY)
+                family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1.5, foreground="black")], zorder=_Z_TOY,
+                parse_math=False)
     ax.plot(state.agent.x, state.agent.y, "o", ms=marker_size, color="white", mec="black", mew=min(2, 4 * cell),
             zorder=_Z_AGENT)
     ax.text(state.agent.x, state.agent.y, "A", ha="center", va="center", fontsize=18 * cell, weight="bold",
@@ -205,7 +206,7 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None,
     ax.tick_params(labelsize=7)
     ax.set_aspect("equal")
     if title:
-        ax.set_title(title, fontsize=9, wrap=True)
+        ax.set_title(title, fontsize=9, wrap=True, parse_math=False)  # a command says "$" as written
     if legend:
         _legend(ax, state, moved, len(pos) > 1, cell, names)
     return ax
@@ -305,8 +306,14 @@ def ascii_state(state: State, names: Mapping[str, str] | None = None) -> str:
         grid[toy.x, toy.y] = sym
     grid[state.agent.x, state.agent.y] = "A"
     rows = ["".join(grid[:, y]).rstrip() for y in range(lay.height - 1, -1, -1)]
-    legend = [f"legend: # wall, + door, A {shown(lay.movable_names[0])}"]
-    legend += [f"  {s} {shown(name)} ({t.colour} {t.shape}{_added(lay, name)})"
+    door = lay.wall & lay.walkable
+
+    def on_door(x: int, y: int) -> str:  # its symbol hides the door's "+"
+        return ", on a door" if door[x, y] else ""
+
+    agent_door = " (on a door)" if door[state.agent.x, state.agent.y] else ""
+    legend = [f"legend: # wall, + door, A {shown(lay.movable_names[0])}{agent_door}"]
+    legend += [f"  {s} {shown(name)} ({t.colour} {t.shape}{_added(lay, name)}{on_door(t.x, t.y)})"
                for s, name, t in zip(symbols, lay.toy_names, state.toys)]
     legend += [f"  {sym} {shown(name)} ({r.colour}{_added(lay, name)})"
                for sym, name, r in zip(rooms, lay.room_names, lay.rooms)]

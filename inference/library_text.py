@@ -31,7 +31,8 @@ def library_text(tasks, reports, score, settings, num_instances: int, pfs: TaskL
     for task in tasks:
         explained = [r for r in reports if r.task == task.name]
         lines.append(f"% {task}")
-        lines.append(f"%   explains {len(explained)} demonstration(s):")
+        instances = sum(len(r.instances) for r in explained)
+        lines.append(f"%   explains {len(explained)} distinct demonstration(s) ({instances} instance(s)):")
         for r in explained:
             picks = ", ".join(f"{v} {describe_pick(c)}" for v, c in r.singled_out)
             more = f" (+{len(r.instances) - 1} more)" if len(r.instances) > 1 else ""

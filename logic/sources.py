@@ -23,6 +23,7 @@ from importlib.resources import files
 from pathlib import Path
 
 import clingo.ast as ast
+import numpy as np
 
 from .storage import as_path
 
@@ -172,6 +173,77 @@ def _relocate(node, name: str) -> None:
             _relocate(child, name)
 
 
+# A term nested deeper than this is refused. clingo's own printing of a statement recurses in C++ and ends the
+# process (a segfault, no message) at some ten thousand levels (x(1+1+...) 20,000 deep); the Python walk
+# below stops at its recursion limit, about a thousand.
+MAX_TERM_DEPTH = 1000
+# A statement shorter than this (characters) cannot nest a term MAX_TERM_DEPTH deep: each level takes at least
+# two characters (``f(``, ``1+``), so only longer ones are measured after parsing.
+_MEASURED_STATEMENT = 2 * MAX_TERM_DEPTH
+# Before parsing: a statement with more operators than this is refused unparsed. Freeing the parse of a chain
+# 1+1+... 100,000 long ends the process in clingo's C++ too; 10,000 is freed safely and then refused as nested
+# too deeply. Characters that are operators of a term (and of little else).
+_MAX_STATEMENT_OPERATORS = 10 * MAX_TERM_DEPTH
+_OPERATORS = np.frombuffer(b"+-*/\\^&|?~", dtype=np.uint8)
+_SPACES = np.frombuffer(b" \t\r\n\f\v", dtype=np.uint8)
+_BEFORE_NEGATION = np.frombuffer(b"(,;:", dtype=np.uint8)
+
+
+def _nesting_refused_unparsed(name: str, scrubbed: str) -> None:
+    """AspSyntaxError where the text (comments and strings blanked) nests parentheses deeper than
+    MAX_TERM_DEPTH, or puts more than _MAX_STATEMENT_OPERATORS operators in one statement: vectorised over
+    the characters, before clingo parses (and later frees) a term its C++ recursion cannot."""
+    codes = np.frombuffer(scrubbed.encode("latin-1", "replace"), dtype=np.uint8)
+    depth = np.cumsum((codes == ord("(")).astype(np.int32) - (codes == ord(")")))
+    deep = np.flatnonzero(depth > MAX_TERM_DEPTH)
+    where, what = None, ""
+    if deep.size:
+        where, what = int(deep[0]), f"more than {MAX_TERM_DEPTH} levels of parentheses"
+    else:
+        dot = codes == ord(".")
+        # A statement ends at a full stop that is not part of an interval's "..".
+        ends = dot & ~np.concatenate([[False], dot[:-1]]) & ~np.concatenate([dot[1:], [False]])
+        statement = np.cumsum(ends) - ends
+        # A minus sign right after "(", ",", ";" or ":" negates a number ("p(-1;-2;...)", a long flat pool):
+        # not counted. Spaces are skipped to find the character before.
+        shown = np.flatnonzero(~np.isin(codes, _SPACES))
+        visible = codes[shown]
+        before = np.concatenate([[ord(",")], visible[:-1]])
+        negation = (visible == ord("-")) & np.isin(before, _BEFORE_NEGATION)
+        operators = shown[np.isin(visible, _OPERATORS) & ~negation]
+        if operators.size > _MAX_STATEMENT_OPERATORS:
+            counts = np.bincount(statement[operators])
+            if counts.max() > _MAX_STATEMENT_OPERATORS:
+                first = operators[statement[operators] == int(np.argmax(counts))]
+                where = int(first[_MAX_STATEMENT_OPERATORS])
+                what = f"more than {_MAX_STATEMENT_OPERATORS} operators in one statement"
+    if where is not None:
+        line = scrubbed.count("\n", 0, where) + 1
+        raise AspSyntaxError(f"{name}:{line}: a term nested too deeply ({what})")
+
+
+def _nested_beyond(node, limit: int) -> bool:
+    """Whether an AST nests deeper than ``limit``, walked with a stack of its own (no recursion, in Python or
+    in clingo's printer)."""
+    stack = [(node, 0)]
+    while stack:
+        item, depth = stack.pop()
+        if depth > limit:
+            return True
+        if isinstance(item, ast.AST):
+            stack.extend((getattr(item, key), depth + 1) for key in item.child_keys)
+        elif isinstance(item, (ast.ASTSequence, list, tuple)):
+            stack.extend((child, depth) for child in item)
+    return False
+
+
+def _span(stm, line_starts: list[int]) -> int:
+    """How many characters of the source text a statement spans (from its location)."""
+    b, e = stm.location.begin, stm.location.end
+    at = lambda p: line_starts[min(p.line, len(line_starts)) - 1] + p.column  # noqa: E731
+    return at(e) - at(b)
+
+
 def parse_source(source: Source, allow_scripts: bool) -> list:
     """Parse one source into AST statements, refusing scripts and includes.
 
@@ -215,6 +287,7 @@ def _parsed(name: str, text: str, allow_scripts: bool) -> tuple:
             f"{source.name}:{line}:{column}: unexpected character {m.group(0)!r}; "
             "names and operators are ASCII (other text only in comments and strings)"
         )
+    _nesting_refused_unparsed(source.name, scrubbed)
     messages: list[str] = []
     statements: list = []
     try:
@@ -225,7 +298,11 @@ def _parsed(name: str, text: str, allow_scripts: bool) -> tuple:
         # clingo's "<string>:2:1-2: error: syntax error, ...": the CLI's line says "error:" already
         text = re.sub(r"(<string>:[\d:-]+): error: ", r"\1: ", one_line(" ".join(messages))) or "syntax error"
         raise AspSyntaxError(text.replace("<string>", source.name)) from None
+    line_starts = [0] + [m.end() for m in re.finditer("\n", source.text)]
     for stm in statements:
+        if _span(stm, line_starts) > _MEASURED_STATEMENT and _nested_beyond(stm, MAX_TERM_DEPTH):
+            raise AspSyntaxError(f"{source.name}:{stm.location.begin.line}: a term nested too deeply (more than "
+                                 f"{MAX_TERM_DEPTH} levels of parentheses or operators)")
         if stm.ast_type == ast.ASTType.Minimize:
             # Optimisation keeps only the best answer sets, and every program here is read for all of them
             # (a library's groundings, a PF's table): its groundings would silently go missing.

@@ -96,7 +96,7 @@ fig.tight_layout()
 # %% [markdown]
 # ## Does the posterior sharpen as training data grows?
 #
-# Train on the first *n* commands of every task (same demonstrations) and ask, in the three novel layouts, for the probability of the right goal for each task's first command. On this tiny corpus the curve is measured, not assumed: it need not be monotone (a second and third phrasing per task first spreads the verbs' meaning before all four pin it down).
+# Train on the first *n* commands of every task (same demonstrations) and ask, in the three novel layouts, for the probability of the right goal for each task's first command. On this tiny corpus the curve is measured, not assumed: it need not be monotone (a second and third phrasing per task first spreads the verbs' meaning before all four pin it down; the full run's three phrasings show it, the quick run, `GROUNDLANG_QUICK=1`, skips three and rises throughout).
 
 # %%
 from groundlang.evaluation import translate_goal

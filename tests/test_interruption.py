@@ -114,6 +114,33 @@ def test_cli_reports_what_an_interrupted_train_kept(tmp_path, monkeypatch, capsy
     assert not (tmp_path / "model").exists()
 
 
+def test_interrupting_again_while_the_interruption_is_reported_says_it_once(tmp_path, monkeypatch, capsys):
+    """A second Ctrl-C while the report counted a large cache had printed two tracebacks."""
+    from groundlang import cli
+    from groundlang.learner import Learner
+
+    monkeypatch.setenv("GROUNDLANG_CACHE", str(tmp_path / "cache"))
+
+    def fit(self, *args, **kwargs):
+        _signal_self(signal.SIGINT)
+        raise AssertionError("SIGINT did not interrupt")
+
+    reported = cli.what_was_kept
+
+    def counted_while_interrupted(*args, **kwargs):
+        _signal_self(signal.SIGINT)  # pressed again, and once more by SIGTERM
+        _signal_self(signal.SIGTERM)
+        return reported(*args, **kwargs)
+
+    monkeypatch.setattr(Learner, "fit", fit)
+    monkeypatch.setattr(cli, "what_was_kept", counted_while_interrupted)
+    before = (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
+    code = main(["--quiet", "train", str(EXAMPLES), "--palette", "sokoban", "-o", str(tmp_path / "model")])
+    assert code == 130
+    assert capsys.readouterr().err == f"groundlang train: interrupted; nothing written to {tmp_path / 'model'}\n"
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before  # given back
+
+
 def test_what_was_kept_describes_each_output(tmp_path):
     import groundlang.inference.likelihoods  # noqa: F401  entries are counted once the cache's module is loaded
 

@@ -48,6 +48,17 @@ def test_ascii_colliding_shape_initials_use_digits():
     assert "  0 block0 (yellow star)" in rows and "  1 block1 (red smiley)" in rows
 
 
+def test_ascii_legend_says_which_object_hides_a_door():
+    """The star and the agent drawn on door cells had hidden their "+", and looked as if in a wall."""
+    s = parse_state("room,1,0,4,4,0 room,5,4,4,8,0 door,4,2,4,2 block,12,0,4,2 agent,2,2", "sokoban")
+    rows = ascii_state(s).splitlines()
+    assert rows[2] == "#bAbSggg#" and "  S block0 (yellow star, on a door)" in rows
+    assert rows[rows.index("  S block0 (yellow star, on a door)") - 1] == "legend: # wall, + door, A agent0"
+    moved = ascii_state(s.with_positions(np.array([[4, 2], [2, 2]]))).splitlines()
+    assert moved[2] == "#bSbAggg#"
+    assert "legend: # wall, + door, A agent0 (on a door)" in moved and "  S block0 (yellow star)" in moved
+
+
 def test_every_palette_shape_has_a_glyph():
     from groundlang.logic.palette_files import palette_names
 
@@ -259,3 +270,18 @@ def test_ascii_rooms_of_one_initial_are_told_apart():
     assert same[-3:] == ["  a room0 (red)", "  b room1 (red)", "  c room2 (green)"]
     apart = ascii_state(parse_bdm_state(line("red", "blue"))[0])
     assert "  r room0 (red)\n  b room1 (blue)\n  g room2 (green)" in apart and "#bbb#ggg#" in apart
+
+
+def test_a_glyph_or_a_title_with_dollar_signs_is_drawn_as_written(tmp_path):
+    """``glyph(ball, "$^$")`` had been read as matplotlib mathtext: a one-line error naming neither, after the
+    text picture; ``"$x$"`` drawn as math."""
+    pytest.importorskip("matplotlib")
+    source = (Path(__file__).parents[1] / "logic" / "palettes" / "sokoban.lp").read_text(encoding="utf-8")
+    palette_file = tmp_path / "dollars.lp"
+    palette_file.write_text(source + 'value(shape, 5, ball).\nglyph(ball, "$^$").\n', encoding="utf-8")
+    palette = get_palette(str(palette_file))
+    state = parse_state("room,1,0,4,4,0 block,12,5,2,2 agent,1,1", palette)
+    assert glyph("ball", palette) == "$^$"
+    for suffix in (".png", ".svg"):
+        out = save_picture(tmp_path / f"d{suffix}", state, title="go to the $x$ room")
+        assert out.stat().st_size > 0

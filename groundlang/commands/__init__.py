@@ -216,13 +216,12 @@ def words_beside_checked(library):
     return library
 
 
-def add_time_limit_option(parser) -> None:
+def add_time_limit_option(parser, help: str = "stop grounding/solving the task library in a layout after this long "
+                                               "(default 10; raise it for a very large layout)") -> None:
     """``--time-limit SECONDS`` for a command that grounds a library in layouts it reads (train, follow, evaluate,
-    and check, parse and discover, which read a user's .lp files): the CLI names it beside the message of a
-    grounding that did not finish in time."""
-    parser.add_argument("--time-limit", type=positive_seconds, default=None, metavar="SECONDS",
-                        help="stop grounding/solving the task library in a layout after this long (default 10; "
-                             "raise it for a very large layout)")
+    and check, parse and discover, which read a user's .lp files; ``help`` says what it limits there): the CLI
+    names it beside the message of a grounding that did not finish in time."""
+    parser.add_argument("--time-limit", type=positive_seconds, default=None, metavar="SECONDS", help=help)
 
 
 def time_limit_given(args: argparse.Namespace) -> dict:

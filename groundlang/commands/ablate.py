@@ -65,7 +65,7 @@ def register(subparsers) -> None:
                    help="loo: unseen commands (held-out remainder below the full size); train: training commands (default loo)")
     p.add_argument("--seed", type=seed, default=None, help="seed of the training subsets (default 0)")
     p.add_argument("--workers", type=positive_int, default=None, help="folds in parallel (processes; no more than the folds or the cores; default 1)")
-    p.add_argument("--ray", metavar="ADDRESS", help="run cells on Ray ('local', 'auto' or host:port)")
+    p.add_argument("--ray", metavar="ADDRESS", help="run cells on a Ray cluster ('auto', 'local' or an address, host:port)")
     p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations that do not replay under the dynamics instead of stopping")
     p.add_argument("--limit", type=positive_int, help="score only the first N instances of each cell")
     add_language_model_settings(p)

@@ -17,7 +17,10 @@ DEMO_LAYOUT = "novel_a.state"
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("demo", help="train on the shipped example corpus and follow a command in a new layout")
+    p = subparsers.add_parser("demo", help="train on the shipped example corpus and follow a command in a new layout",
+                              description="Train the default model on the example corpus the package ships (24 "
+                                          "commands with demonstrations), follow --command in a layout training "
+                                          "never showed, print its readings and the steps taken, and draw them to --out.")
     p.add_argument("--out", default="demo.png", type=output_path, metavar="PNG", help="picture to write (default demo.png)")
     p.add_argument("--command", dest="demo_command", default=DEMO_COMMAND,
                    help=f"the command to follow (default {DEMO_COMMAND!r})")

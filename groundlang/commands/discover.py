@@ -41,7 +41,8 @@ def register(subparsers) -> None:
                         "and its colour and shape families tell objects apart in the report and for --restrict, "
                         "besides pfs.lp's (repeatable; load it beside the written library)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
-    add_time_limit_option(p)
+    add_time_limit_option(p, "stop grounding/solving the --pfs files in a layout after this long (default 10; "
+                             "only with --pfs: the package's own PFs are not grounded under it)")
     p.set_defaults(func=run)
 
 

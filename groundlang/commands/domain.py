@@ -14,7 +14,7 @@ def register(subparsers) -> None:
                    help="task library .lp file (repeatable; default: groundlang's tasks.lp)" + LIBRARY_NAMES)
     p.add_argument("--allow-scripts", action="store_true",
                    help="let library files run #script blocks (only for files you trust)")
-    p.add_argument("--time-limit", type=positive_seconds, default=10.0,
+    p.add_argument("--time-limit", type=positive_seconds, default=10.0, metavar="SECONDS",
                    help="stop grounding/solving the library after this long (default 10)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     p.set_defaults(func=run)

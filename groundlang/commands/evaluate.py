@@ -56,8 +56,8 @@ def register(subparsers) -> None:
     add_lexicon_option(p)
     add_time_limit_option(p)
     add_em_acceleration_option(p)
-    p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes; no more than the folds or the cores)")
-    p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address)")
+    p.add_argument("--workers", type=positive_int, default=1, help="folds in parallel (processes; no more than the folds or the cores; default 1)")
+    p.add_argument("--ray", metavar="ADDRESS", help="run folds on a Ray cluster ('auto', 'local' or an address, host:port)")
     p.add_argument("--skip-inconsistent", action="store_true", help="skip demonstrations (or .bdm pairs) that do not replay under the dynamics, and .bdm pairs whose start state admits no task, instead of stopping")
     p.add_argument("--limit", type=positive_int, help="score only the first N held-out instances (a *.txt corpus with labels; a .bdm "
                    "corpus is scored by its test pairs, every one)")

@@ -39,7 +39,8 @@ def register(subparsers) -> None:
                         "mine.lp) join the parser's, as a learner trained with it reads them" + LIBRARY_NAMES)
     p.add_argument("--palette", help="a palette (a name or a .lp file): its colour and shape names join the "
                                      "parser's words, as a learner trained on states of it reads them")
-    add_time_limit_option(p)
+    add_time_limit_option(p, "stop grounding/solving the --library files after this long (default 10): parse reads "
+                             "no layout, only their words and their checks")
     p.set_defaults(func=run)
 
 
