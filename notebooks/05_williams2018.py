@@ -202,3 +202,34 @@ for phrase in PHRASES:
         print(f"    layout {k}: {lifted} {p_lifted:.2f}; most probable interpretation {format_goal(best.goal)} "
               f"({p:.2f}), binding constraint {described}")
     print(f"    its pairs show: {shown_task(c)}")
+
+# %% [markdown]
+# ### What none of its start states already shows (`other_starts`)
+#
+# A command given in several start states asks for what holds in none of them (`groundlang.other_starts`; README, "What none of its start states already shows"). `evaluate` follows each test command from one start with the others given. Below: the first command about a chair that names no side (among the first 60, in 8x8 layouts) whose share on one lifted task in its first layout falls by at least 0.1 once its other start states are given: its posterior alone, and given them, beside what its pairs show.
+
+# %%
+def changed_by_other_starts(phrase, limit=60):
+    sided = ("left", "right", "west", "east", "north", "south", "unless", "not")
+    candidates = [c for c in commands if has(c, phrase) and not any(w in c.text.lower().split() for w in sided)
+                  and all(p.start.layout.width <= 9 for p in c.pairs)]
+    for c in candidates[:limit]:
+        first, others = c.pairs[0].start, [p.start for p in c.pairs[1:]]
+        alone = learner.posterior(c.text, first)
+        given = learner.posterior(c.text, first, other_starts=others)
+        after = given.lifted_tasks()
+        if any(share - after.get(task, 0.0) >= 0.1 for task, share in alone.lifted_tasks().items()):
+            return c, alone, given
+    return None
+
+
+found = changed_by_other_starts("chair")
+if found is None:
+    print("no such command here: in these layouts no start already shows a reading of the others")
+else:
+    c, alone, given = found
+    print(f"{c.text!r} ({c.path.name}, line {c.line}); its pairs show: {shown_task(c)}")
+    print("\nin its first layout, from the words alone:")
+    print(alone.table(4))
+    print("\ngiven its other two start states:")
+    print(given.table(4))
