@@ -172,6 +172,10 @@ def learner_from_state(cls, state: dict, where: str):
         raise ValueError(f"the vocabulary lacks the lifted tasks {sorted(missing)} of the saved task library")
     if state.get("end_habits") is not None:
         learner.habits = EndHabits.from_json(state["end_habits"])
+        if unknown := learner.habits.unknown_to(learner.library):
+            raise ValueError(f"end_habits names {', '.join(repr(n[:80]) for n in unknown[:3])}"
+                             f"{f' and {len(unknown) - 3} more' if len(unknown) > 3 else ''}: no goal of the saved "
+                             "task library is made of it")
     if state.get("globals") is not None:
         learner.globals = dict(state["globals"])
     return learner

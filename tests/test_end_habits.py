@@ -278,6 +278,9 @@ def test_a_habits_setting_reaches_where_following_ends_and_is_saved(williams_com
     # each name costs a pass over the sets per goal followed: a table of very many names is refused
     ([[[f"r{i}" for i in range(2001)], 1]], "names 2001 relations and bound habits, more than the 2000"),
     ([[["agentInRoom\n", "toyInRoom"], 5]], "is not a relation's name"),  # $ would match before the newline
+    # well formed, but no goal of the saved library is made of them: a forged table, not one training counted
+    ([[["nonsense"], 3]], "end_habits names 'nonsense': no goal of the saved task library is made of it"),
+    ([[["agentInRoom[1]=toyFlies[1]", "agentInRoom"], 3]], "end_habits names 'agentInRoom\\[1\\]=toyFlies\\[1\\]'"),
 ])
 def test_a_damaged_table_in_a_saved_model_is_refused(trained, tmp_path, value, expected):
     directory = tmp_path / "model"
