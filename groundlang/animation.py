@@ -19,6 +19,7 @@ import numpy as np
 from groundlang.logic.atoms import format_goal
 from groundlang.logic.storage import as_path
 from groundlang.model.world import State
+from groundlang.render import as_written
 
 __all__ = ["save_animation", "animate_follow", "posterior_bar_chart", "POSTERIOR_KINDS"]
 
@@ -124,11 +125,11 @@ def posterior_bar_chart(posterior, kind: str = "goals", top: int = 8, ax=None, t
         ax = fig.add_subplot(1, 1, 1)
     y = np.arange(len(labels))
     ax.barh(y, probs, color="tab:blue")
-    ax.set_yticks(y, labels, fontsize=8)
+    ax.set_yticks(y, [as_written(label) for label in labels], fontsize=8)
     ax.invert_yaxis()
     ax.set_xlim(0, 1)
     ax.set_xlabel("posterior probability")
     for yi, p in zip(y, probs):
         ax.text(min(p, 0.85) + 0.01, yi, f"{p:.3f}", va="center", fontsize=7)
-    ax.set_title(title if title is not None else f"{posterior.command!r}: {kind}", fontsize=9)
+    ax.set_title(as_written(title if title is not None else f"{posterior.command!r}: {kind}"), fontsize=9)
     return ax

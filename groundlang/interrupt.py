@@ -87,18 +87,18 @@ def deferred_interrupts() -> Iterator[None]:
 
 @contextlib.contextmanager
 def interrupts_ignored() -> Iterator[None]:
-    """SIGINT/SIGTERM ignored within the block (main thread only): the report of an interruption is made once,
-    whole, however often Ctrl-C is pressed again while it counts the cache and prints (a second press had
-    printed a second traceback from inside the first's report)."""
+    """SIGINT ignored within the block (main thread only): the report of an interruption is made once, whole,
+    however often Ctrl-C is pressed again while it counts the cache and prints (a second press had printed a
+    second traceback from inside the first's report). SIGTERM keeps its handler: ``kill`` still ends a report
+    that takes too long (a cache of millions of entries)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {sig: signal.signal(sig, signal.SIG_IGN) for sig in _SIGNALS}
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         yield
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+        signal.signal(signal.SIGINT, previous)
 
 
 def close_progress_bars() -> None:

@@ -231,8 +231,10 @@ class Learner:
             reach = out_of_reach(probs, goals, out)
             probs = given_achievable(probs, goals, masks, out)
         if self.lm.other_starts and other_starts and not held:
-            probs = given_other_starts(probs, obs.interpretations,
-                                       [held_shares(self, command, other) for other in other_starts])
+            # The start itself, given again, says nothing more (its held readings are set aside already).
+            probs = given_other_starts(probs, obs.interpretations, [
+                held_shares(self, command, other, f"posterior: other_starts[{k}]")
+                for k, other in enumerate(other_starts) if other != state])
         post = Posterior(command, list(obs.interpretations), probs, list(obs.readings), reading_probs,
                          out_of_reach=reach[0], out_of_reach_goal=reach[1])
         post.groups = group_goals(post.goals(), space, self.library, masks)
@@ -254,7 +256,8 @@ class Learner:
         ``unknown_words`` that left the words undecided; :meth:`clarify` takes the answer. It asks too where the
         words most probably ask, as surely, for what already holds (``already_true``), or say only what not to
         do (no choices): :mod:`groundlang.held_question`. ``other_starts``: the other states the command
-        was given in (see :meth:`posterior`)."""
+        was given in (see :meth:`posterior`); they weigh the reading acted on, while whether what already
+        holds is meant, and an answer to a question (:meth:`clarify`), are read in ``state`` alone."""
         check_count("follow", "max_steps", max_steps)
         check_threshold("follow", "min_confidence", min_confidence)
         self._require_fitted()

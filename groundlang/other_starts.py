@@ -22,6 +22,7 @@ and each reading of task ``T`` where the command is followed is weighed by ``pro
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 
 import numpy as np
@@ -33,29 +34,33 @@ from groundlang.results import LAYOUT_ERRORS
 
 __all__ = ["held_shares", "given_other_starts", "check_other_starts"]
 
+logger = logging.getLogger(__name__)
+
 
 def check_other_starts(method: str, other_starts) -> tuple[State, ...]:
     """``other_starts`` as a tuple of States; TypeError for anything else (a single State, a string)."""
     if isinstance(other_starts, (State, str, bytes)) or not isinstance(other_starts, Sequence):
         raise TypeError(f"{method}: other_starts must be a sequence of States (the command's other start states), "
                         f"not {type(other_starts).__name__}")
-    for state in other_starts:
-        if not isinstance(state, State):
-            raise TypeError(f"{method}: other_starts holds a {type(state).__name__}, expected States")
+    for k, other in enumerate(other_starts):
+        if not isinstance(other, State):
+            raise TypeError(f"{method}: other_starts[{k}] is a {type(other).__name__}, expected a State")
     return tuple(other_starts)
 
 
-def held_shares(learner, command: str, state: State) -> dict[str, float]:
+def held_shares(learner, command: str, state: State, where: str = "other_starts") -> dict[str, float]:
     """``{lifted task: h(T)}`` for ``command`` said in ``state``: the share of each lifted task's posterior
     mass, from the words alone, on readings whose goal already holds there (the module docstring). Empty
     where the state admits no reading or its layout cannot be read (too large to tabulate): it then says
-    nothing. ValueError for a state of a palette the learner was not trained on."""
+    nothing, and a warning says so. ValueError, naming ``where``, for a state of a palette the learner was
+    not trained on."""
     try:
-        learner._check_state("other_starts", command, state)  # a layout too large to tabulate: before grounding
+        learner._check_state(where, command, state)  # a layout too large to tabulate: before grounding
         obs = learner._command_observation(command, state, held=True)
         batch = learner.lm.encode([obs], learner.vocab)
         probs, _ = local_posteriors(batch, learner.lm, learner.globals, use_behaviour=False)
-    except (NoTaskError, *LAYOUT_ERRORS):
+    except (NoTaskError, *LAYOUT_ERRORS) as exc:
+        logger.warning("%s: set aside, it says nothing of what the command asks: %s", where, exc)
         return {}
     p = probs[0][: len(obs.interpretations)].double().numpy()
     held: dict[str, float] = {}

@@ -15,7 +15,7 @@ import numpy as np
 from groundlang.logic.storage import as_path
 from groundlang.model.world import State
 
-__all__ = ["glyph", "cell_inches", "draw_state", "picture_title", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
+__all__ = ["glyph", "as_written", "cell_inches", "draw_state", "picture_title", "picture_format", "check_picture_destination", "save_picture", "ascii_state", "trajectory_positions"]
 
 # Half an inch a cell up to this many inches a side, then smaller cells: a 1000 x 1000 room at half an
 # inch a cell was a 50,000-pixel-square canvas (75 GiB). Ticks are labelled only on small grids.
@@ -25,6 +25,13 @@ MAX_TICKED_CELLS = 40
 _WALL = (0.18, 0.18, 0.2)
 _DOOR = (0.93, 0.89, 0.80)
 _OUTSIDE = (1.0, 1.0, 1.0)
+
+
+def as_written(text: str) -> str:
+    """``text`` for matplotlib to draw as written: its dollar signs escaped, so that none opens mathtext (a
+    palette's glyph "$^$", a command "go to the $x$ room" in a title, which had ended a drawing with a
+    mathtext parse error; ``parse_math=False`` is not enough where a title is wrapped, measured as math)."""
+    return text.replace("$", r"\$")
 
 
 def glyph(shape: str, palette) -> str:
@@ -169,8 +176,8 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None,
     )
     # Each room's id in its upper-left corner: titles and printed goals name rooms by id.
     for name, r in zip(lay.room_names, lay.rooms):
-        ax.text(r.left + 0.55, r.top - 0.55, _named(names)(name), ha="left", va="top", fontsize=max(4.0, 12 * cell),
-                color=(0.15, 0.15, 0.15), alpha=0.75, zorder=2, parse_math=False)
+        ax.text(r.left + 0.55, r.top - 0.55, as_written(_named(names)(name)), ha="left", va="top", fontsize=max(4.0, 12 * cell),
+                color=(0.15, 0.15, 0.15), alpha=0.75, zorder=2)
     outline = [pe.withStroke(linewidth=2.5, foreground="black")]
     pos = trajectory_positions(trajectory)
     moved: list[int] = []
@@ -181,19 +188,18 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None,
             toy = state.toys[k - 1]
             ax.plot(pos[:, k, 0], pos[:, k, 1], "--", color=_rgb(toy.colour, palette), lw=2.5,
                     path_effects=outline, zorder=_Z_PATH)
-            ax.text(pos[-1, k, 0] + END_OFFSET, pos[-1, k, 1] + END_OFFSET, glyph(toy.shape, palette),
+            ax.text(pos[-1, k, 0] + END_OFFSET, pos[-1, k, 1] + END_OFFSET, as_written(glyph(toy.shape, palette)),
                     ha="center", va="center", fontsize=glyph_size * END_SCALE, color=_rgb(toy.colour, palette),
                     family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1, foreground="black")],
-                    zorder=_Z_TOY_END, parse_math=False)  # a palette's glyph is drawn as written ("$x$")
+                    zorder=_Z_TOY_END)
         # Above every start marker: the agent often ends where a toy started (it pushed the toy on).
         ax.plot(pos[-1, 0, 0] - END_OFFSET, pos[-1, 0, 1] - END_OFFSET, "X", ms=marker_size * AGENT_END_SCALE,
                 mfc="black", mec="white",
                 mew=min(1.5, 3 * cell), zorder=_Z_AGENT_END)
     for toy in state.toys:
-        ax.text(toy.x, toy.y, glyph(toy.shape, palette), ha="center", va="center", fontsize=glyph_size,
+        ax.text(toy.x, toy.y, as_written(glyph(toy.shape, palette)), ha="center", va="center", fontsize=glyph_size,
                 color=_rgb(toy.colour, palette),
-                family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1.5, foreground="black")], zorder=_Z_TOY,
-                parse_math=False)
+                family="DejaVu Sans", path_effects=[pe.withStroke(linewidth=1.5, foreground="black")], zorder=_Z_TOY)
     ax.plot(state.agent.x, state.agent.y, "o", ms=marker_size, color="white", mec="black", mew=min(2, 4 * cell),
             zorder=_Z_AGENT)
     ax.text(state.agent.x, state.agent.y, "A", ha="center", va="center", fontsize=18 * cell, weight="bold",
@@ -206,7 +212,7 @@ def draw_state(state: State, ax=None, trajectory=None, title: str | None = None,
     ax.tick_params(labelsize=7)
     ax.set_aspect("equal")
     if title:
-        ax.set_title(title, fontsize=9, wrap=True, parse_math=False)  # a command says "$" as written
+        ax.set_title(as_written(title), fontsize=9, wrap=True)
     if legend:
         _legend(ax, state, moved, len(pos) > 1, cell, names)
     return ax

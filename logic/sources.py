@@ -181,45 +181,57 @@ MAX_TERM_DEPTH = 1000
 # two characters (``f(``, ``1+``), so only longer ones are measured after parsing.
 _MEASURED_STATEMENT = 2 * MAX_TERM_DEPTH
 # Before parsing: a statement with more operators than this is refused unparsed. Freeing the parse of a chain
-# 1+1+... 100,000 long ends the process in clingo's C++ too; 10,000 is freed safely and then refused as nested
-# too deeply. Characters that are operators of a term (and of little else).
-_MAX_STATEMENT_OPERATORS = 10 * MAX_TERM_DEPTH
+# 1+1+... (or 1..1..., or f(f(...))) 100,000 long ends the process in clingo's C++ too; 70,000 is freed safely,
+# and a chain under this bound is refused after parsing, as nested too deeply. A flat statement of as many
+# operators (a disjunction of 30,000 atoms) is refused too: split it. Characters that are operators of a term;
+# an interval's ".." counts as one.
+_MAX_STATEMENT_OPERATORS = 30 * MAX_TERM_DEPTH
 _OPERATORS = np.frombuffer(b"+-*/\\^&|?~", dtype=np.uint8)
 _SPACES = np.frombuffer(b" \t\r\n\f\v", dtype=np.uint8)
 _BEFORE_NEGATION = np.frombuffer(b"(,;:", dtype=np.uint8)
+# A #script block's body is another language's: its parentheses and operators are not ASP's (a Python "%"
+# had been blanked as a comment, leaving "(" open).
+_SCRIPT = re.compile(r"#script\b.*?#end\s*\.", re.DOTALL)
 
 
 def _nesting_refused_unparsed(name: str, scrubbed: str) -> None:
-    """AspSyntaxError where the text (comments and strings blanked) nests parentheses deeper than
-    MAX_TERM_DEPTH, or puts more than _MAX_STATEMENT_OPERATORS operators in one statement: vectorised over
-    the characters, before clingo parses (and later frees) a term its C++ recursion cannot."""
+    """AspSyntaxError where a statement of the text (comments, strings and script bodies blanked) nests
+    parentheses deeper than MAX_TERM_DEPTH, or holds more than _MAX_STATEMENT_OPERATORS operators: vectorised
+    over the characters, before clingo parses (and later frees) a term its C++ recursion cannot."""
+    scrubbed = _SCRIPT.sub(_blank, scrubbed)
     codes = np.frombuffer(scrubbed.encode("latin-1", "replace"), dtype=np.uint8)
+    dot = codes == ord(".")
+    before_dot = np.concatenate([[False], dot[:-1]])
+    after_dot = np.concatenate([dot[1:], [False]])
+    # A statement ends at a full stop that is not part of an interval's "..".
+    ends = dot & ~before_dot & ~after_dot
+    statement = np.cumsum(ends) - ends
+    # Parentheses counted from each statement's start: one left open by a broken statement does not carry over.
     depth = np.cumsum((codes == ord("(")).astype(np.int32) - (codes == ord(")")))
+    depth -= np.concatenate([[0], depth[np.flatnonzero(ends)]])[statement]
     deep = np.flatnonzero(depth > MAX_TERM_DEPTH)
     where, what = None, ""
     if deep.size:
-        where, what = int(deep[0]), f"more than {MAX_TERM_DEPTH} levels of parentheses"
+        where, what = int(deep[0]), f"a term nested too deeply (more than {MAX_TERM_DEPTH} levels of parentheses)"
     else:
-        dot = codes == ord(".")
-        # A statement ends at a full stop that is not part of an interval's "..".
-        ends = dot & ~np.concatenate([[False], dot[:-1]]) & ~np.concatenate([dot[1:], [False]])
-        statement = np.cumsum(ends) - ends
         # A minus sign right after "(", ",", ";" or ":" negates a number ("p(-1;-2;...)", a long flat pool):
         # not counted. Spaces are skipped to find the character before.
         shown = np.flatnonzero(~np.isin(codes, _SPACES))
         visible = codes[shown]
         before = np.concatenate([[ord(",")], visible[:-1]])
         negation = (visible == ord("-")) & np.isin(before, _BEFORE_NEGATION)
-        operators = shown[np.isin(visible, _OPERATORS) & ~negation]
+        interval = dot & after_dot  # the first dot of each ".."
+        operators = np.union1d(shown[np.isin(visible, _OPERATORS) & ~negation], np.flatnonzero(interval))
         if operators.size > _MAX_STATEMENT_OPERATORS:
             counts = np.bincount(statement[operators])
             if counts.max() > _MAX_STATEMENT_OPERATORS:
                 first = operators[statement[operators] == int(np.argmax(counts))]
                 where = int(first[_MAX_STATEMENT_OPERATORS])
-                what = f"more than {_MAX_STATEMENT_OPERATORS} operators in one statement"
+                what = (f"a statement of more than {_MAX_STATEMENT_OPERATORS} operators: a term nested too deeply, "
+                        "or too long a statement to parse safely (split it)")
     if where is not None:
         line = scrubbed.count("\n", 0, where) + 1
-        raise AspSyntaxError(f"{name}:{line}: a term nested too deeply ({what})")
+        raise AspSyntaxError(f"{name}:{line}: {what}")
 
 
 def _nested_beyond(node, limit: int) -> bool:

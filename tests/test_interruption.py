@@ -128,8 +128,8 @@ def test_interrupting_again_while_the_interruption_is_reported_says_it_once(tmp_
     reported = cli.what_was_kept
 
     def counted_while_interrupted(*args, **kwargs):
-        _signal_self(signal.SIGINT)  # pressed again, and once more by SIGTERM
-        _signal_self(signal.SIGTERM)
+        _signal_self(signal.SIGINT)  # pressed again, twice
+        _signal_self(signal.SIGINT)
         return reported(*args, **kwargs)
 
     monkeypatch.setattr(Learner, "fit", fit)

@@ -52,15 +52,17 @@ def test_train_names_the_demonstration_file_whose_layout_cannot_be_keyed(tmp_pat
     assert not Path(tmp_path / "m").exists()
 
 
-def test_check_lists_the_layouts_train_could_not_key_and_fails(tmp_path, capsys):
-    """check said nothing of such a layout and exited 0; train then stopped at it."""
+def test_check_warns_of_the_layouts_train_may_not_key(tmp_path, capsys):
+    """check said nothing of such a layout; train then stopped at it. A warning, not a failure: where the toys a
+    likelihood must move fit a key, train reads the layout in a relevance abstraction."""
     folder, source = _corpus_with_a_crowded_layout(tmp_path)
-    assert main(["--quiet", "check", str(folder), "--palette", "sokoban"]) == 1
+    assert main(["--quiet", "check", str(folder), "--palette", "sokoban"]) == 0
     out, err = capsys.readouterr()
-    assert "layouts whose states cannot be keyed: 1\n" in out
+    assert "layouts whose states cannot all be keyed: 1\n" in out
     listed = [line.strip() for line in out.splitlines() if "cannot be keyed in 64 bits" in line]
     assert len(listed) == 1 and listed[0].startswith(f"{source}: 19 moving objects")
-    assert err.strip() == "groundlang check: 1 layouts whose states cannot be keyed (train refuses them)"
+    assert err.strip() == ("groundlang check: warning: 1 layouts whose states cannot all be keyed in 64 bits; train "
+                           "refuses a demonstration there where its likelihood needs every object to move")
 
 
 def test_check_of_layouts_that_can_be_keyed_says_nothing_of_keys(capsys):

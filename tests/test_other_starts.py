@@ -83,7 +83,7 @@ def test_nothing_is_ruled_out_where_every_reading_would_be(learner, novel_a):
 @pytest.mark.parametrize("other, message", [
     ("state", "other_starts must be a sequence of States"),
     ("text", "other_starts must be a sequence of States"),
-    ("list of text", "other_starts holds a str, expected States"),
+    ("list of text", r"other_starts\[0\] is a str, expected a State"),
 ])
 def test_other_starts_of_the_wrong_type_are_refused_in_one_line(learner, novel_a, other, message):
     given = {"state": novel_a, "text": "novel_a.state", "list of text": ["novel_a.state"]}[other]
@@ -140,3 +140,30 @@ def test_follow_reads_other_starts_from_files_and_names_a_bad_one(learner, star_
     assert main(base + ["--other-start", str(broken)]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"groundlang follow: error: {broken}") and err.count("\n") == 1
+
+
+def test_the_start_itself_given_as_another_changes_nothing(learner, novel_a, star_in_red):
+    """Per lifted task, its readings holding in the start had counted against all of its readings."""
+    alone = _task_mass(learner.posterior(COMMAND, star_in_red))
+    assert _task_mass(learner.posterior(COMMAND, star_in_red, other_starts=[star_in_red])) == pytest.approx(alone)
+
+
+def test_another_start_of_another_palette_is_named_by_its_place(learner, novel_a):
+    from groundlang.corpus import parse_state
+
+    other = parse_state("room,1,0,4,4,0 block,1,0,2,2 agent,1,1", "sokoban2")
+    with pytest.raises(ValueError, match=r"^posterior: other_starts\[1\]: the state is of palette 'sokoban2'"):
+        learner.posterior(COMMAND, novel_a, other_starts=[novel_a, other])
+
+
+def test_follow_names_an_other_start_file_it_cannot_read_for_the_model(learner, tmp_path, capsys):
+    from groundlang.cli import main
+
+    model = learner.save(tmp_path / "model")
+    other = tmp_path / "huge.state"
+    other.write_text("room,1,0,70,70,0 agent,1,1\n", encoding="utf-8")  # 4,761 walkable cells: no PF table
+    assert main(["--quiet", "follow", COMMAND, "--model", str(model), "--env", str(EXAMPLES / "novel_a.state"),
+                 "--other-start", str(other)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"groundlang follow: error: {other}: this layout has 4,761 walkable cells")
+    assert err.count("\n") == 1

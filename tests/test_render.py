@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import re
 import subprocess
 from pathlib import Path
@@ -10,11 +11,12 @@ import sys
 import numpy as np
 import pytest
 
-from groundlang.corpus import parse_state, read_instance, read_state_file
+from groundlang.corpus import example_corpus_path, parse_state, read_instance, read_state_file
 from groundlang.model.world import get_palette
 from groundlang.render import ascii_state, glyph, draw_state, save_picture, trajectory_positions
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+EXAMPLES = example_corpus_path()
 
 
 def test_ascii_small_state(fixtures):
@@ -282,6 +284,17 @@ def test_a_glyph_or_a_title_with_dollar_signs_is_drawn_as_written(tmp_path):
     palette = get_palette(str(palette_file))
     state = parse_state("room,1,0,4,4,0 block,12,5,2,2 agent,1,1", palette)
     assert glyph("ball", palette) == "$^$"
-    for suffix in (".png", ".svg"):
-        out = save_picture(tmp_path / f"d{suffix}", state, title="go to the $x$ room")
+    for suffix, title in ((".png", "go to the $x$ room"), (".svg", "go to the $^$ room, $\\frac{$")):
+        out = save_picture(tmp_path / f"d{suffix}", state, title=title)  # "$^$" is no mathtext: it had failed
         assert out.stat().st_size > 0
+
+
+def test_a_posterior_chart_of_a_command_with_dollar_signs_is_drawn(learner):
+    pytest.importorskip("matplotlib")
+    from groundlang.animation import posterior_bar_chart
+
+    post = learner.posterior("go to the $^$ red room", read_state_file(EXAMPLES / "novel_a.state", "sokoban"))
+    for kind in ("goals", "readings"):
+        ax = posterior_bar_chart(post, kind=kind)
+        ax.figure.savefig(io.BytesIO(), format="png")  # drawing is where mathtext would have failed
+        assert ax.get_title().startswith("'go to the")

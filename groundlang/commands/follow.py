@@ -201,6 +201,7 @@ def run(args: argparse.Namespace) -> int:
     from groundlang.corpus import file_names, read_initial_state
     from groundlang.inference.sweeps import plan_once
     from groundlang.learner import Learner
+    from groundlang.learner_state import check_state
     from groundlang.results import LAYOUT_ERRORS
     from groundlang.logic.atoms import format_goal
     from groundlang.logic.palette_files import palette_names
@@ -244,6 +245,11 @@ def run(args: argparse.Namespace) -> int:
             palette = get_palette(palette.name)
     state = read_initial_state(args.env, palette)
     other_starts = [read_initial_state(path, palette) for path in args.other_starts]
+    for path, other in zip(args.other_starts, other_starts):  # a file that cannot be read is named, as --env is
+        try:
+            check_state(learner.palettes, "--other-start", args.command_text, other)
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
     names = file_names(args.env)  # goals and states are shown by the file's names of its objects
     if args.lexicon:
         learner.add_words(args.lexicon)
