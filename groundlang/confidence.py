@@ -309,7 +309,7 @@ def format_calibration(report: dict, title: str = "confidence", unit: str = "com
 def goals_held_at_start(held) -> set[tuple[Atom, ...]]:
     """The goals of ``held`` (a posterior with goals that hold at the start offered, ``Learner.posterior(...,
     held=True)``) that hold there as a whole: their groundings found every atom holding."""
-    return {i.goal for i in held.interpretations if len(i.task.holding) == len(i.task.goal)}
+    return {i.goal for i in held.interpretations if i.task.holds_wholly}
 
 
 def held_goals_success(held, success: float, end, library) -> float:

@@ -37,7 +37,7 @@ from groundlang.model.world import State
 from groundlang.learner_state import (check_count, check_fit_arguments, check_model_parts, check_state, check_threshold,
                                        word_sources, check_training_options, learner_from_state, learner_state)
 from groundlang.model_io import check_parameter_bound, read_model, write_model
-from groundlang.other_starts import check_other_starts, given_other_starts, held_shares
+from groundlang.other_starts import HeldShares, check_other_starts, given_other_starts
 from groundlang.results import FollowResult, Posterior
 from groundlang.training_vocabulary import build_vocabulary, word_files_beside
 from groundlang.wording import goal_phrase
@@ -101,6 +101,7 @@ class Learner:
         # checks that it is still there
         self.models_seen: dict[Path, str] = {}
         self._interp_cache: dict[tuple[State, bool], list[Interpretation]] = {}
+        self._held_shares = HeldShares()  # a command's other starts, read once for all its starts
         self._world = WorldPlans(self.library, self.settings)  # spaces and plans: the world's, not the words'
 
     def add_words(self, lexicon: WordSource | Sequence[WordSource]) -> "Learner":
@@ -196,6 +197,18 @@ class Learner:
         """TypeError for arguments of the wrong type; ValueError for a state of a palette not trained on."""
         check_state(self.palettes, method, command, state)
 
+    def words_reading(self, command: str, state: State, held: bool = False):
+        """``(observation, [J] probabilities, reading probabilities or None)``: the command's readings and
+        interpretations in ``state`` (with ``held``, goals holding there offered too) and the posterior over
+        the interpretations from the words alone, conditioned on nothing (:meth:`posterior` conditions it)."""
+        obs = self._command_observation(command, state, held)
+        batch = self.lm.encode([obs], self.vocab)
+        # The interpretation and the reading: the two sites the model enumerates per command.
+        probs, structures = local_posteriors(batch, self.lm, self.globals, use_behaviour=False)
+        reading_probs = None if structures is None else per_parser_reading(
+            structures[0], batch, [r.probability for r in obs.readings])
+        return obs, probs[0][: len(obs.interpretations)].double().numpy(), reading_probs
+
     def posterior(self, command: str, state: State, held: bool = False, other_starts: Sequence[State] = ()) -> Posterior:
         """Posterior over interpretations of ``command`` in ``state`` from the words, given (with the
         language model's ``achievable_goals``, the default) that the goal can be reached from ``state``.
@@ -213,15 +226,7 @@ class Learner:
         if not isinstance(held, bool):
             raise TypeError(f"posterior: held must be True or False, not {type(held).__name__}")
         other_starts = check_other_starts("posterior", other_starts)
-        obs = self._command_observation(command, state, held)
-        batch = self.lm.encode([obs], self.vocab)
-        # The interpretation and the reading: the two sites the model enumerates per command.
-        probs, structures = local_posteriors(batch, self.lm, self.globals, use_behaviour=False)
-        probs = probs[0]
-        J = len(obs.interpretations)
-        reading_probs = None if structures is None else per_parser_reading(
-            structures[0], batch, [r.probability for r in obs.readings])
-        probs = probs[:J].numpy().astype(float)
+        obs, probs, reading_probs = self.words_reading(command, state, held)
         space = self._world.space(state)
         masks = self._world.goal_masks(space)
         reach = (0.0, None)
@@ -233,7 +238,7 @@ class Learner:
         if self.lm.other_starts and other_starts and not held:
             # The start itself, given again, says nothing more (its held readings are set aside already).
             probs = given_other_starts(probs, obs.interpretations, [
-                held_shares(self, command, other, f"posterior: other_starts[{k}]")
+                self._held_shares.of(self, command, other, f"posterior: other_starts[{k}]")
                 for k, other in enumerate(other_starts) if other != state])
         post = Posterior(command, list(obs.interpretations), probs, list(obs.readings), reading_probs,
                          out_of_reach=reach[0], out_of_reach_goal=reach[1])

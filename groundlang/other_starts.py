@@ -27,12 +27,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from groundlang.inference.joint import local_posteriors
 from groundlang.model.interpretations import Interpretation, NoTaskError
 from groundlang.model.world import State
 from groundlang.results import LAYOUT_ERRORS
 
-__all__ = ["held_shares", "given_other_starts", "check_other_starts"]
+__all__ = ["held_shares", "HeldShares", "given_other_starts", "check_other_starts"]
 
 logger = logging.getLogger(__name__)
 
@@ -56,20 +55,48 @@ def held_shares(learner, command: str, state: State, where: str = "other_starts"
     not trained on."""
     try:
         learner._check_state(where, command, state)  # a layout too large to tabulate: before grounding
-        obs = learner._command_observation(command, state, held=True)
-        batch = learner.lm.encode([obs], learner.vocab)
-        probs, _ = local_posteriors(batch, learner.lm, learner.globals, use_behaviour=False)
+        obs, p, _ = learner.words_reading(command, state, held=True)
     except (NoTaskError, *LAYOUT_ERRORS) as exc:
         logger.warning("%s: set aside, it says nothing of what the command asks: %s", where, exc)
         return {}
-    p = probs[0][: len(obs.interpretations)].double().numpy()
     held: dict[str, float] = {}
     total: dict[str, float] = {}
     for interp, share in zip(obs.interpretations, p):
         total[interp.lifted] = total.get(interp.lifted, 0.0) + float(share)
-        if len(interp.task.holding) == len(interp.task.goal):
+        if interp.task.holds_wholly:
             held[interp.lifted] = held.get(interp.lifted, 0.0) + float(share)
     return {task: min(1.0, mass / total[task]) for task, mass in held.items() if total[task] > 0}
+
+
+class HeldShares:
+    """:func:`held_shares` of one command's start states, kept while the learner follows that command with the
+    model it has: following a command from each of its three starts, the other two given, reads each start once,
+    not twice. Forgotten at another command or when the model changes (refitted, updated, words added,
+    settings changed): the learner's parts are compared by identity, its settings by value."""
+
+    # At most this many start states kept (a command is given in a few; a caller may give one in many).
+    KEPT = 16
+
+    def __init__(self) -> None:
+        self._read_with: tuple = ()
+        self._shares: dict[State, dict[str, float]] = {}
+
+    def of(self, learner, command: str, state: State, where: str) -> dict[str, float]:
+        read_with = (command, repr(learner.lm.settings()), learner.globals, learner.vocab, learner.word_lexicon,
+                     learner.library)
+        if len(read_with) != len(self._read_with) or not all(map(_same, read_with, self._read_with)):
+            self._read_with, self._shares = read_with, {}
+        if state not in self._shares:
+            if len(self._shares) >= self.KEPT:
+                self._shares.clear()
+            self._shares[state] = held_shares(learner, command, state, where)
+        return self._shares[state]
+
+
+def _same(a, b) -> bool:
+    """Texts (the command, the settings) by value; the model's parts by identity (each kept alive here, so
+    another object cannot take its place at the same address)."""
+    return a == b if isinstance(a, str) else a is b
 
 
 def given_other_starts(probabilities: np.ndarray, interps: Sequence[Interpretation],
@@ -78,9 +105,10 @@ def given_other_starts(probabilities: np.ndarray, interps: Sequence[Interpretati
     holds in none of the other start states (``shares``: :func:`held_shares` of each), renormalised;
     unchanged where nothing is ruled out or everything would be."""
     weight = np.ones(len(interps))
+    lifted = [interp.lifted for interp in interps]
     for share in shares:
         if share:
-            weight *= np.array([1.0 - share.get(interp.lifted, 0.0) for interp in interps])
+            weight *= np.array([1.0 - share.get(task, 0.0) for task in lifted])
     weighed = np.asarray(probabilities, dtype=float)[: len(interps)] * weight
     total = float(weighed.sum())
     if total <= 0 or np.all(weight == 1.0):

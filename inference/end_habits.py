@@ -189,21 +189,24 @@ class EndHabits:
     @cached_property
     def relations(self) -> frozenset[str]:
         """The relations demonstrations left new (and :data:`MOVED`), not their bound habits."""
-        shown = frozenset().union(*(shown for shown, _ in self.shown)) if self.shown else frozenset()
-        return frozenset(name for name in shown if not _BOUND.match(name))
+        return frozenset(name for name in self.names if not _BOUND.match(name))
 
     def unknown_to(self, library) -> list[str]:
         """The names of the table (sorted) that no goal of ``library`` is made of: a relation, or either side of
         a bound habit, that is not one of its goals' relations (canonically spelled), nor :data:`MOVED`. A
         table counted with ``library`` has none; a saved model's that has some was not (a forged table)."""
         asked = frozenset(map(canonical_predicate, library.goal_relations)) | {MOVED}
-        shown = frozenset().union(*(shown for shown, _ in self.shown)) if self.shown else frozenset()
 
         def known(name: str) -> bool:
             m = _BOUND.match(name)
             return name in asked if m is None else m.group(1) in asked and m.group(3) in asked
 
-        return sorted(name for name in shown if not known(name))
+        return sorted(name for name in self.names if not known(name))
+
+    @cached_property
+    def names(self) -> frozenset[str]:
+        """Every name the table counts: relations, :data:`MOVED` and bound habits."""
+        return frozenset().union(*(shown for shown, _ in self.shown)) if self.shown else frozenset()
 
     @cached_property
     def bound(self) -> dict[str, tuple[tuple[str, int, str, int], ...]]:

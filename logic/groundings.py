@@ -246,7 +246,7 @@ def ground_environment(
     }
     relations = {o: tuple(sorted(related[o], key=lambda r: (r[0], r[1], natural_key(r[2]))))
                  for o in sorted(related, key=natural_key)}
-    return ([(g, c) for _, g, c in found if wholly_true or len(g.holding) < len(g.goal)], descriptions,
+    return ([(g, c) for _, g, c in found if wholly_true or not g.holds_wholly], descriptions,
             dict(sorted(terms.items())), relations)
 
 

@@ -251,9 +251,12 @@ def _nested_beyond(node, limit: int) -> bool:
 
 def _span(stm, line_starts: list[int]) -> int:
     """How many characters of the source text a statement spans (from its location)."""
-    b, e = stm.location.begin, stm.location.end
-    at = lambda p: line_starts[min(p.line, len(line_starts)) - 1] + p.column  # noqa: E731
-    return at(e) - at(b)
+    return _offset(stm.location.end, line_starts) - _offset(stm.location.begin, line_starts)
+
+
+def _offset(position, line_starts: list[int]) -> int:
+    """A location's position (line, column) as an offset into the source text."""
+    return line_starts[min(position.line, len(line_starts)) - 1] + position.column
 
 
 def parse_source(source: Source, allow_scripts: bool) -> list:

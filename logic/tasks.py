@@ -99,6 +99,11 @@ class GroundedTask:
     # The goal atoms that already hold in the initial state the grounding was enumerated in.
     holding: tuple[Atom, ...] = field(default=(), compare=False)
 
+    @property
+    def holds_wholly(self) -> bool:
+        """Every goal atom already holds in the initial state: the task asks for nothing there."""
+        return len(self.holding) == len(self.goal)
+
     def object_of(self, variable: str) -> str:
         return dict(self.binding)[variable]
 

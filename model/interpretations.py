@@ -278,7 +278,7 @@ def interpretations(state: State, library: TaskLibrary, enumerate_constraints: b
     starts = start_rooms(state) if start_role else (frozenset(), True)
     relations = object_relations(state, library) if relational else None
     # Counted over what could be asked of the agent: a goal that wholly holds takes a share, not a count.
-    per_lifted = Counter(task.task for task, _ in candidates if len(task.holding) < len(task.goal))
+    per_lifted = Counter(task.task for task, _ in candidates if not task.holds_wholly)
     per_lifted.update({task.task: 1 for task, _ in candidates if task.task not in per_lifted})
     n_lifted = len(per_lifted)
     result = []

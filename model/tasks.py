@@ -52,7 +52,7 @@ def candidate_tasks(state: State, library: TaskLibrary, wholly_true: bool = Fals
     largest first, the empty conjunction last. One clingo Control per (state, library),
     cached (the library is keyed by identity, the state by value). Raises AspError.
     """
-    return [(g, c) for g, c in _environment(state, library)[0] if wholly_true or len(g.holding) < len(g.goal)]
+    return [(g, c) for g, c in _environment(state, library)[0] if wholly_true or not g.holds_wholly]
 
 
 def check_position_pfs(state: State, library: TaskLibrary, tables) -> None:

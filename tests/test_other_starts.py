@@ -167,3 +167,36 @@ def test_follow_names_an_other_start_file_it_cannot_read_for_the_model(learner, 
     err = capsys.readouterr().err
     assert err.startswith(f"groundlang follow: error: {other}: this layout has 4,761 walkable cells")
     assert err.count("\n") == 1
+
+
+def test_a_commands_other_starts_are_read_once_while_the_model_is_unchanged(learner, novel_a, star_in_red,
+                                                                            monkeypatch):
+    """Followed from each of its starts, the others given, a command read each start twice; a changed model
+    (refitted, updated: new parts) or another command reads them again."""
+    import groundlang.other_starts as other_starts
+
+    command = "bring the star to the red room"  # read with other starts by no other test of the module
+
+    read = []
+    real = other_starts.held_shares
+    monkeypatch.setattr(other_starts, "held_shares", lambda l, c, s, where: read.append((c, s)) or real(l, c, s, where))
+    first = learner.posterior(command, novel_a, other_starts=[star_in_red])
+    again = learner.posterior(command, novel_a, other_starts=[star_in_red])
+    assert read == [(command, star_in_red)] and np.array_equal(first.probabilities, again.probabilities)
+    learner.posterior("go to the red room", novel_a, other_starts=[star_in_red])
+    assert len(read) == 2
+    learner.posterior(command, novel_a, other_starts=[star_in_red])
+    assert len(read) == 3  # another command came between
+    saved = learner.globals
+    learner.globals = dict(saved)  # what update() does: new parts
+    try:
+        learner.posterior(command, novel_a, other_starts=[star_in_red])
+        assert len(read) == 4
+    finally:
+        learner.globals = saved
+    learner.lm.argument_bonus += 1.0  # a setting changed in place
+    try:
+        learner.posterior(command, novel_a, other_starts=[star_in_red])
+        assert len(read) == 5
+    finally:
+        learner.lm.argument_bonus -= 1.0
